@@ -1,0 +1,56 @@
+//! The one evaluation interface: the CPU reference and the Vulkan evaluator both implement
+//! [`Backend`], so tests, tables and benchmarks take any backend.
+
+use crate::batch::Batch;
+use crate::error::Result;
+use crate::material::Material;
+
+/// What the caller wants back besides the BRDF.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash)]
+pub struct Request {
+    /// Also return the terms D, G, F_r, F_g, F_b, K per tuple.
+    pub terms: bool,
+}
+
+/// Tuple counts of one evaluation.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Counts {
+    /// Tuples in the batch.
+    pub tuples: u64,
+    /// Invalid tuples (zero or non-finite L, V, N, or a bad tangent for an anisotropic
+    /// material): their outputs are 0 (FORMULAS.md §1).
+    pub invalid: u64,
+    /// Valid tuples with `cos_i ≤ 0` or `cos_o ≤ 0`: their outputs are 0.
+    pub below_horizon: u64,
+    /// Row of the first invalid tuple, if any.
+    pub first_invalid: Option<u64>,
+}
+
+/// Number of term columns: D, G, F_r, F_g, F_b, K.
+pub const TERM_COLUMNS: usize = 6;
+
+/// The result of evaluating a batch.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Output {
+    /// `n × 3` RGB BRDF values in 1/sr (no cosine), row-major.
+    pub brdf: Vec<f32>,
+    /// `n × 6` terms (D, G, F_r, F_g, F_b, K) when requested.
+    pub terms: Option<Vec<f32>>,
+    /// Invalid / below-horizon counts.
+    pub counts: Counts,
+}
+
+/// An evaluator of BRDF batches.
+pub trait Backend {
+    /// A short human-readable name (e.g. `cpu-reference`, `vulkan: llvmpipe`).
+    fn name(&self) -> String;
+
+    /// Evaluates every tuple of `batch` with the material table `materials` (which the
+    /// batch's material column indexes).
+    fn evaluate(
+        &mut self,
+        batch: &Batch,
+        materials: &[Material],
+        request: &Request,
+    ) -> Result<Output>;
+}

@@ -1,0 +1,4 @@
+fn main() {
+    let m = vkbrdf::material::presets::all();
+    println!("{}", m.len());
+}

@@ -1,0 +1,204 @@
+//! Materials: the models, terms and conventions of FORMULAS.md §2–§6 as validated Rust
+//! values. A [`Material`] can only hold a legal combination: the enums carry exactly the
+//! parameters their formula needs, so the evaluators never re-check them.
+//!
+//! Materials come from TOML ([`parse_materials`]) or from [`presets`].
+
+mod parse;
+pub mod presets;
+
+pub use parse::{load_materials, parse_materials};
+
+/// An RGB triple (linear, per channel).
+pub type Rgb = [f64; 3];
+
+/// A validated material (FORMULAS.md §6).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Material {
+    /// Unique name within its table.
+    pub name: String,
+    /// The reflection model and its parameters.
+    pub model: Model,
+    /// `c_diff`: diffuse colour (default black).
+    pub diffuse: Rgb,
+    /// `c_spec`: specular colour (default white).
+    pub specular: Rgb,
+}
+
+/// The reflection models of FORMULAS.md §6, each with the parameters its formula uses.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Model {
+    /// `c_diff / π`.
+    Lambert,
+    /// Modified, normalised Phong with exponent `e`.
+    Phong {
+        /// Phong exponent `e ≥ 0`.
+        exponent: f64,
+    },
+    /// The seed's Blinn–Phong, `c_spec · cos_h^e / (π cos_i)`.
+    BlinnPhong {
+        /// Exponent `e ≥ 0`.
+        exponent: f64,
+    },
+    /// The seed's shading equation (RTR 3rd ed. §5.5), `(e+8)/(8π) cos_h^e`.
+    Rtr {
+        /// Exponent `e ≥ 0`.
+        exponent: f64,
+    },
+    /// Ward 1992, isotropic or anisotropic.
+    Ward {
+        /// Roughness `m` or `[mx, my]`.
+        roughness: Roughness,
+    },
+    /// Cook–Torrance microfacet model `d·c_diff/π + s·c_spec ⊗ D·G·F·K`.
+    CookTorrance(CookTorrance),
+}
+
+/// Parameters of a Cook–Torrance material.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CookTorrance {
+    /// Which glare/normalisation convention (§5).
+    pub convention: Convention,
+    /// Microfacet distribution D (§2).
+    pub distribution: Distribution,
+    /// Geometric attenuation G (§3).
+    pub geometry: Geometry,
+    /// Fresnel term F (§4).
+    pub fresnel: Fresnel,
+    /// `s`: specular weight (default 1).
+    pub specular_weight: f64,
+    /// `d`: diffuse weight (default 0).
+    pub diffuse_weight: f64,
+}
+
+/// Roughness `m > 0` (rms slope; GGX calls it α), isotropic or per tangent axis.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Roughness {
+    /// One `m` for every direction.
+    Isotropic(f64),
+    /// `[mx, my]` along the tangent `t` and bitangent `b`.
+    Anisotropic(f64, f64),
+}
+
+impl Roughness {
+    /// `(mx, my)`, equal for an isotropic roughness.
+    pub fn xy(self) -> (f64, f64) {
+        match self {
+            Roughness::Isotropic(m) => (m, m),
+            Roughness::Anisotropic(x, y) => (x, y),
+        }
+    }
+    /// Whether the roughness is given per axis (needs a tangent).
+    pub fn is_anisotropic(self) -> bool {
+        matches!(self, Roughness::Anisotropic(..))
+    }
+}
+
+/// The glare / normalisation convention (FORMULAS.md §5).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Convention {
+    /// The seed lecture: Beckmann `k = 4`, `K = 1/cos_o`.
+    Seed,
+    /// Cook & Torrance 1982: `k = 1`, `K = 1/(π cos_i cos_o)`.
+    CookTorrance1982,
+    /// Walter et al. 2007 (default): `k = π`, `K = 1/(4 cos_i cos_o)`.
+    Modern,
+}
+
+/// Microfacet distribution D (FORMULAS.md §2) with its parameter.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Distribution {
+    /// Torrance–Sparrow 1967 Gaussian `exp(-(δ/m)²)` (isotropic only).
+    Gaussian {
+        /// Width `m > 0` (radians).
+        m: f64,
+    },
+    /// Beckmann, normalised by the convention's `k`; anisotropic in `modern` only.
+    Beckmann(Roughness),
+    /// GGX / Trowbridge–Reitz; anisotropic in `modern` only.
+    Ggx(Roughness),
+    /// Normalised Blinn–Phong NDF `(e+2)/(2π) cos_h^e`.
+    Blinn {
+        /// Exponent `e ≥ 0`.
+        exponent: f64,
+    },
+}
+
+/// Geometric attenuation G (FORMULAS.md §3).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Geometry {
+    /// `G = 1`.
+    None,
+    /// Blinn's V-cavity, as in the seed and Cook–Torrance.
+    CookTorrance,
+    /// Separable Smith `G1(v)·G1(l)`.
+    Smith,
+    /// Height-correlated Smith `1/(1 + Λ(v) + Λ(l))`.
+    SmithCorrelated,
+    /// Walter et al. 2007 rational fit of Smith–Beckmann (Beckmann only).
+    SmithFast,
+}
+
+/// Fresnel term F (FORMULAS.md §4), per RGB channel.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Fresnel {
+    /// `F = 1`.
+    None,
+    /// Exact unpolarised dielectric Fresnel with relative IOR `μ`.
+    Dielectric {
+        /// Relative index of refraction per channel (> 0; < 1 gives total internal reflection).
+        ior: Rgb,
+    },
+    /// Exact conductor Fresnel with complex `η = n + ik`.
+    Conductor {
+        /// Real part `n` per channel.
+        ior: Rgb,
+        /// Imaginary part `k` per channel.
+        extinction: Rgb,
+    },
+    /// Schlick's approximation with reflectance at normal incidence `F0`.
+    Schlick {
+        /// `F0` per channel (given, or derived from `ior`/`extinction` at parse time).
+        f0: Rgb,
+    },
+}
+
+impl Material {
+    /// The Cook–Torrance parameters, when this is a microfacet material.
+    pub fn cook_torrance(&self) -> Option<&CookTorrance> {
+        match &self.model {
+            Model::CookTorrance(ct) => Some(ct),
+            _ => None,
+        }
+    }
+
+    /// Whether evaluating this material needs a tangent (anisotropic roughness).
+    pub fn is_anisotropic(&self) -> bool {
+        match &self.model {
+            Model::Ward { roughness } => roughness.is_anisotropic(),
+            Model::CookTorrance(ct) => match ct.distribution {
+                Distribution::Beckmann(r) | Distribution::Ggx(r) => r.is_anisotropic(),
+                _ => false,
+            },
+            _ => false,
+        }
+    }
+
+    /// Whether the model obeys Helmholtz reciprocity `f(l, v) = f(v, l)`.
+    /// Blinn–Phong (`1/cos_i`) and the seed convention (`K = 1/cos_o`) do not.
+    pub fn is_reciprocal(&self) -> bool {
+        match &self.model {
+            Model::BlinnPhong { .. } => false,
+            Model::CookTorrance(ct) => ct.convention != Convention::Seed,
+            _ => true,
+        }
+    }
+}
+
+/// `F0 = ((n-1)² + k²)/((n+1)² + k²)`: reflectance at normal incidence (FORMULAS.md §4).
+pub fn f0_from_ior(ior: Rgb, extinction: Rgb) -> Rgb {
+    std::array::from_fn(|c| {
+        let (n, k) = (ior[c], extinction[c]);
+        ((n - 1.0).powi(2) + k * k) / ((n + 1.0).powi(2) + k * k)
+    })
+}

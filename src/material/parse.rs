@@ -1,0 +1,600 @@
+//! TOML materials: `[[material]]` tables, presets plus overrides, and validation with
+//! errors that name the file, line, material and key.
+
+use super::presets;
+use super::*;
+use crate::error::MaterialError;
+use std::collections::BTreeMap;
+use std::path::Path;
+use toml::{Spanned, Value};
+
+/// Every key a `[[material]]` table may hold.
+const KEYS: &[&str] = &[
+    "name",
+    "preset",
+    "model",
+    "convention",
+    "distribution",
+    "roughness",
+    "exponent",
+    "geometry",
+    "fresnel",
+    "ior",
+    "extinction",
+    "f0",
+    "diffuse",
+    "specular",
+    "specular_weight",
+    "diffuse_weight",
+];
+
+#[derive(serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Document {
+    #[serde(default)]
+    material: Vec<Spanned<BTreeMap<String, Spanned<Value>>>>,
+}
+
+/// Reads and validates a materials file.
+pub fn load_materials(path: &Path) -> crate::Result<Vec<Material>> {
+    let text = std::fs::read_to_string(path).map_err(|source| crate::Error::Io {
+        path: path.to_owned(),
+        source,
+    })?;
+    Ok(parse_materials(&text, &path.display().to_string())?)
+}
+
+/// Parses and validates TOML text holding `[[material]]` tables. `source_name` is used in
+/// error messages (normally the file name).
+pub fn parse_materials(text: &str, source_name: &str) -> Result<Vec<Material>, MaterialError> {
+    let lines = LineIndex::new(text);
+    let doc: Document = toml::from_str(text).map_err(|e| MaterialError {
+        source_name: source_name.to_string(),
+        line: e.span().map(|s| lines.line(s.start)),
+        material: None,
+        key: None,
+        message: e.message().trim().to_string(),
+    })?;
+    if doc.material.is_empty() {
+        return Err(MaterialError {
+            source_name: source_name.to_string(),
+            line: None,
+            material: None,
+            key: None,
+            message: "no [[material]] tables found; see `vkbrdf materials --help` for the format"
+                .into(),
+        });
+    }
+    let mut out: Vec<Material> = Vec::with_capacity(doc.material.len());
+    for table in &doc.material {
+        let ctx = Ctx {
+            source_name,
+            lines: &lines,
+            table_line: lines.line(table.span().start),
+        };
+        let m = ctx.material(table.get_ref())?;
+        if out.iter().any(|o| o.name == m.name) {
+            return Err(ctx.err(
+                Some(&m.name),
+                Some("name"),
+                None,
+                "duplicate material name".into(),
+            ));
+        }
+        out.push(m);
+    }
+    Ok(out)
+}
+
+/// Parses one preset's definition (used by [`presets`]).
+pub(super) fn parse_preset(name: &str, body: &str) -> Result<Material, MaterialError> {
+    let text = format!("[[material]]\nname = \"{name}\"\n{body}");
+    let mut v = parse_materials(&text, &format!("preset `{name}`"))?;
+    Ok(v.remove(0))
+}
+
+struct LineIndex(Vec<usize>);
+impl LineIndex {
+    fn new(text: &str) -> Self {
+        LineIndex(text.match_indices('\n').map(|(i, _)| i).collect())
+    }
+    fn line(&self, offset: usize) -> usize {
+        self.0.partition_point(|&nl| nl < offset) + 1
+    }
+}
+
+struct Ctx<'a> {
+    source_name: &'a str,
+    lines: &'a LineIndex,
+    table_line: usize,
+}
+
+/// A key's value and where it came from (`None` line: from a preset).
+struct Entry<'v> {
+    value: &'v Value,
+    line: Option<usize>,
+}
+
+struct Fields<'v, 'c> {
+    ctx: &'c Ctx<'c>,
+    name: String,
+    map: BTreeMap<String, Entry<'v>>,
+    used: Vec<&'static str>,
+}
+
+impl Ctx<'_> {
+    fn err(
+        &self,
+        material: Option<&str>,
+        key: Option<&str>,
+        line: Option<usize>,
+        message: String,
+    ) -> MaterialError {
+        MaterialError {
+            source_name: self.source_name.to_string(),
+            line: line.or(Some(self.table_line)),
+            material: material.map(str::to_string),
+            key: key.map(str::to_string),
+            message,
+        }
+    }
+
+    fn material(
+        &self,
+        table: &BTreeMap<String, Spanned<Value>>,
+    ) -> Result<Material, MaterialError> {
+        let name = match table.get("name") {
+            Some(v) => match v.get_ref() {
+                Value::String(s) if !s.trim().is_empty() => s.clone(),
+                _ => {
+                    return Err(self.err(
+                        None,
+                        Some("name"),
+                        Some(self.lines.line(v.span().start)),
+                        "must be a non-empty string".into(),
+                    ))
+                }
+            },
+            None => {
+                return Err(self.err(
+                    None,
+                    Some("name"),
+                    None,
+                    "every [[material]] needs a `name`".into(),
+                ))
+            }
+        };
+        for (k, v) in table {
+            if !KEYS.contains(&k.as_str()) {
+                return Err(self.err(
+                    Some(&name),
+                    Some(k),
+                    Some(self.lines.line(v.span().start)),
+                    format!("unknown key; the keys are: {}", KEYS.join(", ")),
+                ));
+            }
+        }
+        // Preset first, then the table's own keys override it.
+        let mut map: BTreeMap<String, Entry> = BTreeMap::new();
+        let preset_storage;
+        if let Some(p) = table.get("preset") {
+            let line = Some(self.lines.line(p.span().start));
+            let pname = match p.get_ref() {
+                Value::String(s) => s.as_str(),
+                _ => {
+                    return Err(self.err(
+                        Some(&name),
+                        Some("preset"),
+                        line,
+                        "must be a string".into(),
+                    ))
+                }
+            };
+            let body = presets::body(pname).ok_or_else(|| {
+                self.err(
+                    Some(&name),
+                    Some("preset"),
+                    line,
+                    format!(
+                        "unknown preset `{pname}`; the presets are: {}",
+                        presets::NAMES.join(", ")
+                    ),
+                )
+            })?;
+            preset_storage = body
+                .parse::<toml::Table>()
+                .expect("preset bodies are valid TOML (tested)");
+            for (k, v) in &preset_storage {
+                map.insert(
+                    k.clone(),
+                    Entry {
+                        value: v,
+                        line: None,
+                    },
+                );
+            }
+        }
+        for (k, v) in table {
+            if k != "name" && k != "preset" {
+                map.insert(
+                    k.clone(),
+                    Entry {
+                        value: v.get_ref(),
+                        line: Some(self.lines.line(v.span().start)),
+                    },
+                );
+            }
+        }
+        let mut f = Fields {
+            ctx: self,
+            name,
+            map,
+            used: vec![],
+        };
+        let m = f.build()?;
+        f.reject_unused()?;
+        Ok(m)
+    }
+}
+
+impl Fields<'_, '_> {
+    fn err(&self, key: &str, message: String) -> MaterialError {
+        let line = self.map.get(key).and_then(|e| e.line);
+        self.ctx.err(Some(&self.name), Some(key), line, message)
+    }
+
+    fn has(&self, key: &str) -> bool {
+        self.map.contains_key(key)
+    }
+
+    fn take(&mut self, key: &'static str) -> Option<Value> {
+        self.used.push(key);
+        self.map.get(key).map(|e| e.value.clone())
+    }
+
+    fn string(
+        &mut self,
+        key: &'static str,
+        choices: &[&str],
+    ) -> Result<Option<String>, MaterialError> {
+        match self.take(key) {
+            None => Ok(None),
+            Some(Value::String(s)) if choices.contains(&s.as_str()) => Ok(Some(s)),
+            Some(Value::String(s)) => Err(self.err(
+                key,
+                format!(
+                    "unknown value `{s}`; expected one of: {}",
+                    choices.join(", ")
+                ),
+            )),
+            Some(v) => Err(self.err(
+                key,
+                format!(
+                    "expected a string (one of: {}), found {}",
+                    choices.join(", "),
+                    v.type_str()
+                ),
+            )),
+        }
+    }
+
+    fn required_string(
+        &mut self,
+        key: &'static str,
+        choices: &[&str],
+        why: &str,
+    ) -> Result<String, MaterialError> {
+        self.string(key, choices)?.ok_or_else(|| {
+            self.err(
+                key,
+                format!("missing; {why} (one of: {})", choices.join(", ")),
+            )
+        })
+    }
+
+    fn number_of(&self, key: &str, v: &Value) -> Result<f64, MaterialError> {
+        match v {
+            Value::Float(x) => Ok(*x),
+            Value::Integer(i) => Ok(*i as f64),
+            other => Err(self.err(
+                key,
+                format!("expected a number, found {}", other.type_str()),
+            )),
+        }
+    }
+
+    /// A scalar; `check` returns an error message when the value is out of range.
+    fn scalar(
+        &mut self,
+        key: &'static str,
+        check: fn(f64) -> Option<&'static str>,
+    ) -> Result<Option<f64>, MaterialError> {
+        let Some(v) = self.take(key) else {
+            return Ok(None);
+        };
+        if let Value::Array(_) = v {
+            return Err(self.err(key, "expected a number, found an array".into()));
+        }
+        let x = self.number_of(key, &v)?;
+        match check(x) {
+            Some(msg) => Err(self.err(key, format!("{msg} (got {x})"))),
+            None => Ok(Some(x)),
+        }
+    }
+
+    /// A number or an array of `len` numbers (a scalar is broadcast when `broadcast`).
+    fn vector(
+        &mut self,
+        key: &'static str,
+        len: usize,
+        check: fn(f64) -> Option<&'static str>,
+    ) -> Result<Option<Vec<f64>>, MaterialError> {
+        let Some(v) = self.take(key) else {
+            return Ok(None);
+        };
+        let xs = match &v {
+            Value::Array(items) => {
+                if items.len() != len {
+                    return Err(self.err(
+                        key,
+                        format!(
+                            "expected a number or an array of {len} numbers, found an array of {}",
+                            items.len()
+                        ),
+                    ));
+                }
+                items
+                    .iter()
+                    .map(|i| self.number_of(key, i))
+                    .collect::<Result<Vec<_>, _>>()?
+            }
+            other => vec![self.number_of(key, other)?],
+        };
+        for &x in &xs {
+            if let Some(msg) = check(x) {
+                return Err(self.err(key, format!("{msg} (got {x})")));
+            }
+        }
+        Ok(Some(xs))
+    }
+
+    fn rgb(
+        &mut self,
+        key: &'static str,
+        check: fn(f64) -> Option<&'static str>,
+    ) -> Result<Option<Rgb>, MaterialError> {
+        Ok(self.vector(key, 3, check)?.map(|v| {
+            if v.len() == 1 {
+                [v[0]; 3]
+            } else {
+                [v[0], v[1], v[2]]
+            }
+        }))
+    }
+
+    fn roughness(&mut self, required_for: &str) -> Result<Roughness, MaterialError> {
+        let v = self.vector("roughness", 2, positive)?.ok_or_else(|| {
+            self.err(
+                "roughness",
+                format!("missing; {required_for} needs `roughness` (a number > 0, or [mx, my])"),
+            )
+        })?;
+        Ok(if v.len() == 1 {
+            Roughness::Isotropic(v[0])
+        } else {
+            Roughness::Anisotropic(v[0], v[1])
+        })
+    }
+
+    fn exponent(&mut self, required_for: &str) -> Result<f64, MaterialError> {
+        self.scalar("exponent", non_negative)?.ok_or_else(|| {
+            self.err(
+                "exponent",
+                format!("missing; {required_for} needs `exponent` (a number ≥ 0)"),
+            )
+        })
+    }
+
+    fn build(&mut self) -> Result<Material, MaterialError> {
+        let model = self.required_string(
+            "model",
+            &[
+                "lambert",
+                "phong",
+                "blinn-phong",
+                "rtr",
+                "ward",
+                "cook-torrance",
+            ],
+            "every material states its model",
+        )?;
+        let diffuse = self.rgb("diffuse", non_negative)?.unwrap_or([0.0; 3]);
+        let specular = if model == "lambert" {
+            [1.0; 3]
+        } else {
+            self.rgb("specular", non_negative)?.unwrap_or([1.0; 3])
+        };
+        let model = match model.as_str() {
+            "lambert" => Model::Lambert,
+            "phong" => Model::Phong {
+                exponent: self.exponent("model `phong`")?,
+            },
+            "blinn-phong" => Model::BlinnPhong {
+                exponent: self.exponent("model `blinn-phong`")?,
+            },
+            "rtr" => Model::Rtr {
+                exponent: self.exponent("model `rtr`")?,
+            },
+            "ward" => Model::Ward {
+                roughness: self.roughness("model `ward`")?,
+            },
+            _ => Model::CookTorrance(self.cook_torrance()?),
+        };
+        Ok(Material {
+            name: self.name.clone(),
+            model,
+            diffuse,
+            specular,
+        })
+    }
+
+    fn cook_torrance(&mut self) -> Result<CookTorrance, MaterialError> {
+        let convention = match self
+            .string("convention", &["seed", "cook-torrance-1982", "modern"])?
+            .as_deref()
+        {
+            Some("seed") => Convention::Seed,
+            Some("cook-torrance-1982") => Convention::CookTorrance1982,
+            _ => Convention::Modern,
+        };
+        let why = "a cook-torrance material states its distribution, geometry and fresnel";
+        let dist = self.required_string(
+            "distribution",
+            &["gaussian", "beckmann", "ggx", "blinn"],
+            why,
+        )?;
+        let distribution = match dist.as_str() {
+            "gaussian" => match self.roughness("distribution `gaussian`")? {
+                Roughness::Isotropic(m) => Distribution::Gaussian { m },
+                Roughness::Anisotropic(..) => {
+                    return Err(self.err(
+                        "roughness",
+                        "distribution `gaussian` is isotropic only; give one number".into(),
+                    ))
+                }
+            },
+            "blinn" => Distribution::Blinn {
+                exponent: self.exponent("distribution `blinn`")?,
+            },
+            d => {
+                let r = self.roughness(&format!("distribution `{d}`"))?;
+                if r.is_anisotropic() && convention != Convention::Modern {
+                    return Err(self.err(
+                        "roughness",
+                        format!("anisotropic `{d}` exists in the `modern` convention only"),
+                    ));
+                }
+                if d == "beckmann" {
+                    Distribution::Beckmann(r)
+                } else {
+                    Distribution::Ggx(r)
+                }
+            }
+        };
+        let geometry = match self
+            .required_string(
+                "geometry",
+                &[
+                    "none",
+                    "cook-torrance",
+                    "smith",
+                    "smith-correlated",
+                    "smith-fast",
+                ],
+                why,
+            )?
+            .as_str()
+        {
+            "none" => Geometry::None,
+            "cook-torrance" => Geometry::CookTorrance,
+            "smith" => Geometry::Smith,
+            "smith-correlated" => Geometry::SmithCorrelated,
+            _ => Geometry::SmithFast,
+        };
+        match (geometry, &distribution) {
+            (
+                Geometry::Smith | Geometry::SmithCorrelated | Geometry::SmithFast,
+                Distribution::Gaussian { .. } | Distribution::Blinn { .. },
+            ) => {
+                return Err(self.err("geometry", format!("Smith G needs a Λ for the distribution, and `{dist}` has none; use `cook-torrance` or `none`, or distribution `beckmann`/`ggx`")));
+            }
+            (Geometry::SmithFast, Distribution::Ggx(_)) => {
+                return Err(self.err("geometry", "`smith-fast` is a fit of Smith–Beckmann (Beckmann only); use `smith` or `smith-correlated` with ggx".into()));
+            }
+            _ => {}
+        }
+        let fresnel = self.fresnel()?;
+        let specular_weight = self.scalar("specular_weight", non_negative)?.unwrap_or(1.0);
+        let diffuse_weight = self.scalar("diffuse_weight", non_negative)?.unwrap_or(0.0);
+        Ok(CookTorrance {
+            convention,
+            distribution,
+            geometry,
+            fresnel,
+            specular_weight,
+            diffuse_weight,
+        })
+    }
+
+    fn fresnel(&mut self) -> Result<Fresnel, MaterialError> {
+        let kind = self.required_string(
+            "fresnel",
+            &["none", "dielectric", "conductor", "schlick"],
+            "a cook-torrance material states its distribution, geometry and fresnel",
+        )?;
+        Ok(match kind.as_str() {
+            "none" => Fresnel::None,
+            "dielectric" => {
+                if self.has("extinction") {
+                    self.used.push("extinction");
+                    return Err(self.err("extinction", "`dielectric` has a real IOR; for a complex IOR use fresnel = \"conductor\"".into()));
+                }
+                let ior = self.rgb("ior", positive)?.ok_or_else(|| {
+                    self.err(
+                        "ior",
+                        "missing; fresnel `dielectric` needs `ior` (a number > 0 or RGB)".into(),
+                    )
+                })?;
+                Fresnel::Dielectric { ior }
+            }
+            "conductor" => {
+                let ior = self.rgb("ior", positive)?.ok_or_else(|| {
+                    self.err(
+                        "ior",
+                        "missing; fresnel `conductor` needs `ior` and `extinction`".into(),
+                    )
+                })?;
+                let extinction = self.rgb("extinction", non_negative)?.ok_or_else(|| {
+                    self.err(
+                        "extinction",
+                        "missing; fresnel `conductor` needs `extinction` (RGB k ≥ 0)".into(),
+                    )
+                })?;
+                Fresnel::Conductor { ior, extinction }
+            }
+            _ => {
+                let f0 = self.rgb("f0", unit_interval)?;
+                let ior = self.rgb("ior", positive)?;
+                let ext = self.rgb("extinction", non_negative)?;
+                match (f0, ior) {
+                    (Some(_), Some(_)) => return Err(self.err("f0", "give either `f0` or `ior` (and `extinction`) for schlick, not both".into())),
+                    (Some(f0), None) if ext.is_some() => { let _ = f0; return Err(self.err("extinction", "`extinction` needs `ior`; with `f0` given, drop it".into())) }
+                    (Some(f0), None) => Fresnel::Schlick { f0 },
+                    (None, Some(ior)) => Fresnel::Schlick { f0: f0_from_ior(ior, ext.unwrap_or([0.0; 3])) },
+                    (None, None) => return Err(self.err("f0", "missing; fresnel `schlick` needs `f0` (RGB in [0, 1]) or `ior` (and optionally `extinction`)".into())),
+                }
+            }
+        })
+    }
+
+    /// Keys the table set (not the preset) that the chosen model never reads are errors:
+    /// they are almost always a typo or a misunderstanding.
+    fn reject_unused(&self) -> Result<(), MaterialError> {
+        for (k, e) in &self.map {
+            if e.line.is_some() && !self.used.contains(&k.as_str()) {
+                return Err(self.err(k, "does not apply to this material (its model, distribution or fresnel never reads it)".into()));
+            }
+        }
+        Ok(())
+    }
+}
+
+fn positive(x: f64) -> Option<&'static str> {
+    (!(x.is_finite() && x > 0.0)).then_some("must be a finite number > 0")
+}
+fn non_negative(x: f64) -> Option<&'static str> {
+    (!(x.is_finite() && x >= 0.0)).then_some("must be a finite number ≥ 0")
+}
+fn unit_interval(x: f64) -> Option<&'static str> {
+    (!(x.is_finite() && (0.0..=1.0).contains(&x))).then_some("must be in [0, 1]")
+}

@@ -1,0 +1,114 @@
+//! Built-in materials. Each preset is written as the TOML a user would write, and parsed by
+//! the same code as a materials file, so a preset can never hold what a file could not.
+//!
+//! Metal data: complex refractive index `n + ik` at the three wavelengths vkbrdf uses for
+//! R, G and B: **650 nm, 550 nm and 450 nm**, read (3 significant digits, linear
+//! interpolation between tabulated points) from
+//! - gold, silver, copper: P. B. Johnson and R. W. Christy, "Optical Constants of the Noble
+//!   Metals", Phys. Rev. B 6, 4370 (1972);
+//! - aluminium: A. D. Rakić, "Algorithm for the determination of intrinsic optical constants
+//!   of metal films: application to aluminum", Appl. Opt. 34, 4755 (1995);
+//!
+//! both as tabulated by refractiveindex.info. Dielectrics: glass 1.5, water 1.33 (the
+//! usual round values; dispersion is ignored).
+
+use super::Material;
+use crate::error::MaterialError;
+
+/// The names of all presets, in the order `vkbrdf materials` lists them.
+pub const NAMES: &[&str] = &[
+    "gold",
+    "silver",
+    "copper",
+    "aluminium",
+    "glass",
+    "water",
+    "shiny-plastic",
+];
+
+/// The TOML body (keys without `name`) of a preset, or `None` for an unknown name.
+pub fn body(name: &str) -> Option<String> {
+    Some(match name {
+        "gold" => {
+            METAL_GGX_03.trim_end().to_owned()
+                + "\nior = [0.166, 0.430, 1.38]\nextinction = [3.15, 2.46, 1.92]\n"
+        }
+        "silver" => {
+            METAL_GGX_03.trim_end().to_owned()
+                + "\nior = [0.052, 0.059, 0.040]\nextinction = [4.41, 3.32, 2.65]\n"
+        }
+        "copper" => {
+            METAL_GGX_03.trim_end().to_owned()
+                + "\nior = [0.214, 1.02, 1.24]\nextinction = [3.67, 2.58, 2.40]\n"
+        }
+        "aluminium" => {
+            METAL_GGX_03.trim_end().to_owned()
+                + "\nior = [1.47, 0.958, 0.618]\nextinction = [7.79, 6.69, 5.47]\n"
+        }
+        "glass" => DIELECTRIC.trim_end().to_owned() + "\nior = 1.5\n",
+        "water" => DIELECTRIC.trim_end().to_owned() + "\nior = 1.33\n",
+        "shiny-plastic" => SHINY_PLASTIC.to_owned(),
+        _ => return None,
+    })
+}
+
+/// Metals: modern Cook–Torrance, GGX α = 0.3, height-correlated Smith, exact conductor
+/// Fresnel; the colour comes from F, so `specular` stays white (FORMULAS.md §6).
+const METAL_GGX_03: &str = r#"
+model = "cook-torrance"
+distribution = "ggx"
+roughness = 0.3
+geometry = "smith-correlated"
+fresnel = "conductor"
+"#;
+
+/// Smooth dielectrics: GGX α = 0.1, exact dielectric Fresnel, no diffuse.
+const DIELECTRIC: &str = r#"
+model = "cook-torrance"
+distribution = "ggx"
+roughness = 0.1
+geometry = "smith-correlated"
+fresnel = "dielectric"
+"#;
+
+/// The seed's shiny plastic: `d = 0.9, s = 0.1` with a red diffuse base, Beckmann `m = 0.2`
+/// ("m near 0.2 indicates a nearly smooth surface") and a dielectric coat of IOR 1.5.
+const SHINY_PLASTIC: &str = r#"
+model = "cook-torrance"
+distribution = "beckmann"
+roughness = 0.2
+geometry = "smith"
+fresnel = "dielectric"
+ior = 1.5
+diffuse = [0.8, 0.1, 0.1]
+diffuse_weight = 0.9
+specular_weight = 0.1
+"#;
+
+/// A preset as a validated material named `name`.
+pub fn preset(name: &str) -> Option<Result<Material, MaterialError>> {
+    body(name).map(|b| super::parse::parse_preset(name, &b))
+}
+
+/// Every preset, validated, in [`NAMES`] order.
+pub fn all() -> Vec<Material> {
+    NAMES
+        .iter()
+        .map(|n| {
+            preset(n)
+                .expect("listed")
+                .expect("presets validate (tested)")
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn every_preset_validates() {
+        for name in super::NAMES {
+            let m = super::preset(name).unwrap();
+            assert!(m.is_ok(), "{name}: {:?}", m.err());
+        }
+    }
+}

@@ -1,0 +1,186 @@
+//! FORMULAS.md §6: the models, each returning the BRDF per RGB channel in 1/sr (no cosine)
+//! and its terms. Non-microfacet models report D = the specular lobe per unit `c_spec`
+//! (0 for Lambert) and G = F = K = 1.
+
+use super::frame::{dot, Frame};
+use super::{convention, distribution, fresnel, geometry, Evaluation, Status};
+use crate::material::{CookTorrance, Distribution, Fresnel, Geometry, Material, Model, Roughness};
+use std::f64::consts::PI;
+
+/// Evaluates `m` on a valid, above-horizon frame.
+pub fn evaluate_model(fr: &Frame, m: &Material) -> Evaluation {
+    let (lobe, rs) = match &m.model {
+        Model::Lambert => (0.0, None),
+        Model::Phong { exponent } => (phong_lobe(fr, *exponent), None),
+        Model::BlinnPhong { exponent } => (blinn_phong_lobe(fr, *exponent), None),
+        Model::Rtr { exponent } => (rtr_lobe(fr, *exponent), None),
+        Model::Ward { roughness } => (ward_lobe(fr, *roughness), None),
+        Model::CookTorrance(ct) => (0.0, Some(cook_torrance_terms(fr, ct))),
+    };
+    let diffuse = m.diffuse.map(|c| c / PI);
+    match rs {
+        None => Evaluation {
+            status: Status::Valid,
+            brdf: std::array::from_fn(|c| diffuse[c] + m.specular[c] * lobe),
+            d: lobe,
+            g: 1.0,
+            f: [1.0; 3],
+            k: 1.0,
+        },
+        Some(Terms { d, g, f, k }) => {
+            let ct = m.cook_torrance().expect("matched above");
+            Evaluation {
+                status: Status::Valid,
+                brdf: std::array::from_fn(|c| {
+                    ct.diffuse_weight * diffuse[c]
+                        + ct.specular_weight * m.specular[c] * (d * g * f[c] * k)
+                }),
+                d,
+                g,
+                f,
+                k,
+            }
+        }
+    }
+}
+
+/// Lewis 1994, "Making shaders more physically plausible" (modified, normalised Phong):
+/// `(e+2)/(2π) max(0, r·v)^e` with `r = 2 cos_i n − l`.
+pub fn phong_lobe(fr: &Frame, e: f64) -> f64 {
+    // r·v = 2 cos_i cos_o − l·v, the same value without forming r.
+    let r_dot_v = (2.0 * fr.cos_i * fr.cos_o - dot(fr.l, fr.v)).max(0.0);
+    (e + 2.0) / (2.0 * PI) * r_dot_v.powf(e)
+}
+
+/// The seed's Blinn–Phong (Blinn 1977), as a BRDF: `cos_h^e / (π cos_i)`. The `1/cos_i`
+/// makes the shading equation's `cos_h^e` independent of the incident cosine; it also
+/// makes the model non-reciprocal.
+pub fn blinn_phong_lobe(fr: &Frame, e: f64) -> f64 {
+    fr.cos_h.powf(e) / (PI * fr.cos_i)
+}
+
+/// Akenine-Möller, Haines & Hoffman, "Real-Time Rendering" 3rd ed. §5.5 (the seed's
+/// shading equation): `(e+8)/(8π) cos_h^e`.
+pub fn rtr_lobe(fr: &Frame, e: f64) -> f64 {
+    (e + 8.0) / (8.0 * PI) * fr.cos_h.powf(e)
+}
+
+/// Ward 1992, "Measuring and modeling anisotropic reflection":
+/// `exp(−((hx/mx)² + (hy/my)²)/hz²) / (4π mx my √(cos_i cos_o))`. Isotropic: the exponent
+/// is `−tan²δ/m²`, computed from `|n × h|²` (no tangent needed).
+pub fn ward_lobe(fr: &Frame, roughness: Roughness) -> f64 {
+    let (mx, my) = roughness.xy();
+    let arg = match (roughness, fr.h_local()) {
+        (Roughness::Anisotropic(..), Some([hx, hy, hz])) => {
+            -((hx / mx).powi(2) + (hy / my).powi(2)) / (hz * hz)
+        }
+        _ => -fr.tan2_h() / (mx * mx),
+    };
+    // exp underflows to 0 long before 1/√(cos_i cos_o) can overflow (cosines ≥ 1e-308
+    // give at most 1e308), so the plain product is safe here.
+    arg.exp() / (4.0 * PI * mx * my * (fr.cos_i * fr.cos_o).sqrt())
+}
+
+/// The microfacet terms of a Cook–Torrance material.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Terms {
+    /// D (§2).
+    pub d: f64,
+    /// G (§3).
+    pub g: f64,
+    /// F per channel (§4).
+    pub f: [f64; 3],
+    /// K (§5).
+    pub k: f64,
+}
+
+/// D, G, F and K of a Cook–Torrance material (Cook & Torrance 1982, "A reflectance model
+/// for computer graphics"; conventions per FORMULAS.md §5).
+pub fn cook_torrance_terms(fr: &Frame, ct: &CookTorrance) -> Terms {
+    Terms {
+        d: microfacet_d(fr, ct),
+        g: microfacet_g(fr, ct),
+        f: [0, 1, 2].map(|c| fresnel_f(fr.c, &ct.fresnel, c)),
+        k: convention::glare_k(ct.convention, fr.cos_i, fr.cos_o),
+    }
+}
+
+/// D of §2 for the material's distribution.
+pub fn microfacet_d(fr: &Frame, ct: &CookTorrance) -> f64 {
+    match ct.distribution {
+        Distribution::Gaussian { m } => distribution::gaussian_d(fr.cos_h, fr.sin2_h, m),
+        Distribution::Beckmann(Roughness::Isotropic(m)) => distribution::beckmann_d(
+            fr.cos_h,
+            fr.sin2_h,
+            m,
+            convention::beckmann_k(ct.convention),
+        ),
+        Distribution::Beckmann(Roughness::Anisotropic(mx, my)) => distribution::beckmann_aniso_d(
+            fr.h_local().expect("anisotropic frame has a tangent"),
+            mx,
+            my,
+        ),
+        Distribution::Ggx(Roughness::Isotropic(m)) => distribution::ggx_d(fr.cos_h, fr.sin2_h, m),
+        Distribution::Ggx(Roughness::Anisotropic(mx, my)) => distribution::ggx_aniso_d(
+            fr.h_local().expect("anisotropic frame has a tangent"),
+            mx,
+            my,
+        ),
+        Distribution::Blinn { exponent } => distribution::blinn_d(fr.cos_h, exponent),
+    }
+}
+
+/// `m² tan²θ(w)` for direction `w` (§3), or for anisotropic roughness
+/// `(mx² (w·t)² + my² (w·b)²)/(n·w)²`. Uses `|n × w|²` for `sin²θ`.
+pub fn projected_roughness2(fr: &Frame, w: [f64; 3], cos_w: f64, roughness: Roughness) -> f64 {
+    match (roughness, fr.tb) {
+        (Roughness::Anisotropic(mx, my), Some((t, b))) => {
+            ((mx * dot(w, t)).powi(2) + (my * dot(w, b)).powi(2)) / (cos_w * cos_w)
+        }
+        _ => {
+            let (m, _) = roughness.xy();
+            m * m * super::frame::length_squared(super::frame::cross(fr.n, w)) / (cos_w * cos_w)
+        }
+    }
+}
+
+/// G of §3 for the material's geometry term.
+pub fn microfacet_g(fr: &Frame, ct: &CookTorrance) -> f64 {
+    let roughness = match ct.distribution {
+        Distribution::Beckmann(r) | Distribution::Ggx(r) => Some(r),
+        _ => None,
+    };
+    let x = |w, cos_w| {
+        projected_roughness2(
+            fr,
+            w,
+            cos_w,
+            roughness.expect("Smith needs beckmann/ggx (validated)"),
+        )
+    };
+    let lambda = |w, cos_w| match ct.distribution {
+        Distribution::Beckmann(_) => geometry::beckmann_lambda(x(w, cos_w)),
+        _ => geometry::ggx_lambda(x(w, cos_w)),
+    };
+    match ct.geometry {
+        Geometry::None => 1.0,
+        Geometry::CookTorrance => geometry::cook_torrance_g(fr.cos_h, fr.cos_i, fr.cos_o, fr.c),
+        Geometry::Smith => geometry::smith_g(lambda(fr.v, fr.cos_o), lambda(fr.l, fr.cos_i)),
+        Geometry::SmithCorrelated => {
+            geometry::smith_correlated_g(lambda(fr.v, fr.cos_o), lambda(fr.l, fr.cos_i))
+        }
+        Geometry::SmithFast => {
+            geometry::smith_fast_g1(x(fr.v, fr.cos_o)) * geometry::smith_fast_g1(x(fr.l, fr.cos_i))
+        }
+    }
+}
+
+/// F of §4 for channel `ch`.
+pub fn fresnel_f(c: f64, f: &Fresnel, ch: usize) -> f64 {
+    match *f {
+        Fresnel::None => 1.0,
+        Fresnel::Dielectric { ior } => fresnel::dielectric_f(c, ior[ch]),
+        Fresnel::Conductor { ior, extinction } => fresnel::conductor_f(c, ior[ch], extinction[ch]),
+        Fresnel::Schlick { f0 } => fresnel::schlick_f(c, f0[ch]),
+    }
+}
