@@ -33,5 +33,6 @@ pub mod error;
 pub mod features;
 pub mod material;
 pub mod reference;
+pub mod sample;
 
 pub use error::{Error, Result};

@@ -1,0 +1,79 @@
+//! `vkbrdf eval`: materials + tuples in, BRDF (and terms) out.
+
+use super::backend_choice::{self, BackendArgs};
+use anyhow::Context;
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::time::Instant;
+use vkbrdf::backend::{Request, TERM_COLUMNS};
+use vkbrdf::batch::{self, Batch};
+
+/// Arguments of `vkbrdf eval`.
+#[derive(clap::Args, Debug)]
+#[command(after_help = "\
+Input: a float32 or float64 .npy array, C order, shape (n, 10) or (n, 13), columns
+  Lx Ly Lz Vx Vy Vz Nx Ny Nz material [Tx Ty Tz]
+(material = row index into the materials file's [[material]] tables, from 0; the tangent
+columns are needed only by anisotropic materials).
+
+Output: BRDF.npy, float32 (n, 3): RGB f in 1/sr (no cosine); TERMS.npy, float32 (n, 6):
+D, G, F_r, F_g, F_b, K. Invalid tuples (zero or non-finite vectors, a bad tangent) and
+tuples below the horizon give 0; both are counted. Files are written atomically.
+
+Example:
+  vkbrdf generate --materials m.toml --tuples 1000000 --output t.npy
+  vkbrdf eval --materials m.toml --input t.npy --output brdf.npy --terms terms.npy")]
+pub struct Args {
+    /// Materials file (TOML, [[material]] tables; see `vkbrdf materials --help`).
+    #[arg(long, short = 'm', value_name = "M.toml")]
+    pub materials: PathBuf,
+    /// Tuples (.npy, shape (n, 10) or (n, 13)).
+    #[arg(long, short = 'i', value_name = "T.npy")]
+    pub input: PathBuf,
+    /// Where to write the RGB BRDF values (.npy, float32 (n, 3)).
+    #[arg(long, short = 'o', value_name = "BRDF.npy")]
+    pub output: PathBuf,
+    /// Also write the terms D, G, F_r, F_g, F_b, K (.npy, float32 (n, 6)).
+    #[arg(long, value_name = "TERMS.npy")]
+    pub terms: Option<PathBuf>,
+    /// Fail (exit 1, no output written) if any tuple is invalid.
+    #[arg(long)]
+    pub strict: bool,
+    #[command(flatten)]
+    pub backend: BackendArgs,
+}
+
+/// Runs `vkbrdf eval`.
+pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
+    let materials = vkbrdf::material::load_materials(&args.materials)?;
+    let t0 = Instant::now();
+    let batch = Batch::read_npy(&args.input, materials.len())?;
+    let read_s = t0.elapsed().as_secs_f64();
+    let mut backend = backend_choice::open(&args.backend)?;
+    let request = Request { terms: args.terms.is_some() };
+    let t1 = Instant::now();
+    let out = backend.evaluate(&batch, &materials, &request)?;
+    let eval_s = t1.elapsed().as_secs_f64();
+    let c = out.counts;
+    eprintln!(
+        "{} tuples on {}: {} evaluated, {} invalid, {} below the horizon ({:.3} s read, {:.3} s evaluate, {:.1} M tuples/s)",
+        c.tuples,
+        backend.name(),
+        c.tuples - c.invalid - c.below_horizon,
+        c.invalid,
+        c.below_horizon,
+        read_s,
+        eval_s,
+        c.tuples as f64 / eval_s.max(1e-9) / 1e6
+    );
+    if args.strict && c.invalid > 0 {
+        let e = vkbrdf::Error::InvalidTuples { invalid: c.invalid, total: c.tuples, first_row: c.first_invalid.unwrap_or(0) };
+        eprintln!("error: {e} (--strict: nothing written)");
+        return Ok(ExitCode::from(1));
+    }
+    if let (Some(path), Some(terms)) = (&args.terms, &out.terms) {
+        batch::write_npy_f32(path, terms, TERM_COLUMNS).with_context(|| "writing the terms")?;
+    }
+    batch::write_npy_f32(&args.output, &out.brdf, 3).with_context(|| "writing the BRDF values")?;
+    Ok(ExitCode::SUCCESS)
+}

@@ -1,0 +1,40 @@
+//! `vkbrdf generate`: a seeded sample batch for a materials file.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+/// Arguments of `vkbrdf generate`.
+#[derive(clap::Args, Debug)]
+#[command(after_help = "\
+Row i uses material i mod (number of materials). L and V are uniform over the hemisphere
+of a random normal N, with random lengths in [0.5, 2); --tangents adds random Tx Ty Tz
+columns (needed by anisotropic materials).
+
+Example:
+  vkbrdf generate --materials m.toml --tuples 1000000 --tangents --output t.npy")]
+pub struct Args {
+    /// Materials file whose table the material column indexes.
+    #[arg(long, short = 'm', value_name = "M.toml")]
+    pub materials: PathBuf,
+    /// Number of tuples.
+    #[arg(long, short = 'n', default_value_t = 1_000_000)]
+    pub tuples: usize,
+    /// Append tangent columns (13 columns instead of 10).
+    #[arg(long)]
+    pub tangents: bool,
+    /// Random seed (same seed, same file).
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Output .npy file (float32).
+    #[arg(long, short = 'o', value_name = "T.npy")]
+    pub output: PathBuf,
+}
+
+/// Runs `vkbrdf generate`.
+pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
+    let materials = vkbrdf::material::load_materials(&args.materials)?;
+    let batch = vkbrdf::sample::sample_batch(args.tuples, materials.len(), args.seed, args.tangents);
+    vkbrdf::batch::write_npy_f32(&args.output, batch.as_slice(), batch.columns())?;
+    eprintln!("wrote {} tuples × {} columns to {}", batch.len(), batch.columns(), args.output.display());
+    Ok(ExitCode::SUCCESS)
+}

@@ -1,0 +1,104 @@
+//! `vkbrdf materials`: list presets, or validate and list a materials file.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+use vkbrdf::material::{self, Distribution, Fresnel, Material, Model, Roughness};
+
+/// Arguments of `vkbrdf materials`.
+#[derive(clap::Args, Debug)]
+#[command(after_help = r#"Materials files are TOML, one [[material]] table per material:
+
+  [[material]]
+  name = "brushed"            # required, unique
+  preset = "aluminium"        # optional: start from a preset, then override keys
+  model = "cook-torrance"     # lambert | phong | blinn-phong | rtr | ward | cook-torrance
+  convention = "modern"       # seed | cook-torrance-1982 | modern (default)
+  distribution = "ggx"        # gaussian | beckmann | ggx | blinn
+  roughness = [0.1, 0.4]      # m > 0 (rms slope; GGX alpha), or [mx, my] (anisotropic)
+  geometry = "smith-correlated" # none | cook-torrance | smith | smith-correlated | smith-fast
+  fresnel = "conductor"       # none | dielectric | conductor | schlick
+  ior = [1.47, 0.958, 0.618]  # number or RGB
+  extinction = [7.79, 6.69, 5.47] # RGB k (conductor)
+  # f0 = [0.9, 0.9, 0.9]      # schlick: F0, or give ior (+ extinction) instead
+  # exponent = 50             # phong, blinn-phong, rtr, and distribution "blinn"
+  diffuse = [0.0, 0.0, 0.0]   # c_diff (default black)
+  specular = [1.0, 1.0, 1.0]  # c_spec (default white)
+  specular_weight = 1.0       # s (default 1)
+  diffuse_weight = 0.0        # d (default 0)
+
+Keys a model does not read are errors, as are negative colours or weights, roughness <= 0,
+smith* with gaussian/blinn, smith-fast with anything but beckmann, conductor without
+extinction, and anisotropic roughness outside ward and modern beckmann/ggx.
+
+Examples:
+  vkbrdf materials                      # the presets
+  vkbrdf materials --file m.toml        # validate m.toml and list what it defines"#)]
+pub struct Args {
+    /// Validate this materials file and list its materials instead of the presets.
+    #[arg(long, short = 'f', value_name = "M.toml")]
+    pub file: Option<PathBuf>,
+}
+
+/// Runs `vkbrdf materials`.
+pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
+    let list = match &args.file {
+        Some(path) => material::load_materials(path)?,
+        None => material::presets::all(),
+    };
+    println!("{:<16} {}", "name", "definition");
+    for m in &list {
+        println!("{:<16} {}", m.name, summary(m));
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn rgb(c: [f64; 3]) -> String {
+    if c[0] == c[1] && c[1] == c[2] {
+        format!("{}", c[0])
+    } else {
+        format!("[{}, {}, {}]", c[0], c[1], c[2])
+    }
+}
+
+fn rough(r: Roughness) -> String {
+    match r {
+        Roughness::Isotropic(m) => format!("m={m}"),
+        Roughness::Anisotropic(x, y) => format!("m=[{x}, {y}]"),
+    }
+}
+
+/// A one-line description of a material.
+pub fn summary(m: &Material) -> String {
+    let body = match &m.model {
+        Model::Lambert => format!("lambert diffuse={}", rgb(m.diffuse)),
+        Model::Phong { exponent } => format!("phong e={exponent}"),
+        Model::BlinnPhong { exponent } => format!("blinn-phong e={exponent}"),
+        Model::Rtr { exponent } => format!("rtr e={exponent}"),
+        Model::Ward { roughness } => format!("ward {}", rough(*roughness)),
+        Model::CookTorrance(ct) => {
+            let d = match ct.distribution {
+                Distribution::Gaussian { m } => format!("gaussian m={m}"),
+                Distribution::Beckmann(r) => format!("beckmann {}", rough(r)),
+                Distribution::Ggx(r) => format!("ggx {}", rough(r)),
+                Distribution::Blinn { exponent } => format!("blinn e={exponent}"),
+            };
+            let f = match ct.fresnel {
+                Fresnel::None => "F=none".to_string(),
+                Fresnel::Dielectric { ior } => format!("dielectric ior={}", rgb(ior)),
+                Fresnel::Conductor { ior, extinction } => format!("conductor n={} k={}", rgb(ior), rgb(extinction)),
+                Fresnel::Schlick { f0 } => format!("schlick f0={}", rgb(f0)),
+            };
+            format!(
+                "cook-torrance ({:?}) {d}, G={:?}, {f}, s={} d={}",
+                ct.convention, ct.geometry, ct.specular_weight, ct.diffuse_weight
+            )
+        }
+    };
+    if matches!(m.model, Model::Lambert) {
+        body
+    } else if m.diffuse != [0.0; 3] || m.specular != [1.0; 3] {
+        format!("{body}, diffuse={}, specular={}", rgb(m.diffuse), rgb(m.specular))
+    } else {
+        body
+    }
+}
