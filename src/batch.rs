@@ -154,7 +154,11 @@ pub fn read_npy_f32(path: &Path) -> Result<(Vec<f32>, Vec<u64>)> {
         ));
     }
     let shape = npy.shape().to_vec();
-    let dtype = npy.dtype().descr().trim_matches(|c| c == '\'' || c == '"').to_string();
+    let dtype = npy
+        .dtype()
+        .descr()
+        .trim_matches(|c| c == '\'' || c == '"')
+        .to_string();
     let data: Vec<f32> = match dtype.as_str() {
         "<f4" => npy.into_vec::<f32>().map_err(|e| truncated(path, e))?,
         "<f8" => npy

@@ -20,7 +20,11 @@ pub fn unit_vector(rng: &mut impl Rng) -> [f64; 3] {
 /// `tangents`, a random T not parallel to N is appended.
 pub fn sample_batch(n: usize, material_count: usize, seed: u64, tangents: bool) -> Batch {
     let mut rng = Pcg64Mcg::seed_from_u64(seed);
-    let cols = if tangents { COLUMNS_TANGENT } else { COLUMNS_PLAIN };
+    let cols = if tangents {
+        COLUMNS_TANGENT
+    } else {
+        COLUMNS_PLAIN
+    };
     let mut data = Vec::with_capacity(n * cols);
     for i in 0..n {
         let nrm = unit_vector(&mut rng);
@@ -28,7 +32,11 @@ pub fn sample_batch(n: usize, material_count: usize, seed: u64, tangents: bool) 
             let mut w = unit_vector(rng);
             let d = w[0] * nrm[0] + w[1] * nrm[1] + w[2] * nrm[2];
             if d < 0.0 {
-                w = [w[0] - 2.0 * d * nrm[0], w[1] - 2.0 * d * nrm[1], w[2] - 2.0 * d * nrm[2]];
+                w = [
+                    w[0] - 2.0 * d * nrm[0],
+                    w[1] - 2.0 * d * nrm[1],
+                    w[2] - 2.0 * d * nrm[2],
+                ];
             }
             let len: f64 = rng.random_range(0.5..2.0);
             w.map(|x| (x * len) as f32)
@@ -43,5 +51,11 @@ pub fn sample_batch(n: usize, material_count: usize, seed: u64, tangents: bool) 
             data.extend(unit_vector(&mut rng).map(|x| x as f32));
         }
     }
-    Batch::new(data, cols, material_count.max(1), &crate::batch::memory_source()).expect("generated batches are valid")
+    Batch::new(
+        data,
+        cols,
+        material_count.max(1),
+        &crate::batch::memory_source(),
+    )
+    .expect("generated batches are valid")
 }

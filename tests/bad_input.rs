@@ -17,11 +17,15 @@ fn material_error(toml: &str) -> String {
 fn assert_material_error(toml: &str, fragments: &[&str]) {
     let msg = material_error(toml);
     for f in fragments {
-        assert!(msg.contains(f), "error for\n{toml}\nis `{msg}`, which lacks `{f}`");
+        assert!(
+            msg.contains(f),
+            "error for\n{toml}\nis `{msg}`, which lacks `{f}`"
+        );
     }
 }
 
-const CT: &str = "model = \"cook-torrance\"\ndistribution = \"ggx\"\nroughness = 0.3\ngeometry = \"smith\"\n";
+const CT: &str =
+    "model = \"cook-torrance\"\ndistribution = \"ggx\"\nroughness = 0.3\ngeometry = \"smith\"\n";
 
 #[test]
 fn unknown_key_names_material_key_and_line() {
@@ -33,35 +37,73 @@ fn unknown_key_names_material_key_and_line() {
 
 #[test]
 fn unknown_values_are_rejected() {
-    assert_material_error("[[material]]\nname = \"a\"\nmodel = \"oren-nayar\"\n", &["m.toml:3", "key `model`", "oren-nayar", "lambert"]);
+    assert_material_error(
+        "[[material]]\nname = \"a\"\nmodel = \"oren-nayar\"\n",
+        &["m.toml:3", "key `model`", "oren-nayar", "lambert"],
+    );
     assert_material_error(
         "[[material]]\nname = \"a\"\nmodel = \"cook-torrance\"\ndistribution = \"ggx\"\nroughness = 0.3\ngeometry = \"smith\"\nfresnel = \"magic\"\n",
         &["m.toml:7", "key `fresnel`", "magic"],
     );
-    assert_material_error(&format!("[[material]]\nname = \"a\"\n{CT}fresnel = \"none\"\nconvention = \"old\"\n"), &["key `convention`", "old"]);
-    assert_material_error("[[material]]\nname = \"a\"\npreset = \"unobtainium\"\n", &["key `preset`", "unobtainium", "gold"]);
+    assert_material_error(
+        &format!("[[material]]\nname = \"a\"\n{CT}fresnel = \"none\"\nconvention = \"old\"\n"),
+        &["key `convention`", "old"],
+    );
+    assert_material_error(
+        "[[material]]\nname = \"a\"\npreset = \"unobtainium\"\n",
+        &["key `preset`", "unobtainium", "gold"],
+    );
 }
 
 #[test]
 fn wrong_types_are_rejected() {
-    assert_material_error("[[material]]\nname = \"a\"\nmodel = 3\n", &["key `model`", "expected a string"]);
-    assert_material_error("[[material]]\nname = \"a\"\nmodel = \"phong\"\nexponent = \"high\"\n", &["key `exponent`", "expected a number"]);
-    assert_material_error("[[material]]\nname = \"a\"\nmodel = \"lambert\"\ndiffuse = [1, 2]\n", &["key `diffuse`", "array of 2"]);
-    assert_material_error("[[material]]\nname = \"a\"\nmodel = \"phong\"\nexponent = [1, 2]\n", &["key `exponent`", "array"]);
-    assert_material_error("[[material]]\nname = 5\nmodel = \"lambert\"\n", &["key `name`"]);
-    assert_material_error("[[material]]\nmodel = \"lambert\"\n", &["key `name`", "needs a `name`"]);
+    assert_material_error(
+        "[[material]]\nname = \"a\"\nmodel = 3\n",
+        &["key `model`", "expected a string"],
+    );
+    assert_material_error(
+        "[[material]]\nname = \"a\"\nmodel = \"phong\"\nexponent = \"high\"\n",
+        &["key `exponent`", "expected a number"],
+    );
+    assert_material_error(
+        "[[material]]\nname = \"a\"\nmodel = \"lambert\"\ndiffuse = [1, 2]\n",
+        &["key `diffuse`", "array of 2"],
+    );
+    assert_material_error(
+        "[[material]]\nname = \"a\"\nmodel = \"phong\"\nexponent = [1, 2]\n",
+        &["key `exponent`", "array"],
+    );
+    assert_material_error(
+        "[[material]]\nname = 5\nmodel = \"lambert\"\n",
+        &["key `name`"],
+    );
+    assert_material_error(
+        "[[material]]\nmodel = \"lambert\"\n",
+        &["key `name`", "needs a `name`"],
+    );
 }
 
 #[test]
 fn malformed_toml_names_the_line() {
-    assert_material_error("[[material]]\nname = \"a\"\nmodel = \"lambert\n", &["m.toml:3"]);
+    assert_material_error(
+        "[[material]]\nname = \"a\"\nmodel = \"lambert\n",
+        &["m.toml:3"],
+    );
     assert_material_error("[[materials]]\nname = \"a\"\n", &["m.toml:1", "materials"]);
     assert_material_error("", &["no [[material]]"]);
 }
 
 #[test]
 fn roughness_must_be_positive_and_finite() {
-    for bad in ["0", "-0.1", "nan", "inf", "[0.1, 0]", "[0.1, -1]", "[0.1, 0.2, 0.3]"] {
+    for bad in [
+        "0",
+        "-0.1",
+        "nan",
+        "inf",
+        "[0.1, 0]",
+        "[0.1, -1]",
+        "[0.1, 0.2, 0.3]",
+    ] {
         assert_material_error(
             &format!("[[material]]\nname = \"a\"\nmodel = \"ward\"\nroughness = {bad}\n"),
             &["m.toml:4", "material `a`", "key `roughness`"],
@@ -87,14 +129,42 @@ fn smith_needs_a_lambda() {
 
 #[test]
 fn conductor_needs_extinction_and_dielectric_refuses_it() {
-    assert_material_error(&format!("[[material]]\nname = \"a\"\n{CT}fresnel = \"conductor\"\nior = 0.2\n"), &["key `extinction`", "conductor"]);
-    assert_material_error(&format!("[[material]]\nname = \"a\"\n{CT}fresnel = \"conductor\"\nextinction = [3, 3, 3]\n"), &["key `ior`"]);
-    assert_material_error(&format!("[[material]]\nname = \"a\"\n{CT}fresnel = \"dielectric\"\nior = 1.5\nextinction = 1\n"), &["key `extinction`", "conductor"]);
-    assert_material_error(&format!("[[material]]\nname = \"a\"\n{CT}fresnel = \"dielectric\"\n"), &["key `ior`", "missing"]);
-    assert_material_error(&format!("[[material]]\nname = \"a\"\n{CT}fresnel = \"schlick\"\n"), &["key `f0`", "missing"]);
-    assert_material_error(&format!("[[material]]\nname = \"a\"\n{CT}fresnel = \"schlick\"\nf0 = 0.04\nior = 1.5\n"), &["key `f0`", "not both"]);
-    assert_material_error(&format!("[[material]]\nname = \"a\"\n{CT}fresnel = \"schlick\"\nf0 = 1.5\n"), &["key `f0`", "[0, 1]"]);
-    assert_material_error(&format!("[[material]]\nname = \"a\"\n{CT}fresnel = \"dielectric\"\nior = 0\n"), &["key `ior`", "> 0"]);
+    assert_material_error(
+        &format!("[[material]]\nname = \"a\"\n{CT}fresnel = \"conductor\"\nior = 0.2\n"),
+        &["key `extinction`", "conductor"],
+    );
+    assert_material_error(
+        &format!(
+            "[[material]]\nname = \"a\"\n{CT}fresnel = \"conductor\"\nextinction = [3, 3, 3]\n"
+        ),
+        &["key `ior`"],
+    );
+    assert_material_error(
+        &format!(
+            "[[material]]\nname = \"a\"\n{CT}fresnel = \"dielectric\"\nior = 1.5\nextinction = 1\n"
+        ),
+        &["key `extinction`", "conductor"],
+    );
+    assert_material_error(
+        &format!("[[material]]\nname = \"a\"\n{CT}fresnel = \"dielectric\"\n"),
+        &["key `ior`", "missing"],
+    );
+    assert_material_error(
+        &format!("[[material]]\nname = \"a\"\n{CT}fresnel = \"schlick\"\n"),
+        &["key `f0`", "missing"],
+    );
+    assert_material_error(
+        &format!("[[material]]\nname = \"a\"\n{CT}fresnel = \"schlick\"\nf0 = 0.04\nior = 1.5\n"),
+        &["key `f0`", "not both"],
+    );
+    assert_material_error(
+        &format!("[[material]]\nname = \"a\"\n{CT}fresnel = \"schlick\"\nf0 = 1.5\n"),
+        &["key `f0`", "[0, 1]"],
+    );
+    assert_material_error(
+        &format!("[[material]]\nname = \"a\"\n{CT}fresnel = \"dielectric\"\nior = 0\n"),
+        &["key `ior`", "> 0"],
+    );
 }
 
 #[test]
@@ -112,23 +182,47 @@ fn anisotropy_only_where_it_exists() {
         &["key `roughness`", "isotropic"],
     );
     // Not on a model that has no roughness at all.
-    assert_material_error("[[material]]\nname = \"a\"\nmodel = \"phong\"\nexponent = 10\nroughness = [0.1, 0.3]\n", &["key `roughness`", "does not apply"]);
+    assert_material_error(
+        "[[material]]\nname = \"a\"\nmodel = \"phong\"\nexponent = 10\nroughness = [0.1, 0.3]\n",
+        &["key `roughness`", "does not apply"],
+    );
 }
 
 #[test]
 fn negative_colours_and_weights_are_rejected() {
-    assert_material_error("[[material]]\nname = \"a\"\nmodel = \"lambert\"\ndiffuse = [0.5, -0.1, 0.5]\n", &["key `diffuse`", "≥ 0", "-0.1"]);
-    assert_material_error("[[material]]\nname = \"a\"\nmodel = \"phong\"\nexponent = 10\nspecular = -1\n", &["key `specular`"]);
-    assert_material_error(&format!("[[material]]\nname = \"a\"\n{CT}fresnel = \"none\"\nspecular_weight = -0.5\n"), &["key `specular_weight`"]);
-    assert_material_error(&format!("[[material]]\nname = \"a\"\n{CT}fresnel = \"none\"\ndiffuse_weight = -0.5\n"), &["key `diffuse_weight`"]);
-    assert_material_error("[[material]]\nname = \"a\"\nmodel = \"phong\"\nexponent = -1\n", &["key `exponent`"]);
+    assert_material_error(
+        "[[material]]\nname = \"a\"\nmodel = \"lambert\"\ndiffuse = [0.5, -0.1, 0.5]\n",
+        &["key `diffuse`", "≥ 0", "-0.1"],
+    );
+    assert_material_error(
+        "[[material]]\nname = \"a\"\nmodel = \"phong\"\nexponent = 10\nspecular = -1\n",
+        &["key `specular`"],
+    );
+    assert_material_error(
+        &format!("[[material]]\nname = \"a\"\n{CT}fresnel = \"none\"\nspecular_weight = -0.5\n"),
+        &["key `specular_weight`"],
+    );
+    assert_material_error(
+        &format!("[[material]]\nname = \"a\"\n{CT}fresnel = \"none\"\ndiffuse_weight = -0.5\n"),
+        &["key `diffuse_weight`"],
+    );
+    assert_material_error(
+        "[[material]]\nname = \"a\"\nmodel = \"phong\"\nexponent = -1\n",
+        &["key `exponent`"],
+    );
 }
 
 #[test]
 fn missing_required_keys_and_duplicates() {
     assert_material_error("[[material]]\nname = \"a\"\n", &["key `model`", "missing"]);
-    assert_material_error("[[material]]\nname = \"a\"\nmodel = \"cook-torrance\"\n", &["key `distribution`", "missing"]);
-    assert_material_error("[[material]]\nname = \"a\"\nmodel = \"phong\"\n", &["key `exponent`", "missing"]);
+    assert_material_error(
+        "[[material]]\nname = \"a\"\nmodel = \"cook-torrance\"\n",
+        &["key `distribution`", "missing"],
+    );
+    assert_material_error(
+        "[[material]]\nname = \"a\"\nmodel = \"phong\"\n",
+        &["key `exponent`", "missing"],
+    );
     assert_material_error(
         "[[material]]\nname = \"a\"\nmodel = \"lambert\"\n[[material]]\nname = \"a\"\nmodel = \"lambert\"\n",
         &["m.toml:4", "duplicate"],
@@ -137,16 +231,26 @@ fn missing_required_keys_and_duplicates() {
 
 #[test]
 fn presets_take_overrides_and_drop_keys_the_override_makes_moot() {
-    let m = parse_materials("[[material]]\nname = \"rough-gold\"\npreset = \"gold\"\nroughness = 0.6\n", "m.toml").unwrap();
+    let m = parse_materials(
+        "[[material]]\nname = \"rough-gold\"\npreset = \"gold\"\nroughness = 0.6\n",
+        "m.toml",
+    )
+    .unwrap();
     let ct = m[0].cook_torrance().expect("gold is cook-torrance");
-    assert_eq!(ct.distribution, vkbrdf::material::Distribution::Ggx(vkbrdf::material::Roughness::Isotropic(0.6)));
+    assert_eq!(
+        ct.distribution,
+        vkbrdf::material::Distribution::Ggx(vkbrdf::material::Roughness::Isotropic(0.6))
+    );
     // Switching gold to a Blinn distribution: the preset's roughness is dropped, not an error.
     let m = parse_materials(
         "[[material]]\nname = \"g\"\npreset = \"gold\"\ndistribution = \"blinn\"\nexponent = 80\ngeometry = \"cook-torrance\"\n",
         "m.toml",
     )
     .unwrap();
-    assert_eq!(m[0].cook_torrance().unwrap().distribution, vkbrdf::material::Distribution::Blinn { exponent: 80.0 });
+    assert_eq!(
+        m[0].cook_torrance().unwrap().distribution,
+        vkbrdf::material::Distribution::Blinn { exponent: 80.0 }
+    );
 }
 
 // ---- .npy errors -------------------------------------------------------------------------
@@ -155,9 +259,19 @@ fn presets_take_overrides_and_drop_keys_the_override_makes_moot() {
 fn write_npy(path: &Path, descr: &str, fortran: bool, shape: &[usize], data: &[u8]) {
     let shape_s = match shape.len() {
         1 => format!("({},)", shape[0]),
-        _ => format!("({})", shape.iter().map(|s| s.to_string()).collect::<Vec<_>>().join(", ")),
+        _ => format!(
+            "({})",
+            shape
+                .iter()
+                .map(|s| s.to_string())
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
     };
-    let mut header = format!("{{'descr': '{descr}', 'fortran_order': {}, 'shape': {shape_s}, }}", if fortran { "True" } else { "False" });
+    let mut header = format!(
+        "{{'descr': '{descr}', 'fortran_order': {}, 'shape': {shape_s}, }}",
+        if fortran { "True" } else { "False" }
+    );
     while (10 + header.len() + 1) % 64 != 0 {
         header.push(' ');
     }
@@ -177,7 +291,13 @@ fn row(material: f32) -> Vec<f32> {
     vec![0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0, material]
 }
 
-fn npy_error(descr: &str, fortran: bool, shape: &[usize], data: &[u8], material_count: usize) -> String {
+fn npy_error(
+    descr: &str,
+    fortran: bool,
+    shape: &[usize],
+    data: &[u8],
+    material_count: usize,
+) -> String {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("tuples.npy");
     write_npy(&path, descr, fortran, shape, data);
@@ -185,7 +305,10 @@ fn npy_error(descr: &str, fortran: bool, shape: &[usize], data: &[u8], material_
         Ok(_) => panic!("expected an error for descr {descr} shape {shape:?}"),
         Err(e) => {
             let msg = e.to_string();
-            assert!(msg.contains("tuples.npy"), "error `{msg}` does not name the file");
+            assert!(
+                msg.contains("tuples.npy"),
+                "error `{msg}` does not name the file"
+            );
             msg
         }
     }
@@ -200,7 +323,10 @@ fn npy_good_files_read_in_both_float_widths() {
     let b = Batch::read_npy(&path, 2).unwrap();
     assert_eq!(b.len(), 2);
     assert_eq!(b.material(1), 1);
-    let wide: Vec<u8> = rows.iter().flat_map(|&x| (x as f64).to_le_bytes()).collect();
+    let wide: Vec<u8> = rows
+        .iter()
+        .flat_map(|&x| (x as f64).to_le_bytes())
+        .collect();
     write_npy(&path, "<f8", false, &[2, 10], &wide);
     assert_eq!(Batch::read_npy(&path, 2).unwrap().as_slice(), &rows[..]);
 }
@@ -240,7 +366,10 @@ fn npy_truncated() {
     let path = dir.path().join("tuples.npy");
     std::fs::write(&path, b"\x93NUMPY\x01").unwrap();
     let msg = Batch::read_npy(&path, 1).unwrap_err().to_string();
-    assert!(msg.contains("tuples.npy") && msg.contains("not a valid .npy"), "{msg}");
+    assert!(
+        msg.contains("tuples.npy") && msg.contains("not a valid .npy"),
+        "{msg}"
+    );
 }
 
 #[test]
@@ -248,14 +377,21 @@ fn npy_bad_material_values_name_the_first_bad_row() {
     for (bad, why) in [(1.5f32, "1.5"), (3.0, "3"), (-1.0, "-1"), (f32::NAN, "NaN")] {
         let rows: Vec<f32> = [row(0.0), row(1.0), row(bad), row(bad)].concat();
         let msg = npy_error("<f4", false, &[4, 10], &f32_bytes(&rows), 3);
-        assert!(msg.contains("row 2") && msg.contains(why) && msg.contains("0..3"), "material {bad}: {msg}");
+        assert!(
+            msg.contains("row 2") && msg.contains(why) && msg.contains("0..3"),
+            "material {bad}: {msg}"
+        );
     }
 }
 
 #[test]
 fn missing_file_is_an_io_error_naming_it() {
-    let e = Batch::read_npy(Path::new("/nonexistent/dir/t.npy"), 1).unwrap_err().to_string();
+    let e = Batch::read_npy(Path::new("/nonexistent/dir/t.npy"), 1)
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("/nonexistent/dir/t.npy"), "{e}");
-    let e = vkbrdf::material::load_materials(Path::new("/nonexistent/m.toml")).unwrap_err().to_string();
+    let e = vkbrdf::material::load_materials(Path::new("/nonexistent/m.toml"))
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("/nonexistent/m.toml"), "{e}");
 }

@@ -53,27 +53,63 @@ ior = 1.5
 "#;
 
 fn vkbrdf(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_vkbrdf")).args(args).output().expect("run vkbrdf")
+    Command::new(env!("CARGO_BIN_EXE_vkbrdf"))
+        .args(args)
+        .output()
+        .expect("run vkbrdf")
 }
 
 fn text(o: &Output) -> String {
-    format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr))
+    format!(
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    )
 }
 
 fn setup(dir: &Path) -> (String, String, Batch) {
     let m = dir.join("m.toml");
     std::fs::write(&m, MATERIALS).unwrap();
     let t = dir.join("t.npy");
-    let o = vkbrdf(&["generate", "--materials", m.to_str().unwrap(), "--tuples", "2000", "--tangents", "--output", t.to_str().unwrap()]);
+    let o = vkbrdf(&[
+        "generate",
+        "--materials",
+        m.to_str().unwrap(),
+        "--tuples",
+        "2000",
+        "--tangents",
+        "--output",
+        t.to_str().unwrap(),
+    ]);
     assert!(o.status.success(), "{}", text(&o));
     // Append an invalid row (NaN in L) and a below-horizon row (L = −N).
     let (mut data, shape) = read_npy_f32(&t).unwrap();
     assert_eq!(shape, vec![2000, 13]);
-    data.extend([f32::NAN, 0.0, 1.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 0.0, 1.0, 0.0, 0.0]);
-    data.extend([0.0, 0.0, -1.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 1.0, 1.0, 0.0, 0.0]);
+    data.extend([
+        f32::NAN,
+        0.0,
+        1.0,
+        0.0,
+        0.0,
+        1.0,
+        0.0,
+        0.0,
+        1.0,
+        0.0,
+        1.0,
+        0.0,
+        0.0,
+    ]);
+    data.extend([
+        0.0, 0.0, -1.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 1.0, 1.0, 0.0, 0.0,
+    ]);
     write_npy_f32(&t, &data, 13).unwrap();
     let batch = Batch::new(data, 13, 8, &t).unwrap();
-    (m.to_str().unwrap().to_string(), t.to_str().unwrap().to_string(), batch)
+    (
+        m.to_str().unwrap().to_string(),
+        t.to_str().unwrap().to_string(),
+        batch,
+    )
 }
 
 #[test]
@@ -83,10 +119,27 @@ fn eval_round_trip_matches_the_reference() {
     let materials = vkbrdf::material::parse_materials(MATERIALS, "m.toml").unwrap();
     let brdf = dir.path().join("brdf.npy");
     let terms = dir.path().join("terms.npy");
-    let o = vkbrdf(&["eval", "--backend", "cpu", "-m", &m, "-i", &t, "-o", brdf.to_str().unwrap(), "--terms", terms.to_str().unwrap()]);
+    let o = vkbrdf(&[
+        "eval",
+        "--backend",
+        "cpu",
+        "-m",
+        &m,
+        "-i",
+        &t,
+        "-o",
+        brdf.to_str().unwrap(),
+        "--terms",
+        terms.to_str().unwrap(),
+    ]);
     assert!(o.status.success(), "{}", text(&o));
     let msg = text(&o);
-    assert!(msg.contains("2002 tuples") && msg.contains("1 invalid") && msg.contains("1 below the horizon"), "{msg}");
+    assert!(
+        msg.contains("2002 tuples")
+            && msg.contains("1 invalid")
+            && msg.contains("1 below the horizon"),
+        "{msg}"
+    );
     let (f, fshape) = read_npy_f32(&brdf).unwrap();
     let (g, gshape) = read_npy_f32(&terms).unwrap();
     assert_eq!(fshape, vec![2002, 3]);
@@ -96,13 +149,22 @@ fn eval_round_trip_matches_the_reference() {
         let r = vkbrdf::reference::evaluate_tuple(&tuple, &materials[tuple.material]);
         let terms_ref = r.terms();
         let expect = r.brdf.iter().chain(terms_ref.iter()).copied();
-        let got = f[3 * i..3 * i + 3].iter().chain(&g[6 * i..6 * i + 6]).map(|&x| x as f64);
+        let got = f[3 * i..3 * i + 3]
+            .iter()
+            .chain(&g[6 * i..6 * i + 6])
+            .map(|&x| x as f64);
         for (col, (e, a)) in expect.zip(got).enumerate() {
             // The CPU backend's files hold exactly the reference value rounded once to f32.
-            assert!(a == e as f32 as f64, "row {i} column {col}: file {a}, reference {e}, tuple {tuple:?}");
+            assert!(
+                a == e as f32 as f64,
+                "row {i} column {col}: file {a}, reference {e}, tuple {tuple:?}"
+            );
         }
     }
-    assert!(f[3 * 2000..].iter().all(|&x| x == 0.0), "invalid and below-horizon rows are 0");
+    assert!(
+        f[3 * 2000..].iter().all(|&x| x == 0.0),
+        "invalid and below-horizon rows are 0"
+    );
 }
 
 #[test]
@@ -110,7 +172,18 @@ fn strict_refuses_invalid_tuples_and_writes_nothing() {
     let dir = tempfile::tempdir().unwrap();
     let (m, t, _) = setup(dir.path());
     let brdf = dir.path().join("brdf.npy");
-    let o = vkbrdf(&["eval", "--backend", "cpu", "--strict", "-m", &m, "-i", &t, "-o", brdf.to_str().unwrap()]);
+    let o = vkbrdf(&[
+        "eval",
+        "--backend",
+        "cpu",
+        "--strict",
+        "-m",
+        &m,
+        "-i",
+        &t,
+        "-o",
+        brdf.to_str().unwrap(),
+    ]);
     assert_eq!(o.status.code(), Some(1), "{}", text(&o));
     assert!(text(&o).contains("first invalid row: 2000"), "{}", text(&o));
     assert!(!brdf.exists(), "--strict must not write output");
@@ -123,16 +196,52 @@ fn errors_exit_2_name_the_file_and_leave_existing_output_untouched() {
     let brdf = dir.path().join("brdf.npy");
     std::fs::write(&brdf, b"precious").unwrap();
     let bad = dir.path().join("bad.toml");
-    std::fs::write(&bad, "[[material]]\nname = \"x\"\nmodel = \"lambert\"\nroughness = 1\n").unwrap();
-    let o = vkbrdf(&["eval", "--backend", "cpu", "-m", bad.to_str().unwrap(), "-i", &t, "-o", brdf.to_str().unwrap()]);
+    std::fs::write(
+        &bad,
+        "[[material]]\nname = \"x\"\nmodel = \"lambert\"\nroughness = 1\n",
+    )
+    .unwrap();
+    let o = vkbrdf(&[
+        "eval",
+        "--backend",
+        "cpu",
+        "-m",
+        bad.to_str().unwrap(),
+        "-i",
+        &t,
+        "-o",
+        brdf.to_str().unwrap(),
+    ]);
     assert_eq!(o.status.code(), Some(2));
-    assert!(text(&o).contains("bad.toml:4") && text(&o).contains("roughness"), "{}", text(&o));
+    assert!(
+        text(&o).contains("bad.toml:4") && text(&o).contains("roughness"),
+        "{}",
+        text(&o)
+    );
     assert_eq!(std::fs::read(&brdf).unwrap(), b"precious");
     // An unwritable output directory: a clear error, no stray temporary file.
-    let o = vkbrdf(&["eval", "--backend", "cpu", "-m", &m, "-i", &t, "-o", "/nonexistent-dir/brdf.npy"]);
+    let o = vkbrdf(&[
+        "eval",
+        "--backend",
+        "cpu",
+        "-m",
+        &m,
+        "-i",
+        &t,
+        "-o",
+        "/nonexistent-dir/brdf.npy",
+    ]);
     assert_eq!(o.status.code(), Some(2));
-    assert!(text(&o).contains("/nonexistent-dir/brdf.npy"), "{}", text(&o));
-    let leftovers: Vec<_> = std::fs::read_dir(dir.path()).unwrap().filter_map(|e| e.ok()).filter(|e| e.file_name().to_string_lossy().contains("partial")).collect();
+    assert!(
+        text(&o).contains("/nonexistent-dir/brdf.npy"),
+        "{}",
+        text(&o)
+    );
+    let leftovers: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .filter(|e| e.file_name().to_string_lossy().contains("partial"))
+        .collect();
     assert!(leftovers.is_empty());
 }
 
@@ -141,7 +250,10 @@ fn help_teaches_with_examples() {
     for cmd in ["eval", "materials", "generate", "demo"] {
         let o = vkbrdf(&[cmd, "--help"]);
         assert!(o.status.success());
-        assert!(text(&o).contains("Example"), "`vkbrdf {cmd} --help` has no example");
+        assert!(
+            text(&o).contains("Example"),
+            "`vkbrdf {cmd} --help` has no example"
+        );
     }
     let o = vkbrdf(&["materials"]);
     for p in vkbrdf::material::presets::NAMES {

@@ -41,9 +41,14 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         out.counts.below_horizon,
         out.counts.invalid
     );
-    println!("{:<15} {:>9} {:>27} {:>12} {:>13}", "preset", "tuples", "mean f (R, G, B) 1/sr", "max f (G)", "max rel err");
+    println!(
+        "{:<15} {:>9} {:>27} {:>12} {:>13}",
+        "preset", "tuples", "mean f (R, G, B) 1/sr", "max f (G)", "max rel err"
+    );
     for (mi, m) in materials.iter().enumerate() {
-        let rows: Vec<usize> = (0..batch.len()).filter(|&i| batch.material(i) == mi).collect();
+        let rows: Vec<usize> = (0..batch.len())
+            .filter(|&i| batch.material(i) == mi)
+            .collect();
         let mut mean = [0f64; 3];
         let mut max_g = 0f64;
         for &i in &rows {
@@ -56,7 +61,8 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         for &i in rows.iter().take(args.check) {
             let r = vkbrdf::reference::evaluate_tuple(&batch.tuple(i), m);
             for c in 0..3 {
-                let rel = (out.brdf[3 * i + c] as f64 - r.brdf[c]).abs() / r.brdf[c].abs().max(1e-6);
+                let rel =
+                    (out.brdf[3 * i + c] as f64 - r.brdf[c]).abs() / r.brdf[c].abs().max(1e-6);
                 max_rel = max_rel.max(rel);
             }
         }

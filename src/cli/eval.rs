@@ -50,7 +50,9 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
     let batch = Batch::read_npy(&args.input, materials.len())?;
     let read_s = t0.elapsed().as_secs_f64();
     let mut backend = backend_choice::open(&args.backend)?;
-    let request = Request { terms: args.terms.is_some() };
+    let request = Request {
+        terms: args.terms.is_some(),
+    };
     let t1 = Instant::now();
     let out = backend.evaluate(&batch, &materials, &request)?;
     let eval_s = t1.elapsed().as_secs_f64();
@@ -67,7 +69,11 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         c.tuples as f64 / eval_s.max(1e-9) / 1e6
     );
     if args.strict && c.invalid > 0 {
-        let e = vkbrdf::Error::InvalidTuples { invalid: c.invalid, total: c.tuples, first_row: c.first_invalid.unwrap_or(0) };
+        let e = vkbrdf::Error::InvalidTuples {
+            invalid: c.invalid,
+            total: c.tuples,
+            first_row: c.first_invalid.unwrap_or(0),
+        };
         eprintln!("error: {e} (--strict: nothing written)");
         return Ok(ExitCode::from(1));
     }

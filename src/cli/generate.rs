@@ -33,8 +33,14 @@ pub struct Args {
 /// Runs `vkbrdf generate`.
 pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
     let materials = vkbrdf::material::load_materials(&args.materials)?;
-    let batch = vkbrdf::sample::sample_batch(args.tuples, materials.len(), args.seed, args.tangents);
+    let batch =
+        vkbrdf::sample::sample_batch(args.tuples, materials.len(), args.seed, args.tangents);
     vkbrdf::batch::write_npy_f32(&args.output, batch.as_slice(), batch.columns())?;
-    eprintln!("wrote {} tuples × {} columns to {}", batch.len(), batch.columns(), args.output.display());
+    eprintln!(
+        "wrote {} tuples × {} columns to {}",
+        batch.len(),
+        batch.columns(),
+        args.output.display()
+    );
     Ok(ExitCode::SUCCESS)
 }

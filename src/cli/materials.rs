@@ -6,7 +6,8 @@ use vkbrdf::material::{self, Distribution, Fresnel, Material, Model, Roughness};
 
 /// Arguments of `vkbrdf materials`.
 #[derive(clap::Args, Debug)]
-#[command(after_help = r#"Materials files are TOML, one [[material]] table per material:
+#[command(
+    after_help = r#"Materials files are TOML, one [[material]] table per material:
 
   [[material]]
   name = "brushed"            # required, unique
@@ -32,7 +33,8 @@ extinction, and anisotropic roughness outside ward and modern beckmann/ggx.
 
 Examples:
   vkbrdf materials                      # the presets
-  vkbrdf materials --file m.toml        # validate m.toml and list what it defines"#)]
+  vkbrdf materials --file m.toml        # validate m.toml and list what it defines"#
+)]
 pub struct Args {
     /// Validate this materials file and list its materials instead of the presets.
     #[arg(long, short = 'f', value_name = "M.toml")]
@@ -85,7 +87,9 @@ pub fn summary(m: &Material) -> String {
             let f = match ct.fresnel {
                 Fresnel::None => "F=none".to_string(),
                 Fresnel::Dielectric { ior } => format!("dielectric ior={}", rgb(ior)),
-                Fresnel::Conductor { ior, extinction } => format!("conductor n={} k={}", rgb(ior), rgb(extinction)),
+                Fresnel::Conductor { ior, extinction } => {
+                    format!("conductor n={} k={}", rgb(ior), rgb(extinction))
+                }
                 Fresnel::Schlick { f0 } => format!("schlick f0={}", rgb(f0)),
             };
             format!(
@@ -97,7 +101,11 @@ pub fn summary(m: &Material) -> String {
     if matches!(m.model, Model::Lambert) {
         body
     } else if m.diffuse != [0.0; 3] || m.specular != [1.0; 3] {
-        format!("{body}, diffuse={}, specular={}", rgb(m.diffuse), rgb(m.specular))
+        format!(
+            "{body}, diffuse={}, specular={}",
+            rgb(m.diffuse),
+            rgb(m.specular)
+        )
     } else {
         body
     }

@@ -14,12 +14,17 @@ use std::process::ExitCode;
 /// Values are BRDFs f in 1/sr, without the cosine factor. Directions are any length and
 /// are normalised; see FORMULAS in the README for every model, term and convention.
 #[derive(Parser)]
-#[command(name = "vkbrdf", version, propagate_version = true, after_help = "\
+#[command(
+    name = "vkbrdf",
+    version,
+    propagate_version = true,
+    after_help = "\
 Examples:
   vkbrdf demo                                   # every preset on sample directions
   vkbrdf materials                              # list the presets
   vkbrdf generate --materials m.toml --tuples 1000000 --output t.npy
-  vkbrdf eval --materials m.toml --input t.npy --output brdf.npy --terms terms.npy")]
+  vkbrdf eval --materials m.toml --input t.npy --output brdf.npy --terms terms.npy"
+)]
 pub struct Cli {
     #[command(subcommand)]
     command: Command,

@@ -1,0 +1,152 @@
+// math.glsl — numerical helpers shared by the terms and models (FORMULAS.md §1–§4).
+//
+// Why our own exp/log: the Vulkan spec only bounds exp() by 3 + 2|x| ULP and log() by an
+// absolute 2^-21 near 1; a lobe cos^e with e = 1000 computed as exp(e * log(cos)) would then
+// carry an absolute error of ~5e-4 in its exponent. The helpers below are plain f32
+// arithmetic (range reduction + short series) and behave the same on every driver. Their
+// measured error is pinned by tests/conformance.rs (`math_helpers_are_accurate`).
+
+#ifndef VKBRDF_MATH_GLSL
+#define VKBRDF_MATH_GLSL
+
+const float PI = 3.14159265358979323846;
+const float INV_PI = 0.31830988618379067154;
+const float INV_SQRT_PI = 0.56418958354775628695;
+const float LN2_HI = 0.693145751953125;       // ln 2 rounded to 15 bits: k * LN2_HI is exact for |k| < 256
+const float LN2_LO = 1.42860682030941723212e-6; // ln 2 - LN2_HI
+const float LOG2E = 1.44269504088896340736;
+
+// ---------------------------------------------------------------- finiteness and normalise
+
+// True when x is +-inf or NaN. A bit test, so no fast-math assumption can fold it away.
+bool non_finite(float x) {
+    return (floatBitsToUint(x) & 0x7f800000u) == 0x7f800000u;
+}
+
+bool any_non_finite(vec3 x) {
+    return non_finite(x.x) || non_finite(x.y) || non_finite(x.z);
+}
+
+// x / |x| for any finite non-zero x; ok = false for a zero or non-finite x (an invalid
+// tuple, FORMULAS.md §1). Divides by the largest |component| first: without that, |x|^2
+// underflows to 0 for |x| ~ 1e-20 (0/0 = NaN) and overflows to inf for |x| ~ 1e20
+// (x/inf = 0). After scaling, one component is exactly +-1 and |s| lies in [1, sqrt 3].
+vec3 safe_normalize(vec3 x, out bool ok) {
+    ok = false;
+    if (any_non_finite(x)) {
+        return vec3(0.0);
+    }
+    float m = max(max(abs(x.x), abs(x.y)), abs(x.z));
+    if (m == 0.0) {
+        return vec3(0.0);
+    }
+    vec3 s = x / m;
+    ok = true;
+    return s * inversesqrt(dot(s, s));
+}
+
+// |a x b|^2: the squared sine of the angle between unit vectors, accurate near 0 where
+// 1 - (a.b)^2 cancels to nothing (FORMULAS.md §1, sin2_h).
+float cross_length2(vec3 a, vec3 b) {
+    vec3 c = cross(a, b);
+    return dot(c, c);
+}
+
+// -------------------------------------------------------------------- log-domain helpers
+
+// e^x in f32 to about 2 ULP. Cody–Waite reduction x = k ln2 + r, |r| <= ln2/2, then a
+// degree-7 Taylor polynomial (truncation < 6e-9 relative) and an exact scaling by 2^k.
+float exp_acc(float x) {
+    // Below ln(FLT_MIN) = -87.34 the result is subnormal or 0; returning 0 there keeps k in
+    // the normal exponent range (ldexp of a subnormal result is undefined in GLSL) and maps
+    // x = -inf (e.g. -tan2/m^2 at cos_h = 0) to 0 instead of converting inf to an int.
+    if (x < -87.3) {
+        return 0.0;
+    }
+    // Above ln(FLT_MAX) the true value overflows f32 anyway.
+    if (x > 88.7) {
+        return uintBitsToFloat(0x7f800000u);
+    }
+    float k = floor(x * LOG2E + 0.5);
+    float r = (x - k * LN2_HI) - k * LN2_LO;
+    float p = 1.0 + r * (1.0 + r * (1.0 / 2.0 + r * (1.0 / 6.0 + r * (1.0 / 24.0
+              + r * (1.0 / 120.0 + r * (1.0 / 720.0 + r * (1.0 / 5040.0)))))));
+    return ldexp(p, int(k));
+}
+
+// ln(1 + y) for |y| <= 0.42 via 2 atanh(s), s = y / (2 + y), |s| <= 0.27: series to s^13
+// (truncation s^14 / 15 < 1e-9 relative). Accurate in relative terms even for tiny y,
+// where log(1 + y) loses everything to the rounding of 1 + y.
+float log1p_small(float y) {
+    float s = y / (2.0 + y);
+    float s2 = s * s;
+    return 2.0 * s * (1.0 + s2 * (1.0 / 3.0 + s2 * (1.0 / 5.0 + s2 * (1.0 / 7.0
+                 + s2 * (1.0 / 9.0 + s2 * (1.0 / 11.0 + s2 * (1.0 / 13.0)))))));
+}
+
+// ln x for finite x > 0: x = 2^e f with f in [sqrt(1/2), sqrt 2), ln x = e ln2 + ln f, where
+// f - 1 is exact (Sterbenz) and ln f comes from log1p_small. About 2 ULP.
+float log_acc(float x) {
+    int e;
+    float f = frexp(x, e); // f in [0.5, 1)
+    if (f < 0.70710678) {
+        f *= 2.0;
+        e -= 1;
+    }
+    float fe = float(e);
+    return fe * LN2_HI + (log1p_small(f - 1.0) + fe * LN2_LO);
+}
+
+// ln(1 + y) for y > -1.
+float log1p_acc(float y) {
+    return abs(y) <= 0.42 ? log1p_small(y) : log_acc(1.0 + y);
+}
+
+// ln(cos) of an angle given both cos > 0 and sin^2 = |n x w|^2: near the pole cos is
+// 1 - sin^2/2 and ln(cos) = ln(1 - sin^2)/2 keeps full relative precision; near the horizon
+// cos itself is the accurate number.
+float log_cos(float cos_w, float sin2_w) {
+    return sin2_w < 0.5 ? 0.5 * log1p_acc(-sin2_w) : log_acc(cos_w);
+}
+
+// x^e for x >= 0, e >= 0 with pow(0, 0) = 1 (the reference's f64::powf convention); GLSL's
+// pow(0, y) is undefined, hence the branch.
+float pow_acc(float x, float e) {
+    if (x <= 0.0) {
+        return e == 0.0 ? 1.0 : 0.0;
+    }
+    return exp_acc(e * log_acc(x));
+}
+
+// atan(y / x) for x >= 0, y >= 0 (an angle in [0, pi/2]). GLSL's atan is only bounded by
+// 4096 ULP; here: reduce to t in [0, 1], halve the angle twice with
+// atan t = 2 atan(t / (1 + sqrt(1 + t^2))) to |t| <= tan(pi/16) = 0.199, then the Taylor
+// series to t^15 (truncation 0.199^17/17 < 1e-13). A few ULP in all.
+float atan2_positive(float y, float x) {
+    bool swap = y > x;
+    float t = swap ? x / y : y / x;
+    t = t / (1.0 + sqrt(1.0 + t * t));
+    t = t / (1.0 + sqrt(1.0 + t * t));
+    float t2 = t * t;
+    float a = t * (1.0 - t2 * (1.0 / 3.0 - t2 * (1.0 / 5.0 - t2 * (1.0 / 7.0 - t2 * (1.0 / 9.0
+              - t2 * (1.0 / 11.0 - t2 * (1.0 / 13.0 - t2 * (1.0 / 15.0))))))));
+    a *= 4.0;
+    return swap ? (PI / 2.0 - a) : a;
+}
+
+#if defined(HAS_LAMBDA_BECKMANN)
+// erfc(z) for z >= 0. Press, Teukolsky, Vetterling & Flannery 1992, "Numerical Recipes in C",
+// 2nd ed., §6.2 `erfcc`: a Chebyshev fit with fractional error < 1.2e-7 everywhere (so it
+// stays accurate in relative terms where erfc is tiny, unlike Abramowitz–Stegun 7.1.26,
+// whose bound 1.5e-7 is absolute). In f32 the measured max relative error against an f64
+// erfc on [0, 10] is about 3e-7 (tests/conformance.rs, `math_helpers_are_accurate`).
+float erfc_nr(float z) {
+    float t = 1.0 / (1.0 + 0.5 * z);
+    float p = -z * z - 1.26551223 + t * (1.00002368 + t * (0.37409196 + t * (0.09678418
+              + t * (-0.18628806 + t * (0.27886807 + t * (-1.13520398 + t * (1.48851587
+              + t * (-0.82215223 + t * 0.17087277))))))));
+    return t * exp_acc(p);
+}
+#endif
+
+#endif
