@@ -34,5 +34,7 @@ pub mod features;
 pub mod material;
 pub mod reference;
 pub mod sample;
+pub mod stats;
+pub mod stress;
 
 pub use error::{Error, Result};

@@ -5,6 +5,7 @@ mod demo;
 mod eval;
 mod generate;
 mod materials;
+mod stress;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -41,6 +42,9 @@ enum Command {
     /// The built-in default job: every preset on sample directions, checked against the
     /// reference, with a summary table.
     Demo(demo::Args),
+    /// Evaluate an adversarial corpus and judge it against the f64 reference: non-finite
+    /// outputs, invalid counts, and relative error per term, model and regime.
+    Stress(stress::Args),
 }
 
 /// Runs the parsed command line.
@@ -50,5 +54,6 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Materials(a) => materials::run(&a),
         Command::Generate(a) => generate::run(&a),
         Command::Demo(a) => demo::run(&a),
+        Command::Stress(a) => stress::run(&a),
     }
 }

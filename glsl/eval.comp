@@ -1,0 +1,204 @@
+#version 450
+// eval.comp — the BRDF kernel: one invocation per tuple of one chunk.
+//
+// Compiled once per FeatureSet (src/gpu/kernel.rs): the HAS_* / WRITE_TERMS macros decide
+// which models, terms and outputs exist at all. Also injected from Rust (said once there):
+// the MODEL_* / DIST_* / GEOM_* / FRESNEL_* / CONV_* / FLAG_* codes, the BINDING_* numbers,
+// and USE_SUBGROUP_ARITHMETIC when the device can reduce counts across a subgroup. The
+// workgroup size is specialization constant 0.
+
+#if defined(USE_SUBGROUP_ARITHMETIC)
+#extension GL_KHR_shader_subgroup_basic : require
+#extension GL_KHR_shader_subgroup_arithmetic : require
+#endif
+
+#include "layout.glsl"
+#include "models.glsl"
+
+layout(local_size_x_id = 0) in;
+
+// Rows `Lx Ly Lz Vx Vy Vz Nx Ny Nz material [Tx Ty Tz]` (src/batch.rs), row-major f32.
+layout(std430, set = 0, binding = BINDING_TUPLES) readonly buffer Tuples {
+    float tuples[];
+};
+layout(std430, set = 0, binding = BINDING_MATERIALS) readonly buffer Materials {
+    GpuMaterial materials[];
+};
+// n x 3: RGB BRDF.
+layout(std430, set = 0, binding = BINDING_BRDF) writeonly buffer Brdf {
+    float brdf_out[];
+};
+#if defined(WRITE_TERMS)
+// n x 6: D, G, F_r, F_g, F_b, K.
+layout(std430, set = 0, binding = BINDING_TERMS) writeonly buffer Terms {
+    float terms_out[];
+};
+#endif
+// Chunk totals; the host sets them to (0, 0, 0xffffffff) before each dispatch.
+layout(std430, set = 0, binding = BINDING_COUNTS) buffer Counts {
+    uint invalid_count;
+    uint below_horizon_count;
+    uint first_invalid; // chunk-relative row, 0xffffffff when none
+};
+
+layout(push_constant) uniform Params {
+    uint tuple_count;    // rows in this chunk
+    uint material_count; // rows in the material table
+} params;
+
+#if defined(HAS_TANGENTS)
+const uint COLUMNS = 13u;
+#else
+const uint COLUMNS = 10u;
+#endif
+
+const uint STATUS_VALID = 0u;
+const uint STATUS_INVALID = 1u;
+const uint STATUS_BELOW_HORIZON = 2u;
+
+shared uint s_invalid;
+shared uint s_below;
+shared uint s_first;
+
+vec3 load3(uint base) {
+    return vec3(tuples[base], tuples[base + 1u], tuples[base + 2u]);
+}
+
+// Builds the frame of FORMULAS.md §1 and classifies the tuple. The invalid test comes first.
+uint make_frame(uint row, GpuMaterial m, out Frame f) {
+    uint base = row * COLUMNS;
+    bool ok_l, ok_v, ok_n;
+    f.l = safe_normalize(load3(base), ok_l);
+    f.v = safe_normalize(load3(base + 3u), ok_v);
+    f.n = safe_normalize(load3(base + 6u), ok_n);
+    f.t = vec3(0.0);
+    f.b = vec3(0.0);
+    if (!(ok_l && ok_v && ok_n)) {
+        return STATUS_INVALID;
+    }
+#if defined(HAS_ANISOTROPIC)
+    if (is_anisotropic(m)) {
+#if defined(HAS_TANGENTS)
+        bool ok_t;
+        vec3 t = safe_normalize(load3(base + 10u), ok_t);
+        // |T - n(n.T)| <= 1e-12 |T| (FORMULAS.md §1), on the unit t: |n x t| <= 1e-12, tested
+        // squared. The cross product keeps its relative precision where T - n(n.T) cancels.
+        if (!ok_t || cross_length2(f.n, t) <= 1e-24) {
+            return STATUS_INVALID;
+        }
+        bool ok_p;
+        f.t = safe_normalize(t - f.n * dot(f.n, t), ok_p);
+        f.b = cross(f.n, f.t);
+#else
+        return STATUS_INVALID; // anisotropic material, batch without tangents
+#endif
+    }
+#endif
+    f.cos_i = dot(f.n, f.l);
+    f.cos_o = dot(f.n, f.v);
+    if (f.cos_i <= 0.0 || f.cos_o <= 0.0) {
+        return STATUS_BELOW_HORIZON;
+    }
+    // l + v != 0 here (l = -v would have cos_i = -cos_o), so h is well defined.
+    bool ok_h;
+    f.h = safe_normalize(f.l + f.v, ok_h);
+    f.cos_h = dot(f.n, f.h);
+    f.c = dot(f.v, f.h);
+    f.sin2_h = cross_length2(f.n, f.h);
+    return STATUS_VALID;
+}
+
+Eval evaluate(Frame f, GpuMaterial m) {
+    switch (m.kind.x) {
+#if defined(HAS_LAMBERT)
+    case MODEL_LAMBERT: return model_lambert(m);
+#endif
+#if defined(HAS_PHONG)
+    case MODEL_PHONG: return model_phong(f, m);
+#endif
+#if defined(HAS_BLINN_PHONG)
+    case MODEL_BLINN_PHONG: return model_blinn_phong(f, m);
+#endif
+#if defined(HAS_RTR)
+    case MODEL_RTR: return model_rtr(f, m);
+#endif
+#if defined(HAS_WARD)
+    case MODEL_WARD: return model_ward(f, m);
+#endif
+#if defined(HAS_COOK_TORRANCE)
+    case MODEL_COOK_TORRANCE: return model_cook_torrance(f, m);
+#endif
+    default: return eval_zero();
+    }
+}
+
+void main() {
+    uint row = gl_GlobalInvocationID.x;
+    if (gl_LocalInvocationIndex == 0u) {
+        s_invalid = 0u;
+        s_below = 0u;
+        s_first = 0xffffffffu;
+    }
+    barrier();
+
+    uint status = STATUS_VALID;
+    // No early return: every invocation must reach the barriers below.
+    if (row < params.tuple_count) {
+        // The batch validated every index; the clamp only keeps a corrupted buffer from
+        // reading outside the table.
+        uint mi = min(uint(tuples[row * COLUMNS + 9u]), params.material_count - 1u);
+        GpuMaterial m = materials[mi];
+        Frame f;
+        status = make_frame(row, m, f);
+        Eval e = status == STATUS_VALID ? evaluate(f, m) : eval_zero();
+        brdf_out[row * 3u] = e.brdf.r;
+        brdf_out[row * 3u + 1u] = e.brdf.g;
+        brdf_out[row * 3u + 2u] = e.brdf.b;
+#if defined(WRITE_TERMS)
+        terms_out[row * 6u] = e.d;
+        terms_out[row * 6u + 1u] = e.g;
+        terms_out[row * 6u + 2u] = e.f.r;
+        terms_out[row * 6u + 3u] = e.f.g;
+        terms_out[row * 6u + 4u] = e.f.b;
+        terms_out[row * 6u + 5u] = e.k;
+#endif
+    }
+
+    // Counts: reduce within the subgroup, then one shared atomic per subgroup, then one
+    // global atomic per workgroup (below-horizon tuples are common: per-tuple global atomics
+    // would serialise on one address).
+    bool invalid = status == STATUS_INVALID;
+    bool below = status == STATUS_BELOW_HORIZON;
+#if defined(USE_SUBGROUP_ARITHMETIC)
+    uint n_invalid = subgroupAdd(invalid ? 1u : 0u);
+    uint n_below = subgroupAdd(below ? 1u : 0u);
+    uint first = subgroupMin(invalid ? row : 0xffffffffu);
+    if (subgroupElect()) {
+        if (n_invalid != 0u) {
+            atomicAdd(s_invalid, n_invalid);
+            atomicMin(s_first, first);
+        }
+        if (n_below != 0u) {
+            atomicAdd(s_below, n_below);
+        }
+    }
+#else
+    if (invalid) {
+        atomicAdd(s_invalid, 1u);
+        atomicMin(s_first, row);
+    }
+    if (below) {
+        atomicAdd(s_below, 1u);
+    }
+#endif
+    barrier();
+    if (gl_LocalInvocationIndex == 0u) {
+        if (s_invalid != 0u) {
+            atomicAdd(invalid_count, s_invalid);
+            atomicMin(first_invalid, s_first);
+        }
+        if (s_below != 0u) {
+            atomicAdd(below_horizon_count, s_below);
+        }
+    }
+}

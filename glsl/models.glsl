@@ -1,0 +1,232 @@
+// models.glsl — the reflection models of FORMULAS.md §6, built from the terms of terms.glsl.
+// Each model returns the BRDF (1/sr, no cosine) and its terms; non-microfacet models report
+// D = the specular lobe per unit c_spec (0 for lambert) and G = F = K = 1. Every model is
+// compiled only when the batch uses it (HAS_* macros from the FeatureSet).
+
+#ifndef VKBRDF_MODELS_GLSL
+#define VKBRDF_MODELS_GLSL
+
+#include "layout.glsl"
+#include "terms.glsl"
+
+// One tuple's result: the BRDF and the term columns D, G, F_rgb, K.
+struct Eval {
+    vec3 brdf;
+    float d;
+    float g;
+    vec3 f;
+    float k;
+};
+
+// The all-zero result of an invalid or below-horizon tuple (FORMULAS.md §1).
+Eval eval_zero() {
+    Eval e;
+    e.brdf = vec3(0.0);
+    e.d = 0.0;
+    e.g = 0.0;
+    e.f = vec3(0.0);
+    e.k = 0.0;
+    return e;
+}
+
+// A non-microfacet model: c_diff/pi + c_spec * lobe, D = lobe, G = F = K = 1.
+Eval eval_lobe(GpuMaterial m, float lobe) {
+    Eval e;
+    e.brdf = m.diffuse.rgb + m.specular.rgb * lobe;
+    e.d = lobe;
+    e.g = 1.0;
+    e.f = vec3(1.0);
+    e.k = 1.0;
+    return e;
+}
+
+bool is_anisotropic(GpuMaterial m) {
+    return (m.kind.w & FLAG_ANISOTROPIC) != 0u;
+}
+
+// (hx/mx)^2 + (hy/my)^2, i.e. tan2_h / m^2 times cos_h^2 (isotropic: sin2_h / m^2).
+float slope2_h(Frame f, GpuMaterial m) {
+#if defined(HAS_ANISOTROPIC)
+    if (is_anisotropic(m)) {
+        float hx = dot(f.h, f.t);
+        float hy = dot(f.h, f.b);
+        return hx * hx * m.lobe.x + hy * hy * m.lobe.y;
+    }
+#endif
+    return f.sin2_h * m.lobe.x;
+}
+
+#if defined(HAS_G_SMITH) || defined(HAS_G_SMITH_CORRELATED) || defined(HAS_G_SMITH_FAST)
+// m^2 tan^2(w) = m^2 |n x w|^2 / (n.w)^2, anisotropic (mx^2 (w.t)^2 + my^2 (w.b)^2) / (n.w)^2
+// (FORMULAS.md §3): the argument of Smith's Lambda and of the smith-fast fit.
+float smith_q2(Frame f, GpuMaterial m, vec3 w, float cos_w) {
+    float num;
+#if defined(HAS_ANISOTROPIC)
+    if (is_anisotropic(m)) {
+        float wt = dot(w, f.t);
+        float wb = dot(w, f.b);
+        num = m.lobe.z * wt * wt + m.lobe.w * wb * wb;
+    } else
+#endif
+    {
+        num = m.lobe.z * cross_length2(f.n, w);
+    }
+    return num / (cos_w * cos_w);
+}
+#endif
+
+#if defined(HAS_G_SMITH) || defined(HAS_G_SMITH_CORRELATED)
+// Smith's Lambda for the material's distribution (Beckmann or GGX; the material validation
+// rejects smith* with gaussian or blinn).
+float smith_lambda(GpuMaterial m, float q2) {
+#if defined(HAS_LAMBDA_BECKMANN)
+    if (m.kind.y == DIST_BECKMANN) {
+        return Lambda_Beckmann(q2);
+    }
+#endif
+#if defined(HAS_LAMBDA_GGX)
+    return Lambda_GGX(q2);
+#else
+    return 0.0;
+#endif
+}
+#endif
+
+#if defined(HAS_LAMBERT)
+// Lambert 1760, "Photometria": c_diff / pi (the 1/pi is folded into m.diffuse). D = 0.
+Eval model_lambert(GpuMaterial m) {
+    return eval_lobe(m, 0.0);
+}
+#endif
+
+#if defined(HAS_PHONG)
+// Lewis 1994, "Making Shaders More Physically Plausible" (Phong 1975, modified and
+// normalised): c_diff/pi + c_spec (e+2)/(2 pi) max(0, r.v)^e, r = 2 cos_i n - l.
+// ln(r.v) comes from |r x v|^2 (log_cos), not from r.v itself: near the peak r.v = 1 - x
+// carries an absolute error of ~1e-7 that e = 1000 would turn into 1e-4 relative.
+Eval model_phong(Frame f, GpuMaterial m) {
+    float e = m.lobe.x;
+    vec3 r = 2.0 * f.cos_i * f.n - f.l;
+    float rv = dot(r, f.v);
+    // pow(0, e): 0, or 1 for e = 0 (GLSL leaves pow(0, y) undefined).
+    float p = rv > 0.0 ? exp_acc(e * log_cos(rv, cross_length2(r, f.v))) : (e == 0.0 ? 1.0 : 0.0);
+    return eval_lobe(m, m.scale.x * p);
+}
+#endif
+
+#if defined(HAS_BLINN_PHONG)
+// Blinn 1977 as written in the seed lecture: c_diff/pi + c_spec cos_h^e / (pi cos_i)
+// (not reciprocal; the 1/pi is in m.scale.x).
+Eval model_blinn_phong(Frame f, GpuMaterial m) {
+    float p = exp_acc(m.lobe.x * log_cos(f.cos_h, f.sin2_h));
+    return eval_lobe(m, m.scale.x * p / f.cos_i);
+}
+#endif
+
+#if defined(HAS_RTR)
+// Akenine-Möller, Haines & Hoffman 2008, "Real-Time Rendering", 3rd ed., §5.5 (the seed's
+// shading equation): c_diff/pi + c_spec (e+8)/(8 pi) cos_h^e, the (e+8)/(8 pi) in m.scale.x.
+Eval model_rtr(Frame f, GpuMaterial m) {
+    return eval_lobe(m, m.scale.x * exp_acc(m.lobe.x * log_cos(f.cos_h, f.sin2_h)));
+}
+#endif
+
+#if defined(HAS_WARD)
+// Ward 1992, "Measuring and Modeling Anisotropic Reflection":
+// c_diff/pi + c_spec exp(-((hx/mx)^2 + (hy/my)^2)/hz^2) / (4 pi mx my sqrt(cos_i cos_o));
+// 1/(4 pi mx my) is m.scale.x.
+Eval model_ward(Frame f, GpuMaterial m) {
+    float x = exp_acc(-slope2_h(f, m) / (f.cos_h * f.cos_h));
+    // Where exp underflows to 0 the lobe is 0; the guard keeps 0 * inf (cos_i, cos_o both
+    // ~1e-38) from becoming NaN. One inversesqrt per cosine: their product cannot overflow.
+    float lobe = x == 0.0 ? 0.0 : m.scale.x * x * inversesqrt(f.cos_i) * inversesqrt(f.cos_o);
+    return eval_lobe(m, lobe);
+}
+#endif
+
+#if defined(HAS_COOK_TORRANCE)
+// Cook & Torrance 1982, "A Reflectance Model for Computer Graphics":
+// d c_diff/pi + s c_spec (x) D G F K (d c_diff/pi is m.diffuse, s c_spec is m.specular).
+Eval model_cook_torrance(Frame f, GpuMaterial m) {
+    uint fresnel = m.kind.w & 0xffu;
+    uint convention = (m.kind.w >> 8) & 0xffu;
+    Eval e;
+
+    e.d = 0.0;
+    switch (m.kind.y) {
+#if defined(HAS_D_GAUSSIAN)
+    case DIST_GAUSSIAN: e.d = D_Gaussian(f.cos_h, f.sin2_h, m.lobe.x); break;
+#endif
+#if defined(HAS_D_BECKMANN)
+    case DIST_BECKMANN: e.d = D_Beckmann(slope2_h(f, m), f.cos_h, f.sin2_h, m.scale.x); break;
+#endif
+#if defined(HAS_D_GGX)
+    case DIST_GGX: e.d = D_GGX(slope2_h(f, m), f.cos_h, m.scale.x); break;
+#endif
+#if defined(HAS_D_BLINN)
+    case DIST_BLINN: e.d = D_Blinn(f.cos_h, f.sin2_h, m.lobe.x, m.scale.x); break;
+#endif
+    default: break;
+    }
+
+    e.g = 1.0;
+    switch (m.kind.z) {
+#if defined(HAS_G_COOK_TORRANCE)
+    case GEOM_COOK_TORRANCE: e.g = G_CookTorrance(f.cos_i, f.cos_o, f.cos_h, f.c); break;
+#endif
+#if defined(HAS_G_SMITH)
+    case GEOM_SMITH:
+        e.g = G_Smith(smith_lambda(m, smith_q2(f, m, f.v, f.cos_o)),
+                      smith_lambda(m, smith_q2(f, m, f.l, f.cos_i)));
+        break;
+#endif
+#if defined(HAS_G_SMITH_CORRELATED)
+    case GEOM_SMITH_CORRELATED:
+        e.g = G_SmithCorrelated(smith_lambda(m, smith_q2(f, m, f.v, f.cos_o)),
+                                smith_lambda(m, smith_q2(f, m, f.l, f.cos_i)));
+        break;
+#endif
+#if defined(HAS_G_SMITH_FAST)
+    case GEOM_SMITH_FAST:
+        e.g = G1_SmithFast(smith_q2(f, m, f.v, f.cos_o)) * G1_SmithFast(smith_q2(f, m, f.l, f.cos_i));
+        break;
+#endif
+    default: break;
+    }
+
+    e.f = vec3(1.0);
+    switch (fresnel) {
+#if defined(HAS_F_DIELECTRIC)
+    case FRESNEL_DIELECTRIC: e.f = F_Dielectric(f.c, m.fresnel0.rgb); break;
+#endif
+#if defined(HAS_F_CONDUCTOR)
+    case FRESNEL_CONDUCTOR: e.f = F_Conductor(f.c, m.fresnel0.rgb, m.fresnel1.rgb); break;
+#endif
+#if defined(HAS_F_SCHLICK)
+    case FRESNEL_SCHLICK: e.f = F_Schlick(f.c, m.fresnel0.rgb); break;
+#endif
+    default: break;
+    }
+
+    e.k = 1.0;
+    switch (convention) {
+#if defined(HAS_CONV_SEED)
+    case CONV_SEED: e.k = K_Seed(f.cos_i, f.cos_o); break;
+#endif
+#if defined(HAS_CONV_CT1982)
+    case CONV_CT1982: e.k = K_CookTorrance1982(f.cos_i, f.cos_o); break;
+#endif
+#if defined(HAS_CONV_MODERN)
+    case CONV_MODERN: e.k = K_Modern(f.cos_i, f.cos_o); break;
+#endif
+    default: break;
+    }
+
+    // D = 0 wins: K can be inf when both cosines are ~1e-38, and 0 * inf would be NaN.
+    float dgk = e.d == 0.0 ? 0.0 : e.d * e.g * e.k;
+    e.brdf = m.diffuse.rgb + m.specular.rgb * (dgk * e.f);
+    return e;
+}
+#endif
+
+#endif

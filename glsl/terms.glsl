@@ -1,0 +1,237 @@
+// terms.glsl — one function per term of FORMULAS.md §2–§5, each citing its source and saying
+// what it includes. The CPU reference (src/reference/{distribution,geometry,fresnel,
+// convention}.rs) mirrors these term for term; the term outputs (D, G, F_rgb, K) compare
+// them one by one. Every function is compiled only when its feature is in the batch's
+// FeatureSet (the HAS_* macros), so a GGX + Schlick kernel has no erf, no complex Fresnel.
+
+#ifndef VKBRDF_TERMS_GLSL
+#define VKBRDF_TERMS_GLSL
+
+#include "math.glsl"
+
+// The derived quantities of FORMULAS.md §1 for one valid, above-horizon tuple.
+struct Frame {
+    vec3 n, l, v, h;   // unit vectors
+    float cos_i;       // n.l > 0
+    float cos_o;       // n.v > 0
+    float cos_h;       // n.h > 0 (cos delta)
+    float c;           // v.h > 0, the Fresnel angle cosine
+    float sin2_h;      // |n x h|^2, not 1 - cos_h^2 (which cancels near the peak)
+    vec3 t, b;         // tangent frame, anisotropic materials only (zero otherwise)
+};
+
+// ===================================================================== D (FORMULAS.md §2)
+// Arguments: slope2 = (hx/mx)^2 + (hy/my)^2 (= sin2_h / m^2 when isotropic), so that
+// tan2_h / m^2 = slope2 / cos_h^2; `norm` is the normalisation constant precomputed in f64
+// on the host (src/gpu/layout.rs).
+
+#if defined(HAS_D_GAUSSIAN)
+// Torrance & Sparrow 1967, "Theory for Off-Specular Reflection from Roughened Surfaces".
+// exp(-(delta/m)^2), delta = angle between n and h. Unnormalised: no 1/pi, no 1/cos_h^4.
+float D_Gaussian(float cos_h, float sin2_h, float inv_m2) {
+    float delta = atan2_positive(sqrt(sin2_h), cos_h);
+    return exp_acc(-delta * delta * inv_m2);
+}
+#endif
+
+#if defined(HAS_D_BECKMANN)
+// Beckmann & Spizzichino 1963, "The Scattering of Electromagnetic Waves from Rough
+// Surfaces"; anisotropic form from Walter et al. 2007. exp(-tan2_h/m^2) / (k m^2 cos_h^4):
+// includes the 1/cos_h^4 and the convention's 1/k (k = pi modern, 1 Cook–Torrance 1982,
+// 4 seed), the latter inside `norm`.
+// Evaluated in the log domain: at grazing h, exp(-tan2_h/m^2) underflows to 0 while
+// 1/cos_h^4 overflows to inf, and the direct product would be 0 * inf = NaN.
+float D_Beckmann(float slope2, float cos_h, float sin2_h, float norm) {
+    // slope2 / cos_h^2 is +inf when cos_h^2 underflows; exp_acc(-inf) is 0, not NaN.
+    float x = slope2 / (cos_h * cos_h);
+    return norm * exp_acc(-x - 4.0 * log_cos(cos_h, sin2_h));
+}
+#endif
+
+#if defined(HAS_D_GGX)
+// Walter, Marschner, Li & Torrance 2007, "Microfacet Models for Refraction through Rough
+// Surfaces" (GGX; the Trowbridge & Reitz 1975 ellipsoid NDF). m^2 / (pi cos_h^4 (m^2 +
+// tan2_h)^2), includes the 1/pi. Written 1/(pi mx my (slope2 + cos_h^2)^2), which has no
+// 1/cos_h^4 to overflow and is the anisotropic form too (norm = 1/(pi mx my)).
+float D_GGX(float slope2, float cos_h, float norm) {
+    float d = slope2 + cos_h * cos_h;
+    return norm / (d * d);
+}
+#endif
+
+#if defined(HAS_D_BLINN)
+// Blinn 1977, "Models of Light Reflection for Computer Synthesized Pictures", normalised so
+// that its projected integral is 1: (e+2)/(2 pi) cos_h^e, includes the 1/(2 pi) (in norm).
+float D_Blinn(float cos_h, float sin2_h, float e, float norm) {
+    return norm * exp_acc(e * log_cos(cos_h, sin2_h));
+}
+#endif
+
+// ===================================================================== G (FORMULAS.md §3)
+
+#if defined(HAS_G_COOK_TORRANCE)
+// Blinn 1977 (the V-cavity shadowing/masking), as used by Cook & Torrance 1982, "A
+// Reflectance Model for Computer Graphics": min(1, 2 cos_h cos_o / c, 2 cos_h cos_i / c).
+float G_CookTorrance(float cos_i, float cos_o, float cos_h, float c) {
+    float k = 2.0 * cos_h / c;
+    return min(1.0, min(k * cos_o, k * cos_i));
+}
+#endif
+
+#if defined(HAS_LAMBDA_BECKMANN)
+// Smith 1967, "Geometrical Shadowing of a Random Rough Surface"; Lambda for Beckmann as in
+// Walter et al. 2007: (erf(a) - 1)/2 + exp(-a^2)/(2 a sqrt(pi)), a = 1/(m tan), written with
+// erfc (erf(a) - 1 = -erfc(a)). q2 = m^2 tan^2(w). tan = 0 (w = n) gives Lambda = 0.
+float Lambda_Beckmann(float q2) {
+    // a = 1/sqrt(0) would be inf and inf * 0 below NaN; the limit is 0.
+    if (q2 == 0.0) {
+        return 0.0;
+    }
+    float a = inversesqrt(q2);
+    // For large a both terms are ~exp(-a^2)/(a sqrt(pi)) and cancel: the result is tiny in
+    // absolute terms, which is all G = 1/(1 + Lambda) needs.
+    return 0.5 * (exp_acc(-a * a) * INV_SQRT_PI / a - erfc_nr(a));
+}
+#endif
+
+#if defined(HAS_LAMBDA_GGX)
+// Walter et al. 2007: Smith Lambda for GGX, (-1 + sqrt(1 + m^2 tan^2))/2. For q2 <= 1 it is
+// rewritten q2 / (2 (1 + sqrt(1 + q2))) (no cancellation at small q2); for q2 > 1 the direct
+// form is exact enough and stays finite (inf) when q2 = inf, where the quotient is inf/inf.
+float Lambda_GGX(float q2) {
+    float r = sqrt(1.0 + q2);
+    return q2 <= 1.0 ? q2 / (2.0 * (1.0 + r)) : 0.5 * (r - 1.0);
+}
+#endif
+
+#if defined(HAS_G_SMITH_FAST)
+// Walter et al. 2007, eq. 27: rational fit of the Smith–Beckmann G1 (<= 0.35 % error), kept
+// as published: it exceeds 1 by up to 6.1e-5 for a in (1.548, 1.6).
+float G1_SmithFast(float q2) {
+    if (q2 == 0.0) {
+        return 1.0; // a = inf: G1 = 1 (and inversesqrt(0) is not needed)
+    }
+    float a = inversesqrt(q2);
+    return a < 1.6 ? (3.535 * a + 2.181 * a * a) / (1.0 + 2.276 * a + 2.577 * a * a) : 1.0;
+}
+#endif
+
+#if defined(HAS_G_SMITH)
+// Smith 1967, separable form: G1(v) G1(l), G1 = 1 / (1 + Lambda).
+float G_Smith(float lambda_o, float lambda_i) {
+    return 1.0 / ((1.0 + lambda_o) * (1.0 + lambda_i));
+}
+#endif
+
+#if defined(HAS_G_SMITH_CORRELATED)
+// Heitz 2014, "Understanding the Masking-Shadowing Function in Microfacet-Based BRDFs",
+// eq. 99 (height-correlated Smith): 1 / (1 + Lambda(v) + Lambda(l)).
+float G_SmithCorrelated(float lambda_o, float lambda_i) {
+    return 1.0 / (1.0 + lambda_o + lambda_i);
+}
+#endif
+
+// ===================================================================== F (FORMULAS.md §4)
+
+#if defined(HAS_F_DIELECTRIC)
+// Cook & Torrance 1982 (exact unpolarised dielectric Fresnel), with the seed's typo fixed:
+// g^2 = mu^2 + c^2 - 1, F = 1/2 ((g-c)/(g+c))^2 (1 + ((c(g+c) - 1)/(c(g-c) + 1))^2), F = 1
+// under total internal reflection (g^2 < 0). mu2m1 = mu^2 - 1 is formed in f64 on the host;
+// g - c is computed as (mu^2 - 1)/(g + c), which does not cancel when mu is near 1.
+vec3 F_Dielectric(float c, vec3 mu2m1) {
+    vec3 g2 = mu2m1 + c * c;
+    vec3 g = sqrt(max(g2, 0.0));
+    vec3 gpc = g + c;                 // >= c > 0
+    vec3 gmc = mu2m1 / gpc;           // = g - c
+    vec3 a = gmc / gpc;
+    vec3 b = (c * gpc - 1.0) / (c * gmc + 1.0); // c (g - c) + 1 >= 1 - c^2 >= 0, and > 0 for mu > 0
+    vec3 f = 0.5 * a * a * (1.0 + b * b);
+    return mix(f, vec3(1.0), lessThan(g2, vec3(0.0)));
+}
+#endif
+
+#if defined(HAS_F_CONDUCTOR)
+// Complex helpers for three channels at once: (re, im) pairs.
+vec3 cmul_re(vec3 ar, vec3 ai, vec3 br, vec3 bi) { return ar * br - ai * bi; }
+vec3 cmul_im(vec3 ar, vec3 ai, vec3 br, vec3 bi) { return ar * bi + ai * br; }
+
+// Principal square root of x + iy per channel (Re >= 0). Takes the root of the larger of
+// (|z| + x)/2 and (|z| - x)/2, and derives the other part by division: the direct formulas
+// cancel when |x| >> |y|.
+void csqrt(vec3 x, vec3 y, out vec3 re, out vec3 im) {
+    vec3 r = sqrt(x * x + y * y); // |z|; components here are O(1) to O(k^2), no overflow
+    for (int j = 0; j < 3; j++) {
+        if (x[j] >= 0.0) {
+            float s = sqrt(0.5 * (r[j] + x[j]));
+            re[j] = s;
+            im[j] = s > 0.0 ? 0.5 * y[j] / s : 0.0;
+        } else {
+            float s = sqrt(0.5 * (r[j] - x[j]));
+            re[j] = 0.5 * abs(y[j]) / s;
+            im[j] = y[j] < 0.0 ? -s : s;
+        }
+    }
+}
+
+// Born & Wolf 1999, "Principles of Optics", 7th ed., §13.2: exact Fresnel reflectance of a
+// conductor with complex eta = n + ik, unpolarised: (|r_par|^2 + |r_perp|^2)/2 with
+// sin2_t = (1 - c^2)/eta^2, cos_t = sqrt(1 - sin2_t), r_par = (eta c - cos_t)/(eta c + cos_t),
+// r_perp = (c - eta cos_t)/(c + eta cos_t). |r|^2 is taken as |num|^2/|den|^2 (no complex
+// division). With k = 0, n >= 1 it equals F_Dielectric.
+vec3 F_Conductor(float c, vec3 n, vec3 k) {
+    float s2 = (1.0 - c) * (1.0 + c);           // 1 - c^2 without cancellation at c ~ 0
+    vec3 e2r = n * n - k * k;                   // eta^2
+    vec3 e2i = 2.0 * n * k;
+    vec3 inv = 1.0 / (e2r * e2r + e2i * e2i);   // 1/|eta^2|^2
+    vec3 zr = 1.0 - s2 * e2r * inv;             // 1 - s2 / eta^2
+    vec3 zi = s2 * e2i * inv;
+    vec3 ctr, cti;
+    csqrt(zr, zi, ctr, cti);                    // cos_t
+    vec3 ecr = n * c, eci = k * c;              // eta c
+    vec3 pr = ecr - ctr, pi_ = eci - cti;       // eta c - cos_t
+    vec3 qr = ecr + ctr, qi = eci + cti;        // eta c + cos_t
+    vec3 r_par = (pr * pr + pi_ * pi_) / (qr * qr + qi * qi);
+    vec3 ecr2 = cmul_re(n, k, ctr, cti), eci2 = cmul_im(n, k, ctr, cti); // eta cos_t
+    vec3 ur = c - ecr2, wr = c + ecr2;
+    vec3 r_perp = (ur * ur + eci2 * eci2) / (wr * wr + eci2 * eci2);
+    return 0.5 * (r_par + r_perp);
+}
+#endif
+
+#if defined(HAS_F_SCHLICK)
+// Schlick 1994, "An Inexpensive BRDF Model for Physically-based Rendering":
+// F0 + (1 - F0)(1 - c)^5, F0 given or derived from ior/extinction at parse time.
+vec3 F_Schlick(float c, vec3 f0) {
+    float x = 1.0 - c;
+    float x2 = x * x;
+    return f0 + (1.0 - f0) * (x2 * x2 * x);
+}
+#endif
+
+// ===================================================================== K (FORMULAS.md §5)
+
+#if defined(HAS_CONV_SEED)
+// The seed lecture's glare term (Foley et al. 1990, "Computer Graphics: Principles and
+// Practice", 2nd ed., §16.7, R_s = DGF/(N.V)): 1/cos_o.
+float K_Seed(float cos_i, float cos_o) {
+    return 1.0 / cos_o;
+}
+#endif
+
+#if defined(HAS_CONV_CT1982)
+// Cook & Torrance 1982: R_s = DGF / (pi (N.L)(N.V)): includes the 1/pi.
+float K_CookTorrance1982(float cos_i, float cos_o) {
+    return INV_PI / cos_i / cos_o;
+}
+#endif
+
+#if defined(HAS_CONV_MODERN)
+// Walter et al. 2007: 1/(4 cos_i cos_o) (the Jacobian of the half vector), as in Mitsuba 3
+// and pbrt-v4. Divided one cosine at a time: the product cos_i cos_o can underflow where
+// each quotient is finite.
+float K_Modern(float cos_i, float cos_o) {
+    return 0.25 / cos_i / cos_o;
+}
+#endif
+
+#endif

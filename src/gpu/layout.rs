@@ -1,0 +1,341 @@
+//! The GPU data structures, mirrored field for field from `glsl/layout.glsl`, and the
+//! integer codes and binding numbers the kernel reads, which are said once here and
+//! injected into the GLSL as macros ([`SHADER_CONSTANTS`]).
+//!
+//! Every GPU struct is `#[repr(C)]` + [`Pod`] built only from `[f32; 4]` and `[u32; 4]`, so
+//! its std430 layout equals its Rust layout with no padding rules to remember (a `vec3`
+//! would be 16-byte aligned in std430 but 12 bytes in Rust). The sizes and offsets are
+//! asserted at compile time below; `tests/conformance.rs` has a kernel copy every field
+//! back (`gpu_material_layout_round_trips`).
+
+use crate::material::{Convention, Distribution, Fresnel, Geometry, Material, Model, Roughness};
+use bytemuck::{Pod, Zeroable};
+use std::f64::consts::PI;
+use std::mem::{offset_of, size_of};
+
+/// `kind.x`: `lambert`.
+pub const MODEL_LAMBERT: u32 = 0;
+/// `kind.x`: `phong`.
+pub const MODEL_PHONG: u32 = 1;
+/// `kind.x`: `blinn-phong`.
+pub const MODEL_BLINN_PHONG: u32 = 2;
+/// `kind.x`: `rtr`.
+pub const MODEL_RTR: u32 = 3;
+/// `kind.x`: `ward`.
+pub const MODEL_WARD: u32 = 4;
+/// `kind.x`: `cook-torrance`.
+pub const MODEL_COOK_TORRANCE: u32 = 5;
+
+/// `kind.y`: no distribution (not a microfacet model).
+pub const DIST_NONE: u32 = 0;
+/// `kind.y`: Gaussian D.
+pub const DIST_GAUSSIAN: u32 = 1;
+/// `kind.y`: Beckmann D.
+pub const DIST_BECKMANN: u32 = 2;
+/// `kind.y`: GGX D.
+pub const DIST_GGX: u32 = 3;
+/// `kind.y`: Blinn D.
+pub const DIST_BLINN: u32 = 4;
+
+/// `kind.z`: G = 1.
+pub const GEOM_NONE: u32 = 0;
+/// `kind.z`: V-cavity G.
+pub const GEOM_COOK_TORRANCE: u32 = 1;
+/// `kind.z`: separable Smith.
+pub const GEOM_SMITH: u32 = 2;
+/// `kind.z`: height-correlated Smith.
+pub const GEOM_SMITH_CORRELATED: u32 = 3;
+/// `kind.z`: Walter's rational Smith–Beckmann fit.
+pub const GEOM_SMITH_FAST: u32 = 4;
+
+/// `kind.w & 0xff`: F = 1.
+pub const FRESNEL_NONE: u32 = 0;
+/// `kind.w & 0xff`: exact dielectric.
+pub const FRESNEL_DIELECTRIC: u32 = 1;
+/// `kind.w & 0xff`: exact conductor.
+pub const FRESNEL_CONDUCTOR: u32 = 2;
+/// `kind.w & 0xff`: Schlick.
+pub const FRESNEL_SCHLICK: u32 = 3;
+
+/// `(kind.w >> 8) & 0xff`: no convention (not a microfacet model).
+pub const CONV_NONE: u32 = 0;
+/// `(kind.w >> 8) & 0xff`: the seed convention.
+pub const CONV_SEED: u32 = 1;
+/// `(kind.w >> 8) & 0xff`: Cook & Torrance 1982.
+pub const CONV_CT1982: u32 = 2;
+/// `(kind.w >> 8) & 0xff`: modern (Walter et al. 2007).
+pub const CONV_MODERN: u32 = 3;
+
+/// `kind.w` bit: the material has anisotropic roughness (needs the tangent frame).
+pub const FLAG_ANISOTROPIC: u32 = 1 << 16;
+
+/// Descriptor binding of the tuple rows (read).
+pub const BINDING_TUPLES: u32 = 0;
+/// Descriptor binding of the material table (read).
+pub const BINDING_MATERIALS: u32 = 1;
+/// Descriptor binding of the `n × 3` BRDF output.
+pub const BINDING_BRDF: u32 = 2;
+/// Descriptor binding of the `n × 6` term output (declared only with `WRITE_TERMS`).
+pub const BINDING_TERMS: u32 = 3;
+/// Descriptor binding of the [`GpuCounts`] of a chunk.
+pub const BINDING_COUNTS: u32 = 4;
+/// Number of descriptor bindings.
+pub const BINDING_COUNT: u32 = 5;
+
+/// Every constant the GLSL uses by name, injected as `#define NAME <value>u`.
+pub const SHADER_CONSTANTS: &[(&str, u32)] = &[
+    ("MODEL_LAMBERT", MODEL_LAMBERT),
+    ("MODEL_PHONG", MODEL_PHONG),
+    ("MODEL_BLINN_PHONG", MODEL_BLINN_PHONG),
+    ("MODEL_RTR", MODEL_RTR),
+    ("MODEL_WARD", MODEL_WARD),
+    ("MODEL_COOK_TORRANCE", MODEL_COOK_TORRANCE),
+    ("DIST_NONE", DIST_NONE),
+    ("DIST_GAUSSIAN", DIST_GAUSSIAN),
+    ("DIST_BECKMANN", DIST_BECKMANN),
+    ("DIST_GGX", DIST_GGX),
+    ("DIST_BLINN", DIST_BLINN),
+    ("GEOM_NONE", GEOM_NONE),
+    ("GEOM_COOK_TORRANCE", GEOM_COOK_TORRANCE),
+    ("GEOM_SMITH", GEOM_SMITH),
+    ("GEOM_SMITH_CORRELATED", GEOM_SMITH_CORRELATED),
+    ("GEOM_SMITH_FAST", GEOM_SMITH_FAST),
+    ("FRESNEL_NONE", FRESNEL_NONE),
+    ("FRESNEL_DIELECTRIC", FRESNEL_DIELECTRIC),
+    ("FRESNEL_CONDUCTOR", FRESNEL_CONDUCTOR),
+    ("FRESNEL_SCHLICK", FRESNEL_SCHLICK),
+    ("CONV_NONE", CONV_NONE),
+    ("CONV_SEED", CONV_SEED),
+    ("CONV_CT1982", CONV_CT1982),
+    ("CONV_MODERN", CONV_MODERN),
+    ("FLAG_ANISOTROPIC", FLAG_ANISOTROPIC),
+    ("BINDING_TUPLES", BINDING_TUPLES),
+    ("BINDING_MATERIALS", BINDING_MATERIALS),
+    ("BINDING_BRDF", BINDING_BRDF),
+    ("BINDING_TERMS", BINDING_TERMS),
+    ("BINDING_COUNTS", BINDING_COUNTS),
+];
+
+/// One material as the kernel reads it (`struct GpuMaterial` in `glsl/layout.glsl`; the
+/// field comments there say what each component holds for each model).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
+pub struct GpuMaterial {
+    /// rgb: the diffuse term `d · c_diff / π` (d = 1 outside cook-torrance).
+    pub diffuse: [f32; 4],
+    /// rgb: `s · c_spec` (s = 1 outside cook-torrance).
+    pub specular: [f32; 4],
+    /// rgb: dielectric `μ² − 1` | conductor `n` | Schlick `F0`.
+    pub fresnel0: [f32; 4],
+    /// rgb: conductor `k`.
+    pub fresnel1: [f32; 4],
+    /// Roughness lobes: `1/mx², 1/my², mx², my²`; exponent lobes: `e` in x.
+    pub lobe: [f32; 4],
+    /// x: the lobe's normalisation constant.
+    pub scale: [f32; 4],
+    /// Model, distribution, geometry, fresnel | convention << 8 | flags.
+    pub kind: [u32; 4],
+}
+
+/// The per-chunk counters the kernel accumulates (`buffer Counts` in `glsl/eval.comp`).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Pod, Zeroable)]
+pub struct GpuCounts {
+    /// Invalid tuples in the chunk.
+    pub invalid: u32,
+    /// Below-horizon tuples in the chunk.
+    pub below_horizon: u32,
+    /// Chunk-relative row of the first invalid tuple, `u32::MAX` when none.
+    pub first_invalid: u32,
+    /// Padding to 16 bytes.
+    pub pad: u32,
+}
+
+impl GpuCounts {
+    /// The value the host writes before each dispatch.
+    pub const INITIAL: GpuCounts = GpuCounts { invalid: 0, below_horizon: 0, first_invalid: u32::MAX, pad: 0 };
+}
+
+/// Push constants of the kernel (`uniform Params` in `glsl/eval.comp`).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Pod, Zeroable)]
+pub struct PushConstants {
+    /// Rows in the chunk.
+    pub tuple_count: u32,
+    /// Rows in the material table.
+    pub material_count: u32,
+}
+
+// std430 == repr(C) for these types: sizes and offsets pinned at compile time.
+const _: () = {
+    assert!(size_of::<GpuMaterial>() == 112);
+    assert!(offset_of!(GpuMaterial, diffuse) == 0);
+    assert!(offset_of!(GpuMaterial, specular) == 16);
+    assert!(offset_of!(GpuMaterial, fresnel0) == 32);
+    assert!(offset_of!(GpuMaterial, fresnel1) == 48);
+    assert!(offset_of!(GpuMaterial, lobe) == 64);
+    assert!(offset_of!(GpuMaterial, scale) == 80);
+    assert!(offset_of!(GpuMaterial, kind) == 96);
+    assert!(size_of::<GpuCounts>() == 16);
+    assert!(offset_of!(GpuCounts, below_horizon) == 4);
+    assert!(offset_of!(GpuCounts, first_invalid) == 8);
+    assert!(size_of::<PushConstants>() == 8);
+};
+
+fn v4(x: [f64; 3]) -> [f32; 4] {
+    [x[0] as f32, x[1] as f32, x[2] as f32, 0.0]
+}
+
+/// `1/mx², 1/my², mx², my²` of a roughness (FORMULAS.md §2–§3), formed in f64.
+fn roughness_lobe(r: Roughness) -> [f32; 4] {
+    let (mx, my) = r.xy();
+    [1.0 / (mx * mx), 1.0 / (my * my), mx * mx, my * my].map(|x| x as f32)
+}
+
+/// Beckmann's normalisation `k` per convention (FORMULAS.md §5).
+fn beckmann_k(c: Convention) -> f64 {
+    match c {
+        Convention::Seed => 4.0,
+        Convention::CookTorrance1982 => 1.0,
+        Convention::Modern => PI,
+    }
+}
+
+/// Converts one validated material into the kernel's table row, precomputing every
+/// per-material constant in f64 (normalisations, `1/m²`, `μ² − 1`) so the kernel rounds
+/// each only once.
+pub fn gpu_material(m: &Material) -> GpuMaterial {
+    let mut g = GpuMaterial::zeroed();
+    let diffuse_over_pi = m.diffuse.map(|c| c / PI);
+    g.diffuse = v4(diffuse_over_pi);
+    g.specular = v4(m.specular);
+    let exponent_lobe = |e: f64| [e as f32, 0.0, 0.0, 0.0];
+    let scale = |s: f64| [s as f32, 0.0, 0.0, 0.0];
+    match &m.model {
+        Model::Lambert => g.kind = [MODEL_LAMBERT, DIST_NONE, GEOM_NONE, FRESNEL_NONE],
+        Model::Phong { exponent } => {
+            g.kind[0] = MODEL_PHONG;
+            g.lobe = exponent_lobe(*exponent);
+            g.scale = scale((exponent + 2.0) / (2.0 * PI));
+        }
+        Model::BlinnPhong { exponent } => {
+            g.kind[0] = MODEL_BLINN_PHONG;
+            g.lobe = exponent_lobe(*exponent);
+            g.scale = scale(1.0 / PI);
+        }
+        Model::Rtr { exponent } => {
+            g.kind[0] = MODEL_RTR;
+            g.lobe = exponent_lobe(*exponent);
+            g.scale = scale((exponent + 8.0) / (8.0 * PI));
+        }
+        Model::Ward { roughness } => {
+            let (mx, my) = roughness.xy();
+            g.kind[0] = MODEL_WARD;
+            g.lobe = roughness_lobe(*roughness);
+            g.scale = scale(1.0 / (4.0 * PI * mx * my));
+        }
+        Model::CookTorrance(ct) => {
+            g.kind[0] = MODEL_COOK_TORRANCE;
+            g.diffuse = v4(diffuse_over_pi.map(|c| c * ct.diffuse_weight));
+            g.specular = v4(m.specular.map(|c| c * ct.specular_weight));
+            match ct.distribution {
+                Distribution::Gaussian { m } => {
+                    g.kind[1] = DIST_GAUSSIAN;
+                    g.lobe = roughness_lobe(Roughness::Isotropic(m));
+                    g.scale = scale(1.0);
+                }
+                Distribution::Beckmann(r) => {
+                    let (mx, my) = r.xy();
+                    g.kind[1] = DIST_BECKMANN;
+                    g.lobe = roughness_lobe(r);
+                    g.scale = scale(1.0 / (beckmann_k(ct.convention) * mx * my));
+                }
+                Distribution::Ggx(r) => {
+                    let (mx, my) = r.xy();
+                    g.kind[1] = DIST_GGX;
+                    g.lobe = roughness_lobe(r);
+                    g.scale = scale(1.0 / (PI * mx * my));
+                }
+                Distribution::Blinn { exponent } => {
+                    g.kind[1] = DIST_BLINN;
+                    g.lobe = exponent_lobe(exponent);
+                    g.scale = scale((exponent + 2.0) / (2.0 * PI));
+                }
+            }
+            g.kind[2] = match ct.geometry {
+                Geometry::None => GEOM_NONE,
+                Geometry::CookTorrance => GEOM_COOK_TORRANCE,
+                Geometry::Smith => GEOM_SMITH,
+                Geometry::SmithCorrelated => GEOM_SMITH_CORRELATED,
+                Geometry::SmithFast => GEOM_SMITH_FAST,
+            };
+            let fresnel = match ct.fresnel {
+                Fresnel::None => FRESNEL_NONE,
+                Fresnel::Dielectric { ior } => {
+                    // μ² − 1 in f64: in f32 it cancels for μ near 1, where F ~ (μ−1)².
+                    g.fresnel0 = v4(ior.map(|mu| mu * mu - 1.0));
+                    FRESNEL_DIELECTRIC
+                }
+                Fresnel::Conductor { ior, extinction } => {
+                    g.fresnel0 = v4(ior);
+                    g.fresnel1 = v4(extinction);
+                    FRESNEL_CONDUCTOR
+                }
+                Fresnel::Schlick { f0 } => {
+                    g.fresnel0 = v4(f0);
+                    FRESNEL_SCHLICK
+                }
+            };
+            let convention = match ct.convention {
+                Convention::Seed => CONV_SEED,
+                Convention::CookTorrance1982 => CONV_CT1982,
+                Convention::Modern => CONV_MODERN,
+            };
+            g.kind[3] = fresnel | convention << 8;
+        }
+    }
+    if m.is_anisotropic() {
+        g.kind[3] |= FLAG_ANISOTROPIC;
+    }
+    g
+}
+
+/// The kernel's material table for `materials` (same order, so batch indices carry over).
+pub fn gpu_materials(materials: &[Material]) -> Vec<GpuMaterial> {
+    materials.iter().map(gpu_material).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::material::parse_materials;
+
+    #[test]
+    fn cook_torrance_constants_are_precomputed_in_f64() {
+        let m = &parse_materials(
+            r#"
+            [[material]]
+            name = "x"
+            model = "cook-torrance"
+            convention = "seed"
+            distribution = "beckmann"
+            roughness = 0.5
+            geometry = "smith"
+            fresnel = "dielectric"
+            ior = 1.0001
+            diffuse = 0.5
+            diffuse_weight = 0.5
+            specular_weight = 0.25
+            "#,
+            "test",
+        )
+        .unwrap()[0];
+        let g = gpu_material(m);
+        assert_eq!(g.kind, [MODEL_COOK_TORRANCE, DIST_BECKMANN, GEOM_SMITH, FRESNEL_DIELECTRIC | CONV_SEED << 8]);
+        assert_eq!(g.scale[0], (1.0 / (4.0 * 0.25)) as f32);
+        assert_eq!(g.lobe, [4.0, 4.0, 0.25, 0.25]);
+        assert_eq!(g.fresnel0[0], (1.0001f64 * 1.0001 - 1.0) as f32);
+        assert_eq!(g.diffuse[0], (0.25 / PI) as f32);
+        assert_eq!(g.specular[0], 0.25);
+    }
+}

@@ -1,0 +1,330 @@
+//! The adversarial stress corpus (deterministic for a seed): extreme materials crossed with
+//! the delicate geometric cases of FORMULAS.md §1 — grazing, normal incidence, the specular
+//! peak, L = −V, backfacing, huge and tiny vectors, zero, NaN, Inf and denormal components,
+//! tangents parallel to N.
+
+use crate::batch::{Batch, COLUMNS_TANGENT};
+use crate::material::{parse_materials, Material};
+use crate::sample::unit_vector;
+use rand::{Rng, SeedableRng};
+use rand_pcg::Pcg64Mcg;
+
+/// The geometric case a stress tuple was built for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Case {
+    /// Random directions with both cosines ≥ 0.1.
+    WellConditioned,
+    /// `cos_i` or `cos_o` in [1e-8, 1e-1] (log-uniform).
+    Grazing,
+    /// `L = V = N` exactly.
+    NormalIncidence,
+    /// `cos_h` within 1e-7 of 1 (log-uniform angle 1e-8 … 4e-4 from the peak).
+    NearPeak,
+    /// `L = −V` (always below the horizon on one side).
+    Opposite,
+    /// Both directions below the surface.
+    Backfacing,
+    /// Well-conditioned directions with lengths 1e-20 … 1e20.
+    ExtremeLength,
+    /// A zero vector, or NaN or ±Inf components: invalid by definition.
+    NonFinite,
+    /// Components that are f32 denormals (tiny but non-zero vectors).
+    Denormal,
+    /// A tangent exactly parallel to N (a power-of-two multiple of N).
+    ParallelTangent,
+}
+
+/// Every case, in corpus order.
+pub const CASES: [Case; 10] = [
+    Case::WellConditioned,
+    Case::Grazing,
+    Case::NormalIncidence,
+    Case::NearPeak,
+    Case::Opposite,
+    Case::Backfacing,
+    Case::ExtremeLength,
+    Case::NonFinite,
+    Case::Denormal,
+    Case::ParallelTangent,
+];
+
+/// The stress materials: every model and term, at the parameter extremes the issue names
+/// (roughness 1e-4 … 10, anisotropy ratios to 1e4, exponents to 1e4, IOR 1, < 1 and 100,
+/// extinction 50), plus ordinary values so the extremes can be told apart.
+pub fn materials() -> Vec<Material> {
+    let mut toml = String::new();
+    let mut add =
+        |name: &str, body: &str| toml += &format!("[[material]]\nname = \"{name}\"\n{body}\n");
+    add("lambert", "model = \"lambert\"\ndiffuse = [0.9, 0.5, 0.1]");
+    for e in ["0", "1", "100", "10000"] {
+        add(
+            &format!("phong-e{e}"),
+            &format!("model = \"phong\"\nexponent = {e}\ndiffuse = 0.1"),
+        );
+        add(
+            &format!("blinn-phong-e{e}"),
+            &format!("model = \"blinn-phong\"\nexponent = {e}"),
+        );
+        add(
+            &format!("rtr-e{e}"),
+            &format!("model = \"rtr\"\nexponent = {e}"),
+        );
+    }
+    for r in [
+        "0.0001",
+        "0.3",
+        "10",
+        "[0.0001, 1.0]",
+        "[1.0, 0.0001]",
+        "[0.05, 0.5]",
+    ] {
+        add(
+            &format!("ward-{r}"),
+            &format!("model = \"ward\"\nroughness = {r}"),
+        );
+    }
+    let fresnels = [
+        ("F-none", "fresnel = \"none\""),
+        ("F-ior1", "fresnel = \"dielectric\"\nior = 1.0"),
+        ("F-tir", "fresnel = \"dielectric\"\nior = 0.5"),
+        ("F-glass", "fresnel = \"dielectric\"\nior = 1.5"),
+        ("F-ior100", "fresnel = \"dielectric\"\nior = 100"),
+        (
+            "F-k50",
+            "fresnel = \"conductor\"\nior = [0.2, 1.0, 5.0]\nextinction = [50, 3, 0]",
+        ),
+        (
+            "F-cond-ior1",
+            "fresnel = \"conductor\"\nior = 1.0\nextinction = 0",
+        ),
+        (
+            "F-gold",
+            "fresnel = \"conductor\"\nior = [0.166, 0.430, 1.38]\nextinction = [3.15, 2.46, 1.92]",
+        ),
+        ("F-schlick", "fresnel = \"schlick\"\nf0 = [0.04, 0.5, 1.0]"),
+    ];
+    let conventions = ["modern", "seed", "cook-torrance-1982"];
+    let mut k = 0;
+    let mut ct = |dist: &str, param: &str, geoms: &[&str], aniso: bool| {
+        for g in geoms {
+            let (fname, f) = fresnels[k % fresnels.len()];
+            let conv = if aniso {
+                "modern"
+            } else {
+                conventions[k % conventions.len()]
+            };
+            k += 1;
+            add(
+                &format!("ct-{dist}-{param}-{g}-{fname}-{conv}").replace(['[', ']', ' ', ','], ""),
+                &format!("model = \"cook-torrance\"\nconvention = \"{conv}\"\ndistribution = \"{dist}\"\n{param}\ngeometry = \"{g}\"\n{f}\ndiffuse = 0.2\ndiffuse_weight = 0.5"),
+            );
+        }
+    };
+    for r in ["0.0001", "0.01", "0.5", "10"] {
+        let p = format!("roughness = {r}");
+        ct(
+            "beckmann",
+            &p,
+            &[
+                "none",
+                "cook-torrance",
+                "smith",
+                "smith-correlated",
+                "smith-fast",
+            ],
+            false,
+        );
+        ct(
+            "ggx",
+            &p,
+            &["none", "cook-torrance", "smith", "smith-correlated"],
+            false,
+        );
+        ct("gaussian", &p, &["none", "cook-torrance"], false);
+    }
+    for r in ["[0.0001, 1.0]", "[1.0, 0.0001]", "[0.1, 0.4]"] {
+        let p = format!("roughness = {r}");
+        ct(
+            "beckmann",
+            &p,
+            &["cook-torrance", "smith", "smith-correlated", "smith-fast"],
+            true,
+        );
+        ct(
+            "ggx",
+            &p,
+            &["cook-torrance", "smith", "smith-correlated"],
+            true,
+        );
+    }
+    for e in ["0", "50", "10000"] {
+        ct(
+            "blinn",
+            &format!("exponent = {e}"),
+            &["none", "cook-torrance"],
+            false,
+        );
+    }
+    // Every fresnel at least once with an ordinary GGX lobe.
+    for (i, (fname, f)) in fresnels.iter().enumerate() {
+        let conv = conventions[i % 3];
+        add(
+            &format!("ct-ggx-0.3-{fname}-{conv}"),
+            &format!("model = \"cook-torrance\"\nconvention = \"{conv}\"\ndistribution = \"ggx\"\nroughness = 0.3\ngeometry = \"smith-correlated\"\n{f}"),
+        );
+    }
+    parse_materials(&toml, "stress corpus").expect("the stress materials are legal")
+}
+
+/// A random unit vector within the hemisphere of `n` with `n·w ≥ min_cos`.
+fn hemisphere(rng: &mut Pcg64Mcg, n: [f64; 3], min_cos: f64) -> [f64; 3] {
+    loop {
+        let w = unit_vector(rng);
+        if dot(w, n) >= min_cos {
+            return w;
+        }
+        let r = reflect_through_plane(w, n);
+        if dot(r, n) >= min_cos {
+            return r;
+        }
+    }
+}
+
+fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+fn axpy(a: f64, x: [f64; 3], y: [f64; 3]) -> [f64; 3] {
+    [a * x[0] + y[0], a * x[1] + y[1], a * x[2] + y[2]]
+}
+
+fn normalize(a: [f64; 3]) -> [f64; 3] {
+    let l = dot(a, a).sqrt();
+    a.map(|x| x / l)
+}
+
+fn reflect_through_plane(w: [f64; 3], n: [f64; 3]) -> [f64; 3] {
+    axpy(-2.0 * dot(w, n), n, w)
+}
+
+/// A unit vector at angle `theta` from `n`, in a random azimuth.
+fn at_angle(rng: &mut Pcg64Mcg, n: [f64; 3], theta: f64) -> [f64; 3] {
+    let p = loop {
+        let r = unit_vector(rng);
+        let p = axpy(-dot(r, n), n, r);
+        if dot(p, p) > 1e-6 {
+            break normalize(p);
+        }
+    };
+    normalize(axpy(theta.cos(), n, p.map(|x| x * theta.sin())))
+}
+
+fn log_uniform(rng: &mut Pcg64Mcg, lo: f64, hi: f64) -> f64 {
+    10f64.powf(rng.random_range(lo.log10()..hi.log10()))
+}
+
+/// One tuple (13 columns, material in column 9) of the given case.
+fn tuple(rng: &mut Pcg64Mcg, case: Case, material: usize) -> [f32; 13] {
+    let n = unit_vector(rng);
+    let mut t = unit_vector(rng);
+    let (mut l, mut v) = (hemisphere(rng, n, 0.1), hemisphere(rng, n, 0.1));
+    let mut scale = [1.0f64; 4];
+    match case {
+        Case::WellConditioned => {}
+        Case::Grazing => {
+            let c = log_uniform(rng, 1e-8, 1e-1);
+            let w = at_angle(rng, n, c.acos());
+            match rng.random_range(0..3) {
+                0 => l = w,
+                1 => v = w,
+                _ => {
+                    l = w;
+                    let c2 = log_uniform(rng, 1e-8, 1e-1);
+                    v = at_angle(rng, n, c2.acos());
+                }
+            }
+        }
+        Case::NormalIncidence => {
+            l = n;
+            v = n;
+        }
+        Case::NearPeak => {
+            let delta = log_uniform(rng, 1e-8, 4e-4);
+            let h = at_angle(rng, n, delta);
+            v = hemisphere(rng, n, 0.2);
+            l = axpy(2.0 * dot(v, h), h, v.map(|x| -x));
+        }
+        Case::Opposite => l = v.map(|x| -x),
+        Case::Backfacing => {
+            l = l.map(|x| -x);
+            v = v.map(|x| -x);
+        }
+        Case::ExtremeLength => {
+            for s in &mut scale {
+                *s = log_uniform(rng, 1e-20, 1e20);
+            }
+        }
+        Case::NonFinite | Case::Denormal | Case::ParallelTangent => {}
+    }
+    let mut row = [0f32; 13];
+    for (k, w) in [l, v, n, t].iter().enumerate() {
+        let idx = if k == 3 { 10 } else { 3 * k };
+        for c in 0..3 {
+            row[idx + c] = (w[c] * scale[k]) as f32;
+        }
+    }
+    row[9] = material as f32;
+    let vec_slot = rng.random_range(0..3usize) * 3;
+    match case {
+        Case::NonFinite => {
+            let bad = [0.0, f32::NAN, f32::INFINITY, f32::NEG_INFINITY][rng.random_range(0..4)];
+            if bad == 0.0 {
+                row[vec_slot..vec_slot + 3].fill(0.0);
+            } else {
+                row[vec_slot + rng.random_range(0..3)] = bad;
+            }
+        }
+        Case::Denormal => {
+            // Scale one vector down into the f32 denormal range (components ~1e-39 … 1e-44).
+            let s = log_uniform(rng, 1e-44, 1e-39);
+            for c in 0..3 {
+                row[vec_slot + c] = (row[vec_slot + c] as f64 * s) as f32;
+            }
+        }
+        Case::ParallelTangent => {
+            // An exact power-of-two multiple of N: parallel in f32 and in f64 alike.
+            t = [row[6] as f64, row[7] as f64, row[8] as f64];
+            let k = [2.0, -0.5, 4.0, 1.0][rng.random_range(0..4)];
+            for c in 0..3 {
+                row[10 + c] = (t[c] * k) as f32;
+            }
+        }
+        _ => {}
+    }
+    row
+}
+
+/// The corpus: `n` tuples with tangents over [`materials`]; row `i` uses material
+/// `i % M` and case `CASES[(i / M) % 10]`. Returns the batch and each row's case.
+pub fn corpus(n: usize, seed: u64) -> (Vec<Material>, Batch, Vec<Case>) {
+    corpus_rows(0..n, seed)
+}
+
+/// Rows `range` of the corpus of seed `seed`: each row has its own RNG stream, so a chunk
+/// is identical to the same rows of the whole corpus (long runs go chunk by chunk).
+pub fn corpus_rows(range: std::ops::Range<usize>, seed: u64) -> (Vec<Material>, Batch, Vec<Case>) {
+    let materials = materials();
+    let m = materials.len();
+    let mut data = Vec::with_capacity(range.len() * COLUMNS_TANGENT);
+    let mut cases = Vec::with_capacity(range.len());
+    for i in range {
+        let mut rng =
+            Pcg64Mcg::seed_from_u64(seed ^ (i as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15));
+        let case = CASES[(i / m) % CASES.len()];
+        data.extend_from_slice(&tuple(&mut rng, case, i % m));
+        cases.push(case);
+    }
+    let batch = Batch::new(data, COLUMNS_TANGENT, m, &crate::batch::memory_source())
+        .expect("corpus rows are valid");
+    (materials, batch, cases)
+}

@@ -1,0 +1,276 @@
+//! `vkbrdf stress`: an adversarial corpus ([`corpus`]) evaluated on a backend and judged
+//! against the f64 reference. The policy it checks (README, "Numerical stability"): finite
+//! input gives finite output on every backend, invalid input gives 0 and is counted, and
+//! the relative error per term, model and regime is measured, not guessed.
+
+pub mod corpus;
+
+use crate::backend::{Backend, Request, TERM_COLUMNS};
+use crate::error::Result;
+use crate::material::{Distribution, Fresnel, Material, Model, Roughness};
+use crate::reference::{self, Status};
+use crate::stats::{relative_error, ErrorStats};
+use corpus::Case;
+use std::collections::BTreeMap;
+
+/// Absolute floor of the relative error: below 1e-6 (1/sr, or for G and F dimensionless)
+/// errors count as absolute. f32 carries ~7 digits, so values under the floor are compared
+/// at the floor's scale.
+pub const ERROR_FLOOR: f64 = 1e-6;
+
+/// The error regimes of the report.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Regime {
+    /// Ordinary parameters and directions (including huge/tiny vector lengths).
+    WellConditioned,
+    /// A cosine in [1e-8, 0.1].
+    Grazing,
+    /// `cos_h` within 1e-7 of 1, and exact normal incidence.
+    NearPeak,
+    /// Roughness < 1e-3 or > 2, anisotropy ratio ≥ 100, or exponent ≥ 1000.
+    ExtremeRoughness,
+    /// IOR ≤ 1 or ≥ 50, or extinction ≥ 20.
+    ExtremeIor,
+}
+
+impl Regime {
+    /// The label used in reports.
+    pub fn label(self) -> &'static str {
+        match self {
+            Regime::WellConditioned => "well-conditioned",
+            Regime::Grazing => "grazing",
+            Regime::NearPeak => "near-peak",
+            Regime::ExtremeRoughness => "extreme roughness",
+            Regime::ExtremeIor => "extreme IOR",
+        }
+    }
+}
+
+fn extreme_roughness(r: Roughness) -> bool {
+    let (x, y) = r.xy();
+    x.min(y) < 1e-3 || x.max(y) > 2.0 || x.max(y) / x.min(y) >= 100.0
+}
+
+/// The regime a valid tuple of material `m` built for `case` is judged in.
+pub fn regime(m: &Material, case: Case) -> Regime {
+    let rough = match &m.model {
+        Model::Phong { exponent } | Model::BlinnPhong { exponent } | Model::Rtr { exponent } => {
+            *exponent >= 1000.0
+        }
+        Model::Ward { roughness } => extreme_roughness(*roughness),
+        Model::CookTorrance(ct) => match ct.distribution {
+            Distribution::Gaussian { m } => extreme_roughness(Roughness::Isotropic(m)),
+            Distribution::Beckmann(r) | Distribution::Ggx(r) => extreme_roughness(r),
+            Distribution::Blinn { exponent } => exponent >= 1000.0,
+        },
+        Model::Lambert => false,
+    };
+    let ior = match m.cook_torrance().map(|ct| ct.fresnel) {
+        Some(Fresnel::Dielectric { ior }) => ior.iter().any(|&n| n <= 1.0 || n >= 50.0),
+        Some(Fresnel::Conductor { ior, extinction }) => {
+            ior.iter().any(|&n| n >= 50.0)
+                || extinction.iter().any(|&k| k >= 20.0)
+                || (ior == [1.0; 3] && extinction == [0.0; 3])
+        }
+        _ => false,
+    };
+    match case {
+        _ if rough => Regime::ExtremeRoughness,
+        _ if ior => Regime::ExtremeIor,
+        Case::Grazing => Regime::Grazing,
+        Case::NearPeak | Case::NormalIncidence => Regime::NearPeak,
+        _ => Regime::WellConditioned,
+    }
+}
+
+/// What a stress run found on one backend.
+#[derive(Debug, Clone, Default)]
+pub struct StressReport {
+    /// Backend name.
+    pub backend: String,
+    /// Tuples evaluated.
+    pub tuples: u64,
+    /// Output values (BRDF or term) that were NaN or ±Inf.
+    pub non_finite: u64,
+    /// Invalid tuples as counted by the backend and by the reference.
+    pub invalid: (u64, u64),
+    /// Below-horizon tuples as counted by the backend and by the reference.
+    pub below_horizon: (u64, u64),
+    /// Invalid or below-horizon tuples (per the reference) with a non-zero output.
+    pub nonzero_rejects: u64,
+    /// Relative error per (quantity, regime); quantity is `f: MODEL`, `D`, `G`, `F` or `K`.
+    pub errors: BTreeMap<(String, Regime), ErrorStats>,
+    /// Rows (of the corpus) of the worst error per (quantity, regime), with their input.
+    pub worst_rows: BTreeMap<(String, Regime), [f32; 13]>,
+}
+
+fn model_label(m: &Material) -> &'static str {
+    match m.model {
+        Model::Lambert => "f: lambert",
+        Model::Phong { .. } => "f: phong",
+        Model::BlinnPhong { .. } => "f: blinn-phong",
+        Model::Rtr { .. } => "f: rtr",
+        Model::Ward { .. } => "f: ward",
+        Model::CookTorrance(_) => "f: cook-torrance",
+    }
+}
+
+/// Runs `tuples` corpus tuples (seed `seed`) through `backend` in chunks of `chunk`,
+/// calling `progress(done)` after each chunk.
+pub fn run(
+    backend: &mut dyn Backend,
+    tuples: usize,
+    seed: u64,
+    chunk: usize,
+    progress: &mut dyn FnMut(usize),
+) -> Result<StressReport> {
+    let mut report = StressReport {
+        backend: backend.name(),
+        ..StressReport::default()
+    };
+    let mut start = 0;
+    while start < tuples {
+        let end = (start + chunk.max(1)).min(tuples);
+        let (materials, batch, cases) = corpus::corpus_rows(start..end, seed);
+        let out = backend.evaluate(&batch, &materials, &Request { terms: true })?;
+        let terms = out.terms.as_deref().expect("terms were requested");
+        report.tuples += batch.len() as u64;
+        report.invalid.0 += out.counts.invalid;
+        report.below_horizon.0 += out.counts.below_horizon;
+        let parts = judge(&batch, &materials, &cases, &out.brdf, terms, start);
+        for p in parts {
+            report.non_finite += p.non_finite;
+            report.invalid.1 += p.invalid;
+            report.below_horizon.1 += p.below;
+            report.nonzero_rejects += p.nonzero_rejects;
+            for (key, stats) in p.errors {
+                let entry = report.errors.entry(key.clone()).or_default();
+                let before = entry.max;
+                entry.merge(&stats);
+                if entry.max > before || !report.worst_rows.contains_key(&key) {
+                    if let Some(row) = stats.worst {
+                        let local = row as usize - start;
+                        let mut r = [0f32; 13];
+                        r.copy_from_slice(&batch.as_slice()[local * 13..local * 13 + 13]);
+                        report.worst_rows.insert(key, r);
+                    }
+                }
+            }
+        }
+        start = end;
+        progress(start);
+    }
+    Ok(report)
+}
+
+#[derive(Default)]
+struct Part {
+    non_finite: u64,
+    invalid: u64,
+    below: u64,
+    nonzero_rejects: u64,
+    errors: BTreeMap<(String, Regime), ErrorStats>,
+}
+
+/// Compares one evaluated chunk with the reference, spread over the cores.
+fn judge(
+    batch: &crate::batch::Batch,
+    materials: &[Material],
+    cases: &[Case],
+    brdf: &[f32],
+    terms: &[f32],
+    offset: usize,
+) -> Vec<Part> {
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let per = batch.len().div_ceil(threads).max(1);
+    std::thread::scope(|s| {
+        let handles: Vec<_> = (0..batch.len())
+            .step_by(per)
+            .map(|lo| {
+                s.spawn(move || {
+                    let mut p = Part::default();
+                    for i in lo..(lo + per).min(batch.len()) {
+                        let t = batch.tuple(i);
+                        let m = &materials[t.material];
+                        let r = reference::evaluate_tuple(&t, m);
+                        let got_f = &brdf[3 * i..3 * i + 3];
+                        let got_t = &terms[TERM_COLUMNS * i..TERM_COLUMNS * (i + 1)];
+                        p.non_finite +=
+                            got_f.iter().chain(got_t).filter(|x| !x.is_finite()).count() as u64;
+                        if r.status != Status::Valid {
+                            if r.status == Status::Invalid {
+                                p.invalid += 1;
+                            } else {
+                                p.below += 1;
+                            }
+                            if got_f.iter().chain(got_t).any(|&x| x != 0.0) {
+                                p.nonzero_rejects += 1;
+                            }
+                            continue;
+                        }
+                        let regime = regime(m, cases[i]);
+                        let row = (offset + i) as u64;
+                        let mut add = |q: &str, x: f32, want: f64| {
+                            p.errors
+                                .entry((q.to_string(), regime))
+                                .or_default()
+                                .add(relative_error(x as f64, want, ERROR_FLOOR), row);
+                        };
+                        for c in 0..3 {
+                            add(model_label(m), got_f[c], r.brdf[c]);
+                        }
+                        let want = r.terms();
+                        add("D", got_t[0], want[0]);
+                        add("G", got_t[1], want[1]);
+                        for c in 0..3 {
+                            add("F", got_t[2 + c], want[2 + c]);
+                        }
+                        add("K", got_t[5], want[5]);
+                    }
+                    p
+                })
+            })
+            .collect();
+        handles
+            .into_iter()
+            .map(|h| h.join().expect("stress judge thread panicked"))
+            .collect()
+    })
+}
+
+impl StressReport {
+    /// Whether the policy holds: no non-finite output, counts agree, rejects are zero.
+    pub fn policy_holds(&self) -> bool {
+        self.non_finite == 0
+            && self.invalid.0 == self.invalid.1
+            && self.below_horizon.0 == self.below_horizon.1
+            && self.nonzero_rejects == 0
+    }
+
+    /// The report as Markdown: the policy summary and the error table.
+    pub fn to_markdown(&self, target: f64) -> String {
+        let mut s = format!(
+            "### {}: {} stress tuples\n\n- non-finite outputs: **{}**\n- invalid tuples: {} (reference {})\n- below the horizon: {} (reference {})\n- invalid/below-horizon tuples with a non-zero output: {}\n\n",
+            self.backend, self.tuples, self.non_finite, self.invalid.0, self.invalid.1, self.below_horizon.0, self.below_horizon.1, self.nonzero_rejects
+        );
+        s += &format!("Relative error against the f64 reference, `|x − ref| / max(|ref|, {ERROR_FLOOR:e})`:\n\n");
+        s += &format!("| quantity | regime | values | max rel err | p99 rel err | ≤ {target:e} |\n|---|---|---:|---:|---:|:---:|\n");
+        for ((q, regime), st) in &self.errors {
+            s += &format!(
+                "| {q} | {} | {} | {:.2e} | {:.2e} | {} |\n",
+                regime.label(),
+                st.count,
+                st.max,
+                st.p99(),
+                if st.max <= target {
+                    "yes"
+                } else if st.p99() <= target {
+                    "p99 only"
+                } else {
+                    "**no**"
+                }
+            );
+        }
+        s
+    }
+}
