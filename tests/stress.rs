@@ -1,0 +1,45 @@
+//! The CI stress pass: 200,000 adversarial tuples per backend; any non-finite output, count
+//! disagreement or non-zero reject fails. (`vkbrdf stress --tuples 10000000` is the full run.)
+
+mod common;
+
+use vkbrdf::stress;
+
+const TUPLES: usize = 200_000;
+
+#[test]
+fn stress_policy_holds_on_every_backend() {
+    for mut backend in common::backends() {
+        let report =
+            stress::run(backend.as_mut(), TUPLES, 7, 1 << 16, &mut |_| {}).expect("stress run");
+        assert_eq!(report.tuples, TUPLES as u64);
+        assert!(
+            report.policy_holds(),
+            "stress policy fails on {}:\n{}",
+            report.backend,
+            report.to_markdown(1e-5)
+        );
+        // The corpus really is adversarial: it holds invalid and below-horizon tuples.
+        assert!(
+            report.invalid.1 > TUPLES as u64 / 20 && report.below_horizon.1 > TUPLES as u64 / 20
+        );
+    }
+}
+
+#[test]
+fn corpus_is_deterministic_and_chunkable() {
+    let (_, whole, cases) = stress::corpus::corpus(3000, 11);
+    let (_, part, part_cases) = stress::corpus::corpus_rows(1000..3000, 11);
+    let first_diff = whole.as_slice()[1000 * 13..]
+        .iter()
+        .zip(part.as_slice())
+        .position(|(a, b)| a.to_bits() != b.to_bits());
+    assert_eq!(
+        first_diff, None,
+        "chunked corpus differs from the whole (index into the chunk)"
+    );
+    assert_eq!(&cases[1000..], &part_cases[..]);
+    for case in stress::corpus::CASES {
+        assert!(cases.contains(&case), "{case:?} missing from the corpus");
+    }
+}
