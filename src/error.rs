@@ -59,6 +59,12 @@ pub enum Error {
     /// A request the backend cannot honour (e.g. a batch too large for memory).
     #[error("{0}")]
     Unsupported(String),
+
+    /// A table that cannot be generated, written or read (`vkbrdf table`): an empty or
+    /// oversized grid, an unknown material, a file that is not in the expected layout.
+    /// The message names the file or option at fault.
+    #[error("{0}")]
+    Table(String),
 }
 
 /// A problem in a materials definition: names the source, line, material and key.

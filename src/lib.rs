@@ -29,12 +29,15 @@
 pub mod atomic;
 pub mod backend;
 pub mod batch;
+pub mod check;
 pub mod error;
 pub mod features;
+pub mod gpu;
 pub mod material;
 pub mod reference;
 pub mod sample;
 pub mod stats;
 pub mod stress;
+pub mod table;
 
 pub use error::{Error, Result};

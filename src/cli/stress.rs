@@ -1,7 +1,7 @@
 //! `vkbrdf stress`: the adversarial corpus on one or more backends, judged against the f64
 //! reference; exit 1 when the policy (finite outputs, agreeing counts, zero rejects) fails.
 
-use super::backend_choice::{self, BackendArgs, BackendKind};
+use super::backend_choice::{self, BackendArgs, BackendKind, DeviceArgs};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -15,7 +15,7 @@ incidence, the specular peak, L = −V, backfacing, vector lengths 1e-20 … 1e2
 Inf and denormal components, and tangents parallel to N.
 
 Examples:
-  vkbrdf stress --tuples 200000
+  vkbrdf stress --tuples 200000                  # Vulkan and the CPU reference
   vkbrdf stress --tuples 10000000 --backend vulkan --backend cpu --report stress.md")]
 pub struct Args {
     /// Number of corpus tuples per backend.
@@ -36,6 +36,8 @@ pub struct Args {
     /// Tuples per evaluation call (bounds memory).
     #[arg(long, default_value_t = 1 << 20)]
     pub chunk: usize,
+    #[command(flatten)]
+    pub device: DeviceArgs,
 }
 
 /// Runs `vkbrdf stress`.
@@ -48,7 +50,10 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
     let mut md = String::from("## Stress report\n\n");
     let mut ok = true;
     for kind in kinds {
-        let mut backend = backend_choice::open(&BackendArgs { backend: kind })?;
+        let mut backend = backend_choice::open(&BackendArgs {
+            backend: Some(kind),
+            device: args.device.clone(),
+        })?;
         let bar = ProgressBar::new(args.tuples as u64).with_style(
             ProgressStyle::with_template(
                 "{msg} [{bar:30}] {pos}/{len} tuples, {elapsed} (eta {eta})",

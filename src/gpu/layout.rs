@@ -1,6 +1,6 @@
 //! The GPU data structures, mirrored field for field from `glsl/layout.glsl`, and the
 //! integer codes and binding numbers the kernel reads, which are said once here and
-//! injected into the GLSL as macros ([`SHADER_CONSTANTS`]).
+//! injected into the GLSL as macros ([`SHADER_CODES`], [`SHADER_BINDINGS`]).
 //!
 //! Every GPU struct is `#[repr(C)]` + [`Pod`] built only from `[f32; 4]` and `[u32; 4]`, so
 //! its std430 layout equals its Rust layout with no padding rules to remember (a `vec3`
@@ -82,8 +82,8 @@ pub const BINDING_COUNTS: u32 = 4;
 /// Number of descriptor bindings.
 pub const BINDING_COUNT: u32 = 5;
 
-/// Every constant the GLSL uses by name, injected as `#define NAME <value>u`.
-pub const SHADER_CONSTANTS: &[(&str, u32)] = &[
+/// The integer codes the GLSL compares against, injected as `#define NAME <value>u`.
+pub const SHADER_CODES: &[(&str, u32)] = &[
     ("MODEL_LAMBERT", MODEL_LAMBERT),
     ("MODEL_PHONG", MODEL_PHONG),
     ("MODEL_BLINN_PHONG", MODEL_BLINN_PHONG),
@@ -109,6 +109,11 @@ pub const SHADER_CONSTANTS: &[(&str, u32)] = &[
     ("CONV_CT1982", CONV_CT1982),
     ("CONV_MODERN", CONV_MODERN),
     ("FLAG_ANISOTROPIC", FLAG_ANISOTROPIC),
+];
+
+/// The descriptor bindings, injected as `#define BINDING_NAME <value>` (plain int: layout
+/// qualifiers take an int).
+pub const SHADER_BINDINGS: &[(&str, u32)] = &[
     ("BINDING_TUPLES", BINDING_TUPLES),
     ("BINDING_MATERIALS", BINDING_MATERIALS),
     ("BINDING_BRDF", BINDING_BRDF),
@@ -153,7 +158,12 @@ pub struct GpuCounts {
 
 impl GpuCounts {
     /// The value the host writes before each dispatch.
-    pub const INITIAL: GpuCounts = GpuCounts { invalid: 0, below_horizon: 0, first_invalid: u32::MAX, pad: 0 };
+    pub const INITIAL: GpuCounts = GpuCounts {
+        invalid: 0,
+        below_horizon: 0,
+        first_invalid: u32::MAX,
+        pad: 0,
+    };
 }
 
 /// Push constants of the kernel (`uniform Params` in `glsl/eval.comp`).
@@ -331,7 +341,15 @@ mod tests {
         )
         .unwrap()[0];
         let g = gpu_material(m);
-        assert_eq!(g.kind, [MODEL_COOK_TORRANCE, DIST_BECKMANN, GEOM_SMITH, FRESNEL_DIELECTRIC | CONV_SEED << 8]);
+        assert_eq!(
+            g.kind,
+            [
+                MODEL_COOK_TORRANCE,
+                DIST_BECKMANN,
+                GEOM_SMITH,
+                FRESNEL_DIELECTRIC | CONV_SEED << 8
+            ]
+        );
         assert_eq!(g.scale[0], (1.0 / (4.0 * 0.25)) as f32);
         assert_eq!(g.lobe, [4.0, 4.0, 0.25, 0.25]);
         assert_eq!(g.fresnel0[0], (1.0001f64 * 1.0001 - 1.0) as f32);

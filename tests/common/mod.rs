@@ -2,10 +2,34 @@
 #![allow(dead_code)]
 
 use vkbrdf::backend::Backend;
+use vkbrdf::gpu::{DeviceSelector, VulkanBackend, VulkanOptions};
 use vkbrdf::reference::CpuReference;
 
-/// The CPU reference and, when a Vulkan device exists, the Vulkan backend. With
-/// `VKBRDF_REQUIRE_VULKAN=1` (CI), a missing device fails the test instead of skipping.
+/// The Vulkan backend with validation on, or `None` (with a loud message) when no device
+/// exists. With `VKBRDF_REQUIRE_VULKAN=1` (CI) a missing device panics: Vulkan tests never
+/// pass silently.
+pub fn vulkan() -> Option<VulkanBackend> {
+    let options = VulkanOptions {
+        validation: true,
+        ..VulkanOptions::default()
+    };
+    match VulkanBackend::new(DeviceSelector::from_env(), options) {
+        Ok(b) => Some(b),
+        Err(e) if std::env::var("VKBRDF_REQUIRE_VULKAN").as_deref() == Ok("1") => {
+            panic!("VKBRDF_REQUIRE_VULKAN=1 but no Vulkan device: {e}")
+        }
+        Err(e) => {
+            eprintln!("!!! SKIPPING the Vulkan half of this test: no Vulkan device ({e}). Set VKBRDF_REQUIRE_VULKAN=1 to fail instead.");
+            None
+        }
+    }
+}
+
+/// The CPU reference and, when a Vulkan device exists, the Vulkan backend.
 pub fn backends() -> Vec<Box<dyn Backend>> {
-    vec![Box::new(CpuReference::new())]
+    let mut v: Vec<Box<dyn Backend>> = vec![Box::new(CpuReference::new())];
+    if let Some(b) = vulkan() {
+        v.push(Box::new(b));
+    }
+    v
 }

@@ -1,0 +1,662 @@
+//! [`VulkanBackend`]: the [`Backend`] that runs the GLSL kernel, streaming a batch through
+//! a ring of [`FRAMES_IN_FLIGHT`] slots so host copies overlap device work.
+//!
+//! Per chunk: wait for the slot's previous chunk (fence), copy its results out, copy the
+//! next rows in, record one dispatch, submit with the slot's fence. While the device works
+//! on chunk `c`, the host is copying chunk `c + 1` in and chunk `c − 2` out.
+
+use super::context::{Device, DeviceSelector, ValidationCounter};
+use super::kernel::{Kernels, WORKGROUP_SIZE};
+use super::layout::{gpu_materials, GpuCounts, GpuMaterial, PushConstants, BINDING_COUNT};
+use super::memory::{Buffer, MemoryUse};
+use super::sync::{CommandPool, DescriptorPool, Fence};
+use super::vk_error;
+use crate::backend::{Backend, Counts, Output, Request, TERM_COLUMNS};
+use crate::batch::{Batch, COLUMNS_TANGENT};
+use crate::error::{Error, Result};
+use crate::features::FeatureSet;
+use crate::material::Material;
+use ash::vk;
+use std::ops::Range;
+use std::sync::Arc;
+
+/// Chunks in flight: one being filled by the host, one running, one being read back.
+pub const FRAMES_IN_FLIGHT: usize = 3;
+
+/// Upper bound on tuples per chunk (about 22 MiB of buffers per slot at the widest layout):
+/// small enough that a million-tuple batch already streams in several overlapped chunks,
+/// large enough that the per-dispatch cost (tens of µs) is noise.
+pub const MAX_CHUNK_TUPLES: usize = 1 << 18;
+
+/// Bytes one tuple can occupy in a slot at the widest layout: 13 input floats (tangents),
+/// 3 BRDF floats, 6 term floats. Chunks are sized for it, so the slot buffers never exceed
+/// the memory budget whatever mix of batches the backend sees.
+const WORST_CASE_BYTES_PER_TUPLE: u64 = 4 * (COLUMNS_TANGENT + 3 + TERM_COLUMNS) as u64;
+
+/// Settings of a [`VulkanBackend`].
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct VulkanOptions {
+    /// Upper bound on the device memory the backend's buffers use, in bytes (default
+    /// 256 MiB). Batches larger than this stream through in chunks.
+    pub max_gpu_memory: u64,
+    /// Enable `VK_LAYER_KHRONOS_validation` and count its warnings and errors (default:
+    /// on when the environment variable `VKBRDF_VALIDATION` is `1`).
+    pub validation: bool,
+}
+
+impl Default for VulkanOptions {
+    fn default() -> Self {
+        VulkanOptions {
+            max_gpu_memory: 256 << 20,
+            validation: validation_from_env(),
+        }
+    }
+}
+
+/// Whether `VKBRDF_VALIDATION` asks for the validation layer (`1`, `true` or `yes`).
+pub fn validation_from_env() -> bool {
+    matches!(
+        std::env::var("VKBRDF_VALIDATION").as_deref(),
+        Ok("1" | "true" | "yes")
+    )
+}
+
+/// Bytes held by the backend's persistent buffers, per purpose (all slots together).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct BufferBytes {
+    /// Tuple input buffers.
+    pub input: u64,
+    /// BRDF output buffers.
+    pub brdf: u64,
+    /// Term output buffers (0 until some evaluation asks for terms).
+    pub terms: u64,
+    /// The material table.
+    pub materials: u64,
+}
+
+impl BufferBytes {
+    /// The sum.
+    pub fn total(&self) -> u64 {
+        self.input + self.brdf + self.terms + self.materials
+    }
+}
+
+/// Where a submitted chunk's results go when it is read back.
+#[derive(Debug, Clone)]
+struct Pending {
+    /// Float range of `Output::brdf` (the BRDF buffer's first `len` floats).
+    brdf: Range<usize>,
+    /// Float range of `Output::terms`, when the chunk writes terms.
+    terms: Option<Range<usize>>,
+    /// Batch row of the chunk's first tuple (turns chunk-relative rows into batch rows).
+    first_row: u64,
+}
+
+/// One frame in flight: its buffers, descriptor set, command buffer and fence.
+struct Slot {
+    input: Option<Buffer>,
+    brdf: Option<Buffer>,
+    terms: Option<Buffer>,
+    counts: Buffer,
+    fence: Fence,
+    cmd: vk::CommandBuffer,
+    set: vk::DescriptorSet,
+    /// The buffers the descriptor set points at now, by binding.
+    bound: [vk::Buffer; BINDING_COUNT as usize],
+    pending: Option<Pending>,
+}
+
+/// The Vulkan compute backend (see the [module docs](super) for its design).
+///
+/// ```no_run
+/// use vkbrdf::backend::{Backend, Request};
+/// use vkbrdf::gpu::{VulkanBackend, VulkanOptions};
+/// # fn main() -> vkbrdf::Result<()> {
+/// let materials = vec![vkbrdf::material::presets::preset("gold").unwrap()?];
+/// let batch = vkbrdf::sample::sample_batch(1000, materials.len(), 1, false);
+/// let mut gpu = VulkanBackend::new(None, VulkanOptions::default())?;
+/// let out = gpu.evaluate(&batch, &materials, &Request { terms: true })?;
+/// assert_eq!(out.brdf.len(), 3000);
+/// # Ok(()) }
+/// ```
+pub struct VulkanBackend {
+    // Field order is drop order: buffers and fences, then the pools, the pipelines, and
+    // last the device (Drop waits idle before any of them goes).
+    slots: Vec<Slot>,
+    materials: Option<Buffer>,
+    dummy: Buffer,
+    /// Owns the slots' descriptor sets (freed with the pool).
+    _descriptors: DescriptorPool,
+    /// Owns the slots' command buffers (freed with the pool).
+    _commands: CommandPool,
+    kernels: Kernels,
+    last_features: Option<FeatureSet>,
+    options: VulkanOptions,
+    device: Arc<Device>,
+}
+
+impl VulkanBackend {
+    /// Opens a device — `selector`, else the `VKBRDF_DEVICE` environment variable, else the
+    /// best one (discrete > integrated > virtual > CPU) — and creates the backend's
+    /// persistent objects. Fails with [`Error::NoDevice`] when Vulkan is not installed or no
+    /// device matches.
+    pub fn new(selector: Option<DeviceSelector>, options: VulkanOptions) -> Result<VulkanBackend> {
+        let device = Device::new(selector.as_ref(), options.validation)?;
+        let kernels = Kernels::new(&device)?;
+        let commands = CommandPool::new(&device, FRAMES_IN_FLIGHT as u32)?;
+        let descriptors = DescriptorPool::new(
+            &device,
+            kernels.set_layout(),
+            BINDING_COUNT,
+            FRAMES_IN_FLIGHT as u32,
+        )?;
+        let dummy = Buffer::new(&device, 16, MemoryUse::Readback)?;
+        let mut slots = Vec::with_capacity(FRAMES_IN_FLIGHT);
+        for i in 0..FRAMES_IN_FLIGHT {
+            slots.push(Slot {
+                input: None,
+                brdf: None,
+                terms: None,
+                counts: Buffer::new(
+                    &device,
+                    std::mem::size_of::<GpuCounts>() as u64,
+                    MemoryUse::Readback,
+                )?,
+                fence: Fence::new(&device)?,
+                cmd: commands.buffers[i],
+                set: descriptors.sets[i],
+                bound: [vk::Buffer::null(); BINDING_COUNT as usize],
+                pending: None,
+            });
+        }
+        Ok(VulkanBackend {
+            slots,
+            materials: None,
+            dummy,
+            _descriptors: descriptors,
+            _commands: commands,
+            kernels,
+            last_features: None,
+            options,
+            device,
+        })
+    }
+
+    /// The device's name (e.g. `llvmpipe (LLVM 15.0.6, 256 bits)`).
+    pub fn device_name(&self) -> String {
+        self.device.physical.name()
+    }
+
+    /// Whether the validation layer is active (asked for and installed).
+    pub fn validation_enabled(&self) -> bool {
+        self.device.instance.validation_enabled()
+    }
+
+    /// Validation-layer warnings and errors reported since the backend was created.
+    pub fn validation_message_count(&self) -> u64 {
+        self.device.instance.log.count()
+    }
+
+    /// The first (at most 32) validation messages, for reports.
+    pub fn validation_messages(&self) -> Vec<String> {
+        self.device.instance.log.messages()
+    }
+
+    /// A handle on the validation counter that stays valid after the backend is dropped,
+    /// so messages emitted during destruction (leaked objects) can be checked too.
+    pub fn validation_counter(&self) -> ValidationCounter {
+        self.device.instance.counter()
+    }
+
+    /// The FeatureSet (and so the pipeline) the last evaluation ran with.
+    pub fn last_features(&self) -> Option<FeatureSet> {
+        self.last_features
+    }
+
+    /// The SPIR-V of the kernel for `features` (compiled and cached on first use).
+    pub fn spirv(&mut self, features: FeatureSet) -> Result<Vec<u32>> {
+        self.kernels.spirv(features)
+    }
+
+    /// Bytes held by the persistent buffers now.
+    pub fn buffer_bytes(&self) -> BufferBytes {
+        let size = |b: &Option<Buffer>| b.as_ref().map_or(0, Buffer::size);
+        let mut bytes = BufferBytes {
+            materials: size(&self.materials),
+            ..BufferBytes::default()
+        };
+        for s in &self.slots {
+            bytes.input += size(&s.input);
+            bytes.brdf += size(&s.brdf);
+            bytes.terms += size(&s.terms);
+        }
+        bytes
+    }
+
+    /// Tuples per chunk for a material table of `material_count` rows: the memory budget
+    /// over [`FRAMES_IN_FLIGHT`] slots at the widest tuple layout, capped by
+    /// `maxStorageBufferRange` (one input buffer), the dispatch size limit and
+    /// [`MAX_CHUNK_TUPLES`]; a multiple of the workgroup size when above it.
+    pub fn chunk_tuples(&self, material_count: usize) -> Result<usize> {
+        let limits = &self.device.physical.properties.limits;
+        let table = (material_count * std::mem::size_of::<GpuMaterial>()) as u64;
+        if table > u64::from(limits.max_storage_buffer_range) {
+            return Err(Error::Unsupported(format!(
+                "{material_count} materials need {table} bytes, over the device's maxStorageBufferRange of {} bytes",
+                limits.max_storage_buffer_range
+            )));
+        }
+        let fixed = table + 16 * (FRAMES_IN_FLIGHT as u64 + 1);
+        let per_chunk_tuple = FRAMES_IN_FLIGHT as u64 * WORST_CASE_BYTES_PER_TUPLE;
+        let by_memory = self.options.max_gpu_memory.saturating_sub(fixed) / per_chunk_tuple;
+        let by_range = u64::from(limits.max_storage_buffer_range) / (4 * COLUMNS_TANGENT as u64);
+        let by_dispatch =
+            u64::from(limits.max_compute_work_group_count[0]) * u64::from(WORKGROUP_SIZE);
+        let chunk = by_memory
+            .min(by_range)
+            .min(by_dispatch)
+            .min(MAX_CHUNK_TUPLES as u64) as usize;
+        if chunk == 0 {
+            return Err(Error::Unsupported(format!(
+                "max_gpu_memory = {} bytes cannot hold one tuple in each of the {FRAMES_IN_FLIGHT} frames in flight; allow at least {} bytes",
+                self.options.max_gpu_memory,
+                fixed + per_chunk_tuple
+            )));
+        }
+        let wg = WORKGROUP_SIZE as usize;
+        Ok(if chunk >= wg { chunk / wg * wg } else { chunk })
+    }
+
+    /// Evaluates with the kernel for `forced` ∪ what the batch needs (the tangent layout and
+    /// the terms output still follow the batch and `request`): e.g. `FeatureSet::all()` runs
+    /// the all-features kernel, the baseline of the specialisation measurement.
+    pub fn evaluate_with_features(
+        &mut self,
+        batch: &Batch,
+        materials: &[Material],
+        request: &Request,
+        forced: FeatureSet,
+    ) -> Result<Output> {
+        let mut features = FeatureSet::of_batch(batch, materials, request);
+        for (f, _) in FeatureSet::ALL_NAMED {
+            if forced.contains(*f) && *f != FeatureSet::TANGENTS && *f != FeatureSet::TERMS {
+                features |= *f;
+            }
+        }
+        self.run(batch, materials, features)
+    }
+
+    /// Runs a probe shader — GLSL with `main()` that may `#include` the embedded files
+    /// (`layout.glsl`, `math.glsl`, …) and use the kernel's bindings: `BINDING_TUPLES` holds
+    /// `input` as `float[]`, `BINDING_MATERIALS` holds `materials`, and `BINDING_BRDF`
+    /// receives `outputs` floats, which are returned. Push constant `tuple_count` is
+    /// `outputs`; the workgroup size is specialization constant 0 and the dispatch covers
+    /// `outputs` invocations. A testing aid: the layout round trip and the accuracy of the
+    /// math helpers are measured with it.
+    pub fn run_probe(
+        &mut self,
+        source: &str,
+        materials: &[GpuMaterial],
+        input: &[f32],
+        outputs: usize,
+    ) -> Result<Vec<f32>> {
+        let pipeline = self.kernels.probe(source)?.raw();
+        self.upload_materials(materials)?;
+        let groups = outputs.div_ceil(WORKGROUP_SIZE as usize);
+        if groups
+            > self
+                .device
+                .physical
+                .properties
+                .limits
+                .max_compute_work_group_count[0] as usize
+        {
+            return Err(Error::Unsupported(format!(
+                "a probe of {outputs} outputs exceeds the dispatch limit"
+            )));
+        }
+        let mut out = Output {
+            brdf: vec![0.0; outputs],
+            ..Output::default()
+        };
+        let result = (|| {
+            self.prepare(0, input.len(), outputs, 0)?;
+            let slot = &mut self.slots[0];
+            // SAFETY: slot 0 has no pending work (nothing is pending between calls).
+            unsafe {
+                slot.input.as_mut().expect("prepared").write(0, input);
+                slot.counts.write(0, &[GpuCounts::INITIAL]);
+            }
+            let pending = Pending {
+                brdf: 0..outputs,
+                terms: None,
+                first_row: 0,
+            };
+            self.submit(0, pipeline, outputs as u32, materials.len() as u32, pending)?;
+            self.finish(0, &mut out)
+        })();
+        result.inspect_err(|_| self.recover())?;
+        Ok(out.brdf)
+    }
+
+    /// Evaluates `batch` with the pipeline for exactly `features`.
+    fn run(
+        &mut self,
+        batch: &Batch,
+        materials: &[Material],
+        features: FeatureSet,
+    ) -> Result<Output> {
+        let n = batch.len();
+        let terms = features.contains(FeatureSet::TERMS);
+        let mut out = Output {
+            brdf: vec![0.0; n * 3],
+            terms: terms.then(|| vec![0.0; n * TERM_COLUMNS]),
+            counts: Counts {
+                tuples: n as u64,
+                ..Counts::default()
+            },
+        };
+        self.last_features = Some(features);
+        if n == 0 {
+            return Ok(out);
+        }
+        let chunk = self.chunk_tuples(materials.len())?;
+        let pipeline = self.kernels.pipeline(features)?.raw();
+        self.upload_materials(&gpu_materials(materials))?;
+        self.stream(
+            batch,
+            materials.len() as u32,
+            pipeline,
+            chunk,
+            terms,
+            &mut out,
+        )
+        .inspect_err(|_| self.recover())?;
+        Ok(out)
+    }
+
+    /// The chunk loop (see the module docs).
+    fn stream(
+        &mut self,
+        batch: &Batch,
+        material_count: u32,
+        pipeline: vk::Pipeline,
+        chunk: usize,
+        terms: bool,
+        out: &mut Output,
+    ) -> Result<()> {
+        let (n, cols, data) = (batch.len(), batch.columns(), batch.as_slice());
+        let chunks = n.div_ceil(chunk);
+        for c in 0..chunks {
+            let s = c % FRAMES_IN_FLIGHT;
+            self.finish(s, out)?;
+            let (start, len) = (c * chunk, chunk.min(n - c * chunk));
+            self.prepare(
+                s,
+                len * cols,
+                len * 3,
+                if terms { len * TERM_COLUMNS } else { 0 },
+            )?;
+            let slot = &mut self.slots[s];
+            // SAFETY: the slot's previous chunk was finished above (fence waited), so the
+            // device no longer reads or writes its buffers.
+            unsafe {
+                slot.input
+                    .as_mut()
+                    .expect("prepared")
+                    .write(0, &data[start * cols..(start + len) * cols]);
+                slot.counts.write(0, &[GpuCounts::INITIAL]);
+            }
+            let pending = Pending {
+                brdf: start * 3..(start + len) * 3,
+                terms: terms.then(|| start * TERM_COLUMNS..(start + len) * TERM_COLUMNS),
+                first_row: start as u64,
+            };
+            self.submit(s, pipeline, len as u32, material_count, pending)?;
+        }
+        // Drain in submission order: the oldest pending chunk sits in slot `chunks % S`.
+        for k in 0..FRAMES_IN_FLIGHT {
+            self.finish((chunks + k) % FRAMES_IN_FLIGHT, out)?;
+        }
+        Ok(())
+    }
+
+    /// Copies the material table into its buffer (growing it when needed).
+    /// Precondition: nothing is pending (true between and at the start of calls).
+    fn upload_materials(&mut self, table: &[GpuMaterial]) -> Result<()> {
+        debug_assert!(self.slots.iter().all(|s| s.pending.is_none()));
+        let bytes = std::mem::size_of_val(table) as u64;
+        ensure(&self.device, &mut self.materials, bytes, MemoryUse::Upload)?;
+        // SAFETY: no submitted work is pending (precondition), so the device does not read
+        // the table while it is rewritten.
+        unsafe { self.materials.as_mut().expect("ensured").write(0, table) };
+        Ok(())
+    }
+
+    /// Grows slot `s`'s buffers to the given float counts and points its descriptor set at
+    /// the current buffers. Precondition: slot `s` is not pending.
+    fn prepare(
+        &mut self,
+        s: usize,
+        input_floats: usize,
+        brdf_floats: usize,
+        terms_floats: usize,
+    ) -> Result<()> {
+        let slot = &mut self.slots[s];
+        debug_assert!(slot.pending.is_none());
+        ensure(
+            &self.device,
+            &mut slot.input,
+            4 * input_floats as u64,
+            MemoryUse::Upload,
+        )?;
+        ensure(
+            &self.device,
+            &mut slot.brdf,
+            4 * brdf_floats as u64,
+            MemoryUse::Readback,
+        )?;
+        if terms_floats > 0 {
+            ensure(
+                &self.device,
+                &mut slot.terms,
+                4 * terms_floats as u64,
+                MemoryUse::Readback,
+            )?;
+        }
+        let raw = |b: &Option<Buffer>| b.as_ref().map(Buffer::raw);
+        let materials =
+            raw(&self.materials).expect("materials are uploaded before any slot is prepared");
+        let wanted = [
+            raw(&slot.input).expect("ensured"),
+            materials,
+            raw(&slot.brdf).expect("ensured"),
+            raw(&slot.terms).unwrap_or(self.dummy.raw()),
+            slot.counts.raw(),
+        ];
+        if wanted != slot.bound {
+            let infos: Vec<[vk::DescriptorBufferInfo; 1]> = wanted
+                .iter()
+                .map(|&b| {
+                    [vk::DescriptorBufferInfo {
+                        buffer: b,
+                        offset: 0,
+                        range: vk::WHOLE_SIZE,
+                    }]
+                })
+                .collect();
+            let writes: Vec<vk::WriteDescriptorSet> = infos
+                .iter()
+                .enumerate()
+                .map(|(binding, info)| {
+                    vk::WriteDescriptorSet::default()
+                        .dst_set(slot.set)
+                        .dst_binding(binding as u32)
+                        .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
+                        .buffer_info(info)
+                })
+                .collect();
+            // SAFETY: the set is not used by pending work (precondition) and every buffer
+            // in `wanted` is live.
+            unsafe { self.device.raw.update_descriptor_sets(&writes, &[]) };
+            slot.bound = wanted;
+        }
+        Ok(())
+    }
+
+    /// Records and submits one dispatch of `count` invocations on slot `s`.
+    fn submit(
+        &mut self,
+        s: usize,
+        pipeline: vk::Pipeline,
+        count: u32,
+        material_count: u32,
+        pending: Pending,
+    ) -> Result<()> {
+        let (d, layout) = (&self.device.raw, self.kernels.layout());
+        let slot = &mut self.slots[s];
+        let cmd = slot.cmd;
+        let push = PushConstants {
+            tuple_count: count,
+            material_count,
+        };
+        let groups = count.div_ceil(WORKGROUP_SIZE);
+        // Results must be visible to host reads after the fence: compute writes → host reads.
+        let barrier = [vk::MemoryBarrier::default()
+            .src_access_mask(vk::AccessFlags::SHADER_WRITE)
+            .dst_access_mask(vk::AccessFlags::HOST_READ)];
+        let begin = vk::CommandBufferBeginInfo::default()
+            .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
+        // SAFETY: the command buffer is not pending (the slot's fence was waited), its pool
+        // allows per-buffer reset (begin resets it), and every handle recorded is live.
+        unsafe {
+            d.begin_command_buffer(cmd, &begin)
+                .map_err(vk_error("vkBeginCommandBuffer"))?;
+            d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, pipeline);
+            d.cmd_bind_descriptor_sets(
+                cmd,
+                vk::PipelineBindPoint::COMPUTE,
+                layout,
+                0,
+                &[slot.set],
+                &[],
+            );
+            d.cmd_push_constants(
+                cmd,
+                layout,
+                vk::ShaderStageFlags::COMPUTE,
+                0,
+                bytemuck::bytes_of(&push),
+            );
+            d.cmd_dispatch(cmd, groups, 1, 1);
+            d.cmd_pipeline_barrier(
+                cmd,
+                vk::PipelineStageFlags::COMPUTE_SHADER,
+                vk::PipelineStageFlags::HOST,
+                vk::DependencyFlags::empty(),
+                &barrier,
+                &[],
+                &[],
+            );
+            d.end_command_buffer(cmd)
+                .map_err(vk_error("vkEndCommandBuffer"))?;
+        }
+        let cmds = [cmd];
+        let submit = [vk::SubmitInfo::default().command_buffers(&cmds)];
+        // SAFETY: the command buffer is fully recorded, the fence is unsignalled and unused
+        // (reset after its last wait), and the host writes to the slot's mapped buffers
+        // happen-before this call (submission makes them visible to the device).
+        unsafe { d.queue_submit(self.device.queue, &submit, slot.fence.raw()) }
+            .map_err(vk_error("vkQueueSubmit"))?;
+        slot.pending = Some(pending);
+        Ok(())
+    }
+
+    /// If slot `s` has a chunk in flight: waits for it and copies its results into `out`.
+    fn finish(&mut self, s: usize, out: &mut Output) -> Result<()> {
+        let Some(p) = self.slots[s].pending.take() else {
+            return Ok(());
+        };
+        let slot = &self.slots[s];
+        slot.fence.wait_and_reset()?;
+        let mut counts = [GpuCounts::INITIAL];
+        // SAFETY: the fence is signalled, so the dispatch and its compute→host barrier have
+        // completed: the buffers hold final, host-visible results and nothing writes them.
+        unsafe {
+            slot.brdf
+                .as_ref()
+                .expect("prepared")
+                .read(0, &mut out.brdf[p.brdf.clone()]);
+            if let (Some(range), Some(terms)) = (p.terms.clone(), out.terms.as_mut()) {
+                slot.terms
+                    .as_ref()
+                    .expect("prepared with terms")
+                    .read(0, &mut terms[range]);
+            }
+            slot.counts.read(0, &mut counts);
+        }
+        let c = counts[0];
+        out.counts.invalid += u64::from(c.invalid);
+        out.counts.below_horizon += u64::from(c.below_horizon);
+        if c.first_invalid != u32::MAX {
+            let row = p.first_row + u64::from(c.first_invalid);
+            out.counts.first_invalid = Some(out.counts.first_invalid.map_or(row, |r| r.min(row)));
+        }
+        Ok(())
+    }
+
+    /// After an error mid-stream: waits for the device, then forgets pending chunks and
+    /// resets fences and command buffers, so the next call starts clean.
+    fn recover(&mut self) {
+        self.device.wait_idle();
+        for slot in &mut self.slots {
+            slot.pending = None;
+            slot.fence.reset();
+            // SAFETY: the device is idle, so the command buffer is not pending.
+            let _ = unsafe {
+                self.device
+                    .raw
+                    .reset_command_buffer(slot.cmd, vk::CommandBufferResetFlags::empty())
+            };
+        }
+    }
+}
+
+/// Makes `buffer` at least `bytes` large (replacing a smaller one; the old one is freed
+/// first, so the budget holds one of them at a time).
+fn ensure(
+    device: &Arc<Device>,
+    buffer: &mut Option<Buffer>,
+    bytes: u64,
+    usage: MemoryUse,
+) -> Result<()> {
+    if buffer.as_ref().map_or(true, |b| b.size() < bytes) {
+        *buffer = None;
+        *buffer = Some(Buffer::new(device, bytes, usage)?);
+    }
+    Ok(())
+}
+
+impl Backend for VulkanBackend {
+    fn name(&self) -> String {
+        format!("vulkan: {}", self.device_name())
+    }
+
+    fn evaluate(
+        &mut self,
+        batch: &Batch,
+        materials: &[Material],
+        request: &Request,
+    ) -> Result<Output> {
+        let features = FeatureSet::of_batch(batch, materials, request);
+        self.run(batch, materials, features)
+    }
+}
+
+impl Drop for VulkanBackend {
+    fn drop(&mut self) {
+        // Then the fields drop in declaration order: buffers and fences, pools, pipelines
+        // and layouts, and the device (when this was the last Arc).
+        self.device.wait_idle();
+    }
+}

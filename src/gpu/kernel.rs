@@ -1,0 +1,384 @@
+//! The kernel: GLSL embedded in the binary, compiled by shaderc once per [`FeatureSet`],
+//! and the compute pipelines, cached by FeatureSet.
+//!
+//! The FeatureSet's preprocessor names (`HAS_D_GGX`, `WRITE_TERMS`, …) are defined for the
+//! compile, so code a batch does not use is not in the SPIR-V at all (the GLSL wraps every
+//! model and term in `#if defined(...)`). The integer codes and binding numbers come from
+//! [`super::layout`], the workgroup size from [`WORKGROUP_SIZE`] as specialization
+//! constant 0: each is said once, in Rust.
+
+use super::context::{Device, PhysicalInfo};
+use super::layout::{PushConstants, BINDING_COUNT, SHADER_BINDINGS, SHADER_CODES};
+use super::vk_error;
+use crate::error::{Error, Result};
+use crate::features::FeatureSet;
+use ash::vk;
+use std::collections::HashMap;
+use std::sync::Arc;
+
+/// Invocations per workgroup (specialization constant 0 of every kernel). 64 is a multiple
+/// of every common subgroup size (8 on lavapipe, 32 NVIDIA, 64 AMD).
+pub const WORKGROUP_SIZE: u32 = 64;
+
+/// The GLSL sources embedded in the binary, by the name `#include` uses.
+pub const SOURCES: &[(&str, &str)] = &[
+    ("eval.comp", include_str!("../../glsl/eval.comp")),
+    ("layout.glsl", include_str!("../../glsl/layout.glsl")),
+    ("math.glsl", include_str!("../../glsl/math.glsl")),
+    ("terms.glsl", include_str!("../../glsl/terms.glsl")),
+    ("models.glsl", include_str!("../../glsl/models.glsl")),
+];
+
+/// The kernel's entry file in [`SOURCES`].
+pub const KERNEL_FILE: &str = "eval.comp";
+
+/// The Vulkan version to compile for: 1.1 (SPIR-V 1.3, subgroup operations) when the device
+/// has it.
+fn target(physical: &PhysicalInfo) -> shaderc::EnvVersion {
+    if physical.properties.api_version >= vk::API_VERSION_1_1 {
+        shaderc::EnvVersion::Vulkan1_1
+    } else {
+        shaderc::EnvVersion::Vulkan1_0
+    }
+}
+
+/// The macros of the kernel for `features`: every feature name, every code and binding,
+/// and `USE_SUBGROUP_ARITHMETIC` when the counts can be reduced across a subgroup.
+pub fn kernel_defines(features: FeatureSet, subgroup_arithmetic: bool) -> Vec<(String, String)> {
+    let mut d: Vec<(String, String)> = features
+        .defines()
+        .map(|n| (n.to_string(), "1".to_string()))
+        .collect();
+    d.extend(
+        SHADER_CODES
+            .iter()
+            .map(|(n, v)| (n.to_string(), format!("{v}u"))),
+    );
+    d.extend(
+        SHADER_BINDINGS
+            .iter()
+            .map(|(n, v)| (n.to_string(), v.to_string())),
+    );
+    if subgroup_arithmetic {
+        d.push(("USE_SUBGROUP_ARITHMETIC".to_string(), "1".to_string()));
+    }
+    d
+}
+
+/// Compiles `main` of `files` (name, text) to SPIR-V words for Vulkan `env`, resolving
+/// `#include "x"` against `files` only, so the binary needs no source tree. A compile error
+/// is an [`Error::Shader`] whose text names the file and line (`terms.glsl:42: error: …`).
+pub fn compile(
+    files: &[(&str, &str)],
+    main: &str,
+    defines: &[(String, String)],
+    env: shaderc::EnvVersion,
+) -> Result<Vec<u32>> {
+    let text = files
+        .iter()
+        .find(|(n, _)| *n == main)
+        .map(|(_, t)| *t)
+        .ok_or_else(|| Error::Shader(format!("{main}: no such embedded shader")))?;
+    let compiler = shaderc::Compiler::new()
+        .map_err(|e| Error::Shader(format!("cannot start the shaderc compiler: {e}")))?;
+    let mut options = shaderc::CompileOptions::new()
+        .map_err(|e| Error::Shader(format!("cannot create shaderc options: {e}")))?;
+    options.set_target_env(shaderc::TargetEnv::Vulkan, env as u32);
+    for (name, value) in defines {
+        options.add_macro_definition(name, Some(value));
+    }
+    let names: Vec<String> = files.iter().map(|(n, _)| n.to_string()).collect();
+    let owned: Vec<(String, String)> = files
+        .iter()
+        .map(|(n, t)| (n.to_string(), t.to_string()))
+        .collect();
+    options.set_include_callback(move |requested, _kind, from, _depth| {
+        let wanted = requested.trim_start_matches("./");
+        owned
+            .iter()
+            .find(|(n, _)| n == wanted)
+            .map(|(n, t)| shaderc::ResolvedInclude {
+                resolved_name: n.clone(),
+                content: t.clone(),
+            })
+            .ok_or_else(|| {
+                format!(
+                    "{from}: #include \"{requested}\": not an embedded shader file (they are: {})",
+                    names.join(", ")
+                )
+            })
+    });
+    let artifact = compiler
+        .compile_into_spirv(
+            text,
+            shaderc::ShaderKind::Compute,
+            main,
+            "main",
+            Some(&options),
+        )
+        .map_err(|e| match e {
+            shaderc::Error::CompilationError(n, msg) => {
+                Error::Shader(format!("{n} error(s):\n{}", msg.trim_end()))
+            }
+            other => Error::Shader(other.to_string()),
+        })?;
+    Ok(artifact.as_binary().to_vec())
+}
+
+/// Compiles the embedded kernel for `features` (no device needed: used by tests that
+/// inspect what a FeatureSet compiles to).
+pub fn compile_kernel(features: FeatureSet, subgroup_arithmetic: bool) -> Result<Vec<u32>> {
+    let env = if subgroup_arithmetic {
+        shaderc::EnvVersion::Vulkan1_1
+    } else {
+        shaderc::EnvVersion::Vulkan1_0
+    };
+    compile(
+        SOURCES,
+        KERNEL_FILE,
+        &kernel_defines(features, subgroup_arithmetic),
+        env,
+    )
+}
+
+/// The `OpName` strings of a SPIR-V module (function, variable and type names; glslang
+/// writes a function `f(float)` as `f(f1;`). `OpSource` text is not included, so a name
+/// here means the code is really in the module.
+pub fn spirv_names(words: &[u32]) -> Vec<String> {
+    const OP_NAME: u32 = 5;
+    let mut names = Vec::new();
+    let mut i = 5; // header: magic, version, generator, bound, schema
+    while i < words.len() {
+        let count = (words[i] >> 16) as usize;
+        let opcode = words[i] & 0xffff;
+        if count == 0 || i + count > words.len() {
+            break;
+        }
+        if opcode == OP_NAME && count >= 3 {
+            let bytes: Vec<u8> = words[i + 2..i + count]
+                .iter()
+                .flat_map(|w| w.to_le_bytes())
+                .collect();
+            let end = bytes.iter().position(|&b| b == 0).unwrap_or(bytes.len());
+            names.push(String::from_utf8_lossy(&bytes[..end]).into_owned());
+        }
+        i += count;
+    }
+    names
+}
+
+/// One compute pipeline and the SPIR-V it was made from.
+pub(crate) struct Pipeline {
+    raw: vk::Pipeline,
+    spirv: Vec<u32>,
+    device: Arc<Device>,
+}
+
+impl Pipeline {
+    /// The handle.
+    pub fn raw(&self) -> vk::Pipeline {
+        self.raw
+    }
+}
+
+impl Drop for Pipeline {
+    fn drop(&mut self) {
+        // SAFETY: owners drop pipelines only when no submitted work uses them (the evaluator
+        // waits idle first); destroyed exactly once, before the layout (see Kernels::drop).
+        unsafe { self.device.raw.destroy_pipeline(self.raw, None) };
+    }
+}
+
+/// The descriptor-set and pipeline layouts every kernel shares, and the pipeline cache.
+pub(crate) struct Kernels {
+    cache: HashMap<FeatureSet, Pipeline>,
+    probes: HashMap<String, Pipeline>,
+    layout: vk::PipelineLayout,
+    set_layout: vk::DescriptorSetLayout,
+    device: Arc<Device>,
+}
+
+impl Kernels {
+    /// Creates the shared layouts: `BINDING_COUNT` storage buffers and the push constants.
+    pub fn new(device: &Arc<Device>) -> Result<Kernels> {
+        let bindings: Vec<vk::DescriptorSetLayoutBinding> = (0..BINDING_COUNT)
+            .map(|b| {
+                vk::DescriptorSetLayoutBinding::default()
+                    .binding(b)
+                    .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
+                    .descriptor_count(1)
+                    .stage_flags(vk::ShaderStageFlags::COMPUTE)
+            })
+            .collect();
+        let info = vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings);
+        // SAFETY: valid create info for a live device.
+        let set_layout = unsafe { device.raw.create_descriptor_set_layout(&info, None) }
+            .map_err(vk_error("vkCreateDescriptorSetLayout"))?;
+        let mut kernels = Kernels {
+            cache: HashMap::new(),
+            probes: HashMap::new(),
+            layout: vk::PipelineLayout::null(),
+            set_layout,
+            device: Arc::clone(device),
+        };
+        let ranges = [vk::PushConstantRange::default()
+            .stage_flags(vk::ShaderStageFlags::COMPUTE)
+            .size(std::mem::size_of::<PushConstants>() as u32)];
+        let set_layouts = [set_layout];
+        let info = vk::PipelineLayoutCreateInfo::default()
+            .set_layouts(&set_layouts)
+            .push_constant_ranges(&ranges);
+        // SAFETY: valid create info referencing the live set layout.
+        kernels.layout = unsafe { device.raw.create_pipeline_layout(&info, None) }
+            .map_err(vk_error("vkCreatePipelineLayout"))?;
+        Ok(kernels)
+    }
+
+    /// The shared pipeline layout.
+    pub fn layout(&self) -> vk::PipelineLayout {
+        self.layout
+    }
+
+    /// The shared descriptor-set layout.
+    pub fn set_layout(&self) -> vk::DescriptorSetLayout {
+        self.set_layout
+    }
+
+    /// The pipeline for `features`, compiled on first use.
+    pub fn pipeline(&mut self, features: FeatureSet) -> Result<&Pipeline> {
+        if !self.cache.contains_key(&features) {
+            let p = &self.device.physical;
+            let arithmetic =
+                p.subgroup_arithmetic && target(p) as u32 >= shaderc::EnvVersion::Vulkan1_1 as u32;
+            let spirv = compile(
+                SOURCES,
+                KERNEL_FILE,
+                &kernel_defines(features, arithmetic),
+                target(p),
+            )
+            .map_err(|e| match e {
+                Error::Shader(m) => Error::Shader(format!("{m}\n(kernel for features {features})")),
+                e => e,
+            })?;
+            let pipeline = self.create(spirv)?;
+            self.cache.insert(features, pipeline);
+        }
+        Ok(&self.cache[&features])
+    }
+
+    /// The SPIR-V of the pipeline for `features` (compiled on first use).
+    pub fn spirv(&mut self, features: FeatureSet) -> Result<Vec<u32>> {
+        Ok(self.pipeline(features)?.spirv.clone())
+    }
+
+    /// A pipeline for a probe shader (`main.comp` in `source`, with the embedded files
+    /// available to `#include`), cached by its text.
+    pub fn probe(&mut self, source: &str) -> Result<&Pipeline> {
+        if !self.probes.contains_key(source) {
+            let mut files: Vec<(&str, &str)> = SOURCES.to_vec();
+            files.push(("probe.comp", source));
+            let p = &self.device.physical;
+            let spirv = compile(
+                &files,
+                "probe.comp",
+                &kernel_defines(FeatureSet::EMPTY, false),
+                target(p),
+            )?;
+            let pipeline = self.create(spirv)?;
+            self.probes.insert(source.to_string(), pipeline);
+        }
+        Ok(&self.probes[source])
+    }
+
+    fn create(&self, spirv: Vec<u32>) -> Result<Pipeline> {
+        let d = &self.device.raw;
+        let info = vk::ShaderModuleCreateInfo::default().code(&spirv);
+        // SAFETY: `spirv` is a complete module from shaderc; the device is live.
+        let module = unsafe { d.create_shader_module(&info, None) }
+            .map_err(vk_error("vkCreateShaderModule"))?;
+        let entries = [vk::SpecializationMapEntry {
+            constant_id: 0,
+            offset: 0,
+            size: 4,
+        }];
+        let data = WORKGROUP_SIZE.to_ne_bytes();
+        let specialization = vk::SpecializationInfo::default()
+            .map_entries(&entries)
+            .data(&data);
+        let stage = vk::PipelineShaderStageCreateInfo::default()
+            .stage(vk::ShaderStageFlags::COMPUTE)
+            .module(module)
+            .name(c"main")
+            .specialization_info(&specialization);
+        let infos = [vk::ComputePipelineCreateInfo::default()
+            .stage(stage)
+            .layout(self.layout)];
+        // SAFETY: the module, layout and specialization data are live for the call.
+        let created =
+            unsafe { d.create_compute_pipelines(vk::PipelineCache::null(), &infos, None) };
+        // SAFETY: the module is no longer needed once the pipeline exists (or failed).
+        unsafe { d.destroy_shader_module(module, None) };
+        let raw = created.map_err(|(_, r)| vk_error("vkCreateComputePipelines")(r))?[0];
+        Ok(Pipeline {
+            raw,
+            spirv,
+            device: Arc::clone(&self.device),
+        })
+    }
+}
+
+impl Drop for Kernels {
+    fn drop(&mut self) {
+        // Pipelines first (they were created with the layout), then the layouts.
+        self.cache.clear();
+        self.probes.clear();
+        // SAFETY: no pipeline or pending work uses the layouts any more (the evaluator waits
+        // idle before dropping); each is destroyed exactly once, in reverse creation order.
+        unsafe {
+            self.device.raw.destroy_pipeline_layout(self.layout, None);
+            self.device
+                .raw
+                .destroy_descriptor_set_layout(self.set_layout, None);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_compile_error_names_file_and_line() {
+        let files = [
+            (
+                "main.comp",
+                "#version 450\n#include \"bad.glsl\"\nvoid main() {}\n",
+            ),
+            ("bad.glsl", "float f() {\n  return undefined_thing;\n}\n"),
+        ];
+        let err = compile(&files, "main.comp", &[], shaderc::EnvVersion::Vulkan1_0)
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("bad.glsl:2"), "{err}");
+    }
+
+    #[test]
+    fn a_missing_include_is_named() {
+        let files = [(
+            "main.comp",
+            "#version 450\n#include \"nope.glsl\"\nvoid main() {}\n",
+        )];
+        let err = compile(&files, "main.comp", &[], shaderc::EnvVersion::Vulkan1_0)
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("nope.glsl"), "{err}");
+    }
+
+    #[test]
+    fn every_feature_set_of_one_feature_compiles() {
+        for (f, _) in FeatureSet::ALL_NAMED {
+            compile_kernel(*f, true).unwrap_or_else(|e| panic!("{f}: {e}"));
+        }
+        compile_kernel(FeatureSet::all(), false).unwrap();
+    }
+}

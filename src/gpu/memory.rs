@@ -1,0 +1,192 @@
+//! Storage buffers in host-visible, host-coherent memory, persistently mapped, with RAII.
+//!
+//! Two memory preferences: [`MemoryUse::Upload`] (tuples, materials) prefers memory that is
+//! also `DEVICE_LOCAL` (resizable BAR / unified memory), [`MemoryUse::Readback`] (results,
+//! counters) prefers `HOST_CACHED`, so host reads of results are cached reads. Both require
+//! `HOST_VISIBLE | HOST_COHERENT`, which the spec guarantees to exist, so no flush or
+//! invalidate calls are needed. On lavapipe every type is ordinary RAM.
+
+use super::context::Device;
+use super::vk_error;
+use crate::error::{Error, Result};
+use ash::vk;
+use bytemuck::Pod;
+use std::sync::Arc;
+
+/// What a buffer is for: decides the preferred memory type.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum MemoryUse {
+    /// Written by the host, read by the device.
+    Upload,
+    /// Written by the device, read by the host.
+    Readback,
+}
+
+/// A storage buffer with its own memory, mapped for its whole life.
+pub(crate) struct Buffer {
+    raw: vk::Buffer,
+    memory: vk::DeviceMemory,
+    size: u64,
+    mapped: *mut u8,
+    device: Arc<Device>,
+}
+
+/// The index of a memory type allowed by `bits` with `required` flags, preferring one that
+/// also has `preferred`.
+fn memory_type(
+    props: &vk::PhysicalDeviceMemoryProperties,
+    bits: u32,
+    required: vk::MemoryPropertyFlags,
+    preferred: vk::MemoryPropertyFlags,
+) -> Option<u32> {
+    let types = &props.memory_types[..props.memory_type_count as usize];
+    let fits = |i: usize, flags: vk::MemoryPropertyFlags| {
+        bits & (1 << i) != 0 && types[i].property_flags.contains(flags)
+    };
+    (0..types.len())
+        .find(|&i| fits(i, required | preferred))
+        .or_else(|| (0..types.len()).find(|&i| fits(i, required)))
+        .map(|i| i as u32)
+}
+
+impl Buffer {
+    /// A mapped storage buffer of at least `size` bytes (0 is rounded up to 16).
+    pub fn new(device: &Arc<Device>, size: u64, usage: MemoryUse) -> Result<Buffer> {
+        let size = size.max(16);
+        let info = vk::BufferCreateInfo::default()
+            .size(size)
+            .usage(vk::BufferUsageFlags::STORAGE_BUFFER)
+            .sharing_mode(vk::SharingMode::EXCLUSIVE);
+        let d = &device.raw;
+        // SAFETY: `info` is a valid create info for a live device.
+        let raw = unsafe { d.create_buffer(&info, None) }.map_err(vk_error("vkCreateBuffer"))?;
+        // Owns `raw` until the memory is bound, so every error path below frees it.
+        struct Guard<'a>(&'a ash::Device, vk::Buffer, vk::DeviceMemory);
+        impl Drop for Guard<'_> {
+            fn drop(&mut self) {
+                // SAFETY: the handles were created above from this device, are not in use by
+                // any submitted work, and are destroyed only here (on an error path).
+                unsafe {
+                    self.0.destroy_buffer(self.1, None);
+                    self.0.free_memory(self.2, None);
+                }
+            }
+        }
+        let mut guard = Guard(d, raw, vk::DeviceMemory::null());
+        // SAFETY: `raw` is a live buffer of this device.
+        let req = unsafe { d.get_buffer_memory_requirements(raw) };
+        let required =
+            vk::MemoryPropertyFlags::HOST_VISIBLE | vk::MemoryPropertyFlags::HOST_COHERENT;
+        let preferred = match usage {
+            MemoryUse::Upload => vk::MemoryPropertyFlags::DEVICE_LOCAL,
+            MemoryUse::Readback => vk::MemoryPropertyFlags::HOST_CACHED,
+        };
+        let type_index = memory_type(
+            &device.physical.memory,
+            req.memory_type_bits,
+            required,
+            preferred,
+        )
+        .ok_or_else(|| {
+            Error::Unsupported(
+                "the device has no host-visible, host-coherent memory type for storage buffers"
+                    .into(),
+            )
+        })?;
+        let alloc = vk::MemoryAllocateInfo::default()
+            .allocation_size(req.size)
+            .memory_type_index(type_index);
+        // SAFETY: valid allocate info for a live device.
+        let memory =
+            unsafe { d.allocate_memory(&alloc, None) }.map_err(vk_error("vkAllocateMemory"))?;
+        guard.2 = memory;
+        // SAFETY: fresh buffer and memory of a compatible type and sufficient size, offset 0.
+        unsafe { d.bind_buffer_memory(raw, memory, 0) }.map_err(vk_error("vkBindBufferMemory"))?;
+        // SAFETY: the memory is host visible and not mapped yet; the whole range is mapped.
+        let mapped =
+            unsafe { d.map_memory(memory, 0, vk::WHOLE_SIZE, vk::MemoryMapFlags::empty()) }
+                .map_err(vk_error("vkMapMemory"))?;
+        std::mem::forget(guard);
+        Ok(Buffer {
+            raw,
+            memory,
+            size,
+            mapped: mapped.cast(),
+            device: Arc::clone(device),
+        })
+    }
+
+    /// The buffer handle.
+    pub fn raw(&self) -> vk::Buffer {
+        self.raw
+    }
+
+    /// Size in bytes.
+    pub fn size(&self) -> u64 {
+        self.size
+    }
+
+    /// Copies `data` into the buffer at byte `offset`.
+    ///
+    /// # Panics
+    /// If the data does not fit (a caller bug: buffers are sized before use).
+    ///
+    /// # Safety
+    /// No submitted, unfinished GPU work may read or write this buffer (the caller has
+    /// waited on the fence of the last submission that used it).
+    pub unsafe fn write<T: Pod>(&mut self, offset: u64, data: &[T]) {
+        let bytes: &[u8] = bytemuck::cast_slice(data);
+        assert!(
+            offset + bytes.len() as u64 <= self.size,
+            "buffer write out of range"
+        );
+        // SAFETY: the range is inside the mapping (checked above); the caller guarantees no
+        // concurrent device access; the source is a distinct host allocation.
+        unsafe {
+            std::ptr::copy_nonoverlapping(
+                bytes.as_ptr(),
+                self.mapped.add(offset as usize),
+                bytes.len(),
+            )
+        };
+    }
+
+    /// Copies `out.len()` elements from byte `offset` of the buffer into `out`.
+    ///
+    /// # Panics
+    /// If the range is outside the buffer.
+    ///
+    /// # Safety
+    /// As for [`Buffer::write`]: the device must have finished writing the buffer (fence
+    /// waited, and the command buffer's barrier made the writes host-visible).
+    pub unsafe fn read<T: Pod>(&self, offset: u64, out: &mut [T]) {
+        let bytes: &mut [u8] = bytemuck::cast_slice_mut(out);
+        assert!(
+            offset + bytes.len() as u64 <= self.size,
+            "buffer read out of range"
+        );
+        // SAFETY: the range is inside the mapping; no concurrent device access (caller).
+        unsafe {
+            std::ptr::copy_nonoverlapping(
+                self.mapped.add(offset as usize),
+                bytes.as_mut_ptr(),
+                bytes.len(),
+            )
+        };
+    }
+}
+
+impl Drop for Buffer {
+    fn drop(&mut self) {
+        // SAFETY: owners drop buffers only when no submitted work uses them (the evaluator
+        // waits for its fences, and waits idle in its own Drop); freeing the memory unmaps it.
+        unsafe {
+            self.device.raw.destroy_buffer(self.raw, None);
+            self.device.raw.free_memory(self.memory, None);
+        }
+    }
+}
+
+// SAFETY: the only non-Send member is the mapping pointer, which is plain process memory
+// owned by this buffer; moving the owner to another thread moves that ownership with it.
+unsafe impl Send for Buffer {}

@@ -1,0 +1,83 @@
+//! The Vulkan compute backend — the only module of the crate with `unsafe` code. Every
+//! `unsafe` block carries a `// SAFETY:` line naming the invariant it relies on.
+//!
+//! # Pieces
+//! - [`context`](DeviceSelector): loads the Vulkan loader (a missing `libvulkan` is an
+//!   [`Error::NoDevice`] that says what to install), creates the instance — with
+//!   `VK_LAYER_KHRONOS_validation` and a `VK_EXT_debug_utils` messenger that counts warnings
+//!   and errors when [`VulkanOptions::validation`] asks for it — picks the physical device
+//!   (discrete GPU > integrated > virtual > CPU, overridden by a [`DeviceSelector`] from
+//!   `--device` or `VKBRDF_DEVICE`) and creates the logical device with one compute queue.
+//! - `memory`: storage buffers, persistently mapped, freed on drop.
+//! - [`kernel`]: the GLSL in `glsl/`, embedded with `include_str!` and compiled by shaderc
+//!   at run time (`#include` resolved against the embedded files, errors naming file and
+//!   line), one pipeline per [`FeatureSet`](crate::features::FeatureSet), cached.
+//! - [`VulkanBackend`] (`evaluator`): chunking and streaming, the [`Backend`](crate::backend::Backend).
+//! - [`layout`]: the `#[repr(C)]` GPU structs and the codes the GLSL reads.
+//! - [`devices`]: `vkbrdf devices`.
+//!
+//! # Decisions
+//! - **Memory types.** Every buffer is `HOST_VISIBLE | HOST_COHERENT` and mapped for its
+//!   whole life: the host writes tuples straight into the buffer the kernel reads and reads
+//!   results straight from the buffer it writes, with no staging copy and no flush or
+//!   invalidate. Uploads prefer memory that is also `DEVICE_LOCAL`, readbacks prefer
+//!   `HOST_CACHED` (uncached reads of results are several times slower). On lavapipe,
+//!   integrated GPUs and discrete GPUs with resizable BAR this is the fastest path; it is
+//!   what the project's machines (lavapipe) run. On a discrete GPU without resizable BAR
+//!   the kernel would read tuples across PCIe instead; there the better design is a
+//!   `DEVICE_LOCAL` buffer per slot plus host-visible staging buffers, with
+//!   `vkCmdCopyBuffer` in → dispatch → `vkCmdCopyBuffer` out recorded in the same command
+//!   buffer (barriers transfer→compute→transfer→host). The slot structure below already
+//!   has the place for it: only `memory.rs` and the recording in `submit` would change.
+//! - **Memory bound.** Slot buffers are sized for chunks such that all
+//!   [`FRAMES_IN_FLIGHT`] slots at the widest tuple layout (13 input + 3 + 6 output floats)
+//!   fit in [`VulkanOptions::max_gpu_memory`], and one input buffer fits in
+//!   `maxStorageBufferRange` (128 MiB on lavapipe) and one dispatch in
+//!   `maxComputeWorkGroupCount[0]`. Buffers persist between calls and only grow (the old
+//!   one is freed before the new one is allocated).
+//! - **Synchronisation.** One fence per slot and nothing else: each submission is one
+//!   command buffer (dispatch, then a compute-write → host-read memory barrier) signalling
+//!   its slot's fence; the host waits on that fence before it reads the results or reuses
+//!   the slot's buffers, command buffer or descriptor set. Host writes before
+//!   `vkQueueSubmit` are visible to the device by the submission's implicit host
+//!   synchronisation. No semaphores: chunks are independent, and results go to the host.
+//! - **One queue.** The work is a stream of independent dispatches whose only consumer is
+//!   the host; one compute queue executes them in order and the ring of fences gives all
+//!   the overlap there is to get (host copies vs device work). A second queue (e.g. a
+//!   transfer queue for staging copies on a discrete GPU) would add cross-queue semaphores
+//!   and ownership transfers for no gain on the devices this runs on.
+//! - **Counts.** Invalid and below-horizon tuples are reduced per subgroup
+//!   (`subgroupAdd`/`subgroupMin` when the device supports subgroup arithmetic in compute
+//!   shaders, shared-memory atomics otherwise), then one global atomic per workgroup.
+//! - **RAII.** Child objects hold an `Arc` of their [`Device`](context::Device), which
+//!   holds an `Arc` of the instance: parents outlive children. [`VulkanBackend`]'s `Drop`
+//!   waits for the device to go idle; its fields then drop in reverse creation order.
+//! - **Errors.** Every `vk::Result` is mapped at its call site to
+//!   [`Error::Vulkan`]` { call: "vkCreateBuffer", .. }`; nothing unwraps a driver result.
+#![allow(unsafe_code)]
+
+mod context;
+pub mod devices;
+mod evaluator;
+pub mod kernel;
+pub mod layout;
+mod memory;
+mod sync;
+
+pub use context::{DeviceSelector, ValidationCounter, INSTALL_HINT};
+pub use devices::{list_devices, DeviceInfo, HeapInfo};
+pub use evaluator::{
+    validation_from_env, BufferBytes, VulkanBackend, VulkanOptions, FRAMES_IN_FLIGHT,
+    MAX_CHUNK_TUPLES,
+};
+
+use crate::error::Error;
+use ash::vk;
+
+/// Maps a failed `vk::Result` of `call` to [`Error::Vulkan`].
+pub(crate) fn vk_error(call: &'static str) -> impl Fn(vk::Result) -> Error {
+    move |r| Error::Vulkan {
+        call,
+        result: format!("{r:?} ({r})"),
+    }
+}

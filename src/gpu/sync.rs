@@ -1,0 +1,161 @@
+//! Small RAII owners for the per-evaluator Vulkan objects: the command pool (and its
+//! command buffers), the descriptor pool (and its sets), and fences.
+
+use super::context::Device;
+use super::vk_error;
+use crate::error::{Error, Result};
+use ash::vk;
+use std::sync::Arc;
+
+/// How long one wait for a chunk may take before it is reported as an error (a hung or
+/// lost device), in nanoseconds: 10 minutes.
+const FENCE_TIMEOUT_NS: u64 = 600_000_000_000;
+
+/// A fence, created unsignalled.
+pub(crate) struct Fence {
+    raw: vk::Fence,
+    device: Arc<Device>,
+}
+
+impl Fence {
+    pub fn new(device: &Arc<Device>) -> Result<Fence> {
+        // SAFETY: valid create info for a live device.
+        let raw = unsafe {
+            device
+                .raw
+                .create_fence(&vk::FenceCreateInfo::default(), None)
+        }
+        .map_err(vk_error("vkCreateFence"))?;
+        Ok(Fence {
+            raw,
+            device: Arc::clone(device),
+        })
+    }
+
+    pub fn raw(&self) -> vk::Fence {
+        self.raw
+    }
+
+    /// Waits until the fence is signalled, then resets it.
+    pub fn wait_and_reset(&self) -> Result<()> {
+        let fences = [self.raw];
+        // SAFETY: the fence belongs to this device; waiting has no other precondition.
+        match unsafe {
+            self.device
+                .raw
+                .wait_for_fences(&fences, true, FENCE_TIMEOUT_NS)
+        } {
+            Ok(()) => {}
+            Err(vk::Result::TIMEOUT) => {
+                return Err(Error::Vulkan {
+                    call: "vkWaitForFences",
+                    result: "TIMEOUT: a chunk took more than 10 minutes (hung device?)".into(),
+                })
+            }
+            Err(r) => return Err(vk_error("vkWaitForFences")(r)),
+        }
+        // SAFETY: the fence is signalled, so no queue operation still refers to it.
+        unsafe { self.device.raw.reset_fences(&fences) }.map_err(vk_error("vkResetFences"))
+    }
+
+    /// Resets the fence after the device was waited idle (error recovery).
+    pub fn reset(&self) {
+        // SAFETY: called only after vkDeviceWaitIdle, so no pending submission uses it.
+        let _ = unsafe { self.device.raw.reset_fences(&[self.raw]) };
+    }
+}
+
+impl Drop for Fence {
+    fn drop(&mut self) {
+        // SAFETY: owners drop fences only after waiting for them (or the device idle).
+        unsafe { self.device.raw.destroy_fence(self.raw, None) };
+    }
+}
+
+/// A command pool whose buffers can be re-recorded one by one, with `count` primary
+/// command buffers allocated from it (freed with the pool).
+pub(crate) struct CommandPool {
+    raw: vk::CommandPool,
+    pub buffers: Vec<vk::CommandBuffer>,
+    device: Arc<Device>,
+}
+
+impl CommandPool {
+    pub fn new(device: &Arc<Device>, count: u32) -> Result<CommandPool> {
+        let info = vk::CommandPoolCreateInfo::default()
+            .queue_family_index(device.queue_family)
+            .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER);
+        // SAFETY: valid create info for a live device and its queue family.
+        let raw = unsafe { device.raw.create_command_pool(&info, None) }
+            .map_err(vk_error("vkCreateCommandPool"))?;
+        let mut pool = CommandPool {
+            raw,
+            buffers: vec![],
+            device: Arc::clone(device),
+        };
+        let alloc = vk::CommandBufferAllocateInfo::default()
+            .command_pool(raw)
+            .level(vk::CommandBufferLevel::PRIMARY)
+            .command_buffer_count(count);
+        // SAFETY: the pool is live; on error `pool` is dropped and destroys it.
+        pool.buffers = unsafe { device.raw.allocate_command_buffers(&alloc) }
+            .map_err(vk_error("vkAllocateCommandBuffers"))?;
+        Ok(pool)
+    }
+}
+
+impl Drop for CommandPool {
+    fn drop(&mut self) {
+        // SAFETY: no command buffer of the pool is pending (owners wait idle first);
+        // destroying the pool frees its command buffers.
+        unsafe { self.device.raw.destroy_command_pool(self.raw, None) };
+    }
+}
+
+/// A descriptor pool with `count` sets of `layout` allocated from it (freed with the pool).
+pub(crate) struct DescriptorPool {
+    raw: vk::DescriptorPool,
+    pub sets: Vec<vk::DescriptorSet>,
+    device: Arc<Device>,
+}
+
+impl DescriptorPool {
+    pub fn new(
+        device: &Arc<Device>,
+        layout: vk::DescriptorSetLayout,
+        bindings: u32,
+        count: u32,
+    ) -> Result<DescriptorPool> {
+        let sizes = [vk::DescriptorPoolSize {
+            ty: vk::DescriptorType::STORAGE_BUFFER,
+            descriptor_count: bindings * count,
+        }];
+        let info = vk::DescriptorPoolCreateInfo::default()
+            .max_sets(count)
+            .pool_sizes(&sizes);
+        // SAFETY: valid create info for a live device.
+        let raw = unsafe { device.raw.create_descriptor_pool(&info, None) }
+            .map_err(vk_error("vkCreateDescriptorPool"))?;
+        let mut pool = DescriptorPool {
+            raw,
+            sets: vec![],
+            device: Arc::clone(device),
+        };
+        let layouts = vec![layout; count as usize];
+        let alloc = vk::DescriptorSetAllocateInfo::default()
+            .descriptor_pool(raw)
+            .set_layouts(&layouts);
+        // SAFETY: the pool has room for exactly these sets; on error `pool` is dropped.
+        pool.sets = unsafe { device.raw.allocate_descriptor_sets(&alloc) }
+            .map_err(vk_error("vkAllocateDescriptorSets"))?;
+        Ok(pool)
+    }
+}
+
+impl Drop for DescriptorPool {
+    fn drop(&mut self) {
+        // SAFETY: no pending work uses the sets (owners wait idle first); destroying the
+        // pool frees them.
+        unsafe { self.device.raw.destroy_descriptor_pool(self.raw, None) };
+    }
+}

@@ -1,0 +1,158 @@
+//! OpenEXR output with the `exr` crate: float32 (or float16 with `--half`) channels in one
+//! or more named layers, ZIP-compressed scan lines, with the table's provenance as text
+//! attributes `vkbrdf.*` in every layer's header. Written atomically.
+//!
+//! Channel data is row-major with row 0 first (the top of the image): texel `(i, j)` is
+//! `values[j·W + i]`, matching [`super::TEXEL_CENTRES`].
+
+use super::Grid;
+use crate::error::{Error, Result};
+use exr::prelude::{
+    f16, AnyChannel, AnyChannels, AttributeValue, Encoding, FlatSamples, Image, ImageAttributes,
+    IntegerBounds, Layer as ExrLayer, LayerAttributes, SmallVec, Text, WritableImage,
+};
+use std::path::Path;
+
+/// One channel of a table: a name (`R`, `Y`, `F.R`, …) and `W·H` values, row-major.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Channel {
+    /// Channel name inside its layer.
+    pub name: String,
+    /// `W·H` values, texel `(i, j)` at `j·W + i`.
+    pub values: Vec<f32>,
+}
+
+/// A layer of channels. A file with one layer is a plain single-part EXR; a file with
+/// several is multi-part, each part named by its layer's name (so channel names may repeat
+/// across layers, e.g. `G` of the BRDF and `G` of the terms).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Layer {
+    /// Part name (written only in multi-part files).
+    pub name: String,
+    /// The channels (sorted by name on writing, as OpenEXR requires).
+    pub channels: Vec<Channel>,
+}
+
+/// Where a table came from, stored as `vkbrdf.<key>` text attributes in each header.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Provenance {
+    /// Which table (`slice`, `albedo`, `albedo-average`, `dfg`).
+    pub table: String,
+    /// The material, or the model the table integrates, in words.
+    pub material: String,
+    /// The convention (§5) the material uses.
+    pub convention: String,
+    /// What x, y (and the channels) mean.
+    pub parameterisation: String,
+    /// Samples per texel and how they were taken.
+    pub samples: String,
+    /// The backend that evaluated f.
+    pub backend: String,
+}
+
+impl Provenance {
+    /// The attributes as `(name, value)`: the fields plus the texel-centre convention and
+    /// the vkbrdf version.
+    pub fn attributes(&self) -> Vec<(&'static str, String)> {
+        vec![
+            ("vkbrdf.table", self.table.clone()),
+            ("vkbrdf.material", self.material.clone()),
+            ("vkbrdf.convention", self.convention.clone()),
+            ("vkbrdf.parameterisation", self.parameterisation.clone()),
+            ("vkbrdf.texelCentres", super::TEXEL_CENTRES.to_string()),
+            ("vkbrdf.samples", self.samples.clone()),
+            ("vkbrdf.backend", self.backend.clone()),
+            ("vkbrdf.version", super::VERSION.to_string()),
+        ]
+    }
+}
+
+/// Writes `layers` of a `grid` table to `path` (float16 when `half`), atomically.
+pub fn write(
+    path: &Path,
+    grid: Grid,
+    layers: Vec<Layer>,
+    provenance: &Provenance,
+    half: bool,
+) -> Result<()> {
+    for layer in &layers {
+        for c in &layer.channels {
+            if c.values.len() != grid.texels() {
+                return Err(Error::Table(format!(
+                    "{}: channel {}.{} holds {} values for a {}x{} table (a bug)",
+                    path.display(),
+                    layer.name,
+                    c.name,
+                    c.values.len(),
+                    grid.width,
+                    grid.height
+                )));
+            }
+        }
+    }
+    let multi = layers.len() > 1;
+    let size = (grid.width, grid.height);
+    let exr_layers: Vec<_> = layers
+        .into_iter()
+        .map(|layer| {
+            let mut attributes = if multi {
+                LayerAttributes::named(text(&layer.name))
+            } else {
+                LayerAttributes::default()
+            };
+            attributes.software_name = Some(text(&format!("vkbrdf {}", super::VERSION)));
+            for (key, value) in provenance.attributes() {
+                attributes
+                    .other
+                    .insert(text(key), AttributeValue::Text(text(&value)));
+            }
+            let channels: SmallVec<[AnyChannel<FlatSamples>; 4]> = layer
+                .channels
+                .into_iter()
+                .map(|c| AnyChannel::new(text(&c.name), samples(c.values, half)))
+                .collect();
+            ExrLayer::new(
+                size,
+                attributes,
+                Encoding::SMALL_LOSSLESS,
+                AnyChannels::sort(channels),
+            )
+        })
+        .collect();
+    let image = Image::from_layers(
+        ImageAttributes::new(IntegerBounds::from_dimensions(size)),
+        exr_layers,
+    );
+    crate::atomic::write(path, |w| {
+        image.write().to_unbuffered(w).map_err(|e| match e {
+            exr::error::Error::Io(io) => io,
+            other => std::io::Error::other(format!("OpenEXR encoding: {other}")),
+        })
+    })
+}
+
+/// float32 samples, or float16 when `half`.
+fn samples(values: Vec<f32>, half: bool) -> FlatSamples {
+    if half {
+        FlatSamples::F16(values.into_iter().map(f16::from_f32).collect())
+    } else {
+        FlatSamples::F32(values)
+    }
+}
+
+/// An EXR text (Latin-1); characters beyond it are written as `\u{…}` escapes.
+fn text(s: &str) -> Text {
+    Text::new_or_none(s).unwrap_or_else(|| {
+        let escaped: String = s
+            .chars()
+            .map(|c| {
+                if (c as u32) < 256 {
+                    c.to_string()
+                } else {
+                    c.escape_unicode().to_string()
+                }
+            })
+            .collect();
+        Text::new_or_panic(escaped)
+    })
+}

@@ -1,0 +1,298 @@
+//! Tables of f: half/difference slices, directional albedo, split-sum DFG, MERL binaries and
+//! PNG previews (`vkbrdf table <kind>`).
+//!
+//! Every table evaluates f through a [`Backend`] — the Vulkan kernel or the CPU reference —
+//! so a table is exactly what the chosen evaluator computes. The host builds the tuples in
+//! chunks of at most [`DEFAULT_CHUNK_TUPLES`] (bounded memory whatever the table size),
+//! the backend evaluates them, and the host reduces the results; a [`Runner`] owns that loop
+//! and its progress bar.
+//!
+//! Conventions shared by every 2-D table (written into each EXR header too):
+//! - texel centres: column `i` ↔ `x = (i + 0.5)/W`, row `j` ↔ `y = (j + 0.5)/H`
+//!   ([`texel_centre`]); row 0 is the first (top) row of the image;
+//! - frame: `n = +z`, tangent `t = +x` (anisotropic materials), directions in the `xz` plane
+//!   where a table has no azimuth of its own.
+//!
+//! Every output file is written atomically ([`crate::atomic::write`]): a failed run leaves
+//! no partial file and never clobbers an existing one.
+
+pub mod albedo;
+pub mod dfg;
+pub mod exr_out;
+pub mod merl;
+pub mod preview;
+pub mod slice;
+
+use crate::backend::{Backend, Output, Request};
+use crate::batch::{Batch, COLUMNS_PLAIN, COLUMNS_TANGENT};
+use crate::error::{Error, Result};
+use crate::material::{Convention, Material};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use std::path::Path;
+
+/// Tuples per backend call: 2²¹ rows of 13 floats are 109 MB in, 25 MB out (terms
+/// included), which bounds host memory and stays a size every backend streams well.
+pub const DEFAULT_CHUNK_TUPLES: usize = 1 << 21;
+
+/// The version string stored in every table's provenance (`vkbrdf` crate version).
+pub const VERSION: &str = env!("CARGO_PKG_VERSION");
+
+/// The texel-centre convention, as stored in EXR headers.
+pub const TEXEL_CENTRES: &str = "column i <-> x = (i + 0.5)/W, row j <-> y = (j + 0.5)/H";
+
+/// The coordinate of texel `i` of `n`: `(i + 0.5)/n`.
+pub fn texel_centre(i: usize, n: usize) -> f64 {
+    (i as f64 + 0.5) / n as f64
+}
+
+/// A 2-D table size, `W × H` texels (both ≥ 1).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Grid {
+    /// Columns (x).
+    pub width: usize,
+    /// Rows (y).
+    pub height: usize,
+}
+
+impl Grid {
+    /// A grid of `width × height`, refusing an empty one and one beyond OpenEXR's
+    /// `i32` coordinates.
+    pub fn new(width: usize, height: usize) -> Result<Grid> {
+        if width == 0 || height == 0 {
+            return Err(Error::Table(format!(
+                "table size {width}x{height} has no texels; give W and H of at least 1"
+            )));
+        }
+        let limit = i32::MAX as usize / 2;
+        if width > limit || height > limit {
+            return Err(Error::Table(format!(
+                "table size {width}x{height} exceeds OpenEXR's limit of {limit} texels per side"
+            )));
+        }
+        Ok(Grid { width, height })
+    }
+
+    /// Number of texels, `W·H` (cannot overflow: both sides are below 2³⁰).
+    pub fn texels(&self) -> usize {
+        self.width * self.height
+    }
+}
+
+impl std::str::FromStr for Grid {
+    type Err = Error;
+
+    /// Parses `WxH` (e.g. `32x32`), or `N` for `N×N`.
+    fn from_str(s: &str) -> Result<Grid> {
+        let bad = || {
+            Error::Table(format!(
+                "table size `{s}` is not of the form WxH (e.g. 32x32) or N"
+            ))
+        };
+        let number = |t: &str| t.trim().parse::<usize>().map_err(|_| bad());
+        match s.split_once(['x', 'X', '×']) {
+            Some((w, h)) => Grid::new(number(w)?, number(h)?),
+            None => {
+                let n = number(s)?;
+                Grid::new(n, n)
+            }
+        }
+    }
+}
+
+/// Memory the machine can still give (`MemAvailable` of `/proc/meminfo`), when known.
+pub fn available_memory() -> Option<u64> {
+    let info = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = info.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    kib.checked_mul(1024)
+}
+
+/// Refuses, before anything is allocated, a job whose buffers need more memory than the
+/// machine has available. `bytes` is `None` when the size computation itself overflowed.
+pub fn check_memory(bytes: Option<u128>, what: &str) -> Result<()> {
+    let gib = |b: u128| b as f64 / (1u64 << 30) as f64;
+    match (bytes, available_memory()) {
+        (None, _) => Err(Error::Table(format!(
+            "{what} would need more memory than can be addressed; use a smaller size"
+        ))),
+        (Some(b), Some(avail)) if b > avail as u128 => Err(Error::Table(format!(
+            "{what} would need {:.1} GiB of memory, more than the {:.1} GiB available; use a smaller size",
+            gib(b),
+            gib(avail as u128)
+        ))),
+        _ => Ok(()),
+    }
+}
+
+/// Bytes to hold a `grid` table of `channels` values per texel: the f64 accumulators, the
+/// f32 result and the copy the EXR encoder makes (`8 + 4 + 4` bytes per value), plus one
+/// chunk of tuples in and out.
+pub fn table_bytes(grid: Grid, channels: usize) -> Option<u128> {
+    let values = (grid.width as u128)
+        .checked_mul(grid.height as u128)?
+        .checked_mul(channels as u128)?;
+    let chunk = DEFAULT_CHUNK_TUPLES as u128 * ((COLUMNS_TANGENT + 3 + 6) * 4 + 16) as u128;
+    values.checked_mul(16)?.checked_add(chunk)
+}
+
+/// The material called `name`: from `materials_file` when given, else from the presets.
+pub fn load_material(materials_file: Option<&Path>, name: &str) -> Result<Material> {
+    let (list, source) = match materials_file {
+        Some(path) => (
+            crate::material::load_materials(path)?,
+            path.display().to_string(),
+        ),
+        None => (crate::material::presets::all(), "the presets".to_string()),
+    };
+    find_material(&list, name, &source)
+}
+
+/// The material called `name` in `list`, or an error listing the names `source` defines.
+pub fn find_material(list: &[Material], name: &str, source: &str) -> Result<Material> {
+    list.iter()
+        .find(|m| m.name == name)
+        .cloned()
+        .ok_or_else(|| {
+            let names: Vec<&str> = list.iter().map(|m| m.name.as_str()).collect();
+            Error::Table(format!(
+                "material `{name}` is not defined in {source}; it defines: {}",
+                names.join(", ")
+            ))
+        })
+}
+
+/// The convention a material's provenance records (`-` for non-microfacet models).
+pub fn convention_name(m: &Material) -> &'static str {
+    match m.cook_torrance().map(|ct| ct.convention) {
+        Some(Convention::Seed) => "seed",
+        Some(Convention::CookTorrance1982) => "cook-torrance-1982",
+        Some(Convention::Modern) => "modern",
+        None => "- (not a microfacet model)",
+    }
+}
+
+/// Appends one tuple row `l v n material [t]` (f64 rounded to the f32 the backend reads).
+pub fn push_row(
+    rows: &mut Vec<f32>,
+    l: [f64; 3],
+    v: [f64; 3],
+    material: usize,
+    t: Option<[f64; 3]>,
+) {
+    rows.extend(l.iter().chain(&v).map(|&x| x as f32));
+    rows.extend_from_slice(&[0.0, 0.0, 1.0, material as f32]);
+    if let Some(t) = t {
+        rows.extend(t.map(|x| x as f32));
+    }
+}
+
+/// A unit vector rounded to f32 and widened back: the direction the backend actually sees.
+pub fn as_f32(a: [f64; 3]) -> [f64; 3] {
+    a.map(|x| f64::from(x as f32))
+}
+
+/// Runs a table's tuples through a backend in chunks, advancing a progress bar.
+pub struct Runner<'a> {
+    backend: &'a mut dyn Backend,
+    progress: ProgressBar,
+    chunk_tuples: usize,
+}
+
+impl<'a> Runner<'a> {
+    /// A runner on `backend` without a progress bar and with [`DEFAULT_CHUNK_TUPLES`].
+    pub fn new(backend: &'a mut dyn Backend) -> Runner<'a> {
+        Runner {
+            backend,
+            progress: ProgressBar::hidden(),
+            chunk_tuples: DEFAULT_CHUNK_TUPLES,
+        }
+    }
+
+    /// Shows a progress bar on stderr (drawn only when stderr is a terminal).
+    pub fn with_progress(mut self, show: bool) -> Runner<'a> {
+        if show {
+            self.progress = ProgressBar::with_draw_target(None, ProgressDrawTarget::stderr());
+            self.progress.set_style(
+                ProgressStyle::with_template(
+                    "{msg:>12} [{bar:40}] {human_pos}/{human_len} tuples, {elapsed} (eta {eta})",
+                )
+                .expect("static template")
+                .progress_chars("=> "),
+            );
+        }
+        self
+    }
+
+    /// Tuples per backend call (at least 1).
+    pub fn with_chunk_tuples(mut self, tuples: usize) -> Runner<'a> {
+        self.chunk_tuples = tuples.max(1);
+        self
+    }
+
+    /// Tuples per backend call.
+    pub fn chunk_tuples(&self) -> usize {
+        self.chunk_tuples
+    }
+
+    /// The backend's name, for provenance and messages.
+    pub fn backend_name(&self) -> String {
+        self.backend.name()
+    }
+
+    /// Starts a job of `tuples` tuples labelled `what` on the progress bar.
+    pub fn start(&self, what: &str, tuples: u64) {
+        self.progress.set_message(what.to_string());
+        self.progress.set_length(tuples);
+        self.progress.set_position(0);
+    }
+
+    /// Ends the current job's progress bar.
+    pub fn finish(&self) {
+        self.progress.finish_and_clear();
+    }
+
+    /// Advances the progress bar by `tuples` (generated, whether evaluated or skipped).
+    pub fn advance(&self, tuples: u64) {
+        self.progress.inc(tuples);
+    }
+
+    /// Evaluates rows built by [`push_row`] (13 columns when [`needs_tangents`]`(materials)`,
+    /// else 10) with `materials`, and checks that the backend found no invalid tuple: the
+    /// generators only build valid ones, so an invalid count is a bug worth stopping for.
+    pub fn evaluate(
+        &mut self,
+        rows: Vec<f32>,
+        materials: &[Material],
+        terms: bool,
+    ) -> Result<Output> {
+        let columns = if needs_tangents(materials) {
+            COLUMNS_TANGENT
+        } else {
+            COLUMNS_PLAIN
+        };
+        let batch = Batch::new(
+            rows,
+            columns,
+            materials.len(),
+            &crate::batch::memory_source(),
+        )?;
+        let out = self
+            .backend
+            .evaluate(&batch, materials, &Request { terms })?;
+        if out.counts.invalid > 0 {
+            return Err(Error::Table(format!(
+                "{}: {} of {} generated tuples came back invalid (first row {:?}); this is a bug",
+                self.backend.name(),
+                out.counts.invalid,
+                out.counts.tuples,
+                out.counts.first_invalid
+            )));
+        }
+        Ok(out)
+    }
+}
+
+/// Whether rows for `materials` carry a tangent (`t = +x`): when any is anisotropic.
+pub fn needs_tangents(materials: &[Material]) -> bool {
+    materials.iter().any(Material::is_anisotropic)
+}
