@@ -88,66 +88,76 @@ fn projected_d_integral(m: &Material, scale: (f64, f64), psi_steps: u32) -> f64 
 
 const ROUGHNESSES: [f64; 6] = [0.05, 0.1, 0.2, 0.4, 0.7, 1.0];
 
-/// Quadrature tolerance of (a): the brief asks 1e-3; the grid above reaches ~1e-12, and
+/// Quadrature tolerance of (a): the brief asks 1e-3; the grid above reaches ~1e-13, and
 /// asserting 1e-9 keeps a margin while still catching any wrong constant.
 const NORM_TOL: f64 = 1e-9;
 
-fn assert_integral(what: &str, body: &str, got: f64, want: f64) {
+/// Asserts `got ≈ want` to `NORM_TOL` relative; returns the relative error.
+fn assert_integral(what: &str, body: &str, got: f64, want: f64) -> f64 {
     assert!(
         (got - want).abs() <= NORM_TOL * want,
         "∫ D cos_h dω for {what}: got {got:.15}, want {want:.15} (|err| = {:.3e})\nmaterial:\n{body}",
         (got - want).abs()
     );
+    (got - want).abs() / want
 }
 
 #[test]
 fn normalised_distributions_integrate_to_one() {
+    let mut worst = 0.0f64;
     for m in ROUGHNESSES {
         for d in ["beckmann", "ggx"] {
             let body = format!(
                 "model = \"cook-torrance\"\ndistribution = \"{d}\"\nroughness = {m}\ngeometry = \"none\"\nfresnel = \"none\""
             );
             let got = projected_d_integral(&material(&body), (m, m), 4);
-            assert_integral(&format!("{d}, m = {m}"), &body, got, 1.0);
+            worst = worst.max(assert_integral(&format!("{d}, m = {m}"), &body, got, 1.0));
         }
     }
     // Blinn: the lobe cos^e has angular width ~ √(2/(e+2)); use that as the grid's scale.
-    for e in [0.0, 1.0, 10.0, 100.0, 1e3, 1e4] {
+    for e in [0.0f64, 1.0, 10.0, 100.0, 1e3, 1e4] {
         let body = format!(
             "model = \"cook-torrance\"\ndistribution = \"blinn\"\nexponent = {e}\ngeometry = \"none\"\nfresnel = \"none\""
         );
         let w = (2.0 / (e + 2.0)).sqrt();
         let got = projected_d_integral(&material(&body), (w, w), 4);
-        assert_integral(&format!("blinn, e = {e}"), &body, got, 1.0);
+        worst = worst.max(assert_integral(&format!("blinn, e = {e}"), &body, got, 1.0));
     }
+    println!("∫ D cos_h dω, isotropic: worst relative error {worst:.2e}");
 }
 
 #[test]
 fn anisotropic_distributions_integrate_to_one() {
+    let mut worst = 0.0f64;
     for (mx, my) in [(0.05, 0.5), (0.1, 1.0), (0.3, 0.1), (1.0, 0.2), (0.5, 0.5)] {
         for d in ["beckmann", "ggx"] {
             let body = format!(
                 "model = \"cook-torrance\"\ndistribution = \"{d}\"\nroughness = [{mx}, {my}]\ngeometry = \"none\"\nfresnel = \"none\""
             );
             let got = projected_d_integral(&material(&body), (mx, my), 64);
-            assert_integral(&format!("anisotropic {d}, [{mx}, {my}]"), &body, got, 1.0);
+            let what = format!("anisotropic {d}, [{mx}, {my}]");
+            worst = worst.max(assert_integral(&what, &body, got, 1.0));
         }
     }
+    println!("∫ D cos_h dω, anisotropic: worst relative error {worst:.2e}");
 }
 
 #[test]
 fn unnormalised_beckmann_conventions() {
     // D = exp(−tan²δ/m²)/(k m² cos⁴δ) integrates to π/k: the seed's k = 4 gives π/4,
     // Cook & Torrance 1982's k = 1 gives π (FORMULAS.md §5).
+    let mut worst = 0.0f64;
     for m in ROUGHNESSES {
         for (convention, want) in [("seed", PI / 4.0), ("cook-torrance-1982", PI)] {
             let body = format!(
                 "model = \"cook-torrance\"\ndistribution = \"beckmann\"\nroughness = {m}\ngeometry = \"none\"\nfresnel = \"none\"\nconvention = \"{convention}\""
             );
             let got = projected_d_integral(&material(&body), (m, m), 4);
-            assert_integral(&format!("beckmann {convention}, m = {m}"), &body, got, want);
+            let what = format!("beckmann {convention}, m = {m}");
+            worst = worst.max(assert_integral(&what, &body, got, want));
         }
     }
+    println!("∫ D cos_h dω, seed and 1982 Beckmann: worst relative error {worst:.2e}");
 }
 
 // ---------------------------------------------------------------------------------------
@@ -368,19 +378,21 @@ fn white_furnace() {
         [t.sin(), 0.0, t.cos()]
     });
     let mut worst = (f64::MIN, String::new());
+    let mut max_diff = 0.0f64;
     for d in ["beckmann", "ggx"] {
         for g in ["smith", "smith-correlated", "cook-torrance"] {
-            for m in [0.1, 0.3, 0.6, 1.0] {
+            for m in [0.1f64, 0.3, 0.6, 1.0] {
                 let body = format!(
                     "model = \"cook-torrance\"\ndistribution = \"{d}\"\nroughness = {m}\ngeometry = \"{g}\"\nfresnel = \"none\""
                 );
                 let mat = material(&body);
                 for v in views {
-                    let e = furnace_albedo(&mat, m, v, 1);
-                    let fine = furnace_albedo(&mat, m, v, 2);
+                    let e = furnace_albedo(&mat, m, v, 2);
+                    let fine = furnace_albedo(&mat, m, v, 4);
+                    max_diff = max_diff.max((e - fine).abs());
                     let ctx = format!("V = {v:?}, material:\n{body}");
                     assert!(
-                        (e - fine).abs() <= FURNACE_TOL / 4.0,
+                        (e - fine).abs() <= FURNACE_TOL / 2.0,
                         "quadrature not converged: E = {e:.6} on the grid, {fine:.6} on one twice \
                          as fine; {ctx}"
                     );
@@ -395,7 +407,10 @@ fn white_furnace() {
             }
         }
     }
-    println!("white furnace: largest E(v) = {:.6} ({})", worst.0, worst.1);
+    println!(
+        "white furnace: largest E(v) = {:.9} ({}); grid vs twice as fine: max |ΔE| = {max_diff:.2e}",
+        worst.0, worst.1
+    );
 }
 
 #[test]
@@ -406,7 +421,7 @@ fn furnace_quadrature_is_exact_on_a_known_albedo() {
     // tan θ = 1). The integrand jumps there (G = 1), which costs the trapezoid rule O(step)
     // unless the jump sits mid-cell, where the first-order error cancels: the grid is
     // placed so (the jump is at u = ln(1/m) in the grid's stretched slopes).
-    for m in [0.1, 0.3, 0.6, 1.0] {
+    for m in [0.1f64, 0.3, 0.6, 1.0] {
         let body = format!(
             "model = \"cook-torrance\"\ndistribution = \"beckmann\"\nroughness = {m}\ngeometry = \"none\"\nfresnel = \"none\""
         );
@@ -557,6 +572,9 @@ proptest! {
     ) {
         let m = material(&body);
         prop_assume!(m.is_reciprocal());
+        // Both directions above the horizon (flipped if not), so that f is not trivially 0.
+        let up = |w: [f64; 3]| if dot(w, n) < 0.0 { w.map(|x| -x) } else { w };
+        let (l, v) = (up(l), up(v));
         let (a, b) = (evaluate(l, v, n, Some(t), &m), evaluate(v, l, n, Some(t), &m));
         let d = worst_rel_diff(&a, &b);
         prop_assert!(

@@ -21,7 +21,7 @@ fn independent<const K: usize>(
     let theta_o = mu.acos();
     let v = [theta_o.sin(), 0.0, mu];
     let wt = alpha.max(1e-3);
-    let wp = (alpha / theta_o.sin().max(alpha)).min(1.0);
+    let wp = (2.0 * alpha * mu / theta_o.sin().max(1e-9)).min(1.0);
     let q = 8;
     let nodes = gl(q);
     let ta = (-theta_o / wt).asinh();
@@ -190,6 +190,33 @@ fn scan() {
                 "{lobe:?} N={n} ({t1:?} per table): worst E {:?} A {:?} B {:?}",
                 worst[0], worst[1], worst[2]
             );
+        }
+    }
+}
+
+#[test]
+#[ignore]
+fn scan_avg() {
+    let mut cpu = CpuReference::new();
+    for lobe in [Lobe::Ggx, Lobe::Beckmann] {
+        let spec = Microfacet {
+            lobe,
+            geometry: Geometry::SmithCorrelated,
+        };
+        let alphas = [1.0 / 64.0, 0.05, 0.2, 0.5, 0.99];
+        let mut runner = Runner::new(&mut cpu as &mut dyn Backend);
+        let prod = albedo::average_albedo(&mut runner, &spec, &alphas, 1 << 16).unwrap();
+        for (i, &a) in alphas.iter().enumerate() {
+            let m = spec.material(a).unwrap();
+            let ind = |k: usize, panels: usize| -> f64 {
+                gl(k)
+                    .iter()
+                    .map(|&(mu, w)| 2.0 * mu * w * independent(&m, mu, a, panels, &|_| [1.0])[0])
+                    .sum()
+            };
+            let (i32_, i64_, i128_) = (ind(32, 24), ind(64, 24), ind(128, 24));
+            let i64b = ind(64, 48);
+            eprintln!("{lobe:?} a={a}: prod {:.7} ind32 {:.7} ind64 {:.7} ind128 {:.7} ind64(48p) {:.7} err {:.1e}", prod[i], i32_, i64_, i128_, i64b, prod[i] - i128_);
         }
     }
 }

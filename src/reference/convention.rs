@@ -24,3 +24,14 @@ pub fn beckmann_k(convention: Convention) -> f64 {
         Convention::Modern => PI,
     }
 }
+
+/// `ln K`, from the cosines' logarithms: finite even where `K` itself overflows (cosines
+/// near 1e-170, reachable from f64 callers), so the product `D·G·F·K` can be formed in the
+/// log domain there.
+pub fn glare_ln_k(convention: Convention, cos_i: f64, cos_o: f64) -> f64 {
+    match convention {
+        Convention::Seed => -cos_o.ln(),
+        Convention::CookTorrance1982 => -(PI.ln() + cos_i.ln() + cos_o.ln()),
+        Convention::Modern => -(4f64.ln() + cos_i.ln() + cos_o.ln()),
+    }
+}

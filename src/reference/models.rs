@@ -29,11 +29,12 @@ pub fn evaluate_model(fr: &Frame, m: &Material) -> Evaluation {
         },
         Some(Terms { d, g, f, k }) => {
             let ct = m.cook_torrance().expect("matched above");
+            let ln_k = convention::glare_ln_k(ct.convention, fr.cos_i, fr.cos_o);
             Evaluation {
                 status: Status::Valid,
                 brdf: std::array::from_fn(|c| {
                     ct.diffuse_weight * diffuse[c]
-                        + ct.specular_weight * m.specular[c] * (d * g * f[c] * k)
+                        + ct.specular_weight * m.specular[c] * specular_product(d, g, f[c], k, ln_k)
                 }),
                 d,
                 g,
@@ -41,6 +42,18 @@ pub fn evaluate_model(fr: &Frame, m: &Material) -> Evaluation {
                 k,
             }
         }
+    }
+}
+
+/// `D·G·F·K` for one channel. At extreme grazing (cosines near 1e-170, reachable only from
+/// f64 callers) K overflows to ∞ while D or G underflows to 0, and the direct product is
+/// 0·∞ = NaN; then it is formed in the log domain with `ln K` taken from the cosines.
+fn specular_product(d: f64, g: f64, f: f64, k: f64, ln_k: f64) -> f64 {
+    let direct = d * g * f * k;
+    if direct.is_finite() {
+        direct
+    } else {
+        (d.ln() + g.ln() + f.ln() + ln_k).exp()
     }
 }
 

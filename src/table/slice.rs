@@ -1,1 +1,152 @@
-//! (in progress)
+//! Half/difference slices (Rusinkiewicz 1998, "A new change of variables for efficient BRDF
+//! representation"): f over `(θ_h, θ_d)` at `φ_d = 90°`, `φ_h = 0`.
+//!
+//! Column i ↔ `x = (i + 0.5)/W`, `θ_h = x² · π/2` (the square-root spacing MERL uses, which
+//! puts half the columns within 22.5° of the normal) or `θ_h = x · π/2` (`--linear`); row j ↔
+//! `y = (j + 0.5)/H`, `θ_d = y · π/2`. Channels R, G, B hold f; with terms, a second layer
+//! `terms` holds D, G, F.R, F.G, F.B, K.
+
+use super::exr_out::{self, Channel, Layer, Provenance};
+use super::{needs_tangents, push_row, texel_centre, Grid, Runner};
+use crate::backend::TERM_COLUMNS;
+use crate::error::Result;
+use crate::material::Material;
+use std::f64::consts::FRAC_PI_2;
+use std::path::PathBuf;
+
+/// Default slice size, 90 × 90 (MERL's θ_h and θ_d resolution).
+pub const DEFAULT_SIZE: usize = 90;
+
+/// How column x maps to θ_h.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Spacing {
+    /// `θ_h = x² · π/2` (MERL).
+    Sqrt,
+    /// `θ_h = x · π/2`.
+    Linear,
+}
+
+/// θ_h of column coordinate `x` in [0, 1].
+pub fn theta_h(x: f64, spacing: Spacing) -> f64 {
+    match spacing {
+        Spacing::Sqrt => x * x * FRAC_PI_2,
+        Spacing::Linear => x * FRAC_PI_2,
+    }
+}
+
+/// `(l, v)` of half/difference angles with `φ_h = 0` and `n = +z`: `h = R_y(θ_h) z`,
+/// `l = R_y(θ_h) · d(θ_d, φ_d)`, `v` = `l` reflected about `h`.
+pub fn from_half_diff(theta_h: f64, theta_d: f64, phi_d: f64) -> ([f64; 3], [f64; 3]) {
+    let (sh, ch) = theta_h.sin_cos();
+    let (sd, cd) = theta_d.sin_cos();
+    let d = [sd * phi_d.cos(), sd * phi_d.sin(), cd];
+    let l = [d[0] * ch + d[2] * sh, d[1], -d[0] * sh + d[2] * ch];
+    let h = [sh, 0.0, ch];
+    let lh = l[0] * h[0] + l[2] * h[2];
+    let v = std::array::from_fn(|i| 2.0 * lh * h[i] - l[i]);
+    (l, v)
+}
+
+/// The tangent every table passes for anisotropic materials.
+pub const TANGENT: [f64; 3] = [1.0, 0.0, 0.0];
+
+/// f (n × 3, row-major texels) and, when `terms`, the terms (n × 6) of the slice.
+pub fn compute(
+    runner: &mut Runner,
+    material: &Material,
+    grid: Grid,
+    spacing: Spacing,
+    terms: bool,
+) -> Result<(Vec<f32>, Option<Vec<f32>>)> {
+    let materials = std::slice::from_ref(material);
+    let tangent = needs_tangents(materials).then_some(TANGENT);
+    let n = grid.texels();
+    let mut brdf = Vec::with_capacity(n * 3);
+    let mut term_values = Vec::with_capacity(if terms { n * TERM_COLUMNS } else { 0 });
+    runner.start("slice", n as u64);
+    let mut next = 0;
+    while next < n {
+        let end = n.min(next + runner.chunk_tuples());
+        let mut rows = Vec::with_capacity((end - next) * 13);
+        for t in next..end {
+            let (i, j) = (t % grid.width, t / grid.width);
+            let th = theta_h(texel_centre(i, grid.width), spacing);
+            let td = texel_centre(j, grid.height) * FRAC_PI_2;
+            let (l, v) = from_half_diff(th, td, FRAC_PI_2);
+            push_row(&mut rows, l, v, 0, tangent);
+        }
+        let out = runner.evaluate(rows, materials, terms)?;
+        brdf.extend_from_slice(&out.brdf);
+        if let Some(t) = out.terms {
+            term_values.extend_from_slice(&t);
+        }
+        runner.advance((end - next) as u64);
+        next = end;
+    }
+    runner.finish();
+    Ok((brdf, terms.then_some(term_values)))
+}
+
+/// What `vkbrdf table slice` writes.
+#[derive(Debug, Clone)]
+pub struct SliceJob {
+    /// The material.
+    pub material: Material,
+    /// Table size (x ↔ θ_h, y ↔ θ_d).
+    pub grid: Grid,
+    /// θ_h spacing.
+    pub spacing: Spacing,
+    /// Add the `terms` layer.
+    pub terms: bool,
+    /// Write float16.
+    pub half: bool,
+    /// The EXR file.
+    pub output: PathBuf,
+}
+
+/// Evaluates and writes the slice, refusing oversized grids first.
+pub fn write(runner: &mut Runner, job: &SliceJob) -> Result<()> {
+    let channels = if job.terms { 3 + TERM_COLUMNS } else { 3 };
+    super::check_memory(super::table_bytes(job.grid, channels), "the slice")?;
+    let (brdf, terms) = compute(runner, &job.material, job.grid, job.spacing, job.terms)?;
+    let mut layers = vec![interleaved("brdf", &brdf, &["R", "G", "B"])];
+    if let Some(t) = &terms {
+        layers.push(interleaved(
+            "terms",
+            t,
+            &["D", "G", "F.R", "F.G", "F.B", "K"],
+        ));
+    }
+    let spacing = match job.spacing {
+        Spacing::Sqrt => "theta_h = x^2 * pi/2 (MERL square-root spacing)",
+        Spacing::Linear => "theta_h = x * pi/2 (linear)",
+    };
+    let provenance = Provenance {
+        table: "slice".into(),
+        material: job.material.name.clone(),
+        convention: super::convention_name(&job.material).into(),
+        parameterisation: format!(
+            "f (1/sr, no cosine) over half/difference angles (Rusinkiewicz 1998): {spacing}, theta_d = y * pi/2, phi_d = pi/2, phi_h = 0; n = +z, t = +x{}",
+            if job.terms { "; layer terms: D, G, F.R, F.G, F.B, K" } else { "" }
+        ),
+        samples: "1 point sample at each texel centre".into(),
+        backend: runner.backend_name(),
+    };
+    exr_out::write(&job.output, job.grid, layers, &provenance, job.half)
+}
+
+/// A layer from `n × k` interleaved values, one channel per name.
+fn interleaved(layer: &str, values: &[f32], names: &[&str]) -> Layer {
+    let k = names.len();
+    Layer {
+        name: layer.into(),
+        channels: names
+            .iter()
+            .enumerate()
+            .map(|(c, name)| Channel {
+                name: (*name).into(),
+                values: values.iter().skip(c).step_by(k).copied().collect(),
+            })
+            .collect(),
+    }
+}
