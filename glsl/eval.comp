@@ -81,14 +81,20 @@ uint make_frame(uint row, GpuMaterial m, out Frame f) {
 #if defined(HAS_TANGENTS)
         bool ok_t;
         vec3 t = safe_normalize(load3(base + 10u), ok_t);
-        // |T - n(n.T)| <= 1e-12 |T| (FORMULAS.md §1), on the unit t: |n x t| <= 1e-12, tested
-        // squared. The cross product keeps its relative precision where T - n(n.T) cancels.
-        if (!ok_t || cross_length2(f.n, t) <= 1e-24) {
+        // |T - n(n.T)| = |n x t| |T|: the tuple is invalid when |n x t| <= 1e-12 (FORMULAS.md
+        // §1), tested squared.
+        vec3 nxt = cross(f.n, t);
+        float s2 = dot(nxt, nxt);
+        if (!ok_t || s2 <= 1e-24) {
             return STATUS_INVALID;
         }
-        bool ok_p;
-        f.t = safe_normalize(t - f.n * dot(f.n, t), ok_p);
-        f.b = cross(f.n, f.t);
+        // b = n x t / |n x t| and t = b x n: the same frame as t = normalize(T - n(n.T)),
+        // b = n x t, but built from cross products. Gram–Schmidt's subtraction leaves t
+        // tilted out of the tangent plane by ~u/|n x t| (when T is near N), and h, which lies
+        // mostly along n, would turn that tilt into an error of h.t; b x n is perpendicular
+        // to n to within u whatever the error of b.
+        f.b = nxt * inversesqrt(s2);
+        f.t = cross(f.b, f.n);
 #else
         return STATUS_INVALID; // anisotropic material, batch without tangents
 #endif

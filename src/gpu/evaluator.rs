@@ -101,8 +101,9 @@ struct Slot {
     fence: Fence,
     cmd: vk::CommandBuffer,
     set: vk::DescriptorSet,
-    /// The buffers the descriptor set points at now, by binding.
-    bound: [vk::Buffer; BINDING_COUNT as usize],
+    /// The [`Buffer::id`]s the descriptor set points at now, by binding (ids, not handles:
+    /// see [`Buffer::id`]).
+    bound: [u64; BINDING_COUNT as usize],
     pending: Option<Pending>,
 }
 
@@ -165,7 +166,7 @@ impl VulkanBackend {
                 fence: Fence::new(&device)?,
                 cmd: commands.buffers[i],
                 set: descriptors.sets[i],
-                bound: [vk::Buffer::null(); BINDING_COUNT as usize],
+                bound: [0; BINDING_COUNT as usize],
                 pending: None,
             });
         }
@@ -464,27 +465,18 @@ impl VulkanBackend {
                 MemoryUse::Readback,
             )?;
         }
-        let raw = |b: &Option<Buffer>| b.as_ref().map(Buffer::raw);
-        let materials =
-            raw(&self.materials).expect("materials are uploaded before any slot is prepared");
-        let wanted = [
-            raw(&slot.input).expect("ensured"),
+        let materials = self.materials.as_ref().expect("materials are uploaded before any slot is prepared");
+        let wanted: [&Buffer; BINDING_COUNT as usize] = [
+            slot.input.as_ref().expect("ensured"),
             materials,
-            raw(&slot.brdf).expect("ensured"),
-            raw(&slot.terms).unwrap_or(self.dummy.raw()),
-            slot.counts.raw(),
+            slot.brdf.as_ref().expect("ensured"),
+            slot.terms.as_ref().unwrap_or(&self.dummy),
+            &slot.counts,
         ];
-        if wanted != slot.bound {
-            let infos: Vec<[vk::DescriptorBufferInfo; 1]> = wanted
-                .iter()
-                .map(|&b| {
-                    [vk::DescriptorBufferInfo {
-                        buffer: b,
-                        offset: 0,
-                        range: vk::WHOLE_SIZE,
-                    }]
-                })
-                .collect();
+        let ids = wanted.map(Buffer::id);
+        if ids != slot.bound {
+            let infos: Vec<[vk::DescriptorBufferInfo; 1]> =
+                wanted.iter().map(|b| [vk::DescriptorBufferInfo { buffer: b.raw(), offset: 0, range: vk::WHOLE_SIZE }]).collect();
             let writes: Vec<vk::WriteDescriptorSet> = infos
                 .iter()
                 .enumerate()
@@ -499,7 +491,7 @@ impl VulkanBackend {
             // SAFETY: the set is not used by pending work (precondition) and every buffer
             // in `wanted` is live.
             unsafe { self.device.raw.update_descriptor_sets(&writes, &[]) };
-            slot.bound = wanted;
+            slot.bound = ids;
         }
         Ok(())
     }

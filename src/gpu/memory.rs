@@ -11,6 +11,7 @@ use super::vk_error;
 use crate::error::{Error, Result};
 use ash::vk;
 use bytemuck::Pod;
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
 
 /// What a buffer is for: decides the preferred memory type.
@@ -22,8 +23,12 @@ pub(crate) enum MemoryUse {
     Readback,
 }
 
+/// Source of [`Buffer::id`]s.
+static NEXT_ID: AtomicU64 = AtomicU64::new(1);
+
 /// A storage buffer with its own memory, mapped for its whole life.
 pub(crate) struct Buffer {
+    id: u64,
     raw: vk::Buffer,
     memory: vk::DeviceMemory,
     size: u64,
@@ -108,12 +113,20 @@ impl Buffer {
                 .map_err(vk_error("vkMapMemory"))?;
         std::mem::forget(guard);
         Ok(Buffer {
+            id: NEXT_ID.fetch_add(1, Ordering::Relaxed),
             raw,
             memory,
             size,
             mapped: mapped.cast(),
             device: Arc::clone(device),
         })
+    }
+
+    /// A process-unique identity. Not the handle: a driver may give a new buffer the handle
+    /// of one just destroyed (lavapipe's handles are pointers), and a descriptor set that
+    /// compared handles would keep pointing at the freed memory.
+    pub fn id(&self) -> u64 {
+        self.id
     }
 
     /// The buffer handle.

@@ -156,8 +156,8 @@ impl Backend for CpuReference {
                                 Status::BelowHorizon => counts.below_horizon += 1,
                                 Status::Valid => {}
                             }
-                            for c in 0..3 {
-                                rgb[c] = e.brdf[c] as f32;
+                            for (dst, src) in rgb.iter_mut().zip(e.brdf) {
+                                *dst = src as f32;
                             }
                             if let Some(t) = tout.as_deref_mut() {
                                 for (dst, src) in t[j * TERM_COLUMNS..(j + 1) * TERM_COLUMNS]

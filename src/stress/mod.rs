@@ -234,8 +234,8 @@ fn judge(
                                 .or_default()
                                 .add(relative_error(x as f64, want, ERROR_FLOOR), row);
                         };
-                        for c in 0..3 {
-                            add(model_label(m), got_f[c], r.brdf[c]);
+                        for (&x, want) in got_f.iter().zip(r.brdf) {
+                            add(model_label(m), x, want);
                         }
                         let want = r.terms();
                         add("D", got_t[0], want[0]);
@@ -302,6 +302,15 @@ impl StressReport {
                     "**no**"
                 }
             );
+        }
+        let failing: Vec<_> = self.errors.iter().filter(|(_, st)| st.max > target).collect();
+        if !failing.is_empty() {
+            s += "\nWorst tuple per row over the target (`Lx Ly Lz Vx Vy Vz Nx Ny Nz material Tx Ty Tz`):\n\n";
+            for (key, st) in failing {
+                if let Some(row) = self.worst_rows.get(key) {
+                    s += &format!("- {} / {} (row {}, rel err {:.2e}): `{:?}`\n", key.0, key.1.label(), st.worst.unwrap_or(0), st.max, row);
+                }
+            }
         }
         s
     }

@@ -12,19 +12,27 @@
 //! [`DEFAULT_SAMPLES`] states the count and the accuracy measured for it.
 
 use super::exr_out::{self, Channel, Layer, Provenance};
-use super::{as_f32, push_row, texel_centre, Grid, Runner};
+use super::{as_f32, push_row, texel_centre, Grid, Runner, NORMAL};
 use crate::error::{Error, Result};
 use crate::material::{Geometry, Material};
 use crate::reference::distribution::{beckmann_d, ggx_d};
-use crate::reference::frame::{dot, normalize};
+use crate::reference::frame::{cross, dot};
 use crate::reference::geometry::ggx_lambda;
 use std::f64::consts::{PI, TAU};
 use std::path::PathBuf;
 
-/// Samples per texel by default: 2¹⁴ Hammersley points. Measured against an independent
-/// dense quadrature of the f64 reference (tests/tables.rs): the error is below 1e-4
-/// absolute for α ≥ 1/64 at every μ ≥ 1/64, for E and for the DFG A and B.
-pub const DEFAULT_SAMPLES: u32 = 1 << 14;
+/// Samples per texel by default: 2¹⁶ Hammersley points.
+///
+/// Measured against an independent dense quadrature of the f64 reference (the ignored test
+/// `accuracy_scan` in tests/tables.rs), smith-correlated G, every texel centre of a 32×32
+/// table plus α = 1/512 … 7/512 at μ = (i + ½)/32: the largest error of E, A and B is
+/// 2.4e-5 (GGX) and 1.4e-5 (Beckmann); with 2¹⁴ points it is 9.4e-5 (GGX, μ = 0.39,
+/// α = 0.047), too close to the 1e-4 target. The error comes from samples whose `l`
+/// crosses the horizon (a discontinuity the low-discrepancy points resolve only to about
+/// 1/N), not from the weights, which stay bounded as α shrinks (GGX: `G/G1(v) ≤ 1`;
+/// Beckmann: `G (v·h)/(cos_o cos_h)` → G): small α needs no more samples than large.
+/// The test suite checks α down to 1/1024.
+pub const DEFAULT_SAMPLES: u32 = 1 << 16;
 
 /// Gauss–Legendre nodes in μ for [`average_albedo`].
 pub const AVERAGE_NODES: usize = 32;
@@ -79,7 +87,14 @@ impl Microfacet {
             self.lobe.name(),
             geometry_name(self.geometry),
         );
-        let mut list = crate::material::parse_materials(&toml, "the table's model")?;
+        let mut list = crate::material::parse_materials(&toml, "table").map_err(|e| {
+            Error::Table(format!(
+                "--distribution {} --geometry {}: {}",
+                self.lobe.name(),
+                geometry_name(self.geometry),
+                e.message
+            ))
+        })?;
         Ok(list.remove(0))
     }
 
@@ -101,34 +116,132 @@ pub fn hammersley(k: u32, n: u32) -> (f64, f64) {
     )
 }
 
-/// Heitz 2018, "Sampling the GGX Distribution of Visible Normals" (JCGT 7(4)): a normal
-/// `h` distributed as `G1(v) max(0, v·h) D(h) / cos_o`, from `(u1, u2)` in [0, 1)².
-pub fn sample_ggx_vndf(v: [f64; 3], alpha: f64, u1: f64, u2: f64) -> [f64; 3] {
-    let vh = normalize([alpha * v[0], alpha * v[1], v[2]]).unwrap_or([0.0, 0.0, 1.0]);
-    let len2 = vh[0] * vh[0] + vh[1] * vh[1];
-    let t1 = if len2 > 0.0 {
-        let inv = 1.0 / len2.sqrt();
-        [-vh[1] * inv, vh[0] * inv, 0.0]
-    } else {
-        [1.0, 0.0, 0.0]
-    };
-    let t2 = crate::reference::frame::cross(vh, t1);
-    let (r, phi) = (u1.sqrt(), TAU * u2);
-    let p1 = r * phi.cos();
-    let s = 0.5 * (1.0 + vh[2]);
-    let p2 = (1.0 - s) * (1.0 - p1 * p1).max(0.0).sqrt() + s * r * phi.sin();
-    let p3 = (1.0 - p1 * p1 - p2 * p2).max(0.0).sqrt();
-    let nh: [f64; 3] = std::array::from_fn(|i| p1 * t1[i] + p2 * t2[i] + p3 * vh[i]);
-    normalize([alpha * nh[0], alpha * nh[1], nh[2].max(0.0)]).unwrap_or([0.0, 0.0, 1.0])
+/// A Hammersley point `(u1, u2)` in the forms the two mappings read: computed once per
+/// sample index and shared by every `(μ, α)` point.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct UnitSample {
+    /// `(√u1 cos 2πu2, √u1 sin 2πu2)`: the point on the unit disk (GGX).
+    disk: [f64; 2],
+    /// `√(1 − disk₀²)`: half the disk's chord at `disk₀` (GGX).
+    chord: f64,
+    /// `−ln(1 − u1)`: Beckmann's `tan²θ / α²`.
+    neg_log: f64,
+    /// `(cos 2πu2, sin 2πu2)` (Beckmann).
+    phi: [f64; 2],
 }
 
-/// Beckmann normals distributed as `D(h) cos_h`: `tan²θ = −α² ln(1 − u1)`, `φ = 2π u2`.
-pub fn sample_beckmann(alpha: f64, u1: f64, u2: f64) -> [f64; 3] {
-    let tan2 = -alpha * alpha * (-u1).ln_1p();
-    let cos = 1.0 / (1.0 + tan2).sqrt();
-    let sin = (tan2 / (1.0 + tan2)).sqrt();
-    let phi = TAU * u2;
-    [sin * phi.cos(), sin * phi.sin(), cos]
+impl UnitSample {
+    /// Point `k` of `n` ([`hammersley`]).
+    pub fn new(k: u32, n: u32) -> UnitSample {
+        let (u1, u2) = hammersley(k, n);
+        let (sin, cos) = (TAU * u2).sin_cos();
+        let r = u1.sqrt();
+        UnitSample {
+            disk: [r * cos, r * sin],
+            chord: (1.0 - r * r * cos * cos).max(0.0).sqrt(),
+            neg_log: -(-u1).ln_1p(),
+            phi: [cos, sin],
+        }
+    }
+}
+
+/// The sampling constants of one `(μ, α)` point, computed once for all its samples.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct View {
+    lobe: Lobe,
+    alpha: f64,
+    /// `v = (√(1−μ²), 0, μ)`.
+    v: [f64; 3],
+    /// `v` as the backend reads it: rounded to f32, normalised.
+    vf: [f64; 3],
+    /// `G1(v)` of GGX (Smith, uncorrelated: the visible-normal density's own G1).
+    g1: f64,
+    /// The hemisphere frame of the stretched view (GGX): `t1`, `t2`, `v_h`, and
+    /// `s = (1 + v_h·z)/2`.
+    frame: [[f64; 3]; 3],
+    s: f64,
+}
+
+impl View {
+    /// The constants for view cosine `mu` and roughness `alpha`.
+    pub fn new(lobe: Lobe, mu: f64, alpha: f64) -> View {
+        let v = [(1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu];
+        let vf = unit(as_f32(v));
+        let tan2_o = (vf[0] * vf[0] + vf[1] * vf[1]) / (vf[2] * vf[2]);
+        // Heitz 2018 listing 1: the view stretched to the hemisphere configuration and an
+        // orthonormal basis around it.
+        let vh = unit([alpha * v[0], alpha * v[1], v[2]]);
+        let len2 = vh[0] * vh[0] + vh[1] * vh[1];
+        let t1 = if len2 > 0.0 {
+            let inv = 1.0 / len2.sqrt();
+            [-vh[1] * inv, vh[0] * inv, 0.0]
+        } else {
+            [1.0, 0.0, 0.0]
+        };
+        View {
+            lobe,
+            alpha,
+            v,
+            vf,
+            g1: 1.0 / (1.0 + ggx_lambda(alpha * alpha * tan2_o)),
+            frame: [t1, cross(vh, t1), vh],
+            s: 0.5 * (1.0 + vh[2]),
+        }
+    }
+
+    /// The microfacet normal of unit sample `u`: GGX by Heitz 2018, "Sampling the GGX
+    /// Distribution of Visible Normals" (JCGT 7(4)), density `G1(v) max(0, v·h) D(h)/cos_o`;
+    /// Beckmann by `D(h) cos_h`, `tan²θ = −α² ln(1 − u1)`, `φ = 2π u2`.
+    pub fn normal(&self, u: &UnitSample) -> [f64; 3] {
+        let a = self.alpha;
+        match self.lobe {
+            Lobe::Ggx => {
+                let [t1, t2, vh] = self.frame;
+                let p1 = u.disk[0];
+                let p2 = (1.0 - self.s) * u.chord + self.s * u.disk[1];
+                let p3 = (1.0 - p1 * p1 - p2 * p2).max(0.0).sqrt();
+                let n: [f64; 3] = std::array::from_fn(|i| p1 * t1[i] + p2 * t2[i] + p3 * vh[i]);
+                unit([a * n[0], a * n[1], n[2].max(0.0)])
+            }
+            Lobe::Beckmann => {
+                let tan2 = a * a * u.neg_log;
+                let cos = 1.0 / (1.0 + tan2).sqrt();
+                let sin = tan2.sqrt() * cos;
+                [sin * u.phi[0], sin * u.phi[1], cos]
+            }
+        }
+    }
+
+    /// The sample of `u`, or `None` when `l` falls below the horizon (f = 0 there). The
+    /// weight is computed from the f32-rounded directions the backend evaluates, so
+    /// `f(l) · weight` is consistent: GGX `cos_i / (G1(v) D(h) / (4 cos_o))`, Beckmann
+    /// `cos_i / (D(h) cos_h / (4 c))`.
+    pub fn sample(&self, u: &UnitSample) -> Option<Sample> {
+        let (v, vf) = (self.v, self.vf);
+        let h = self.normal(u);
+        let vh = dot(v, h);
+        let l: [f64; 3] = std::array::from_fn(|i| 2.0 * vh * h[i] - v[i]);
+        let lf = unit(as_f32(l));
+        let (cos_i, cos_o) = (lf[2], vf[2]);
+        if cos_i.is_nan() || cos_i <= 0.0 {
+            return None; // below the horizon (or a degenerate l)
+        }
+        let hf = unit(std::array::from_fn(|i| lf[i] + vf[i]));
+        let (cos_h, sin2_h, c) = (hf[2], hf[0] * hf[0] + hf[1] * hf[1], dot(vf, hf));
+        let pdf = match self.lobe {
+            Lobe::Ggx => self.g1 * ggx_d(cos_h, sin2_h, self.alpha) / (4.0 * cos_o),
+            Lobe::Beckmann => beckmann_d(cos_h, sin2_h, self.alpha, PI) * cos_h / (4.0 * c),
+        };
+        let weight = cos_i / pdf;
+        weight.is_finite().then_some(Sample { l, weight, c })
+    }
+}
+
+/// `a/|a|` without the reference's guards (the sampler's vectors are finite and nonzero;
+/// a degenerate one gives NaN, which [`View::sample`] rejects).
+fn unit(a: [f64; 3]) -> [f64; 3] {
+    let inv = 1.0 / dot(a, a).sqrt();
+    a.map(|x| x * inv)
 }
 
 /// One importance sample: the light direction, `cos_i / pdf(l)`, and `c = v·h`.
@@ -142,71 +255,56 @@ pub struct Sample {
     pub c: f64,
 }
 
-/// The `k`-th of `n` samples for view `v` and roughness `alpha`, or `None` when `l` falls
-/// below the horizon (f = 0 there).
-pub fn sample(lobe: Lobe, v: [f64; 3], alpha: f64, k: u32, n: u32) -> Option<Sample> {
-    let (u1, u2) = hammersley(k, n);
-    let h = match lobe {
-        Lobe::Ggx => sample_ggx_vndf(v, alpha, u1, u2),
-        Lobe::Beckmann => sample_beckmann(alpha, u1, u2),
-    };
-    let vh = dot(v, h);
-    let l: [f64; 3] = std::array::from_fn(|i| 2.0 * vh * h[i] - v[i]);
-    // What the backend sees: f32 directions, normalised in f64.
-    let (lf, vf) = (normalize(as_f32(l))?, normalize(as_f32(v))?);
-    let (cos_i, cos_o) = (lf[2], vf[2]);
-    if cos_i <= 0.0 || cos_o <= 0.0 {
-        return None;
-    }
-    let hf = normalize(std::array::from_fn(|i| lf[i] + vf[i]))?;
-    let (cos_h, sin2_h, c) = (hf[2], hf[0] * hf[0] + hf[1] * hf[1], dot(vf, hf));
-    let pdf = match lobe {
-        Lobe::Ggx => {
-            let tan2_o = (vf[0] * vf[0] + vf[1] * vf[1]) / (cos_o * cos_o);
-            let g1 = 1.0 / (1.0 + ggx_lambda(alpha * alpha * tan2_o));
-            g1 * ggx_d(cos_h, sin2_h, alpha) / (4.0 * cos_o)
-        }
-        Lobe::Beckmann => beckmann_d(cos_h, sin2_h, alpha, PI) * cos_h / (4.0 * c),
-    };
-    let weight = cos_i / pdf;
-    weight.is_finite().then_some(Sample { l, weight, c })
-}
-
-/// The view direction of cosine `mu` in the `xz` plane.
-pub fn view(mu: f64) -> [f64; 3] {
-    [(1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu]
-}
-
 /// `(1/N) Σ f cos_i/pdf · weight(c)` for each `(μ, α)` point: the integrals
 /// `∫ f(l, v) cos_i · weight(v·h) dω_l` with `samples` points each, evaluated on the runner.
+/// The host builds each chunk's samples on every core (the result does not depend on the
+/// thread count: pieces are concatenated in order) and sums in f64.
 pub fn integrate<const K: usize>(
     runner: &mut Runner,
     spec: &Microfacet,
     points: &[(f64, f64)],
     samples: u32,
     what: &str,
-    weight: impl Fn(f64) -> [f64; K],
+    weight: impl Fn(f64) -> [f64; K] + Sync,
 ) -> Result<Vec<[f64; K]>> {
     if samples == 0 {
         return Err(Error::Table("--samples must be at least 1".into()));
     }
     let (materials, index) = materials_for(spec, points)?;
+    let plan = Plan {
+        views: points
+            .iter()
+            .map(|&(mu, alpha)| View::new(spec.lobe, mu, alpha))
+            .collect(),
+        index: &index,
+        units: (0..samples).map(|k| UnitSample::new(k, samples)).collect(),
+    };
     let total = points.len() as u64 * u64::from(samples);
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get()) as u64;
     runner.start(what, total);
     let mut sums = vec![[0.0f64; K]; points.len()];
     let mut next = 0u64;
     while next < total {
         let end = total.min(next + runner.chunk_tuples() as u64);
-        let mut rows = Vec::with_capacity((end - next) as usize * 10);
-        let mut meta: Vec<(usize, [f64; K])> = Vec::with_capacity((end - next) as usize);
-        for g in next..end {
-            let p = (g / u64::from(samples)) as usize;
-            let k = (g % u64::from(samples)) as u32;
-            let (mu, alpha) = points[p];
-            if let Some(s) = sample(spec.lobe, view(mu), alpha, k, samples) {
-                push_row(&mut rows, s.l, view(mu), index[p], None);
-                meta.push((p, weight(s.c).map(|w| w * s.weight)));
-            }
+        let step = (end - next).div_ceil(threads);
+        let pieces: Vec<Generated<K>> = std::thread::scope(|s| {
+            let handles: Vec<_> = (next..end)
+                .step_by(step as usize)
+                .map(|a| {
+                    let (plan, weight) = (&plan, &weight);
+                    s.spawn(move || plan.generate(a..end.min(a + step), weight))
+                })
+                .collect();
+            handles
+                .into_iter()
+                .map(|h| h.join().expect("sample generation panicked"))
+                .collect()
+        });
+        let mut rows = Vec::with_capacity(pieces.iter().map(|p| p.rows.len()).sum());
+        let mut meta = Vec::with_capacity(pieces.iter().map(|p| p.meta.len()).sum());
+        for p in pieces {
+            rows.extend_from_slice(&p.rows);
+            meta.extend_from_slice(&p.meta);
         }
         if !meta.is_empty() {
             let out = runner.evaluate(rows, &materials, false)?;
@@ -225,6 +323,45 @@ pub fn integrate<const K: usize>(
         .into_iter()
         .map(|s| s.map(|x| x / f64::from(samples)))
         .collect())
+}
+
+/// What [`integrate`] generates: each point's sampling constants and material, and the
+/// unit samples every point shares.
+struct Plan<'a> {
+    views: Vec<View>,
+    index: &'a [usize],
+    units: Vec<UnitSample>,
+}
+
+/// Rows for the backend and, per row, its point and weights `cos_i/pdf · weight(c)`.
+struct Generated<const K: usize> {
+    rows: Vec<f32>,
+    meta: Vec<(usize, [f64; K])>,
+}
+
+impl Plan<'_> {
+    /// Samples `range` of the flattened (point, sample) index; below-horizon ones skipped.
+    fn generate<const K: usize>(
+        &self,
+        range: std::ops::Range<u64>,
+        weight: &(impl Fn(f64) -> [f64; K] + Sync),
+    ) -> Generated<K> {
+        let n = (range.end - range.start) as usize;
+        let mut out = Generated {
+            rows: Vec::with_capacity(n * 10),
+            meta: Vec::with_capacity(n),
+        };
+        let per_point = self.units.len() as u64;
+        for g in range {
+            let (p, k) = ((g / per_point) as usize, (g % per_point) as usize);
+            let view = &self.views[p];
+            if let Some(s) = view.sample(&self.units[k]) {
+                push_row(&mut out.rows, s.l, view.v, NORMAL, self.index[p], None);
+                out.meta.push((p, weight(s.c).map(|w| w * s.weight)));
+            }
+        }
+        out
+    }
 }
 
 /// One material per distinct α of `points`, and each point's index into that table.
@@ -341,6 +478,10 @@ pub struct AlbedoJob {
 /// Integrates and writes the albedo table (and E_avg), refusing oversized grids first.
 pub fn write(runner: &mut Runner, job: &AlbedoJob) -> Result<()> {
     super::check_memory(super::table_bytes(job.grid, 1), "the albedo table")?;
+    super::check_output(&job.output)?;
+    if let Some(path) = &job.average {
+        super::check_output(path)?;
+    }
     job.spec.material(0.5)?;
     let e = directional_albedo(runner, &job.spec, &grid_points(job.grid), job.samples)?;
     let backend = runner.backend_name();

@@ -50,6 +50,7 @@ pub struct DfgJob {
 /// Integrates and writes the DFG table, refusing oversized grids first.
 pub fn write(runner: &mut Runner, job: &DfgJob) -> Result<()> {
     super::check_memory(super::table_bytes(job.grid, 2), "the DFG table")?;
+    super::check_output(&job.output)?;
     job.spec.material(0.5)?;
     let ab = split_sum(runner, &job.spec, &grid_points(job.grid), job.samples)?;
     let channel = |name: &str, k: usize| Channel {

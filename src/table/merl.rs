@@ -15,7 +15,7 @@
 //! counts as in that bin, so the bins' own sample points always find their bin.
 
 use super::slice::{from_half_diff, TANGENT};
-use super::{as_f32, needs_tangents, push_row, Runner};
+use super::{as_f32, needs_tangents, push_row, Runner, NORMAL};
 use crate::batch::Batch;
 use crate::error::{Error, Result};
 use crate::material::Material;
@@ -88,7 +88,7 @@ pub fn compute(runner: &mut Runner, material: &Material) -> Result<Vec<f64>> {
             let (l, v) = bin_directions(i, j, k);
             // The horizon test on the directions the backend sees (f32).
             if as_f32(l)[2] > 0.0 && as_f32(v)[2] > 0.0 {
-                push_row(&mut rows, l, v, 0, tangent);
+                push_row(&mut rows, l, v, NORMAL, 0, tangent);
                 bins.push(b);
             }
         }
@@ -110,6 +110,7 @@ pub fn compute(runner: &mut Runner, material: &Material) -> Result<Vec<f64>> {
 /// Exports `material` as a MERL binary at `path` (atomically).
 pub fn write(runner: &mut Runner, material: &Material, path: &Path) -> Result<()> {
     super::check_memory(Some(2 * FILE_BYTES as u128), "the MERL table")?;
+    super::check_output(path)?;
     let values = compute(runner, material)?;
     write_values(path, &values)
 }

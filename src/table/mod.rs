@@ -135,6 +135,39 @@ pub fn table_bytes(grid: Grid, channels: usize) -> Option<u128> {
     values.checked_mul(16)?.checked_add(chunk)
 }
 
+/// Fails early, before any evaluation, when `path` cannot be written: creates (and
+/// removes) a temporary file in its directory, as the final atomic write will.
+pub fn check_output(path: &Path) -> Result<()> {
+    let io = |source| Error::Io {
+        path: path.to_owned(),
+        source,
+    };
+    if path.is_dir() {
+        return Err(io(std::io::Error::other(
+            "is a directory; give a file name",
+        )));
+    }
+    let dir = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    tempfile::Builder::new()
+        .prefix(".vkbrdf-")
+        .suffix(".partial")
+        .tempfile_in(dir)
+        .map(drop)
+        .map_err(|e| {
+            // tempfile's message names its random file; name the directory instead.
+            let why = e
+                .raw_os_error()
+                .map_or_else(|| e.kind().to_string(), |c| std::io::Error::from_raw_os_error(c).to_string());
+            io(std::io::Error::new(
+                e.kind(),
+                format!("cannot create a file in `{}`: {why}", dir.display()),
+            ))
+        })
+}
+
 /// The material called `name`: from `materials_file` when given, else from the presets.
 pub fn load_material(materials_file: Option<&Path>, name: &str) -> Result<Material> {
     let (list, source) = match materials_file {
@@ -171,18 +204,23 @@ pub fn convention_name(m: &Material) -> &'static str {
     }
 }
 
+/// The normal of every table's frame, `+z`.
+pub const NORMAL: [f64; 3] = [0.0, 0.0, 1.0];
+
 /// Appends one tuple row `l v n material [t]` (f64 rounded to the f32 the backend reads).
 pub fn push_row(
     rows: &mut Vec<f32>,
     l: [f64; 3],
     v: [f64; 3],
+    n: [f64; 3],
     material: usize,
     t: Option<[f64; 3]>,
 ) {
-    rows.extend(l.iter().chain(&v).map(|&x| x as f32));
-    rows.extend_from_slice(&[0.0, 0.0, 1.0, material as f32]);
+    let f = |a: [f64; 3]| a.map(|x| x as f32);
+    let ([l0, l1, l2], [v0, v1, v2], [n0, n1, n2]) = (f(l), f(v), f(n));
+    rows.extend_from_slice(&[l0, l1, l2, v0, v1, v2, n0, n1, n2, material as f32]);
     if let Some(t) = t {
-        rows.extend(t.map(|x| x as f32));
+        rows.extend_from_slice(&f(t));
     }
 }
 

@@ -1,1 +1,248 @@
-//! (in progress)
+//! Previews, to look at a material instead of reading numbers: a lit sphere and a polar
+//! plot of the lobe in the plane of incidence (like Figure 9.18 of Real-Time Rendering,
+//! which the seed lecture cites). Both are evaluated through the backend, drawn by hand
+//! into an RGB8 buffer and written as PNG (atomically), with provenance as text chunks.
+
+use super::{needs_tangents, push_row, Runner};
+use crate::error::{Error, Result};
+use crate::material::Material;
+use crate::reference::frame::{cross, normalize};
+use std::f64::consts::PI;
+use std::path::Path;
+
+/// Default sphere image size (pixels per side).
+pub const DEFAULT_SPHERE_SIZE: usize = 256;
+/// Default incidence angle of the polar plot, degrees from the normal.
+pub const DEFAULT_INCIDENCE_DEG: f64 = 45.0;
+/// Direction toward the light of the lit sphere: upper left, in front (view is +z).
+pub const SPHERE_LIGHT: [f64; 3] = [-1.0, 1.0, 1.0];
+/// Polar plot size, pixels.
+pub const POLAR_SIZE: (usize, usize) = (512, 288);
+
+/// An RGB8 image being drawn.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Canvas {
+    /// Width in pixels.
+    pub width: usize,
+    /// Height in pixels.
+    pub height: usize,
+    /// Row-major RGB8, row 0 at the top.
+    pub rgb: Vec<u8>,
+}
+
+impl Canvas {
+    /// A canvas filled with `background`.
+    pub fn new(width: usize, height: usize, background: [u8; 3]) -> Canvas {
+        Canvas {
+            width,
+            height,
+            rgb: background.repeat(width * height),
+        }
+    }
+
+    /// Sets pixel `(x, y)` when it lies on the canvas.
+    pub fn put(&mut self, x: i64, y: i64, c: [u8; 3]) {
+        if x >= 0 && y >= 0 && (x as usize) < self.width && (y as usize) < self.height {
+            let i = 3 * (y as usize * self.width + x as usize);
+            self.rgb[i..i + 3].copy_from_slice(&c);
+        }
+    }
+
+    /// A 2-pixel-wide line; `dash` > 0 leaves gaps every `dash` pixels.
+    pub fn line(&mut self, a: (f64, f64), b: (f64, f64), c: [u8; 3], dash: usize) {
+        let steps = ((b.0 - a.0).abs().max((b.1 - a.1).abs()).ceil() as usize).max(1);
+        for s in 0..=steps {
+            if dash > 0 && (s / dash) % 2 == 1 {
+                continue;
+            }
+            let t = s as f64 / steps as f64;
+            let (x, y) = (a.0 + (b.0 - a.0) * t, a.1 + (b.1 - a.1) * t);
+            for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+                self.put(x.floor() as i64 + dx, y.floor() as i64 + dy, c);
+            }
+        }
+    }
+}
+
+/// Linear → sRGB8 after Reinhard tone mapping `x / (1 + x)`.
+pub fn tone_srgb8(x: f64) -> u8 {
+    let t = if x.is_finite() {
+        x.max(0.0) / (1.0 + x.max(0.0))
+    } else {
+        1.0
+    };
+    let s = if t <= 0.003_130_8 {
+        12.92 * t
+    } else {
+        1.055 * t.powf(1.0 / 2.4) - 0.055
+    };
+    (s * 255.0).round().clamp(0.0, 255.0) as u8
+}
+
+/// The lit sphere: orthographic view along −z of a unit sphere, one directional light of
+/// irradiance π·`exposure` at normal incidence toward [`SPHERE_LIGHT`] (so a white
+/// Lambertian facing it shows 1 before tone mapping); pixel = f·cos_i·π·exposure.
+/// Anisotropic materials use the tangent `ŷ × n` (along the lines of latitude).
+pub fn sphere(
+    runner: &mut Runner,
+    material: &Material,
+    size: usize,
+    exposure: f64,
+) -> Result<Canvas> {
+    super::check_memory(
+        super::table_bytes(super::Grid::new(size, size)?, 3),
+        "the sphere preview",
+    )?;
+    let materials = std::slice::from_ref(material);
+    let light = normalize(SPHERE_LIGHT).expect("constant");
+    let mut rows = Vec::new();
+    let mut pixels = Vec::new();
+    for py in 0..size {
+        for px in 0..size {
+            let x = 2.0 * super::texel_centre(px, size) - 1.0;
+            let y = 1.0 - 2.0 * super::texel_centre(py, size);
+            let z2 = 1.0 - x * x - y * y;
+            if z2 > 0.0 {
+                let n = [x, y, z2.sqrt()];
+                let t = needs_tangents(materials).then(|| cross([0.0, 1.0, 0.0], n));
+                push_row(&mut rows, light, [0.0, 0.0, 1.0], n, 0, t);
+                pixels.push((px, py, n[0] * light[0] + n[1] * light[1] + n[2] * light[2]));
+            }
+        }
+    }
+    runner.start("sphere", pixels.len() as u64);
+    let out = evaluate_chunked(runner, rows, materials, pixels.len())?;
+    runner.finish();
+    let mut canvas = Canvas::new(size, size, [24, 24, 24]);
+    for (r, &(px, py, cos_i)) in pixels.iter().enumerate() {
+        let c: [u8; 3] = std::array::from_fn(|ch| {
+            tone_srgb8(f64::from(out[3 * r + ch]) * cos_i.max(0.0) * PI * exposure)
+        });
+        canvas.put(px as i64, py as i64, c);
+    }
+    Ok(canvas)
+}
+
+/// Evaluates `tuples` rows in chunks of the runner's size; returns f (n × 3).
+fn evaluate_chunked(
+    runner: &mut Runner,
+    rows: Vec<f32>,
+    materials: &[Material],
+    tuples: usize,
+) -> Result<Vec<f32>> {
+    if tuples == 0 {
+        return Ok(Vec::new());
+    }
+    let columns = rows.len() / tuples;
+    let mut out = Vec::with_capacity(tuples * 3);
+    for chunk in rows.chunks(runner.chunk_tuples() * columns) {
+        let o = runner.evaluate(chunk.to_vec(), materials, false)?;
+        runner.advance((chunk.len() / columns) as u64);
+        out.extend_from_slice(&o.brdf);
+    }
+    Ok(out)
+}
+
+/// The polar plot: f(l, v) for `v` swept through the plane of incidence (−90°…90° from the
+/// normal, 0.1° apart), with `l` at `incidence_deg` on the left, drawn as a radius scaled
+/// so the largest value of the curve reaches the plot's edge. Channels that differ are
+/// drawn in red, green and blue, otherwise one white curve; the light direction is solid
+/// yellow, the mirror direction dashed yellow, the largest radius a grey semicircle.
+pub fn polar(runner: &mut Runner, material: &Material, incidence_deg: f64) -> Result<Canvas> {
+    if !(0.0..90.0).contains(&incidence_deg) {
+        return Err(Error::Table(format!(
+            "--incidence {incidence_deg}: give an angle in [0, 90) degrees from the normal"
+        )));
+    }
+    let materials = std::slice::from_ref(material);
+    let ti = incidence_deg.to_radians();
+    let l = [-ti.sin(), 0.0, ti.cos()];
+    let t = needs_tangents(materials).then_some(super::slice::TANGENT);
+    let angles: Vec<f64> = (0..=1800)
+        .map(|k| (k as f64 / 10.0 - 90.0).to_radians())
+        .collect();
+    let mut rows = Vec::new();
+    for &a in &angles {
+        push_row(&mut rows, l, [a.sin(), 0.0, a.cos()], super::NORMAL, 0, t);
+    }
+    runner.start("polar", angles.len() as u64);
+    let f = evaluate_chunked(runner, rows, materials, angles.len())?;
+    runner.finish();
+    Ok(draw_polar(&angles, &f, ti))
+}
+
+/// Draws the polar plot of `f` (n × 3) at `angles` for incidence `ti` (radians).
+fn draw_polar(angles: &[f64], f: &[f32], ti: f64) -> Canvas {
+    let (w, h) = POLAR_SIZE;
+    let mut canvas = Canvas::new(w, h, [16, 16, 16]);
+    let origin = (w as f64 / 2.0, h as f64 - 20.0);
+    let radius = (h as f64 - 40.0).min(w as f64 / 2.0 - 10.0);
+    let at = |a: f64, r: f64| (origin.0 + r * a.sin(), origin.1 - r * a.cos());
+    let max = f.iter().fold(0.0f32, |m, &x| m.max(x));
+    canvas.line(
+        (10.0, origin.1),
+        (w as f64 - 10.0, origin.1),
+        [110, 110, 110],
+        0,
+    );
+    for k in 0..180 {
+        let (a0, a1) = (
+            (k as f64 - 90.0).to_radians(),
+            (k as f64 - 89.0).to_radians(),
+        );
+        canvas.line(at(a0, radius), at(a1, radius), [60, 60, 60], 0);
+    }
+    canvas.line(origin, at(0.0, radius), [70, 70, 70], 4);
+    canvas.line(origin, at(-ti, radius), [230, 200, 40], 0);
+    canvas.line(origin, at(ti, radius), [230, 200, 40], 6);
+    let grey = f.chunks_exact(3).all(|c| {
+        (c[0] - c[1]).abs() <= 1e-6 * c[0].abs() && (c[0] - c[2]).abs() <= 1e-6 * c[0].abs()
+    });
+    let colours: &[(usize, [u8; 3])] = if grey {
+        &[(0, [240, 240, 240])]
+    } else {
+        &[(0, [240, 70, 70]), (1, [70, 220, 70]), (2, [90, 120, 255])]
+    };
+    if max > 0.0 {
+        for &(ch, colour) in colours {
+            let point = |k: usize| at(angles[k], radius * f64::from(f[3 * k + ch] / max));
+            for k in 1..angles.len() {
+                canvas.line(point(k - 1), point(k), colour, 0);
+            }
+        }
+    }
+    canvas
+}
+
+/// Writes `canvas` as an 8-bit sRGB PNG with `text` chunks (keyword, value), atomically.
+pub fn write_png(path: &Path, canvas: &Canvas, text: &[(&str, String)]) -> Result<()> {
+    crate::atomic::write(path, |w| {
+        let mut enc = png::Encoder::new(w, canvas.width as u32, canvas.height as u32);
+        enc.set_color(png::ColorType::Rgb);
+        enc.set_depth(png::BitDepth::Eight);
+        enc.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
+        for (k, v) in text {
+            enc.add_itxt_chunk((*k).to_string(), v.clone())
+                .map_err(std::io::Error::other)?;
+        }
+        let mut writer = enc.write_header().map_err(std::io::Error::other)?;
+        writer
+            .write_image_data(&canvas.rgb)
+            .map_err(std::io::Error::other)?;
+        writer.finish().map_err(std::io::Error::other)
+    })
+}
+
+/// Provenance text chunks for a preview of `material`.
+pub fn provenance(material: &Material, what: &str, backend: &str) -> Vec<(&'static str, String)> {
+    vec![
+        ("vkbrdf.table", what.to_string()),
+        ("vkbrdf.material", material.name.clone()),
+        (
+            "vkbrdf.convention",
+            super::convention_name(material).to_string(),
+        ),
+        ("vkbrdf.backend", backend.to_string()),
+        ("vkbrdf.version", super::VERSION.to_string()),
+    ]
+}

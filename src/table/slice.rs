@@ -7,7 +7,7 @@
 //! `terms` holds D, G, F.R, F.G, F.B, K.
 
 use super::exr_out::{self, Channel, Layer, Provenance};
-use super::{needs_tangents, push_row, texel_centre, Grid, Runner};
+use super::{needs_tangents, push_row, texel_centre, Grid, Runner, NORMAL};
 use crate::backend::TERM_COLUMNS;
 use crate::error::Result;
 use crate::material::Material;
@@ -73,7 +73,7 @@ pub fn compute(
             let th = theta_h(texel_centre(i, grid.width), spacing);
             let td = texel_centre(j, grid.height) * FRAC_PI_2;
             let (l, v) = from_half_diff(th, td, FRAC_PI_2);
-            push_row(&mut rows, l, v, 0, tangent);
+            push_row(&mut rows, l, v, NORMAL, 0, tangent);
         }
         let out = runner.evaluate(rows, materials, terms)?;
         brdf.extend_from_slice(&out.brdf);
@@ -108,6 +108,7 @@ pub struct SliceJob {
 pub fn write(runner: &mut Runner, job: &SliceJob) -> Result<()> {
     let channels = if job.terms { 3 + TERM_COLUMNS } else { 3 };
     super::check_memory(super::table_bytes(job.grid, channels), "the slice")?;
+    super::check_output(&job.output)?;
     let (brdf, terms) = compute(runner, &job.material, job.grid, job.spacing, job.terms)?;
     let mut layers = vec![interleaved("brdf", &brdf, &["R", "G", "B"])];
     if let Some(t) = &terms {

@@ -1,0 +1,37 @@
+//! `vkbrdf devices`: the Vulkan devices of this machine and which one vkbrdf uses.
+
+use std::process::ExitCode;
+use vkbrdf::gpu::{list_devices, INSTALL_HINT};
+
+/// Arguments of `vkbrdf devices`.
+#[derive(clap::Args, Debug, Clone)]
+#[command(after_help = "\
+Lists every Vulkan physical device with its type, driver, Vulkan version, subgroup size,
+largest storage-buffer range and memory heaps. `(default)` marks the device vkbrdf picks
+on its own: a discrete GPU, else an integrated one, else a virtual one, else a CPU
+implementation such as lavapipe (llvmpipe). Choose another with `--device INDEX` or
+`--device NAME` (any part of the name, case-insensitive) on the evaluating commands, or
+with the environment variable VKBRDF_DEVICE.
+
+Exit status: 0 devices listed, 2 no Vulkan loader or no device.
+
+Examples:
+  vkbrdf devices
+  vkbrdf eval --device llvmpipe ...
+  VKBRDF_DEVICE=1 vkbrdf check")]
+pub struct Args {}
+
+/// Runs `vkbrdf devices`.
+pub fn run(_args: &Args) -> anyhow::Result<ExitCode> {
+    let devices = list_devices()?;
+    if devices.is_empty() {
+        anyhow::bail!("the Vulkan loader found no device; {INSTALL_HINT}");
+    }
+    for d in &devices {
+        print!("{d}");
+    }
+    if let Ok(sel) = std::env::var("VKBRDF_DEVICE") {
+        println!("VKBRDF_DEVICE={sel} is set: it overrides the default choice.");
+    }
+    Ok(ExitCode::SUCCESS)
+}
