@@ -156,21 +156,22 @@ vec3 cmul_re(vec3 ar, vec3 ai, vec3 br, vec3 bi) { return ar * br - ai * bi; }
 vec3 cmul_im(vec3 ar, vec3 ai, vec3 br, vec3 bi) { return ar * bi + ai * br; }
 
 // Principal square root of x + iy per channel (Re >= 0). Takes the root of the larger of
-// (|z| + x)/2 and (|z| - x)/2, and derives the other part by division: the direct formulas
-// cancel when |x| >> |y|.
+// (|z| + x)/2 and (|z| - x)/2 and derives the other part by division (the direct formulas
+// cancel when |x| >> |y|). Branch-free: both candidates are computed and one is selected
+// per channel, so lanes never diverge.
 void csqrt(vec3 x, vec3 y, out vec3 re, out vec3 im) {
     vec3 r = sqrt(x * x + y * y); // |z|; components here are O(1) to O(k^2), no overflow
-    for (int j = 0; j < 3; j++) {
-        if (x[j] >= 0.0) {
-            float s = sqrt(0.5 * (r[j] + x[j]));
-            re[j] = s;
-            im[j] = s > 0.0 ? 0.5 * y[j] / s : 0.0;
-        } else {
-            float s = sqrt(0.5 * (r[j] - x[j]));
-            re[j] = 0.5 * abs(y[j]) / s;
-            im[j] = y[j] < 0.0 ? -s : s;
-        }
-    }
+    vec3 sp = sqrt(0.5 * (r + x)); // the real part when x >= 0
+    vec3 sn = sqrt(0.5 * (r - x)); // |the imaginary part| when x < 0
+    // max(.., 1e-30): sp = 0 only for z = 0 (then y = 0 and the quotient must be 0), and
+    // sn = 0 only where x >= 0 selects the other candidate; the guard keeps 0/0 = NaN out
+    // of both.
+    vec3 im_p = 0.5 * y / max(sp, 1e-30);
+    vec3 re_n = 0.5 * abs(y) / max(sn, 1e-30);
+    vec3 im_n = mix(sn, -sn, lessThan(y, vec3(0.0)));
+    bvec3 neg = lessThan(x, vec3(0.0));
+    re = mix(sp, re_n, neg);
+    im = mix(im_p, im_n, neg);
 }
 
 // Born & Wolf 1999, "Principles of Optics", 7th ed., §13.2: exact Fresnel reflectance of a

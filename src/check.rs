@@ -201,7 +201,11 @@ pub struct CheckOptions {
 
 impl Default for CheckOptions {
     fn default() -> Self {
-        CheckOptions { tuples: 2000, seed: 1, only: None }
+        CheckOptions {
+            tuples: 2000,
+            seed: 1,
+            only: None,
+        }
     }
 }
 
@@ -704,13 +708,26 @@ pub fn check_combination(
 
 /// Checks every combination of [`combinations`] (or those `options.only` selects) on
 /// `backend`, calling `progress` after each.
-pub fn run(backend: &mut dyn Backend, options: &CheckOptions, progress: &mut dyn FnMut(&CombinationReport)) -> Result<Vec<CombinationReport>> {
+pub fn run(
+    backend: &mut dyn Backend,
+    options: &CheckOptions,
+    progress: &mut dyn FnMut(&CombinationReport),
+) -> Result<Vec<CombinationReport>> {
     let mut reports = Vec::new();
     for (i, c) in combinations(options.seed)?.iter().enumerate() {
-        if options.only.as_deref().is_some_and(|only| !c.name.contains(only)) {
+        if options
+            .only
+            .as_deref()
+            .is_some_and(|only| !c.name.contains(only))
+        {
             continue;
         }
-        let r = check_combination(backend, c, options.tuples, options.seed.wrapping_add(i as u64))?;
+        let r = check_combination(
+            backend,
+            c,
+            options.tuples,
+            options.seed.wrapping_add(i as u64),
+        )?;
         progress(&r);
         reports.push(r);
     }

@@ -29,6 +29,7 @@
 pub mod atomic;
 pub mod backend;
 pub mod batch;
+pub mod bench;
 pub mod check;
 pub mod error;
 pub mod features;

@@ -507,6 +507,52 @@ fn merl_round_trip(backend: &mut dyn Backend) {
         std::fs::metadata(&path).unwrap().len() as usize,
         merl::FILE_BYTES
     );
+    // The layout, read raw and with the directions built here from FORMULAS.md §7, not
+    // through the library: header 90 90 180, bin (i,j,k) of channel c at
+    // 12 + 8·(c·90·90·180 + k + 180·(j + 90·i)), value f/scale.
+    let bytes = std::fs::read(&path).unwrap();
+    let dims: Vec<i32> = (0..3)
+        .map(|d| i32::from_le_bytes(bytes[4 * d..4 * d + 4].try_into().unwrap()))
+        .collect();
+    assert_eq!(dims, [90, 90, 180]);
+    let scales = [1.0 / 1500.0, 1.15 / 1500.0, 1.66 / 1500.0];
+    for &(i, j, k) in &[
+        (5, 10, 20),
+        (60, 30, 100),
+        (89, 2, 179),
+        (20, 80, 0),
+        (60, 60, 0),
+    ] {
+        let (th, td, pd) = (
+            (i as f64 / 90.0).powi(2) * FRAC_PI_2,
+            j as f64 * PI / 180.0,
+            k as f64 * PI / 180.0,
+        );
+        let d = [td.sin() * pd.cos(), td.sin() * pd.sin(), td.cos()];
+        let l = [
+            d[0] * th.cos() + d[2] * th.sin(),
+            d[1],
+            -d[0] * th.sin() + d[2] * th.cos(),
+        ];
+        let h = [th.sin(), 0.0, th.cos()];
+        let lh = frame::dot(l, h);
+        let v = [2.0 * lh * h[0] - l[0], -l[1], 2.0 * lh * h[2] - l[2]];
+        let want = reference::evaluate(l, v, [0.0, 0.0, 1.0], None, &material).brdf;
+        for c in 0..3 {
+            let at = 12 + 8 * (c * 90 * 90 * 180 + k + 180 * (j + 90 * i));
+            let stored = f64::from_le_bytes(bytes[at..at + 8].try_into().unwrap());
+            if l[2] <= 0.0 || v[2] <= 0.0 {
+                assert_eq!(stored, -1.0);
+            } else {
+                let got = stored * scales[c];
+                assert!(
+                    (got - want[c]).abs() <= 1e-4 * want[c],
+                    "raw bin ({i},{j},{k}) channel {c}: {got} vs {}",
+                    want[c]
+                );
+            }
+        }
+    }
     let measured = merl::read(&path).unwrap();
     let (mut checked, mut invalid, mut worst) = (0usize, 0usize, 0.0f64);
     for i in 0..90 {
@@ -889,7 +935,10 @@ fn default_table_timings() {
         let t = std::time::Instant::now();
         let alphas: Vec<f64> = (0..32).map(|j| (j as f64 + 0.5) / 32.0).collect();
         albedo::average_albedo(&mut runner, &job.spec, &alphas, albedo::DEFAULT_SAMPLES).unwrap();
-        eprintln!("E_avg 32 x 32 nodes x 65536: {:.2} s", t.elapsed().as_secs_f64());
+        eprintln!(
+            "E_avg 32 x 32 nodes x 65536: {:.2} s",
+            t.elapsed().as_secs_f64()
+        );
         let t = std::time::Instant::now();
         let dfg_job = DfgJob {
             spec: specs()[0],
@@ -916,37 +965,4 @@ fn default_table_timings() {
         slice::write(&mut runner, &slice_job).unwrap();
         eprintln!("slice 90x90 + terms: {:.2} s", t.elapsed().as_secs_f64());
     });
-}
-
-#[test]
-#[ignore]
-fn scratch_host_overhead() {
-    struct Null;
-    impl Backend for Null {
-        fn name(&self) -> String { "null".into() }
-        fn evaluate(&mut self, batch: &vkbrdf::batch::Batch, _: &[Material], _: &vkbrdf::backend::Request) -> vkbrdf::Result<vkbrdf::backend::Output> {
-            Ok(vkbrdf::backend::Output { brdf: vec![0.0; batch.len() * 3], terms: None, counts: Default::default() })
-        }
-    }
-    let mut null = Null;
-    let mut runner = Runner::new(&mut null);
-    let t = std::time::Instant::now();
-    let pts = albedo::grid_points(Grid::new(32, 32).unwrap());
-    albedo::directional_albedo(&mut runner, &specs()[0], &pts, 1 << 16).unwrap();
-    eprintln!("host overhead, 67M samples: {:.2} s", t.elapsed().as_secs_f64());
-}
-
-#[test]
-#[ignore]
-fn scratch_sample_cost() {
-    let units: Vec<albedo::UnitSample> = (0..65536).map(|k| albedo::UnitSample::new(k, 65536)).collect();
-    let view = albedo::View::new(Lobe::Ggx, 0.5, 0.3);
-    let t = std::time::Instant::now();
-    let mut acc = 0.0;
-    for _ in 0..100 { for u in &units { if let Some(s) = view.sample(u) { acc += s.weight + s.l[0]; } } }
-    eprintln!("sample: {:.1} ns each ({acc})", t.elapsed().as_secs_f64() / 6553600.0 * 1e9);
-    let t = std::time::Instant::now();
-    let mut rows = Vec::with_capacity(6553600 * 10);
-    for _ in 0..100 { for u in &units { if let Some(s) = view.sample(u) { vkbrdf::table::push_row(&mut rows, s.l, s.l, s.l, 0, None); } } }
-    eprintln!("sample+push: {:.1} ns each ({})", t.elapsed().as_secs_f64() / 6553600.0 * 1e9, rows.len());
 }

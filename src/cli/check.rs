@@ -57,10 +57,17 @@ pub struct Args {
 
 /// Runs `vkbrdf check`.
 pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
-    let options = VulkanOptions { validation: args.validation || vkbrdf::gpu::validation_from_env(), ..VulkanOptions::default() };
+    let options = VulkanOptions {
+        validation: args.validation || vkbrdf::gpu::validation_from_env(),
+        ..VulkanOptions::default()
+    };
     let mut gpu = VulkanBackend::new(args.device.clone(), options)?;
     let counter = gpu.validation_counter();
-    let check_options = CheckOptions { tuples: args.tuples, seed: args.seed, only: args.filter.clone() };
+    let check_options = CheckOptions {
+        tuples: args.tuples,
+        seed: args.seed,
+        only: args.filter.clone(),
+    };
     println!("backend:   {}", gpu.name());
     println!("reference: cpu-reference (f64)");
     println!("tolerance: {}", check::tolerance());
@@ -84,7 +91,10 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
     let failed = reports.iter().filter(|r| !r.pass()).count();
     let max_rel = reports.iter().map(|r| r.max_rel).fold(0.0, f64::max);
     let max_used = reports.iter().map(|r| r.max_used).fold(0.0, f64::max);
-    let well = reports.iter().map(|r| r.max_rel_well_conditioned).fold(0.0, f64::max);
+    let well = reports
+        .iter()
+        .map(|r| r.max_rel_well_conditioned)
+        .fold(0.0, f64::max);
     println!();
     println!(
         "{} combinations × {} tuples in {elapsed:.1} s: {} pass, {failed} fail; most tolerance used {max_used:.3}",
@@ -95,7 +105,14 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
     println!("largest relative error {max_rel:.2e} overall, {well:.2e} where f32 inputs determine the value well");
     let messages = counter.count();
     if messages > 0 {
-        println!("validation layer: {messages} warning(s)/error(s); the first:\n{}", counter.messages().join("\n"));
+        println!(
+            "validation layer: {messages} warning(s)/error(s); the first:\n{}",
+            counter.messages().join("\n")
+        );
     }
-    Ok(if failed == 0 && messages == 0 { ExitCode::SUCCESS } else { ExitCode::from(1) })
+    Ok(if failed == 0 && messages == 0 {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::from(1)
+    })
 }

@@ -1,6 +1,7 @@
 //! Subcommands. Each module parses its own arguments (clap derive) and returns an exit code.
 
 mod backend_choice;
+mod bench;
 mod demo;
 mod eval;
 mod generate;
@@ -45,6 +46,9 @@ enum Command {
     /// Evaluate an adversarial corpus and judge it against the f64 reference: non-finite
     /// outputs, invalid counts, and relative error per term, model and regime.
     Stress(stress::Args),
+    /// Throughput against batch size, error and the peers (Mitsuba 3, NumPy, memcpy):
+    /// table, JSON and SVG plots.
+    Bench(bench::Args),
 }
 
 /// Runs the parsed command line.
@@ -55,5 +59,6 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Generate(a) => generate::run(&a),
         Command::Demo(a) => demo::run(&a),
         Command::Stress(a) => stress::run(&a),
+        Command::Bench(a) => bench::run(&a),
     }
 }

@@ -2,14 +2,15 @@
 //! evaluated on the chosen backend (library: `vkbrdf::table`).
 
 use super::backend_choice::{self, BackendArgs};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
-use vkbrdf::material::Geometry;
+use vkbrdf::material::{Geometry, Material};
 use vkbrdf::table::albedo::{self, AlbedoJob, Lobe, Microfacet};
 use vkbrdf::table::dfg::{self, DfgJob};
+use vkbrdf::table::preview::{self, PreviewJob};
 use vkbrdf::table::slice::{self, SliceJob, Spacing};
-use vkbrdf::table::{merl, preview, Grid, Runner};
+use vkbrdf::table::{merl, Grid, Runner};
 
 /// Arguments of `vkbrdf table`.
 #[derive(clap::Args, Debug)]
@@ -252,7 +253,7 @@ impl ModelArgs {
 }
 
 impl MaterialArgs {
-    fn load(&self) -> anyhow::Result<vkbrdf::material::Material> {
+    fn load(&self) -> anyhow::Result<Material> {
         Ok(vkbrdf::table::load_material(
             self.materials.as_deref(),
             &self.material,
@@ -260,75 +261,29 @@ impl MaterialArgs {
     }
 }
 
-/// Runs `vkbrdf table <kind>`.
+/// A checked job of any kind.
+enum Job {
+    Slice(SliceJob),
+    Albedo(AlbedoJob),
+    Dfg(DfgJob),
+    Merl(Material, PathBuf),
+    Preview(PreviewJob),
+}
+
+/// Runs `vkbrdf table <kind>`: builds and checks the job (material, model, size, memory,
+/// output paths) before opening the backend, then evaluates and writes.
 pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
     let t0 = Instant::now();
-    let (backend_args, outputs): (&BackendArgs, Vec<&Path>) = match &args.kind {
-        Kind::Slice(a) => (&a.backend, vec![&a.output]),
-        Kind::Albedo(a) => (
-            &a.model.backend,
-            std::iter::once(a.output.as_path())
-                .chain(a.average.as_deref())
-                .collect(),
-        ),
-        Kind::Dfg(a) => (&a.model.backend, vec![&a.output]),
-        Kind::Merl(a) => (&a.backend, vec![&a.output]),
-        Kind::Preview(a) => (
-            &a.backend,
-            a.sphere
-                .iter()
-                .chain(&a.polar)
-                .map(PathBuf::as_path)
-                .collect(),
-        ),
-    };
-    // Bad input first (material, size, paths), then the device.
-    validate(&args.kind)?;
-    for p in &outputs {
-        vkbrdf::table::check_output(p)?;
-    }
+    let (job, backend_args, outputs) = prepare(&args.kind)?;
     let mut backend = backend_choice::open(backend_args)?;
     let name = backend.name();
     let mut runner = Runner::new(backend.as_mut()).with_progress(true);
-    match &args.kind {
-        Kind::Slice(a) => slice::write(
-            &mut runner,
-            &SliceJob {
-                material: a.material.load()?,
-                grid: a.size,
-                spacing: if a.linear {
-                    Spacing::Linear
-                } else {
-                    Spacing::Sqrt
-                },
-                terms: a.terms,
-                half: a.half,
-                output: a.output.clone(),
-            },
-        )?,
-        Kind::Albedo(a) => albedo::write(
-            &mut runner,
-            &AlbedoJob {
-                spec: a.model.spec(),
-                grid: a.model.size,
-                samples: a.model.samples,
-                half: a.model.half,
-                output: a.output.clone(),
-                average: a.average.clone(),
-            },
-        )?,
-        Kind::Dfg(a) => dfg::write(
-            &mut runner,
-            &DfgJob {
-                spec: a.model.spec(),
-                grid: a.model.size,
-                samples: a.model.samples,
-                half: a.model.half,
-                output: a.output.clone(),
-            },
-        )?,
-        Kind::Merl(a) => merl::write(&mut runner, &a.material.load()?, &a.output)?,
-        Kind::Preview(a) => run_preview(&mut runner, a, &name)?,
+    match &job {
+        Job::Slice(j) => slice::write(&mut runner, j)?,
+        Job::Albedo(j) => albedo::write(&mut runner, j)?,
+        Job::Dfg(j) => dfg::write(&mut runner, j)?,
+        Job::Merl(m, path) => merl::write(&mut runner, m, path)?,
+        Job::Preview(j) => preview::write(&mut runner, j)?,
     }
     let written: Vec<String> = outputs.iter().map(|p| p.display().to_string()).collect();
     eprintln!(
@@ -340,50 +295,74 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
-/// Checks what can be checked without a device: the material exists and validates, the
-/// model combination is legal, the sizes fit in memory.
-fn validate(kind: &Kind) -> anyhow::Result<()> {
-    match kind {
+/// The checked job, its backend options and the files it will write.
+fn prepare(kind: &Kind) -> anyhow::Result<(Job, &BackendArgs, Vec<PathBuf>)> {
+    let (job, backend) = match kind {
         Kind::Slice(a) => {
-            a.material.load()?;
-            let channels = if a.terms { 9 } else { 3 };
-            vkbrdf::table::check_memory(vkbrdf::table::table_bytes(a.size, channels), "the slice")?;
+            let job = SliceJob {
+                material: a.material.load()?,
+                grid: a.size,
+                spacing: if a.linear {
+                    Spacing::Linear
+                } else {
+                    Spacing::Sqrt
+                },
+                terms: a.terms,
+                half: a.half,
+                output: a.output.clone(),
+            };
+            job.check()?;
+            (Job::Slice(job), &a.backend)
         }
-        Kind::Albedo(AlbedoArgs { model, .. }) | Kind::Dfg(DfgArgs { model, .. }) => {
-            model.spec().material(0.5)?;
-            vkbrdf::table::check_memory(vkbrdf::table::table_bytes(model.size, 2), "the table")?;
+        Kind::Albedo(a) => {
+            let job = AlbedoJob {
+                spec: a.model.spec(),
+                grid: a.model.size,
+                samples: a.model.samples,
+                half: a.model.half,
+                output: a.output.clone(),
+                average: a.average.clone(),
+            };
+            job.check()?;
+            (Job::Albedo(job), &a.model.backend)
+        }
+        Kind::Dfg(a) => {
+            let job = DfgJob {
+                spec: a.model.spec(),
+                grid: a.model.size,
+                samples: a.model.samples,
+                half: a.model.half,
+                output: a.output.clone(),
+            };
+            job.check()?;
+            (Job::Dfg(job), &a.model.backend)
         }
         Kind::Merl(a) => {
-            a.material.load()?;
+            let material = a.material.load()?;
+            merl::check(&a.output)?;
+            (Job::Merl(material, a.output.clone()), &a.backend)
         }
         Kind::Preview(a) => {
-            a.material.load()?;
-            if !(0.0..90.0).contains(&a.incidence) {
-                anyhow::bail!(
-                    "--incidence {}: give an angle in [0, 90) degrees",
-                    a.incidence
-                );
-            }
+            let job = PreviewJob {
+                material: a.material.load()?,
+                sphere: a.sphere.clone(),
+                polar: a.polar.clone(),
+                size: a.size as usize,
+                incidence_deg: a.incidence,
+                exposure: a.exposure,
+            };
+            job.check()?;
+            (Job::Preview(job), &a.backend)
         }
-    }
-    Ok(())
-}
-
-fn run_preview(runner: &mut Runner, a: &PreviewArgs, backend: &str) -> anyhow::Result<()> {
-    let material = a.material.load()?;
-    if let Some(path) = &a.sphere {
-        let canvas = preview::sphere(runner, &material, a.size as usize, a.exposure)?;
-        preview::write_png(
-            path,
-            &canvas,
-            &preview::provenance(&material, "preview-sphere", backend),
-        )?;
-    }
-    if let Some(path) = &a.polar {
-        let canvas = preview::polar(runner, &material, a.incidence)?;
-        let mut text = preview::provenance(&material, "preview-polar", backend);
-        text.push(("vkbrdf.incidence", format!("{} degrees", a.incidence)));
-        preview::write_png(path, &canvas, &text)?;
-    }
-    Ok(())
+    };
+    let outputs = match &job {
+        Job::Slice(j) => vec![j.output.clone()],
+        Job::Albedo(j) => std::iter::once(j.output.clone())
+            .chain(j.average.clone())
+            .collect(),
+        Job::Dfg(j) => vec![j.output.clone()],
+        Job::Merl(_, path) => vec![path.clone()],
+        Job::Preview(j) => j.sphere.iter().chain(&j.polar).cloned().collect(),
+    };
+    Ok((job, backend, outputs))
 }

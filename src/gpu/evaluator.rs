@@ -5,6 +5,8 @@
 //! next rows in, record one dispatch, submit with the slot's fence. While the device works
 //! on chunk `c`, the host is copying chunk `c + 1` in and chunk `c − 2` out.
 
+mod timing;
+
 use super::context::{Device, DeviceSelector, ValidationCounter};
 use super::kernel::{Kernels, WORKGROUP_SIZE};
 use super::layout::{gpu_materials, GpuCounts, GpuMaterial, PushConstants, BINDING_COUNT};
@@ -278,12 +280,7 @@ impl VulkanBackend {
         request: &Request,
         forced: FeatureSet,
     ) -> Result<Output> {
-        let mut features = FeatureSet::of_batch(batch, materials, request);
-        for (f, _) in FeatureSet::ALL_NAMED {
-            if forced.contains(*f) && *f != FeatureSet::TANGENTS && *f != FeatureSet::TERMS {
-                features |= *f;
-            }
-        }
+        let features = Self::features_with(batch, materials, request, forced);
         self.run(batch, materials, features)
     }
 
@@ -465,7 +462,10 @@ impl VulkanBackend {
                 MemoryUse::Readback,
             )?;
         }
-        let materials = self.materials.as_ref().expect("materials are uploaded before any slot is prepared");
+        let materials = self
+            .materials
+            .as_ref()
+            .expect("materials are uploaded before any slot is prepared");
         let wanted: [&Buffer; BINDING_COUNT as usize] = [
             slot.input.as_ref().expect("ensured"),
             materials,
@@ -475,8 +475,16 @@ impl VulkanBackend {
         ];
         let ids = wanted.map(Buffer::id);
         if ids != slot.bound {
-            let infos: Vec<[vk::DescriptorBufferInfo; 1]> =
-                wanted.iter().map(|b| [vk::DescriptorBufferInfo { buffer: b.raw(), offset: 0, range: vk::WHOLE_SIZE }]).collect();
+            let infos: Vec<[vk::DescriptorBufferInfo; 1]> = wanted
+                .iter()
+                .map(|b| {
+                    [vk::DescriptorBufferInfo {
+                        buffer: b.raw(),
+                        offset: 0,
+                        range: vk::WHOLE_SIZE,
+                    }]
+                })
+                .collect();
             let writes: Vec<vk::WriteDescriptorSet> = infos
                 .iter()
                 .enumerate()

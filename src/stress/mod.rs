@@ -303,12 +303,23 @@ impl StressReport {
                 }
             );
         }
-        let failing: Vec<_> = self.errors.iter().filter(|(_, st)| st.max > target).collect();
+        let failing: Vec<_> = self
+            .errors
+            .iter()
+            .filter(|(_, st)| st.max > target)
+            .collect();
         if !failing.is_empty() {
             s += "\nWorst tuple per row over the target (`Lx Ly Lz Vx Vy Vz Nx Ny Nz material Tx Ty Tz`):\n\n";
             for (key, st) in failing {
                 if let Some(row) = self.worst_rows.get(key) {
-                    s += &format!("- {} / {} (row {}, rel err {:.2e}): `{:?}`\n", key.0, key.1.label(), st.worst.unwrap_or(0), st.max, row);
+                    s += &format!(
+                        "- {} / {} (row {}, rel err {:.2e}): `{:?}`\n",
+                        key.0,
+                        key.1.label(),
+                        st.worst.unwrap_or(0),
+                        st.max,
+                        row
+                    );
                 }
             }
         }

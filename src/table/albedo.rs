@@ -7,12 +7,15 @@
 //! map to microfacet normals `h` — GGX through its distribution of visible normals (Heitz
 //! 2018), Beckmann through `D cos_h` — and `l` is `v` reflected about `h`. The backend
 //! evaluates `f(l, v)`; the host adds `f cos_i / pdf(l)` (times a per-sample weight of
-//! `c = v·h`). Samples with `l` below the horizon contribute 0 and are not sent. The pdf is
-//! computed from the f32 directions the backend sees, so the ratio is consistent.
+//! `c = v·h`). Samples with `l` below the horizon contribute 0. The pdf is computed from
+//! the f32 directions the backend sees, so the ratio is consistent. `E_avg` integrates
+//! `E(μ)` over μ with [`AVERAGE_NODES`]-point Gauss–Legendre (measured: converged to
+//! 1e-7; within 2e-6 of the independent integration).
 //! [`DEFAULT_SAMPLES`] states the count and the accuracy measured for it.
 
 use super::exr_out::{self, Channel, Layer, Provenance};
 use super::{as_f32, push_row, texel_centre, Grid, Runner, NORMAL};
+use crate::batch::COLUMNS_PLAIN;
 use crate::error::{Error, Result};
 use crate::material::{Geometry, Material};
 use crate::reference::distribution::{beckmann_d, ggx_d};
@@ -33,6 +36,10 @@ use std::path::PathBuf;
 /// Beckmann: `G (v·h)/(cos_o cos_h)` → G): small α needs no more samples than large.
 /// The test suite checks α down to 1/1024.
 pub const DEFAULT_SAMPLES: u32 = 1 << 16;
+
+/// Host bytes per texel of an integrated table: the point and its sampling constants
+/// ([`View`], 152 bytes), its material index and f64 sums, the f32 result and its EXR copy.
+pub const BYTES_PER_TEXEL: u64 = 256;
 
 /// Gauss–Legendre nodes in μ for [`average_albedo`].
 pub const AVERAGE_NODES: usize = 32;
@@ -257,8 +264,10 @@ pub struct Sample {
 
 /// `(1/N) Σ f cos_i/pdf · weight(c)` for each `(μ, α)` point: the integrals
 /// `∫ f(l, v) cos_i · weight(v·h) dω_l` with `samples` points each, evaluated on the runner.
-/// The host builds each chunk's samples on every core (the result does not depend on the
-/// thread count: pieces are concatenated in order) and sums in f64.
+///
+/// Every sample keeps its row (a below-horizon one is sent with weight 0: the backend
+/// returns 0 for it at little cost), so the host fills each chunk's rows in parallel,
+/// in place, on every core; the sums are f64 and independent of the thread count.
 pub fn integrate<const K: usize>(
     runner: &mut Runner,
     spec: &Microfacet,
@@ -280,43 +289,36 @@ pub fn integrate<const K: usize>(
         units: (0..samples).map(|k| UnitSample::new(k, samples)).collect(),
     };
     let total = points.len() as u64 * u64::from(samples);
-    let threads = std::thread::available_parallelism().map_or(1, |n| n.get()) as u64;
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
     runner.start(what, total);
     let mut sums = vec![[0.0f64; K]; points.len()];
     let mut next = 0u64;
     while next < total {
-        let end = total.min(next + runner.chunk_tuples() as u64);
-        let step = (end - next).div_ceil(threads);
-        let pieces: Vec<Generated<K>> = std::thread::scope(|s| {
-            let handles: Vec<_> = (next..end)
-                .step_by(step as usize)
-                .map(|a| {
-                    let (plan, weight) = (&plan, &weight);
-                    s.spawn(move || plan.generate(a..end.min(a + step), weight))
-                })
-                .collect();
-            handles
-                .into_iter()
-                .map(|h| h.join().expect("sample generation panicked"))
-                .collect()
+        let n = (total - next).min(runner.chunk_tuples() as u64) as usize;
+        let mut rows = vec![0f32; n * COLUMNS_PLAIN];
+        let mut weights = vec![[0.0f64; K]; n];
+        let per_thread = n.div_ceil(threads);
+        std::thread::scope(|s| {
+            for (t, (r, w)) in rows
+                .chunks_mut(per_thread * COLUMNS_PLAIN)
+                .zip(weights.chunks_mut(per_thread))
+                .enumerate()
+            {
+                let (plan, weight) = (&plan, &weight);
+                let first = next + (t * per_thread) as u64;
+                s.spawn(move || plan.generate(first, r, w, weight));
+            }
         });
-        let mut rows = Vec::with_capacity(pieces.iter().map(|p| p.rows.len()).sum());
-        let mut meta = Vec::with_capacity(pieces.iter().map(|p| p.meta.len()).sum());
-        for p in pieces {
-            rows.extend_from_slice(&p.rows);
-            meta.extend_from_slice(&p.meta);
-        }
-        if !meta.is_empty() {
-            let out = runner.evaluate(rows, &materials, false)?;
-            for (r, (p, w)) in meta.iter().enumerate() {
-                let f = f64::from(out.brdf[3 * r]);
-                for (sum, wk) in sums[*p].iter_mut().zip(w) {
-                    *sum += f * wk;
-                }
+        let out = runner.evaluate(rows, &materials, false)?;
+        for (r, w) in weights.iter().enumerate() {
+            let p = ((next + r as u64) / u64::from(samples)) as usize;
+            let f = f64::from(out.brdf[3 * r]);
+            for (sum, wk) in sums[p].iter_mut().zip(w) {
+                *sum += f * wk;
             }
         }
-        runner.advance(end - next);
-        next = end;
+        runner.advance(n as u64);
+        next += n as u64;
     }
     runner.finish();
     Ok(sums
@@ -333,34 +335,34 @@ struct Plan<'a> {
     units: Vec<UnitSample>,
 }
 
-/// Rows for the backend and, per row, its point and weights `cos_i/pdf · weight(c)`.
-struct Generated<const K: usize> {
-    rows: Vec<f32>,
-    meta: Vec<(usize, [f64; K])>,
-}
-
 impl Plan<'_> {
-    /// Samples `range` of the flattened (point, sample) index; below-horizon ones skipped.
+    /// Fills `rows` (10 columns each) and `weights` (`cos_i/pdf · weight(c)`, 0 below the
+    /// horizon) for the flattened (point, sample) indices from `first` on.
     fn generate<const K: usize>(
         &self,
-        range: std::ops::Range<u64>,
+        first: u64,
+        rows: &mut [f32],
+        weights: &mut [[f64; K]],
         weight: &(impl Fn(f64) -> [f64; K] + Sync),
-    ) -> Generated<K> {
-        let n = (range.end - range.start) as usize;
-        let mut out = Generated {
-            rows: Vec::with_capacity(n * 10),
-            meta: Vec::with_capacity(n),
-        };
+    ) {
         let per_point = self.units.len() as u64;
-        for g in range {
+        let mut row = Vec::with_capacity(COLUMNS_PLAIN);
+        for (r, w) in weights.iter_mut().enumerate() {
+            let g = first + r as u64;
             let (p, k) = ((g / per_point) as usize, (g % per_point) as usize);
             let view = &self.views[p];
-            if let Some(s) = view.sample(&self.units[k]) {
-                push_row(&mut out.rows, s.l, view.v, NORMAL, self.index[p], None);
-                out.meta.push((p, weight(s.c).map(|w| w * s.weight)));
-            }
+            // Below the horizon: any valid direction there (f = 0), weight 0.
+            let l = match view.sample(&self.units[k]) {
+                Some(s) => {
+                    *w = weight(s.c).map(|x| x * s.weight);
+                    s.l
+                }
+                None => [0.0, 0.0, -1.0],
+            };
+            row.clear();
+            push_row(&mut row, l, view.v, NORMAL, self.index[p], None);
+            rows[r * COLUMNS_PLAIN..(r + 1) * COLUMNS_PLAIN].copy_from_slice(&row);
         }
-        out
     }
 }
 
@@ -475,14 +477,23 @@ pub struct AlbedoJob {
     pub average: Option<PathBuf>,
 }
 
-/// Integrates and writes the albedo table (and E_avg), refusing oversized grids first.
-pub fn write(runner: &mut Runner, job: &AlbedoJob) -> Result<()> {
-    super::check_memory(super::table_bytes(job.grid, 1), "the albedo table")?;
-    super::check_output(&job.output)?;
-    if let Some(path) = &job.average {
-        super::check_output(path)?;
+impl AlbedoJob {
+    /// Everything that can be checked before evaluating: the model is legal, the table
+    /// fits in memory, the outputs can be written.
+    pub fn check(&self) -> Result<()> {
+        self.spec.material(0.5)?;
+        super::check_memory(
+            super::table_bytes(self.grid, BYTES_PER_TEXEL),
+            "the albedo table",
+        )?;
+        super::check_output(&self.output)?;
+        self.average.as_deref().map_or(Ok(()), super::check_output)
     }
-    job.spec.material(0.5)?;
+}
+
+/// Integrates and writes the albedo table (and E_avg), after [`AlbedoJob::check`].
+pub fn write(runner: &mut Runner, job: &AlbedoJob) -> Result<()> {
+    job.check()?;
     let e = directional_albedo(runner, &job.spec, &grid_points(job.grid), job.samples)?;
     let backend = runner.backend_name();
     let provenance = |table: &str, parameterisation: &str, samples: String| Provenance {

@@ -47,11 +47,20 @@ pub struct DfgJob {
     pub output: PathBuf,
 }
 
-/// Integrates and writes the DFG table, refusing oversized grids first.
+impl DfgJob {
+    /// Everything that can be checked before evaluating: the model is legal, the table
+    /// fits in memory, the output can be written.
+    pub fn check(&self) -> Result<()> {
+        self.spec.material(0.5)?;
+        let bytes = super::table_bytes(self.grid, albedo::BYTES_PER_TEXEL + 16);
+        super::check_memory(bytes, "the DFG table")?;
+        super::check_output(&self.output)
+    }
+}
+
+/// Integrates and writes the DFG table, after [`DfgJob::check`].
 pub fn write(runner: &mut Runner, job: &DfgJob) -> Result<()> {
-    super::check_memory(super::table_bytes(job.grid, 2), "the DFG table")?;
-    super::check_output(&job.output)?;
-    job.spec.material(0.5)?;
+    job.check()?;
     let ab = split_sum(runner, &job.spec, &grid_points(job.grid), job.samples)?;
     let channel = |name: &str, k: usize| Channel {
         name: name.into(),

@@ -107,10 +107,17 @@ pub fn compute(runner: &mut Runner, material: &Material) -> Result<Vec<f64>> {
     Ok(values)
 }
 
-/// Exports `material` as a MERL binary at `path` (atomically).
+/// Everything that can be checked before evaluating: memory for the table (the values
+/// and one chunk) and that `path` can be written.
+pub fn check(path: &Path) -> Result<()> {
+    let chunk = super::table_bytes(super::Grid::new(1, 1)?, 0).unwrap_or(0);
+    super::check_memory(Some(FILE_BYTES as u128 + chunk), "the MERL table")?;
+    super::check_output(path)
+}
+
+/// Exports `material` as a MERL binary at `path` (atomically), after [`check`].
 pub fn write(runner: &mut Runner, material: &Material, path: &Path) -> Result<()> {
-    super::check_memory(Some(2 * FILE_BYTES as u128), "the MERL table")?;
-    super::check_output(path)?;
+    check(path)?;
     let values = compute(runner, material)?;
     write_values(path, &values)
 }

@@ -30,9 +30,11 @@ use crate::material::{Convention, Material};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::path::Path;
 
-/// Tuples per backend call: 2²¹ rows of 13 floats are 109 MB in, 25 MB out (terms
-/// included), which bounds host memory and stays a size every backend streams well.
-pub const DEFAULT_CHUNK_TUPLES: usize = 1 << 21;
+/// Tuples per backend call, 2¹⁹: at most 27 MB of rows in and 19 MB out (13 columns,
+/// terms included). Large enough to amortise a backend call; small enough that the host's
+/// buffers stay below glibc's 32 MiB `mmap` threshold and are reused from chunk to chunk
+/// (measured: 2²¹ doubled the host's share of an albedo table's time).
+pub const DEFAULT_CHUNK_TUPLES: usize = 1 << 19;
 
 /// The version string stored in every table's provenance (`vkbrdf` crate version).
 pub const VERSION: &str = env!("CARGO_PKG_VERSION");
@@ -124,15 +126,13 @@ pub fn check_memory(bytes: Option<u128>, what: &str) -> Result<()> {
     }
 }
 
-/// Bytes to hold a `grid` table of `channels` values per texel: the f64 accumulators, the
-/// f32 result and the copy the EXR encoder makes (`8 + 4 + 4` bytes per value), plus one
-/// chunk of tuples in and out.
-pub fn table_bytes(grid: Grid, channels: usize) -> Option<u128> {
-    let values = (grid.width as u128)
-        .checked_mul(grid.height as u128)?
-        .checked_mul(channels as u128)?;
+/// Bytes a job over `grid` needs: `per_texel` bytes for each texel (the generator's
+/// per-texel state, its f32 results and the EXR encoder's copy; each kind states its
+/// own), plus one chunk of tuples in and out with their weights.
+pub fn table_bytes(grid: Grid, per_texel: u64) -> Option<u128> {
+    let texels = (grid.width as u128).checked_mul(grid.height as u128)?;
     let chunk = DEFAULT_CHUNK_TUPLES as u128 * ((COLUMNS_TANGENT + 3 + 6) * 4 + 16) as u128;
-    values.checked_mul(16)?.checked_add(chunk)
+    texels.checked_mul(per_texel as u128)?.checked_add(chunk)
 }
 
 /// Fails early, before any evaluation, when `path` cannot be written: creates (and
@@ -158,9 +158,10 @@ pub fn check_output(path: &Path) -> Result<()> {
         .map(drop)
         .map_err(|e| {
             // tempfile's message names its random file; name the directory instead.
-            let why = e
-                .raw_os_error()
-                .map_or_else(|| e.kind().to_string(), |c| std::io::Error::from_raw_os_error(c).to_string());
+            let why = e.raw_os_error().map_or_else(
+                || e.kind().to_string(),
+                |c| std::io::Error::from_raw_os_error(c).to_string(),
+            );
             io(std::io::Error::new(
                 e.kind(),
                 format!("cannot create a file in `{}`: {why}", dir.display()),

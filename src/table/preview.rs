@@ -8,7 +8,7 @@ use crate::error::{Error, Result};
 use crate::material::Material;
 use crate::reference::frame::{cross, normalize};
 use std::f64::consts::PI;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// Default sphere image size (pixels per side).
 pub const DEFAULT_SPHERE_SIZE: usize = 256;
@@ -18,6 +18,84 @@ pub const DEFAULT_INCIDENCE_DEG: f64 = 45.0;
 pub const SPHERE_LIGHT: [f64; 3] = [-1.0, 1.0, 1.0];
 /// Polar plot size, pixels.
 pub const POLAR_SIZE: (usize, usize) = (512, 288);
+/// Host bytes per sphere pixel: its tuple row (40), pixel record (24), f (12), RGB8 (3).
+pub const SPHERE_BYTES_PER_PIXEL: u64 = 96;
+
+/// What `vkbrdf table preview` writes.
+#[derive(Debug, Clone)]
+pub struct PreviewJob {
+    /// The material.
+    pub material: Material,
+    /// The lit-sphere PNG, when wanted.
+    pub sphere: Option<PathBuf>,
+    /// The polar-plot PNG, when wanted.
+    pub polar: Option<PathBuf>,
+    /// Sphere image size, pixels per side.
+    pub size: usize,
+    /// Polar plot: light angle from the normal, degrees in [0, 90).
+    pub incidence_deg: f64,
+    /// Sphere exposure before tone mapping.
+    pub exposure: f64,
+}
+
+impl PreviewJob {
+    /// Everything that can be checked before evaluating: an output is asked for, the
+    /// angle is legal, the sphere fits in memory, the outputs can be written.
+    pub fn check(&self) -> Result<()> {
+        if self.sphere.is_none() && self.polar.is_none() {
+            return Err(Error::Table(
+                "preview: give --sphere PNG, --polar PNG or both".into(),
+            ));
+        }
+        check_incidence(self.incidence_deg)?;
+        if !(self.exposure.is_finite() && self.exposure > 0.0) {
+            return Err(Error::Table(format!(
+                "--exposure {}: give a positive number",
+                self.exposure
+            )));
+        }
+        let grid = super::Grid::new(self.size, self.size)?;
+        super::check_memory(
+            super::table_bytes(grid, SPHERE_BYTES_PER_PIXEL),
+            "the sphere preview",
+        )?;
+        for path in self.sphere.iter().chain(&self.polar) {
+            super::check_output(path)?;
+        }
+        Ok(())
+    }
+}
+
+/// Draws and writes the previews of `job`, after [`PreviewJob::check`].
+pub fn write(runner: &mut Runner, job: &PreviewJob) -> Result<()> {
+    job.check()?;
+    let backend = runner.backend_name();
+    if let Some(path) = &job.sphere {
+        let canvas = sphere(runner, &job.material, job.size, job.exposure)?;
+        write_png(
+            path,
+            &canvas,
+            &provenance(&job.material, "preview-sphere", &backend),
+        )?;
+    }
+    if let Some(path) = &job.polar {
+        let canvas = polar(runner, &job.material, job.incidence_deg)?;
+        let mut text = provenance(&job.material, "preview-polar", &backend);
+        text.push(("vkbrdf.incidence", format!("{} degrees", job.incidence_deg)));
+        write_png(path, &canvas, &text)?;
+    }
+    Ok(())
+}
+
+fn check_incidence(deg: f64) -> Result<()> {
+    if (0.0..90.0).contains(&deg) {
+        Ok(())
+    } else {
+        Err(Error::Table(format!(
+            "--incidence {deg}: give an angle in [0, 90) degrees from the normal"
+        )))
+    }
+}
 
 /// An RGB8 image being drawn.
 #[derive(Debug, Clone, PartialEq)]
@@ -89,10 +167,8 @@ pub fn sphere(
     size: usize,
     exposure: f64,
 ) -> Result<Canvas> {
-    super::check_memory(
-        super::table_bytes(super::Grid::new(size, size)?, 3),
-        "the sphere preview",
-    )?;
+    let bytes = super::table_bytes(super::Grid::new(size, size)?, SPHERE_BYTES_PER_PIXEL);
+    super::check_memory(bytes, "the sphere preview")?;
     let materials = std::slice::from_ref(material);
     let light = normalize(SPHERE_LIGHT).expect("constant");
     let mut rows = Vec::new();
@@ -149,11 +225,7 @@ fn evaluate_chunked(
 /// drawn in red, green and blue, otherwise one white curve; the light direction is solid
 /// yellow, the mirror direction dashed yellow, the largest radius a grey semicircle.
 pub fn polar(runner: &mut Runner, material: &Material, incidence_deg: f64) -> Result<Canvas> {
-    if !(0.0..90.0).contains(&incidence_deg) {
-        return Err(Error::Table(format!(
-            "--incidence {incidence_deg}: give an angle in [0, 90) degrees from the normal"
-        )));
-    }
+    check_incidence(incidence_deg)?;
     let materials = std::slice::from_ref(material);
     let ti = incidence_deg.to_radians();
     let l = [-ti.sin(), 0.0, ti.cos()];

@@ -104,11 +104,23 @@ pub struct SliceJob {
     pub output: PathBuf,
 }
 
-/// Evaluates and writes the slice, refusing oversized grids first.
+impl SliceJob {
+    /// Everything that can be checked before evaluating: the table fits in memory (f32
+    /// results, their per-channel copies and the EXR encoder's: 12 bytes per value), the
+    /// output can be written.
+    pub fn check(&self) -> Result<()> {
+        let channels = if self.terms { 3 + TERM_COLUMNS } else { 3 };
+        super::check_memory(
+            super::table_bytes(self.grid, 12 * channels as u64),
+            "the slice",
+        )?;
+        super::check_output(&self.output)
+    }
+}
+
+/// Evaluates and writes the slice, after [`SliceJob::check`].
 pub fn write(runner: &mut Runner, job: &SliceJob) -> Result<()> {
-    let channels = if job.terms { 3 + TERM_COLUMNS } else { 3 };
-    super::check_memory(super::table_bytes(job.grid, channels), "the slice")?;
-    super::check_output(&job.output)?;
+    job.check()?;
     let (brdf, terms) = compute(runner, &job.material, job.grid, job.spacing, job.terms)?;
     let mut layers = vec![interleaved("brdf", &brdf, &["R", "G", "B"])];
     if let Some(t) = &terms {
