@@ -712,19 +712,19 @@ fn read_png(path: &Path) -> (u32, u32, Vec<u8>, HashMap<String, String>) {
 
 fn previews(backend: &mut dyn Backend) {
     let dir = tmp();
-    let material = presets::preset("copper").unwrap().unwrap();
-    let mut runner = Runner::new(backend);
-    let sphere = preview::sphere(&mut runner, &material, 64, 1.0).unwrap();
-    let path = dir.path().join("sphere.png");
-    preview::write_png(
-        &path,
-        &sphere,
-        &preview::provenance(&material, "preview-sphere", "test"),
-    )
-    .unwrap();
-    let (w, h, rgb, text) = read_png(&path);
+    let job = preview::PreviewJob {
+        material: presets::preset("copper").unwrap().unwrap(),
+        sphere: Some(dir.path().join("sphere.png")),
+        polar: Some(dir.path().join("polar.png")),
+        size: 64,
+        incidence_deg: 45.0,
+        exposure: 1.0,
+    };
+    preview::write(&mut Runner::new(backend), &job).unwrap();
+    let (w, h, rgb, text) = read_png(job.sphere.as_ref().unwrap());
     assert_eq!((w, h), (64, 64));
     assert_eq!(text["vkbrdf.material"], "copper");
+    assert_eq!(text["vkbrdf.table"], "preview-sphere");
     let px = |x: usize, y: usize| &rgb[3 * (y * 64 + x)..3 * (y * 64 + x) + 3];
     assert_eq!(px(0, 0), [24, 24, 24], "background outside the sphere");
     assert!(
@@ -734,20 +734,27 @@ fn previews(backend: &mut dyn Backend) {
     );
     assert_eq!(px(60, 40), [0, 0, 0], "facing away from the light: black");
 
-    let polar = preview::polar(&mut runner, &material, 45.0).unwrap();
-    let path = dir.path().join("polar.png");
-    preview::write_png(
-        &path,
-        &polar,
-        &preview::provenance(&material, "preview-polar", "test"),
-    )
-    .unwrap();
-    let (w, h, rgb, _) = read_png(&path);
+    let (w, h, rgb, text) = read_png(job.polar.as_ref().unwrap());
     assert_eq!((w as usize, h as usize), preview::POLAR_SIZE);
+    assert_eq!(text["vkbrdf.incidence"], "45 degrees");
     assert!(
         rgb.chunks(3).filter(|c| c[0] == 240 && c[1] == 70).count() > 100,
         "a red curve"
     );
+    // A grey material draws one white curve.
+    let steel = vkbrdf::material::parse_materials(
+        "[[material]]\nname = \"steel\"\nmodel = \"phong\"\nexponent = 40\n",
+        "test",
+    )
+    .unwrap()
+    .remove(0);
+    let canvas = preview::polar(&mut Runner::new(backend), &steel, 30.0).unwrap();
+    let white = canvas
+        .rgb
+        .chunks(3)
+        .filter(|c| c == &[240, 240, 240])
+        .count();
+    assert!(white > 100, "one white curve");
 }
 
 #[test]
@@ -849,6 +856,30 @@ fn illegal_model_is_refused() {
     .unwrap_err()
     .to_string();
     assert!(e.contains("incidence"), "{e}");
+    let dir = tmp();
+    let job = preview::PreviewJob {
+        material: presets::preset("gold").unwrap().unwrap(),
+        sphere: None,
+        polar: None,
+        size: 64,
+        incidence_deg: 45.0,
+        exposure: 1.0,
+    };
+    assert!(job.check().unwrap_err().to_string().contains("--sphere"));
+    let job = preview::PreviewJob {
+        sphere: Some(dir.path().join("s.png")),
+        size: 1 << 20,
+        ..job
+    };
+    let e = job.check().unwrap_err().to_string();
+    assert!(e.contains("memory"), "{e}");
+    let job = preview::PreviewJob {
+        size: 64,
+        exposure: f64::NAN,
+        ..job
+    };
+    assert!(job.check().unwrap_err().to_string().contains("exposure"));
+    no_files_left(dir.path());
 }
 
 #[test]

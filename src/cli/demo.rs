@@ -52,8 +52,8 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         let mut mean = [0f64; 3];
         let mut max_g = 0f64;
         for &i in &rows {
-            for c in 0..3 {
-                mean[c] += out.brdf[3 * i + c] as f64 / rows.len() as f64;
+            for (c, m) in mean.iter_mut().enumerate() {
+                *m += out.brdf[3 * i + c] as f64 / rows.len() as f64;
             }
             max_g = max_g.max(out.brdf[3 * i + 1] as f64);
         }

@@ -47,7 +47,7 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         Some(path) => material::load_materials(path)?,
         None => material::presets::all(),
     };
-    println!("{:<16} {}", "name", "definition");
+    println!("{:<16} definition", "name");
     for m in &list {
         println!("{:<16} {}", m.name, summary(m));
     }

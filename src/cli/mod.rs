@@ -2,7 +2,9 @@
 
 mod backend_choice;
 mod bench;
+mod check;
 mod demo;
+mod devices;
 mod eval;
 mod generate;
 mod materials;
@@ -49,6 +51,11 @@ enum Command {
     /// Throughput against batch size, error and the peers (Mitsuba 3, NumPy, memcpy):
     /// table, JSON and SVG plots.
     Bench(bench::Args),
+    /// Conformance: every legal combination on a Vulkan device against the f64 reference;
+    /// exit 0 only when all pass — the command to trust a new GPU or driver.
+    Check(check::Args),
+    /// List the Vulkan devices and the one vkbrdf picks.
+    Devices(devices::Args),
 }
 
 /// Runs the parsed command line.
@@ -60,5 +67,7 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Demo(a) => demo::run(&a),
         Command::Stress(a) => stress::run(&a),
         Command::Bench(a) => bench::run(&a),
+        Command::Check(a) => check::run(&a),
+        Command::Devices(a) => devices::run(&a),
     }
 }

@@ -67,7 +67,7 @@
 //! - **Subnormal inputs.** lavapipe keeps f32 subnormals, so a vector whose components are
 //!   all subnormal is normalised like any other, as the reference does. A driver that
 //!   flushes subnormals to zero would see a zero vector there and count the tuple invalid.
-//! - **RAII.** Child objects hold an `Arc` of their [`Device`](context::Device), which
+//! - **RAII.** Child objects hold an `Arc` of their `Device` (in `context`), which
 //!   holds an `Arc` of the instance: parents outlive children. [`VulkanBackend`]'s `Drop`
 //!   waits for the device to go idle; its fields then drop in reverse creation order.
 //! - **Errors.** Every `vk::Result` is mapped at its call site to

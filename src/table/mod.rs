@@ -158,10 +158,11 @@ pub fn check_output(path: &Path) -> Result<()> {
         .map(drop)
         .map_err(|e| {
             // tempfile's message names its random file; name the directory instead.
-            let why = e.raw_os_error().map_or_else(
-                || e.kind().to_string(),
-                |c| std::io::Error::from_raw_os_error(c).to_string(),
-            );
+            let why = match e.kind() {
+                std::io::ErrorKind::NotFound => "no such directory".to_string(),
+                std::io::ErrorKind::PermissionDenied => "permission denied".to_string(),
+                kind => kind.to_string(),
+            };
             io(std::io::Error::new(
                 e.kind(),
                 format!("cannot create a file in `{}`: {why}", dir.display()),
