@@ -106,7 +106,11 @@ uint make_frame(uint row, GpuMaterial m, out Frame f) {
     vec3 lv = f.l + f.v;
     float len = sqrt(dot(lv, lv));
     f.h = lv / len;
-    f.cos_h = dot(f.n, f.h);
+    // cos_h = n.h = (cos_i + cos_o) / |l + v|: positive by construction, as it is exactly.
+    // dot(n, h) is not: where l ~ -v (grazing, nearly opposite), l + v is dominated by the
+    // rounding of l and v, h points anywhere, and dot(n, h) can come out <= 0; log(cos_h)
+    // in D then turns into garbage and D into +inf (seen in the 10M-tuple stress corpus).
+    f.cos_h = (f.cos_i + f.cos_o) / len;
     // c = v.h = |l + v| / 2 for unit l, v. Not dot(v, h): at grazing mirror geometry v is
     // nearly perpendicular to h, and the dot product turns h's direction error (which grows
     // as 1/|l + v|) into a relative error of ~u/(2c^2) in c (1e-3 at c = 0.005), where
