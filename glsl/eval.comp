@@ -7,9 +7,15 @@
 // and USE_SUBGROUP_ARITHMETIC when the device can reduce counts across a subgroup. The
 // workgroup size is specialization constant 0.
 
-#if defined(USE_SUBGROUP_ARITHMETIC)
+#if defined(USE_SUBGROUP_ARITHMETIC) || defined(USE_SUBGROUP_UNIFORM)
 #extension GL_KHR_shader_subgroup_basic : require
+#endif
+#if defined(USE_SUBGROUP_ARITHMETIC)
 #extension GL_KHR_shader_subgroup_arithmetic : require
+#endif
+#if defined(USE_SUBGROUP_UNIFORM)
+#extension GL_KHR_shader_subgroup_vote : require
+#extension GL_KHR_shader_subgroup_ballot : require
 #endif
 
 #include "layout.glsl"
@@ -17,10 +23,12 @@
 
 layout(local_size_x_id = 0) in;
 
-// Rows `Lx Ly Lz Vx Vy Vz Nx Ny Nz material [Tx Ty Tz]` (src/batch.rs), row-major f32.
-layout(std430, set = 0, binding = BINDING_TUPLES) readonly buffer Tuples {
-    float tuples[];
-};
+// Rows `Lx Ly Lz Vx Vy Vz Nx Ny Nz material [Tx Ty Tz]` (src/batch.rs), row-major f32,
+// read as RGBA32F texels of a uniform texel buffer over the same bytes (the storage-buffer
+// binding BINDING_TUPLES is not read by the kernel). On lavapipe a texelFetch of 4 floats
+// costs about what one scalar storage-buffer load does (bounds check and address per lane),
+// so 3 fetches instead of 10 loads per row (measured: src/gpu/mod.rs, "Input").
+layout(set = 0, binding = BINDING_TUPLE_TEXELS) uniform samplerBuffer tuple_texels;
 layout(std430, set = 0, binding = BINDING_MATERIALS) readonly buffer Materials {
     GpuMaterial materials[];
 };
@@ -56,17 +64,61 @@ const uint STATUS_VALID = 0u;
 const uint STATUS_INVALID = 1u;
 const uint STATUS_BELOW_HORIZON = 2u;
 
-vec3 load3(uint base) {
-    return vec3(tuples[base], tuples[base + 1u], tuples[base + 2u]);
+// One input row, unpacked.
+struct Row {
+    vec3 l;
+    vec3 v;
+    vec3 n;
+    float material;
+    vec3 t; // 0 without HAS_TANGENTS
+};
+
+// The 4 floats at float offset `off` (0..3) of the 8 floats a, b.
+vec4 window4(vec4 a, vec4 b, uint off) {
+    return off == 0u ? a
+        : off == 1u ? vec4(a.yzw, b.x)
+        : off == 2u ? vec4(a.zw, b.xy)
+        : vec4(a.w, b.xyz);
+}
+
+// Row `row` from the texels that hold it. It starts at float row * COLUMNS, i.e. at float
+// `off` of texel `first`; its COLUMNS floats end within texel first + 2 (10 columns) or
+// first + 3 (13), and each texel fetched holds at least one float of the row, so no fetch
+// leaves the buffer (the host rounds it up to whole texels).
+Row load_row(uint row) {
+    uint start = row * COLUMNS;
+    int first = int(start >> 2u);
+    uint off = start & 3u;
+    vec4 a = texelFetch(tuple_texels, first);
+    vec4 b = texelFetch(tuple_texels, first + 1);
+    vec4 c = texelFetch(tuple_texels, first + 2);
+#if defined(HAS_TANGENTS)
+    vec4 d = texelFetch(tuple_texels, first + 3);
+#else
+    vec4 d = vec4(0.0); // 10 columns end within c (off is 0 or 2)
+#endif
+    vec4 w0 = window4(a, b, off); // Lx Ly Lz Vx
+    vec4 w1 = window4(b, c, off); // Vy Vz Nx Ny
+    vec4 w2 = window4(c, d, off); // Nz material Tx Ty
+    Row r;
+    r.l = w0.xyz;
+    r.v = vec3(w0.w, w1.xy);
+    r.n = vec3(w1.zw, w2.x);
+    r.material = w2.y;
+#if defined(HAS_TANGENTS)
+    r.t = vec3(w2.zw, window4(d, d, off).x); // Tz = d[off]
+#else
+    r.t = vec3(0.0);
+#endif
+    return r;
 }
 
 // Builds the frame of FORMULAS.md §1 and classifies the tuple. The invalid test comes first.
-uint make_frame(uint row, GpuMaterial m, out Frame f) {
-    uint base = row * COLUMNS;
+uint make_frame(Row r, GpuMaterial m, out Frame f) {
     bool ok_l, ok_v, ok_n;
-    f.l = safe_normalize(load3(base), ok_l);
-    f.v = safe_normalize(load3(base + 3u), ok_v);
-    f.n = safe_normalize(load3(base + 6u), ok_n);
+    f.l = safe_normalize(r.l, ok_l);
+    f.v = safe_normalize(r.v, ok_v);
+    f.n = safe_normalize(r.n, ok_n);
     f.t = vec3(0.0);
     f.b = vec3(0.0);
     if (!(ok_l && ok_v && ok_n)) {
@@ -76,7 +128,7 @@ uint make_frame(uint row, GpuMaterial m, out Frame f) {
     if (is_anisotropic(m)) {
 #if defined(HAS_TANGENTS)
         bool ok_t;
-        vec3 t = safe_normalize(load3(base + 10u), ok_t);
+        vec3 t = safe_normalize(r.t, ok_t);
         // |T - n(n.T)| = |n x t| |T|: the tuple is invalid when |n x t| <= 1e-12 (FORMULAS.md
         // §1), tested squared.
         vec3 nxt = cross(f.n, t);
@@ -151,11 +203,28 @@ void main() {
     if (row < params.tuple_count) {
         // The batch validated every index; the clamp only keeps a corrupted buffer from
         // reading outside the table.
-        uint mi = min(uint(tuples[row * COLUMNS + 9u]), params.material_count - 1u);
+        Row r = load_row(row);
+        uint mi = min(uint(r.material), params.material_count - 1u);
+#if defined(USE_SUBGROUP_UNIFORM)
+        // Most batches use one material per subgroup (often per batch): then one uniform
+        // load of the table row serves the whole subgroup (llvmpipe: a scalar load, not a
+        // gather of 28 words per lane).
+        GpuMaterial m;
+        if (subgroupAllEqual(mi)) {
+            m = materials[subgroupBroadcastFirst(mi)];
+        } else {
+            m = materials[mi];
+        }
+#else
         GpuMaterial m = materials[mi];
+#endif
         Frame f;
-        status = make_frame(row, m, f);
+        status = make_frame(r, m, f);
         Eval e = status == STATUS_VALID ? evaluate(f, m) : eval_zero();
+#if defined(EXP_LOADSTORE)
+        e.brdf = r.l + r.v + r.n;
+        status = STATUS_VALID;
+#endif
         brdf_out[row * 3u] = e.brdf.r;
         brdf_out[row * 3u + 1u] = e.brdf.g;
         brdf_out[row * 3u + 2u] = e.brdf.b;
@@ -175,6 +244,10 @@ void main() {
     // that needs barrier(), and llvmpipe runs any shader with a barrier through coroutines,
     // which made the whole kernel 2.7x slower on lavapipe (measured: 280 vs 103 ms for 4M
     // tuples of a load-and-store kernel).
+#if defined(EXP_NOCOUNT)
+    if (status == 77u) { atomicAdd(invalid_count, 1u); }
+    return;
+#endif
     bool invalid = status == STATUS_INVALID;
     bool below = status == STATUS_BELOW_HORIZON;
 #if defined(USE_SUBGROUP_ARITHMETIC)

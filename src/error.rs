@@ -7,7 +7,7 @@ use std::path::PathBuf;
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
     /// A materials file (or preset) that does not parse or validate.
-    #[error("{0}")]
+    #[error(transparent)]
     Material(#[from] MaterialError),
 
     /// A tuple batch (`.npy` file or in-memory array) that cannot be evaluated.
@@ -20,7 +20,9 @@ pub enum Error {
     },
 
     /// Reading or writing a file failed.
-    #[error("{path}: {source}")]
+    // The OS error is the `source`; the CLI prints the chain (`{:#}`), so the message
+    // names only the path, and the pair reads "PATH: OS ERROR" once.
+    #[error("{}", path.display())]
     Io {
         /// The file.
         path: PathBuf,

@@ -9,6 +9,7 @@ mod eval;
 mod generate;
 mod materials;
 mod stress;
+mod table;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -56,6 +57,8 @@ enum Command {
     Check(check::Args),
     /// List the Vulkan devices and the one vkbrdf picks.
     Devices(devices::Args),
+    /// Generate tables to EXR (slice, albedo, dfg), MERL binaries and preview pictures.
+    Table(table::Args),
 }
 
 /// Runs the parsed command line.
@@ -69,5 +72,6 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Bench(a) => bench::run(&a),
         Command::Check(a) => check::run(&a),
         Command::Devices(a) => devices::run(&a),
+        Command::Table(a) => table::run(&a),
     }
 }

@@ -9,8 +9,11 @@ mod timing;
 
 use super::context::{Device, DeviceSelector, ValidationCounter};
 use super::kernel::{Kernels, WORKGROUP_SIZE};
-use super::layout::{gpu_materials, GpuCounts, GpuMaterial, PushConstants, BINDING_COUNT};
-use super::memory::{Buffer, MemoryUse};
+use super::layout::{
+    descriptor_type, gpu_materials, GpuCounts, GpuMaterial, PushConstants, BINDING_COUNT,
+    BINDING_TUPLE_TEXELS,
+};
+use super::memory::{Buffer, MemoryUse, TexelView};
 use super::sync::{CommandPool, DescriptorPool, Fence};
 use super::vk_error;
 use crate::backend::{Backend, Counts, Output, Request, TERM_COLUMNS};
@@ -96,6 +99,8 @@ struct Pending {
 
 /// One frame in flight: its buffers, descriptor set, command buffer and fence.
 struct Slot {
+    /// The RGBA32F view of `input` (declared first: dropped before the buffer it views).
+    input_view: Option<TexelView>,
     input: Option<Buffer>,
     brdf: Option<Buffer>,
     terms: Option<Buffer>,
@@ -157,6 +162,7 @@ impl VulkanBackend {
         let mut slots = Vec::with_capacity(FRAMES_IN_FLIGHT);
         for i in 0..FRAMES_IN_FLIGHT {
             slots.push(Slot {
+                input_view: None,
                 input: None,
                 brdf: None,
                 terms: None,
@@ -253,10 +259,14 @@ impl VulkanBackend {
         let per_chunk_tuple = FRAMES_IN_FLIGHT as u64 * WORST_CASE_BYTES_PER_TUPLE;
         let by_memory = self.options.max_gpu_memory.saturating_sub(fixed) / per_chunk_tuple;
         let by_range = u64::from(limits.max_storage_buffer_range) / (4 * COLUMNS_TANGENT as u64);
+        // The input is also viewed as RGBA32F texels (4 floats each, one spare at the end).
+        let by_texels =
+            (u64::from(limits.max_texel_buffer_elements).saturating_sub(1) * 4) / COLUMNS_TANGENT as u64;
         let by_dispatch =
             u64::from(limits.max_compute_work_group_count[0]) * u64::from(WORKGROUP_SIZE);
         let chunk = by_memory
             .min(by_range)
+            .min(by_texels)
             .min(by_dispatch)
             .min(MAX_CHUNK_TUPLES as u64) as usize;
         if chunk == 0 {
@@ -300,7 +310,7 @@ impl VulkanBackend {
     ) -> Result<Vec<f32>> {
         let pipeline = self.kernels.probe(source)?.raw();
         self.upload_materials(materials)?;
-        let groups = outputs.div_ceil(WORKGROUP_SIZE as usize);
+        let groups = outputs.div_ceil(super::kernel::wg() as usize);
         if groups
             > self
                 .device
@@ -442,12 +452,17 @@ impl VulkanBackend {
     ) -> Result<()> {
         let slot = &mut self.slots[s];
         debug_assert!(slot.pending.is_none());
-        ensure(
-            &self.device,
-            &mut slot.input,
-            4 * input_floats as u64,
-            MemoryUse::Upload,
-        )?;
+        // Whole RGBA32F texels, so the texel view covers every input float.
+        let input_bytes = (4 * input_floats as u64).div_ceil(16) * 16;
+        if slot.input.as_ref().map_or(true, |b| b.size() < input_bytes) {
+            slot.input_view = None; // the view goes before the buffer it views
+        }
+        ensure(&self.device, &mut slot.input, input_bytes, MemoryUse::Upload)?;
+        let input = slot.input.as_ref().expect("ensured");
+        if slot.input_view.as_ref().map(TexelView::buffer_id) != Some(input.id()) {
+            slot.input_view = None;
+            slot.input_view = Some(TexelView::new(&self.device, input)?);
+        }
         ensure(
             &self.device,
             &mut slot.brdf,
@@ -472,6 +487,8 @@ impl VulkanBackend {
             slot.brdf.as_ref().expect("ensured"),
             slot.terms.as_ref().unwrap_or(&self.dummy),
             &slot.counts,
+            // BINDING_TUPLE_TEXELS: the input again, through its view (written below).
+            slot.input.as_ref().expect("ensured"),
         ];
         let ids = wanted.map(Buffer::id);
         if ids != slot.bound {
@@ -485,15 +502,21 @@ impl VulkanBackend {
                     }]
                 })
                 .collect();
+            let views = [slot.input_view.as_ref().expect("created above").raw()];
             let writes: Vec<vk::WriteDescriptorSet> = infos
                 .iter()
                 .enumerate()
                 .map(|(binding, info)| {
-                    vk::WriteDescriptorSet::default()
+                    let binding = binding as u32;
+                    let write = vk::WriteDescriptorSet::default()
                         .dst_set(slot.set)
-                        .dst_binding(binding as u32)
-                        .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
-                        .buffer_info(info)
+                        .dst_binding(binding)
+                        .descriptor_type(descriptor_type(binding));
+                    if binding == BINDING_TUPLE_TEXELS {
+                        write.texel_buffer_view(&views)
+                    } else {
+                        write.buffer_info(info)
+                    }
                 })
                 .collect();
             // SAFETY: the set is not used by pending work (precondition) and every buffer
@@ -520,7 +543,7 @@ impl VulkanBackend {
             tuple_count: count,
             material_count,
         };
-        let groups = count.div_ceil(WORKGROUP_SIZE);
+        let groups = count.div_ceil(super::kernel::wg());
         // Results must be visible to host reads after the fence: compute writes → host reads.
         let barrier = [vk::MemoryBarrier::default()
             .src_access_mask(vk::AccessFlags::SHADER_WRITE)

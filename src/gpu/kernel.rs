@@ -8,7 +8,9 @@
 //! constant 0: each is said once, in Rust.
 
 use super::context::{Device, PhysicalInfo};
-use super::layout::{PushConstants, BINDING_COUNT, SHADER_BINDINGS, SHADER_CODES};
+use super::layout::{
+    descriptor_type, PushConstants, BINDING_COUNT, SHADER_BINDINGS, SHADER_CODES,
+};
 use super::vk_error;
 use crate::error::{Error, Result};
 use crate::features::FeatureSet;
@@ -62,7 +64,17 @@ pub fn kernel_defines(features: FeatureSet, subgroup_arithmetic: bool) -> Vec<(S
     if subgroup_arithmetic {
         d.push(("USE_SUBGROUP_ARITHMETIC".to_string(), "1".to_string()));
     }
+    if let Ok(e) = std::env::var("VKBRDF_EXP") {
+        for n in e.split(',').filter(|n| !n.is_empty()) {
+            d.push((n.to_string(), "1".to_string()));
+        }
+    }
     d
+}
+
+/// EXPERIMENT: workgroup size override.
+pub fn wg() -> u32 {
+    std::env::var("VKBRDF_WG").ok().and_then(|v| v.parse().ok()).unwrap_or(WORKGROUP_SIZE)
 }
 
 /// Compiles `main` of `files` (name, text) to SPIR-V words for Vulkan `env`, resolving
@@ -199,13 +211,14 @@ pub(crate) struct Kernels {
 }
 
 impl Kernels {
-    /// Creates the shared layouts: `BINDING_COUNT` storage buffers and the push constants.
+    /// Creates the shared layouts: `BINDING_COUNT` bindings (storage buffers and the tuple
+    /// texel buffer, see [`descriptor_type`]) and the push constants.
     pub fn new(device: &Arc<Device>) -> Result<Kernels> {
         let bindings: Vec<vk::DescriptorSetLayoutBinding> = (0..BINDING_COUNT)
             .map(|b| {
                 vk::DescriptorSetLayoutBinding::default()
                     .binding(b)
-                    .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
+                    .descriptor_type(descriptor_type(b))
                     .descriptor_count(1)
                     .stage_flags(vk::ShaderStageFlags::COMPUTE)
             })
@@ -250,12 +263,11 @@ impl Kernels {
             let p = &self.device.physical;
             let arithmetic =
                 p.subgroup_arithmetic && target(p) as u32 >= shaderc::EnvVersion::Vulkan1_1 as u32;
-            let spirv = compile(
-                SOURCES,
-                KERNEL_FILE,
-                &kernel_defines(features, arithmetic),
-                target(p),
-            )
+            let mut defines = kernel_defines(features, arithmetic);
+            if p.subgroup_uniform && std::env::var("VKBRDF_NOUNI").is_err() {
+                defines.push(("USE_SUBGROUP_UNIFORM".to_string(), "1".to_string()));
+            }
+            let spirv = compile(SOURCES, KERNEL_FILE, &defines, target(p))
             .map_err(|e| match e {
                 Error::Shader(m) => Error::Shader(format!("{m}\n(kernel for features {features})")),
                 e => e,
@@ -301,7 +313,7 @@ impl Kernels {
             offset: 0,
             size: 4,
         }];
-        let data = WORKGROUP_SIZE.to_ne_bytes();
+        let data = wg().to_ne_bytes();
         let specialization = vk::SpecializationInfo::default()
             .map_entries(&entries)
             .data(&data);

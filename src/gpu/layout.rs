@@ -79,8 +79,12 @@ pub const BINDING_BRDF: u32 = 2;
 pub const BINDING_TERMS: u32 = 3;
 /// Descriptor binding of the [`GpuCounts`] of a chunk.
 pub const BINDING_COUNTS: u32 = 4;
-/// Number of descriptor bindings.
-pub const BINDING_COUNT: u32 = 5;
+/// Descriptor binding of the tuple input again, as a uniform texel buffer of RGBA32F texels
+/// over the same bytes as [`BINDING_TUPLES`] (the kernel reads its rows through it: on
+/// lavapipe `texelFetch` of a vec4 is far cheaper than four scalar storage-buffer loads).
+pub const BINDING_TUPLE_TEXELS: u32 = 5;
+/// Number of descriptor bindings (all storage buffers but [`BINDING_TUPLE_TEXELS`]).
+pub const BINDING_COUNT: u32 = 6;
 
 /// The integer codes the GLSL compares against, injected as `#define NAME <value>u`.
 pub const SHADER_CODES: &[(&str, u32)] = &[
@@ -111,6 +115,15 @@ pub const SHADER_CODES: &[(&str, u32)] = &[
     ("FLAG_ANISOTROPIC", FLAG_ANISOTROPIC),
 ];
 
+/// The descriptor type of `binding` (said once, for the set layout, the pool and the writes).
+pub fn descriptor_type(binding: u32) -> ash::vk::DescriptorType {
+    if binding == BINDING_TUPLE_TEXELS {
+        ash::vk::DescriptorType::UNIFORM_TEXEL_BUFFER
+    } else {
+        ash::vk::DescriptorType::STORAGE_BUFFER
+    }
+}
+
 /// The descriptor bindings, injected as `#define BINDING_NAME <value>` (plain int: layout
 /// qualifiers take an int).
 pub const SHADER_BINDINGS: &[(&str, u32)] = &[
@@ -119,6 +132,7 @@ pub const SHADER_BINDINGS: &[(&str, u32)] = &[
     ("BINDING_BRDF", BINDING_BRDF),
     ("BINDING_TERMS", BINDING_TERMS),
     ("BINDING_COUNTS", BINDING_COUNTS),
+    ("BINDING_TUPLE_TEXELS", BINDING_TUPLE_TEXELS),
 ];
 
 /// One material as the kernel reads it (`struct GpuMaterial` in `glsl/layout.glsl`; the

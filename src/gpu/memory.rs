@@ -60,7 +60,14 @@ impl Buffer {
         let size = size.max(16);
         let info = vk::BufferCreateInfo::default()
             .size(size)
-            .usage(vk::BufferUsageFlags::STORAGE_BUFFER)
+            .usage(match usage {
+                // Uploads are also read as a uniform texel buffer (BINDING_TUPLE_TEXELS).
+                MemoryUse::Upload => {
+                    vk::BufferUsageFlags::STORAGE_BUFFER
+                        | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER
+                }
+                MemoryUse::Readback => vk::BufferUsageFlags::STORAGE_BUFFER,
+            })
             .sharing_mode(vk::SharingMode::EXCLUSIVE);
         let d = &device.raw;
         // SAFETY: `info` is a valid create info for a live device.
@@ -203,3 +210,52 @@ impl Drop for Buffer {
 // SAFETY: the only non-Send member is the mapping pointer, which is plain process memory
 // owned by this buffer; moving the owner to another thread moves that ownership with it.
 unsafe impl Send for Buffer {}
+
+/// An RGBA32F view of a whole [`Buffer`] (created with [`MemoryUse::Upload`], whose size is a
+/// multiple of 16 bytes), for binding it as a uniform texel buffer. Destroyed on drop; the
+/// owner drops it before the buffer it views.
+pub(crate) struct TexelView {
+    raw: vk::BufferView,
+    /// The [`Buffer::id`] of the viewed buffer.
+    buffer: u64,
+    device: Arc<Device>,
+}
+
+impl TexelView {
+    /// A view of all of `buffer` as RGBA32F texels.
+    pub fn new(device: &Arc<Device>, buffer: &Buffer) -> Result<TexelView> {
+        debug_assert_eq!(buffer.size() % 16, 0, "a texel view covers whole texels");
+        let info = vk::BufferViewCreateInfo::default()
+            .buffer(buffer.raw())
+            .format(vk::Format::R32G32B32A32_SFLOAT)
+            .offset(0)
+            .range(buffer.size() / 16 * 16);
+        // SAFETY: the buffer is live, was created with UNIFORM_TEXEL_BUFFER usage, and the
+        // range is whole texels within it.
+        let raw = unsafe { device.raw.create_buffer_view(&info, None) }
+            .map_err(vk_error("vkCreateBufferView"))?;
+        Ok(TexelView {
+            raw,
+            buffer: buffer.id(),
+            device: Arc::clone(device),
+        })
+    }
+
+    /// The view handle.
+    pub fn raw(&self) -> vk::BufferView {
+        self.raw
+    }
+
+    /// The [`Buffer::id`] of the buffer it views.
+    pub fn buffer_id(&self) -> u64 {
+        self.buffer
+    }
+}
+
+impl Drop for TexelView {
+    fn drop(&mut self) {
+        // SAFETY: owners drop the view only when no pending work uses it (their slot was
+        // waited on, or the device is idle), before the buffer it views; destroyed once.
+        unsafe { self.device.raw.destroy_buffer_view(self.raw, None) };
+    }
+}

@@ -2,6 +2,7 @@
 //! command buffers), the descriptor pool (and its sets), and fences.
 
 use super::context::Device;
+use super::layout::descriptor_type;
 use super::vk_error;
 use crate::error::{Error, Result};
 use ash::vk;
@@ -126,10 +127,15 @@ impl DescriptorPool {
         bindings: u32,
         count: u32,
     ) -> Result<DescriptorPool> {
-        let sizes = [vk::DescriptorPoolSize {
-            ty: vk::DescriptorType::STORAGE_BUFFER,
-            descriptor_count: bindings * count,
-        }];
+        let of_type = |ty: vk::DescriptorType| vk::DescriptorPoolSize {
+            ty,
+            descriptor_count: (0..bindings).filter(|&b| descriptor_type(b) == ty).count() as u32
+                * count,
+        };
+        let sizes = [
+            of_type(vk::DescriptorType::STORAGE_BUFFER),
+            of_type(vk::DescriptorType::UNIFORM_TEXEL_BUFFER),
+        ];
         let info = vk::DescriptorPoolCreateInfo::default()
             .max_sets(count)
             .pool_sizes(&sizes);
