@@ -13,8 +13,16 @@ fn main() -> std::result::Result<(), Box<dyn std::error::Error>> {
     let scale: usize = args.get(3).and_then(|s| s.parse().ok()).unwrap_or(4);
     let image = read_first_rgba_layer_from_file(
         &args[1],
-        |res, _| (res.width(), res.height(), vec![[0f32; 3]; res.width() * res.height()]),
-        |(w, _, px), pos, (r, g, b, _a): (f32, f32, f32, f32)| px[pos.y() * *w + pos.x()] = [r, g, b],
+        |res, _| {
+            (
+                res.width(),
+                res.height(),
+                vec![[0f32; 3]; res.width() * res.height()],
+            )
+        },
+        |(w, _, px), pos, (r, g, b, _a): (f32, f32, f32, f32)| {
+            px[pos.y() * *w + pos.x()] = [r, g, b]
+        },
     )?;
     let (w, h, px) = image.layer_data.channel_data.pixels;
     let max = px.iter().flatten().fold(1e-30f32, |m, &v| m.max(v));
@@ -34,6 +42,11 @@ fn main() -> std::result::Result<(), Box<dyn std::error::Error>> {
     enc.set_color(png::ColorType::Rgb);
     enc.set_depth(png::BitDepth::Eight);
     enc.write_header()?.write_image_data(&rgb)?;
-    println!("wrote {} ({}×{}, log10 f in [{lo:.2}, {hi:.2}])", args[2], w * scale, h * scale);
+    println!(
+        "wrote {} ({}×{}, log10 f in [{lo:.2}, {hi:.2}])",
+        args[2],
+        w * scale,
+        h * scale
+    );
     Ok(())
 }

@@ -435,7 +435,7 @@ fn lobe_width(m: &Material) -> f64 {
     use crate::material::{Distribution, Model};
     let from_exponent = |e: f64| (2.0 / (e + 2.0)).sqrt();
     match &m.model {
-        Model::Lambert => 1.0,
+        Model::Lambert | Model::Measured(_) => 1.0,
         Model::Phong { exponent } | Model::BlinnPhong { exponent } | Model::Rtr { exponent } => {
             from_exponent(*exponent)
         }

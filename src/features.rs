@@ -70,6 +70,8 @@ features! {
     LAMBDA_BECKMANN = 23, "HAS_LAMBDA_BECKMANN";
     /// Smith–GGX Λ.
     LAMBDA_GGX = 24, "HAS_LAMBDA_GGX";
+    /// A measured (MERL) material: evaluated by the CPU reference only.
+    MEASURED = 25, "HAS_MEASURED";
 }
 
 impl FeatureSet {
@@ -101,6 +103,7 @@ impl FeatureSet {
             Model::BlinnPhong { .. } => FeatureSet::BLINN_PHONG,
             Model::Rtr { .. } => FeatureSet::RTR,
             Model::Ward { .. } => FeatureSet::WARD,
+            Model::Measured(_) => FeatureSet::MEASURED,
             Model::CookTorrance(ct) => {
                 let mut f = FeatureSet::COOK_TORRANCE;
                 f |= match ct.distribution {

@@ -395,3 +395,28 @@ fn missing_file_is_an_io_error_naming_it() {
         .to_string();
     assert!(e.contains("/nonexistent/m.toml"), "{e}");
 }
+
+#[test]
+fn measured_material_needs_a_readable_merl_file() {
+    assert_material_error(
+        "[[material]]\nname = \"m\"\nmodel = \"merl\"\n",
+        &["material `m`", "key `file`", "missing"],
+    );
+    assert_material_error(
+        "[[material]]\nname = \"m\"\nmodel = \"merl\"\nfile = \"/nonexistent/x.binary\"\n",
+        &["m.toml:4", "key `file`", "/nonexistent/x.binary"],
+    );
+    assert_material_error(
+        "[[material]]\nname = \"m\"\nmodel = \"merl\"\nfile = \"x\"\ndiffuse = 1\n",
+        &["key `file`"],
+    );
+    // A file that is not a MERL binary.
+    let dir = tempfile::tempdir().unwrap();
+    let bogus = dir.path().join("bogus.binary");
+    std::fs::write(&bogus, b"not a merl file").unwrap();
+    let text = format!(
+        "[[material]]\nname = \"m\"\nmodel = \"merl\"\nfile = \"{}\"\n",
+        bogus.display()
+    );
+    assert_material_error(&text, &["key `file`", "bogus.binary"]);
+}

@@ -260,3 +260,85 @@ fn help_teaches_with_examples() {
         assert!(text(&o).contains(p), "preset {p} not listed");
     }
 }
+
+#[test]
+fn merl_export_then_eval_as_a_measured_material_returns_the_analytic_values() {
+    let dir = tempfile::tempdir().unwrap();
+    let binary = dir.path().join("gold.binary");
+    let o = vkbrdf(&[
+        "table",
+        "merl",
+        "--material",
+        "gold",
+        "--backend",
+        "cpu",
+        "--output",
+        binary.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let m = dir.path().join("measured.toml");
+    std::fs::write(
+        &m,
+        "[[material]]\nname = \"measured-gold\"\nmodel = \"merl\"\nfile = \"gold.binary\"\n",
+    )
+    .unwrap();
+    // Tuples at bin sample points (FORMULAS.md §7), built here from the bin angles.
+    let mut rows = Vec::new();
+    let mut dirs = Vec::new();
+    for i in (0..90).step_by(7) {
+        for j in (0..90).step_by(11) {
+            for k in (0..180).step_by(23) {
+                let th = (i as f64 / 90.0).powi(2) * std::f64::consts::FRAC_PI_2;
+                let td = j as f64 * std::f64::consts::FRAC_PI_2 / 90.0;
+                let pd = k as f64 * std::f64::consts::PI / 180.0;
+                let d = [td.sin() * pd.cos(), td.sin() * pd.sin(), td.cos()];
+                // l = R_y(θ_h) d; h = R_y(θ_h) z; v = 2 (l·h) h − l.
+                let l = [
+                    th.cos() * d[0] + th.sin() * d[2],
+                    d[1],
+                    -th.sin() * d[0] + th.cos() * d[2],
+                ];
+                let h = [th.sin(), 0.0, th.cos()];
+                let lh = l[0] * h[0] + l[1] * h[1] + l[2] * h[2];
+                let v = [
+                    2.0 * lh * h[0] - l[0],
+                    2.0 * lh * h[1] - l[1],
+                    2.0 * lh * h[2] - l[2],
+                ];
+                if l[2] > 1e-3 && v[2] > 1e-3 {
+                    rows.extend(l.iter().chain(&v).map(|&x| x as f32));
+                    rows.extend([0.0, 0.0, 1.0, 0.0]);
+                    dirs.push((l, v));
+                }
+            }
+        }
+    }
+    let t = dir.path().join("t.npy");
+    write_npy_f32(&t, &rows, 10).unwrap();
+    let out = dir.path().join("f.npy");
+    let o = vkbrdf(&[
+        "eval",
+        "-m",
+        m.to_str().unwrap(),
+        "-i",
+        t.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let (f, _) = read_npy_f32(&out).unwrap();
+    let gold = vkbrdf::material::presets::preset("gold").unwrap().unwrap();
+    assert!(dirs.len() > 300, "{} sample points", dirs.len());
+    for (r, (l, v)) in dirs.iter().enumerate() {
+        let want = vkbrdf::reference::evaluate(*l, *v, [0.0, 0.0, 1.0], None, &gold);
+        for c in 0..3 {
+            let got = f[3 * r + c] as f64;
+            let rel = (got - want.brdf[c]).abs() / want.brdf[c].abs().max(1e-6);
+            assert!(
+                rel < 1e-5,
+                "bin sample {r} channel {c}: measured {got}, analytic {} (l {l:?}, v {v:?})",
+                want.brdf[c]
+            );
+        }
+    }
+}

@@ -99,10 +99,22 @@ fn tables(backend: &mut dyn vkbrdf::backend::Backend, dir: &std::path::Path) -> 
     use vkbrdf::material::Geometry;
     use vkbrdf::table::{albedo, dfg, preview, slice, Grid, Runner};
     std::fs::create_dir_all(dir)?;
-    let ggx = albedo::Microfacet { lobe: albedo::Lobe::Ggx, geometry: Geometry::SmithCorrelated };
-    let grid = Grid { width: 32, height: 32 };
+    let ggx = albedo::Microfacet {
+        lobe: albedo::Lobe::Ggx,
+        geometry: Geometry::SmithCorrelated,
+    };
+    let grid = Grid {
+        width: 32,
+        height: 32,
+    };
     let gold = presets::preset("gold").expect("listed")?;
-    let dfg_job = dfg::DfgJob { spec: ggx, grid, samples: albedo::DEFAULT_SAMPLES, half: false, output: dir.join("dfg.exr") };
+    let dfg_job = dfg::DfgJob {
+        spec: ggx,
+        grid,
+        samples: albedo::DEFAULT_SAMPLES,
+        half: false,
+        output: dir.join("dfg.exr"),
+    };
     let albedo_job = albedo::AlbedoJob {
         spec: ggx,
         grid,
@@ -113,7 +125,10 @@ fn tables(backend: &mut dyn vkbrdf::backend::Backend, dir: &std::path::Path) -> 
     };
     let slice_job = slice::SliceJob {
         material: gold.clone(),
-        grid: Grid { width: 90, height: 90 },
+        grid: Grid {
+            width: 90,
+            height: 90,
+        },
         spacing: slice::Spacing::Sqrt,
         terms: true,
         half: false,
@@ -135,15 +150,31 @@ fn tables(backend: &mut dyn vkbrdf::backend::Backend, dir: &std::path::Path) -> 
     let mut runner = Runner::new(backend).with_progress(true);
     let t = Instant::now();
     dfg::write(&mut runner, &dfg_job)?;
-    println!("  {:<28} {:>7.2} s  split-sum DFG, GGX + smith-correlated, 32×32 (R = A, G = B)", "dfg.exr", t.elapsed().as_secs_f64());
+    println!(
+        "  {:<28} {:>7.2} s  split-sum DFG, GGX + smith-correlated, 32×32 (R = A, G = B)",
+        "dfg.exr",
+        t.elapsed().as_secs_f64()
+    );
     let t = Instant::now();
     albedo::write(&mut runner, &albedo_job)?;
-    println!("  {:<28} {:>7.2} s  E(μ, α) and E_avg(α), GGX + smith-correlated, F = 1", "albedo.exr, albedo-average.exr", t.elapsed().as_secs_f64());
+    println!(
+        "  {:<28} {:>7.2} s  E(μ, α) and E_avg(α), GGX + smith-correlated, F = 1",
+        "albedo.exr, albedo-average.exr",
+        t.elapsed().as_secs_f64()
+    );
     let t = Instant::now();
     slice::write(&mut runner, &slice_job)?;
-    println!("  {:<28} {:>7.2} s  gold, f(θ_h, θ_d) at φ_d = 90°, 90×90, with terms", "slice-gold.exr", t.elapsed().as_secs_f64());
+    println!(
+        "  {:<28} {:>7.2} s  gold, f(θ_h, θ_d) at φ_d = 90°, 90×90, with terms",
+        "slice-gold.exr",
+        t.elapsed().as_secs_f64()
+    );
     let t = Instant::now();
     preview::write(&mut runner, &preview_job)?;
-    println!("  {:<28} {:>7.2} s  gold: lit sphere and polar lobe at 45°", "gold-sphere.png, gold-polar.png", t.elapsed().as_secs_f64());
+    println!(
+        "  {:<28} {:>7.2} s  gold: lit sphere and polar lobe at 45°",
+        "gold-sphere.png, gold-polar.png",
+        t.elapsed().as_secs_f64()
+    );
     Ok(())
 }

@@ -49,7 +49,15 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
     let t0 = Instant::now();
     let batch = Batch::read_npy(&args.input, materials.len())?;
     let read_s = t0.elapsed().as_secs_f64();
-    let mut backend = backend_choice::open(&args.backend)?;
+    let measured = materials
+        .iter()
+        .any(|m| matches!(m.model, vkbrdf::material::Model::Measured(_)));
+    let mut backend = if measured && args.backend.backend.is_none() {
+        eprintln!("note: measured (MERL) materials are evaluated by the CPU reference");
+        Box::new(vkbrdf::reference::CpuReference::new())
+    } else {
+        backend_choice::open(&args.backend)?
+    };
     let request = Request {
         terms: args.terms.is_some(),
     };

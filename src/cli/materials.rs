@@ -12,7 +12,7 @@ use vkbrdf::material::{self, Distribution, Fresnel, Material, Model, Roughness};
   [[material]]
   name = "brushed"            # required, unique
   preset = "aluminium"        # optional: start from a preset, then override keys
-  model = "cook-torrance"     # lambert | phong | blinn-phong | rtr | ward | cook-torrance
+  model = "cook-torrance"     # lambert | phong | blinn-phong | rtr | ward | cook-torrance | merl
   convention = "modern"       # seed | cook-torrance-1982 | modern (default)
   distribution = "ggx"        # gaussian | beckmann | ggx | blinn
   roughness = [0.1, 0.4]      # m > 0 (rms slope; GGX alpha), or [mx, my] (anisotropic)
@@ -26,6 +26,11 @@ use vkbrdf::material::{self, Distribution, Fresnel, Material, Model, Roughness};
   specular = [1.0, 1.0, 1.0]  # c_spec (default white)
   specular_weight = 1.0       # s (default 1)
   diffuse_weight = 0.0        # d (default 0)
+
+  [[material]]
+  name = "measured"
+  model = "merl"              # measured data (CPU reference only)
+  file = "gold.binary"        # a MERL binary, relative to this file
 
 Keys a model does not read are errors, as are negative colours or weights, roughness <= 0,
 smith* with gaussian/blinn, smith-fast with anything but beckmann, conductor without
@@ -77,6 +82,7 @@ pub fn summary(m: &Material) -> String {
         Model::BlinnPhong { exponent } => format!("blinn-phong e={exponent}"),
         Model::Rtr { exponent } => format!("rtr e={exponent}"),
         Model::Ward { roughness } => format!("ward {}", rough(*roughness)),
+        Model::Measured(m) => format!("merl {}", m.path.display()),
         Model::CookTorrance(ct) => {
             let d = match ct.distribution {
                 Distribution::Gaussian { m } => format!("gaussian m={m}"),
@@ -98,7 +104,7 @@ pub fn summary(m: &Material) -> String {
             )
         }
     };
-    if matches!(m.model, Model::Lambert) {
+    if matches!(m.model, Model::Lambert | Model::Measured(_)) {
         body
     } else if m.diffuse != [0.0; 3] || m.specular != [1.0; 3] {
         format!(

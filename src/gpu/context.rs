@@ -308,10 +308,6 @@ pub(crate) struct PhysicalInfo {
     pub subgroup_size: Option<u32>,
     /// Whether compute shaders can use subgroup arithmetic (subgroupAdd, subgroupMin).
     pub subgroup_arithmetic: bool,
-    /// Whether compute shaders can use subgroup vote and ballot (subgroupAllEqual,
-    /// subgroupBroadcastFirst): the kernel then loads a material once per subgroup when
-    /// the whole subgroup uses it.
-    pub subgroup_uniform: bool,
     /// Driver name and info (Vulkan 1.2+).
     pub driver: Option<(String, String)>,
 }
@@ -366,7 +362,6 @@ pub(crate) fn enumerate(instance: &Instance) -> Result<Vec<PhysicalInfo>> {
             compute_family,
             subgroup_size: None,
             subgroup_arithmetic: false,
-            subgroup_uniform: false,
             driver: None,
         };
         let version = properties.api_version.min(instance.api_version);
@@ -392,15 +387,6 @@ pub(crate) fn enumerate(instance: &Instance) -> Result<Vec<PhysicalInfo>> {
                 .contains(vk::ShaderStageFlags::COMPUTE)
                 && subgroup.supported_operations.contains(
                     vk::SubgroupFeatureFlags::BASIC | vk::SubgroupFeatureFlags::ARITHMETIC,
-                );
-            info.subgroup_uniform = version >= vk::API_VERSION_1_1
-                && subgroup
-                    .supported_stages
-                    .contains(vk::ShaderStageFlags::COMPUTE)
-                && subgroup.supported_operations.contains(
-                    vk::SubgroupFeatureFlags::BASIC
-                        | vk::SubgroupFeatureFlags::VOTE
-                        | vk::SubgroupFeatureFlags::BALLOT,
                 );
             if version >= vk::API_VERSION_1_2 {
                 let s = |r: std::result::Result<&CStr, _>| {

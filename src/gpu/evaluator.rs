@@ -260,8 +260,8 @@ impl VulkanBackend {
         let by_memory = self.options.max_gpu_memory.saturating_sub(fixed) / per_chunk_tuple;
         let by_range = u64::from(limits.max_storage_buffer_range) / (4 * COLUMNS_TANGENT as u64);
         // The input is also viewed as RGBA32F texels (4 floats each, one spare at the end).
-        let by_texels =
-            (u64::from(limits.max_texel_buffer_elements).saturating_sub(1) * 4) / COLUMNS_TANGENT as u64;
+        let by_texels = (u64::from(limits.max_texel_buffer_elements).saturating_sub(1) * 4)
+            / COLUMNS_TANGENT as u64;
         let by_dispatch =
             u64::from(limits.max_compute_work_group_count[0]) * u64::from(WORKGROUP_SIZE);
         let chunk = by_memory
@@ -310,7 +310,7 @@ impl VulkanBackend {
     ) -> Result<Vec<f32>> {
         let pipeline = self.kernels.probe(source)?.raw();
         self.upload_materials(materials)?;
-        let groups = outputs.div_ceil(super::kernel::wg() as usize);
+        let groups = outputs.div_ceil(WORKGROUP_SIZE as usize);
         if groups
             > self
                 .device
@@ -354,6 +354,11 @@ impl VulkanBackend {
         materials: &[Material],
         features: FeatureSet,
     ) -> Result<Output> {
+        if features.contains(FeatureSet::MEASURED) {
+            return Err(Error::Unsupported(
+                "the batch uses a measured (MERL) material, which the Vulkan kernel does not evaluate; use --backend cpu".into(),
+            ));
+        }
         let n = batch.len();
         let terms = features.contains(FeatureSet::TERMS);
         let mut out = Output {
@@ -457,7 +462,12 @@ impl VulkanBackend {
         if slot.input.as_ref().map_or(true, |b| b.size() < input_bytes) {
             slot.input_view = None; // the view goes before the buffer it views
         }
-        ensure(&self.device, &mut slot.input, input_bytes, MemoryUse::Upload)?;
+        ensure(
+            &self.device,
+            &mut slot.input,
+            input_bytes,
+            MemoryUse::Upload,
+        )?;
         let input = slot.input.as_ref().expect("ensured");
         if slot.input_view.as_ref().map(TexelView::buffer_id) != Some(input.id()) {
             slot.input_view = None;
@@ -543,7 +553,7 @@ impl VulkanBackend {
             tuple_count: count,
             material_count,
         };
-        let groups = count.div_ceil(super::kernel::wg());
+        let groups = count.div_ceil(WORKGROUP_SIZE);
         // Results must be visible to host reads after the fence: compute writes → host reads.
         let barrier = [vk::MemoryBarrier::default()
             .src_access_mask(vk::AccessFlags::SHADER_WRITE)

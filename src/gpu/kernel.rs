@@ -8,9 +8,7 @@
 //! constant 0: each is said once, in Rust.
 
 use super::context::{Device, PhysicalInfo};
-use super::layout::{
-    descriptor_type, PushConstants, BINDING_COUNT, SHADER_BINDINGS, SHADER_CODES,
-};
+use super::layout::{descriptor_type, PushConstants, BINDING_COUNT, SHADER_BINDINGS, SHADER_CODES};
 use super::vk_error;
 use crate::error::{Error, Result};
 use crate::features::FeatureSet;
@@ -64,17 +62,7 @@ pub fn kernel_defines(features: FeatureSet, subgroup_arithmetic: bool) -> Vec<(S
     if subgroup_arithmetic {
         d.push(("USE_SUBGROUP_ARITHMETIC".to_string(), "1".to_string()));
     }
-    if let Ok(e) = std::env::var("VKBRDF_EXP") {
-        for n in e.split(',').filter(|n| !n.is_empty()) {
-            d.push((n.to_string(), "1".to_string()));
-        }
-    }
     d
-}
-
-/// EXPERIMENT: workgroup size override.
-pub fn wg() -> u32 {
-    std::env::var("VKBRDF_WG").ok().and_then(|v| v.parse().ok()).unwrap_or(WORKGROUP_SIZE)
 }
 
 /// Compiles `main` of `files` (name, text) to SPIR-V words for Vulkan `env`, resolving
@@ -263,11 +251,12 @@ impl Kernels {
             let p = &self.device.physical;
             let arithmetic =
                 p.subgroup_arithmetic && target(p) as u32 >= shaderc::EnvVersion::Vulkan1_1 as u32;
-            let mut defines = kernel_defines(features, arithmetic);
-            if p.subgroup_uniform && std::env::var("VKBRDF_NOUNI").is_err() {
-                defines.push(("USE_SUBGROUP_UNIFORM".to_string(), "1".to_string()));
-            }
-            let spirv = compile(SOURCES, KERNEL_FILE, &defines, target(p))
+            let spirv = compile(
+                SOURCES,
+                KERNEL_FILE,
+                &kernel_defines(features, arithmetic),
+                target(p),
+            )
             .map_err(|e| match e {
                 Error::Shader(m) => Error::Shader(format!("{m}\n(kernel for features {features})")),
                 e => e,
@@ -313,7 +302,7 @@ impl Kernels {
             offset: 0,
             size: 4,
         }];
-        let data = wg().to_ne_bytes();
+        let data = WORKGROUP_SIZE.to_ne_bytes();
         let specialization = vk::SpecializationInfo::default()
             .map_entries(&entries)
             .data(&data);

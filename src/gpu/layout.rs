@@ -237,6 +237,13 @@ pub fn gpu_material(m: &Material) -> GpuMaterial {
     let scale = |s: f64| [s as f32, 0.0, 0.0, 0.0];
     match &m.model {
         Model::Lambert => g.kind = [MODEL_LAMBERT, DIST_NONE, GEOM_NONE, FRESNEL_NONE],
+        // Never dispatched: `VulkanBackend` refuses batches that use a measured material
+        // (FeatureSet::MEASURED) before building the table; a black Lambert keeps the row
+        // well formed.
+        Model::Measured(_) => {
+            g.kind = [MODEL_LAMBERT, DIST_NONE, GEOM_NONE, FRESNEL_NONE];
+            g.diffuse = [0.0; 4];
+        }
         Model::Phong { exponent } => {
             g.kind[0] = MODEL_PHONG;
             g.lobe = exponent_lobe(*exponent);

@@ -53,6 +53,15 @@
 //!   workgroup reduction in shared memory: that needs `barrier()`, and llvmpipe runs any
 //!   shader with a barrier through coroutines, which made the whole kernel 2.7× slower on
 //!   lavapipe (4M tuples of a load-and-store kernel: 280 ms with the barrier, 103 without).
+//! - **Input.** The kernel reads tuple rows through a uniform texel buffer (RGBA32F view,
+//!   `BINDING_TUPLE_TEXELS`) over the same mapped bytes as the storage binding: 3 `texelFetch`
+//!   per 10-float row (4 with tangents) and a per-lane shift by `row * COLUMNS mod 4`, so the
+//!   host layout and copies are unchanged. On lavapipe each storage-buffer load is a per-lane
+//!   bounds-checked gather; side by side (lavapipe, Mesa 25, 1M tuples, kernel-only, noisy
+//!   shared machine) a load-and-store kernel went from 65–103 to 106–161 M tuples/s and
+//!   Lambert from 32–59 to 57–80 M/s. Tried and dropped: loading the material once per
+//!   subgroup (`subgroupAllEqual` + `subgroupBroadcastFirst`): Lambert 57–69 vs 77–80 M/s
+//!   without; workgroup size 256 or 1024 instead of 64: no difference above the noise.
 //! - **Accuracy.** The kernel is f32. Where f32 inputs determine a value well it agrees
 //!   with the f64 reference to 1e-5 relative (measured ≤ 7e-6); near grazing mirror
 //!   geometry with sharp lobes no f32 evaluation can, and [`crate::check`] holds it to a

@@ -7,7 +7,7 @@
 mod parse;
 pub mod presets;
 
-pub use parse::{load_materials, parse_materials};
+pub use parse::{load_materials, parse_materials, parse_materials_in};
 
 /// An RGB triple (linear, per channel).
 pub type Rgb = [f64; 3];
@@ -52,6 +52,30 @@ pub enum Model {
     },
     /// Cook–Torrance microfacet model `d·c_diff/π + s·c_spec ⊗ D·G·F·K`.
     CookTorrance(CookTorrance),
+    /// Measured data: a MERL binary (Matusik et al. 2003), looked up by half/difference
+    /// angles (FORMULAS.md §7). Evaluated by the CPU reference only.
+    Measured(Measured),
+}
+
+/// A measured material's data and where it came from.
+#[derive(Clone)]
+pub struct Measured {
+    /// The MERL file, as resolved when the materials were loaded.
+    pub path: std::path::PathBuf,
+    /// The table (shared: a 17 MB file is read once per materials file).
+    pub data: std::sync::Arc<crate::table::merl::MeasuredMerl>,
+}
+
+impl PartialEq for Measured {
+    fn eq(&self, other: &Measured) -> bool {
+        self.path == other.path && std::sync::Arc::ptr_eq(&self.data, &other.data)
+    }
+}
+
+impl std::fmt::Debug for Measured {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "Measured({})", self.path.display())
+    }
 }
 
 /// Parameters of a Cook–Torrance material.

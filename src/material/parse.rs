@@ -26,6 +26,7 @@ const KEYS: &[&str] = &[
     "specular",
     "specular_weight",
     "diffuse_weight",
+    "file",
 ];
 
 #[derive(serde::Deserialize)]
@@ -41,12 +42,27 @@ pub fn load_materials(path: &Path) -> crate::Result<Vec<Material>> {
         path: path.to_owned(),
         source,
     })?;
-    Ok(parse_materials(&text, &path.display().to_string())?)
+    let base = path.parent().unwrap_or(Path::new("."));
+    Ok(parse_materials_in(
+        &text,
+        &path.display().to_string(),
+        base,
+    )?)
 }
 
 /// Parses and validates TOML text holding `[[material]]` tables. `source_name` is used in
 /// error messages (normally the file name).
 pub fn parse_materials(text: &str, source_name: &str) -> Result<Vec<Material>, MaterialError> {
+    parse_materials_in(text, source_name, Path::new("."))
+}
+
+/// [`parse_materials`] with relative `file` paths (measured materials) resolved against
+/// `base` (the materials file's directory).
+pub fn parse_materials_in(
+    text: &str,
+    source_name: &str,
+    base: &Path,
+) -> Result<Vec<Material>, MaterialError> {
     let lines = LineIndex::new(text);
     let doc: Document = toml::from_str(text).map_err(|e| MaterialError {
         source_name: source_name.to_string(),
@@ -69,6 +85,7 @@ pub fn parse_materials(text: &str, source_name: &str) -> Result<Vec<Material>, M
     for table in &doc.material {
         let ctx = Ctx {
             source_name,
+            base,
             lines: &lines,
             table_line: lines.line(table.span().start),
         };
@@ -105,6 +122,7 @@ impl LineIndex {
 
 struct Ctx<'a> {
     source_name: &'a str,
+    base: &'a Path,
     lines: &'a LineIndex,
     table_line: usize,
 }
@@ -405,9 +423,19 @@ impl Fields<'_, '_> {
                 "rtr",
                 "ward",
                 "cook-torrance",
+                "merl",
             ],
             "every material states its model",
         )?;
+        if model == "merl" {
+            // Measured data carries its own colour: diffuse/specular do not apply.
+            return Ok(Material {
+                name: self.name.clone(),
+                model: Model::Measured(self.measured()?),
+                diffuse: [0.0; 3],
+                specular: [1.0; 3],
+            });
+        }
         let diffuse = self.rgb("diffuse", non_negative)?.unwrap_or([0.0; 3]);
         let specular = if model == "lambert" {
             [1.0; 3]
@@ -435,6 +463,34 @@ impl Fields<'_, '_> {
             model,
             diffuse,
             specular,
+        })
+    }
+
+    /// `file = "x.binary"`: a MERL file, relative to the materials file's directory.
+    fn measured(&mut self) -> Result<Measured, MaterialError> {
+        let file = match self.take("file") {
+            Some(Value::String(s)) => s,
+            Some(v) => {
+                return Err(self.err(
+                    "file",
+                    format!(
+                        "expected a string (a MERL .binary path), found {}",
+                        v.type_str()
+                    ),
+                ))
+            }
+            None => return Err(self.err(
+                "file",
+                "missing; model `merl` needs `file` (a MERL .binary path, relative to this file)"
+                    .into(),
+            )),
+        };
+        let path = self.ctx.base.join(&file);
+        let data = crate::table::merl::read(&path)
+            .map_err(|e| self.err("file", format!("cannot use `{file}`: {e}")))?;
+        Ok(Measured {
+            path,
+            data: std::sync::Arc::new(data),
         })
     }
 

@@ -16,6 +16,7 @@ pub fn evaluate_model(fr: &Frame, m: &Material) -> Evaluation {
         Model::Rtr { exponent } => (rtr_lobe(fr, *exponent), None),
         Model::Ward { roughness } => (ward_lobe(fr, *roughness), None),
         Model::CookTorrance(ct) => (0.0, Some(cook_torrance_terms(fr, ct))),
+        Model::Measured(data) => return measured(fr, data),
     };
     let diffuse = m.diffuse.map(|c| c / PI);
     match rs {
@@ -42,6 +43,19 @@ pub fn evaluate_model(fr: &Frame, m: &Material) -> Evaluation {
                 k,
             }
         }
+    }
+}
+
+/// A measured (MERL) material: f by half/difference lookup (FORMULAS.md §7). Measured
+/// data has no D·G·F·K decomposition: its terms are reported as D = 0, G = F = K = 1.
+pub fn measured(fr: &Frame, m: &crate::material::Measured) -> Evaluation {
+    Evaluation {
+        status: Status::Valid,
+        brdf: m.data.lookup(fr.l, fr.v, fr.n),
+        d: 0.0,
+        g: 1.0,
+        f: [1.0; 3],
+        k: 1.0,
     }
 }
 

@@ -69,7 +69,7 @@ pub fn regime(m: &Material, case: Case) -> Regime {
             Distribution::Beckmann(r) | Distribution::Ggx(r) => extreme_roughness(r),
             Distribution::Blinn { exponent } => exponent >= 1000.0,
         },
-        Model::Lambert => false,
+        Model::Lambert | Model::Measured(_) => false,
     };
     let ior = match m.cook_torrance().map(|ct| ct.fresnel) {
         Some(Fresnel::Dielectric { ior }) => ior.iter().any(|&n| n <= 1.0 || n >= 50.0),
@@ -117,6 +117,7 @@ pub struct StressReport {
 fn model_label(m: &Material) -> &'static str {
     match m.model {
         Model::Lambert => "f: lambert",
+        Model::Measured(_) => "f: measured",
         Model::Phong { .. } => "f: phong",
         Model::BlinnPhong { .. } => "f: blinn-phong",
         Model::Rtr { .. } => "f: rtr",
