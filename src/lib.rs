@@ -35,6 +35,7 @@ pub mod error;
 pub mod features;
 pub mod gpu;
 pub mod material;
+pub mod precision;
 pub mod reference;
 pub mod sample;
 pub mod stats;

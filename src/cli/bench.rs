@@ -7,6 +7,7 @@ use std::process::ExitCode;
 use vkbrdf::backend::Request;
 use vkbrdf::bench::{self, peers, plot, scenarios, ResultRow};
 use vkbrdf::features::FeatureSet;
+use vkbrdf::precision::Precision;
 use vkbrdf::reference::CpuReference;
 
 /// Arguments of `vkbrdf bench`.
@@ -155,6 +156,19 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
                 all,
                 f64::NAN,
             ));
+            // The fast precision variant on the same batch beside the exact one, both judged
+            // against the exact reference: the points of the run-time/error chart.
+            let fast = vkbrdf::precision::apply_all(&sc.materials, Precision::Fast);
+            if fast != sc.materials {
+                bar.set_message(format!("{} fast vs exact", sc.name));
+                for (label, mats) in [("fast", &fast), ("exact", &sc.materials)] {
+                    let (secs, out) = bench::time_end_to_end(v, &batch, mats, repeats)?;
+                    let err = bench::max_rel_err(&batch, &sc.materials, &out.brdf, 20_000);
+                    results.push(row("vulkan", sc.name, "end-to-end", label, n, secs, err));
+                    let ksecs = v.kernel_seconds(&batch, mats, &Request::default(), repeats)?;
+                    results.push(row("vulkan", sc.name, "kernel", label, n, ksecs, err));
+                }
+            }
         }
         bar.inc(1);
     }

@@ -7,6 +7,7 @@ use std::process::ExitCode;
 use std::time::Instant;
 use vkbrdf::backend::{Request, TERM_COLUMNS};
 use vkbrdf::batch::{self, Batch};
+use vkbrdf::precision::{self, Precision};
 
 /// Arguments of `vkbrdf eval`.
 #[derive(clap::Args, Debug)]
@@ -39,13 +40,38 @@ pub struct Args {
     /// Fail (exit 1, no output written) if any tuple is invalid.
     #[arg(long)]
     pub strict: bool,
+    /// `exact` (FORMULAS.md as written) or `fast` (Schlick for exact Fresnel, smith-fast
+    /// for Smith–Beckmann; error measured by `vkbrdf bench`).
+    #[arg(long, value_enum, default_value = "exact")]
+    pub precision: PrecisionArg,
     #[command(flatten)]
     pub backend: BackendArgs,
 }
 
+/// `--precision` values.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum PrecisionArg {
+    /// The exact terms.
+    Exact,
+    /// Cheaper approximations (Schlick, smith-fast).
+    Fast,
+}
+
+impl From<PrecisionArg> for Precision {
+    fn from(p: PrecisionArg) -> Precision {
+        match p {
+            PrecisionArg::Exact => Precision::Exact,
+            PrecisionArg::Fast => Precision::Fast,
+        }
+    }
+}
+
 /// Runs `vkbrdf eval`.
 pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
-    let materials = vkbrdf::material::load_materials(&args.materials)?;
+    let materials = precision::apply_all(
+        &vkbrdf::material::load_materials(&args.materials)?,
+        args.precision.into(),
+    );
     let t0 = Instant::now();
     let batch = Batch::read_npy(&args.input, materials.len())?;
     let read_s = t0.elapsed().as_secs_f64();

@@ -36,6 +36,9 @@ pub struct Args {
     /// Tuples per evaluation call (bounds memory).
     #[arg(long, default_value_t = 1 << 20)]
     pub chunk: usize,
+    /// Precision variant the backend evaluates (judged against the exact reference).
+    #[arg(long, value_enum, default_value = "exact")]
+    pub precision: super::eval::PrecisionArg,
     #[command(flatten)]
     pub device: DeviceArgs,
 }
@@ -61,8 +64,9 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
             .expect("valid template"),
         );
         bar.set_message(format!("stress {}", backend.name()));
-        let report = vkbrdf::stress::run(
+        let report = vkbrdf::stress::run_with(
             backend.as_mut(),
+            args.precision.into(),
             args.tuples,
             args.seed,
             args.chunk,

@@ -27,6 +27,7 @@ const KEYS: &[&str] = &[
     "specular_weight",
     "diffuse_weight",
     "file",
+    "precision",
 ];
 
 #[derive(serde::Deserialize)]
@@ -458,12 +459,25 @@ impl Fields<'_, '_> {
             },
             _ => Model::CookTorrance(self.cook_torrance()?),
         };
-        Ok(Material {
+        let precision = match self.string("precision", &["exact", "fast"])?.as_deref() {
+            Some("fast") if matches!(model, Model::CookTorrance(_)) => {
+                crate::precision::Precision::Fast
+            }
+            Some("fast") => {
+                return Err(self.err(
+                    "precision",
+                    "only cook-torrance materials have a fast variant".into(),
+                ))
+            }
+            _ => crate::precision::Precision::Exact,
+        };
+        let material = Material {
             name: self.name.clone(),
             model,
             diffuse,
             specular,
-        })
+        };
+        Ok(crate::precision::apply(&material, precision))
     }
 
     /// `file = "x.binary"`: a MERL file, relative to the materials file's directory.

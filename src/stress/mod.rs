@@ -8,6 +8,7 @@ pub mod corpus;
 use crate::backend::{Backend, Request, TERM_COLUMNS};
 use crate::error::Result;
 use crate::material::{Distribution, Fresnel, Material, Model, Roughness};
+use crate::precision::Precision;
 use crate::reference::{self, Status};
 use crate::stats::{relative_error, ErrorStats};
 use corpus::Case;
@@ -135,15 +136,33 @@ pub fn run(
     chunk: usize,
     progress: &mut dyn FnMut(usize),
 ) -> Result<StressReport> {
+    run_with(backend, Precision::Exact, tuples, seed, chunk, progress)
+}
+
+/// [`run`] with the backend evaluating the `precision` variant of each material, judged
+/// against the reference of the exact material.
+pub fn run_with(
+    backend: &mut dyn Backend,
+    precision: Precision,
+    tuples: usize,
+    seed: u64,
+    chunk: usize,
+    progress: &mut dyn FnMut(usize),
+) -> Result<StressReport> {
+    let backend_label = match precision {
+        Precision::Exact => backend.name(),
+        p => format!("{} ({})", backend.name(), p.label()),
+    };
     let mut report = StressReport {
-        backend: backend.name(),
+        backend: backend_label,
         ..StressReport::default()
     };
     let mut start = 0;
     while start < tuples {
         let end = (start + chunk.max(1)).min(tuples);
         let (materials, batch, cases) = corpus::corpus_rows(start..end, seed);
-        let out = backend.evaluate(&batch, &materials, &Request { terms: true })?;
+        let variant = crate::precision::apply_all(&materials, precision);
+        let out = backend.evaluate(&batch, &variant, &Request { terms: true })?;
         let terms = out.terms.as_deref().expect("terms were requested");
         report.tuples += batch.len() as u64;
         report.invalid.0 += out.counts.invalid;
