@@ -26,6 +26,20 @@ pub struct Counts {
     pub first_invalid: Option<u64>,
 }
 
+impl Counts {
+    /// Adds the invalid and below-horizon counts of another part of the batch (a chunk or a
+    /// thread's share); the first invalid row is the smaller of the two. `tuples` is left
+    /// to the caller, who knows the batch.
+    pub fn absorb(&mut self, part: &Counts) {
+        self.invalid += part.invalid;
+        self.below_horizon += part.below_horizon;
+        self.first_invalid = match (self.first_invalid, part.first_invalid) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        };
+    }
+}
+
 /// Number of term columns: D, G, F_r, F_g, F_b, K.
 pub const TERM_COLUMNS: usize = 6;
 

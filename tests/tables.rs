@@ -226,50 +226,6 @@ fn albedo_average_matches_independent_integration() {
     for_each_backend(average_accuracy);
 }
 
-/// The measurement behind `albedo::DEFAULT_SAMPLES` (slow: run with
-/// `cargo test --release --test tables -- --ignored accuracy_scan --nocapture`;
-/// `SCAN_H=512 SCAN_ROWS=4` for the smallest α).
-#[test]
-#[ignore]
-fn accuracy_scan() {
-    let h: usize = std::env::var("SCAN_H").map_or(32, |s| s.parse().unwrap());
-    let rows: usize = std::env::var("SCAN_ROWS").map_or(h, |s| s.parse().unwrap());
-    let mut cpu = reference::CpuReference::new();
-    for spec in specs() {
-        let points: Vec<(f64, f64)> = (0..rows)
-            .flat_map(|j| {
-                (0..32).map(move |i| ((i as f64 + 0.5) / 32.0, (j as f64 + 0.5) / h as f64))
-            })
-            .collect();
-        let want: Vec<[f64; 3]> = points
-            .iter()
-            .map(|&(mu, a)| independent(&spec.material(a).unwrap(), mu, a, 64))
-            .collect();
-        for n in [1u32 << 14, 1 << 16] {
-            let mut runner = Runner::new(&mut cpu);
-            let t0 = std::time::Instant::now();
-            let e = albedo::directional_albedo(&mut runner, &spec, &points, n).unwrap();
-            let ab = dfg::split_sum(&mut runner, &spec, &points, n).unwrap();
-            let mut worst = (0.0, 0.0, 0.0);
-            for (p, &(mu, a)) in points.iter().enumerate() {
-                for (got, w) in [e[p], ab[p][0], ab[p][1]].iter().zip(want[p]) {
-                    if (got - w).abs() > worst.0 {
-                        worst = ((got - w).abs(), mu, a);
-                    }
-                }
-            }
-            eprintln!(
-                "{} N={n}: max |error| {:.2e} at mu={} alpha={} ({:.1} s for E and DFG)",
-                spec.describe(),
-                worst.0,
-                worst.1,
-                worst.2,
-                t0.elapsed().as_secs_f64()
-            );
-        }
-    }
-}
-
 // ---------------------------------------------------------------------------------------
 // Files read back.
 
@@ -942,58 +898,4 @@ fn gauss_legendre_integrates_polynomials_exactly() {
         rows[(u2 * n as f64) as usize] += 1;
     }
     assert!(rows.iter().all(|&c| c == 1));
-}
-
-/// Timings of the default tables on every backend (run with
-/// `cargo test --release --test tables -- --ignored default_table_timings --nocapture`).
-#[test]
-#[ignore]
-fn default_table_timings() {
-    for_each_backend(|backend| {
-        let dir = tmp();
-        let t = std::time::Instant::now();
-        let mut runner = Runner::new(backend);
-        let job = AlbedoJob {
-            spec: specs()[0],
-            grid: Grid::new(32, 32).unwrap(),
-            samples: albedo::DEFAULT_SAMPLES,
-            half: false,
-            output: dir.path().join("E.exr"),
-            average: None,
-        };
-        albedo::write(&mut runner, &job).unwrap();
-        eprintln!("albedo 32x32 x 65536: {:.2} s", t.elapsed().as_secs_f64());
-        let t = std::time::Instant::now();
-        let alphas: Vec<f64> = (0..32).map(|j| (j as f64 + 0.5) / 32.0).collect();
-        albedo::average_albedo(&mut runner, &job.spec, &alphas, albedo::DEFAULT_SAMPLES).unwrap();
-        eprintln!(
-            "E_avg 32 x 32 nodes x 65536: {:.2} s",
-            t.elapsed().as_secs_f64()
-        );
-        let t = std::time::Instant::now();
-        let dfg_job = DfgJob {
-            spec: specs()[0],
-            grid: Grid::new(32, 32).unwrap(),
-            samples: albedo::DEFAULT_SAMPLES,
-            half: false,
-            output: dir.path().join("dfg.exr"),
-        };
-        dfg::write(&mut runner, &dfg_job).unwrap();
-        eprintln!("dfg 32x32 x 65536: {:.2} s", t.elapsed().as_secs_f64());
-        let gold = presets::preset("gold").unwrap().unwrap();
-        let t = std::time::Instant::now();
-        merl::write(&mut runner, &gold, &dir.path().join("gold.binary")).unwrap();
-        eprintln!("merl gold: {:.2} s", t.elapsed().as_secs_f64());
-        let t = std::time::Instant::now();
-        let slice_job = SliceJob {
-            material: gold,
-            grid: Grid::new(90, 90).unwrap(),
-            spacing: Spacing::Sqrt,
-            terms: true,
-            half: false,
-            output: dir.path().join("slice.exr"),
-        };
-        slice::write(&mut runner, &slice_job).unwrap();
-        eprintln!("slice 90x90 + terms: {:.2} s", t.elapsed().as_secs_f64());
-    });
 }

@@ -629,12 +629,14 @@ impl VulkanBackend {
             slot.counts.read(0, &mut counts);
         }
         let c = counts[0];
-        out.counts.invalid += u64::from(c.invalid);
-        out.counts.below_horizon += u64::from(c.below_horizon);
-        if c.first_invalid != u32::MAX {
-            let row = p.first_row + u64::from(c.first_invalid);
-            out.counts.first_invalid = Some(out.counts.first_invalid.map_or(row, |r| r.min(row)));
-        }
+        out.counts.absorb(&Counts {
+            tuples: 0,
+            invalid: u64::from(c.invalid),
+            below_horizon: u64::from(c.below_horizon),
+            // u32::MAX: no invalid tuple in this chunk (GpuCounts::INITIAL).
+            first_invalid: (c.first_invalid != u32::MAX)
+                .then(|| p.first_row + u64::from(c.first_invalid)),
+        });
         Ok(())
     }
 

@@ -181,13 +181,8 @@ impl Backend for CpuReference {
             tuples: n as u64,
             ..Counts::default()
         };
-        for c in counts {
-            total.invalid += c.invalid;
-            total.below_horizon += c.below_horizon;
-            total.first_invalid = match (total.first_invalid, c.first_invalid) {
-                (Some(a), Some(b)) => Some(a.min(b)),
-                (a, b) => a.or(b),
-            };
+        for c in &counts {
+            total.absorb(c);
         }
         Ok(Output {
             brdf,
