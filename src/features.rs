@@ -78,10 +78,13 @@ impl FeatureSet {
     /// The empty set.
     pub const EMPTY: FeatureSet = FeatureSet(0);
 
-    /// Every feature (the all-features kernel used as the baseline in measurements).
+    /// Every kernel feature (the all-features kernel, the baseline of the specialisation
+    /// measurement). `MEASURED` is not a kernel feature: measured materials are evaluated
+    /// by the CPU reference.
     pub fn all() -> FeatureSet {
         FeatureSet::ALL_NAMED
             .iter()
+            .filter(|(f, _)| *f != FeatureSet::MEASURED)
             .fold(FeatureSet::EMPTY, |a, (f, _)| a | *f)
     }
 
