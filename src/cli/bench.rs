@@ -325,8 +325,9 @@ fn print_report(results: &[ResultRow], peers: &[peers::PeerRow], list: &[scenari
                             && r.scenario == sc.name
                             && r.mode == mode
                             && r.precision == "exact"
+                            && r.tuples == p.tuples
                     })
-                    .max_by_key(|r| r.tuples)
+                    .last()
                 {
                     println!(
                         "  {:<18} vs {:<8} {:<11} {:.2}×",
@@ -339,10 +340,10 @@ fn print_report(results: &[ResultRow], peers: &[peers::PeerRow], list: &[scenari
             }
         }
     }
-    if let Some(m) = peers
+    if let Some((m, n)) = peers
         .iter()
         .find(|p| p.name == "memcpy")
-        .and_then(|p| p.evals_per_s)
+        .and_then(|p| p.evals_per_s.map(|v| (v, p.tuples)))
     {
         if let Some(r) = results
             .iter()
@@ -351,8 +352,9 @@ fn print_report(results: &[ResultRow], peers: &[peers::PeerRow], list: &[scenari
                     && r.scenario == "lambert"
                     && r.mode == "kernel"
                     && r.precision == "exact"
+                    && r.tuples == n
             })
-            .max_by_key(|r| r.tuples)
+            .last()
         {
             println!(
                 "  lambert kernel vs memory-copy ceiling: {:.0} %",
