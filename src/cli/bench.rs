@@ -228,7 +228,7 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         let largest: Vec<ResultRow> = report
             .results
             .iter()
-            .filter(|r| {
+            .rfind(|r| {
                 r.max_rel_err.is_finite()
                     && r.tuples
                         == sizes
@@ -318,17 +318,13 @@ fn print_report(results: &[ResultRow], peers: &[peers::PeerRow], list: &[scenari
         {
             let Some(pv) = p.evals_per_s else { continue };
             for mode in ["kernel", "end-to-end"] {
-                if let Some(r) = results
-                    .iter()
-                    .filter(|r| {
-                        r.backend == "vulkan"
-                            && r.scenario == sc.name
-                            && r.mode == mode
-                            && r.precision == "exact"
-                            && r.tuples == p.tuples
-                    })
-                    .last()
-                {
+                if let Some(r) = results.iter().filter(|r| {
+                    r.backend == "vulkan"
+                        && r.scenario == sc.name
+                        && r.mode == mode
+                        && r.precision == "exact"
+                        && r.tuples == p.tuples
+                }) {
                     println!(
                         "  {:<18} vs {:<8} {:<11} {:.2}×",
                         sc.name,
@@ -345,17 +341,13 @@ fn print_report(results: &[ResultRow], peers: &[peers::PeerRow], list: &[scenari
         .find(|p| p.name == "memcpy")
         .and_then(|p| p.evals_per_s.map(|v| (v, p.tuples)))
     {
-        if let Some(r) = results
-            .iter()
-            .filter(|r| {
-                r.backend == "vulkan"
-                    && r.scenario == "lambert"
-                    && r.mode == "kernel"
-                    && r.precision == "exact"
-                    && r.tuples == n
-            })
-            .last()
-        {
+        if let Some(r) = results.iter().rfind(|r| {
+            r.backend == "vulkan"
+                && r.scenario == "lambert"
+                && r.mode == "kernel"
+                && r.precision == "exact"
+                && r.tuples == n
+        }) {
             println!(
                 "  lambert kernel vs memory-copy ceiling: {:.0} %",
                 100.0 * r.evals_per_s / m
