@@ -228,7 +228,7 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         let largest: Vec<ResultRow> = report
             .results
             .iter()
-            .rfind(|r| {
+            .filter(|r| {
                 r.max_rel_err.is_finite()
                     && r.tuples
                         == sizes
@@ -318,7 +318,7 @@ fn print_report(results: &[ResultRow], peers: &[peers::PeerRow], list: &[scenari
         {
             let Some(pv) = p.evals_per_s else { continue };
             for mode in ["kernel", "end-to-end"] {
-                if let Some(r) = results.iter().filter(|r| {
+                if let Some(r) = results.iter().rfind(|r| {
                     r.backend == "vulkan"
                         && r.scenario == sc.name
                         && r.mode == mode
