@@ -112,6 +112,15 @@ Row load_row(uint row) {
 }
 
 // Builds the frame of FORMULAS.md §1 and classifies the tuple. The invalid test comes first.
+#if defined(HAS_FLOAT64)
+// a.b / (|a| |b|) in f64 from f32 vectors (both finite and non-zero: checked before).
+double cosine64(vec3 a, vec3 b) {
+    dvec3 da = dvec3(a);
+    dvec3 db = dvec3(b);
+    return dot(da, db) / sqrt(dot(da, da) * dot(db, db));
+}
+#endif
+
 uint make_frame(Row r, GpuMaterial m, out Frame f) {
     bool ok_l, ok_v, ok_n;
     f.l = safe_normalize(r.l, ok_l);
@@ -146,8 +155,19 @@ uint make_frame(Row r, GpuMaterial m, out Frame f) {
 #endif
     }
 #endif
+#if defined(HAS_FLOAT64)
+    // cos_i and cos_o from the raw f32 inputs in f64: the products of f32 values are exact
+    // in f64 and the lengths carry no cancellation, so the cosines come out with full f32
+    // relative precision even at grazing angles. In f32, normalising l and n first leaves
+    // each cosine ~1e-7 off in absolute terms: K = 1/(4 cos_i cos_o) is then wrong by O(1)
+    // below cos ~1e-6 and the horizon test falls on the wrong side (the stress corpus's
+    // grazing regime). Squares of f32 values (<= 1.2e77) and of subnormals stay in f64 range.
+    f.cos_i = float(cosine64(r.n, r.l));
+    f.cos_o = float(cosine64(r.n, r.v));
+#else
     f.cos_i = dot(f.n, f.l);
     f.cos_o = dot(f.n, f.v);
+#endif
     if (f.cos_i <= 0.0 || f.cos_o <= 0.0) {
         return STATUS_BELOW_HORIZON;
     }

@@ -308,6 +308,9 @@ pub(crate) struct PhysicalInfo {
     pub subgroup_size: Option<u32>,
     /// Whether compute shaders can use subgroup arithmetic (subgroupAdd, subgroupMin).
     pub subgroup_arithmetic: bool,
+    /// Whether shaders can use f64 (`shaderFloat64`): the kernel then computes the
+    /// cosines in f64 (see `cosine64` in eval.comp).
+    pub shader_float64: bool,
     /// Driver name and info (Vulkan 1.2+).
     pub driver: Option<(String, String)>,
 }
@@ -362,6 +365,10 @@ pub(crate) fn enumerate(instance: &Instance) -> Result<Vec<PhysicalInfo>> {
             compute_family,
             subgroup_size: None,
             subgroup_arithmetic: false,
+            // SAFETY: `raw` was just enumerated from this instance.
+            shader_float64: unsafe { instance.raw.get_physical_device_features(raw) }
+                .shader_float64
+                == vk::TRUE,
             driver: None,
         };
         let version = properties.api_version.min(instance.api_version);
@@ -469,7 +476,11 @@ impl Device {
         let queues = [vk::DeviceQueueCreateInfo::default()
             .queue_family_index(queue_family)
             .queue_priorities(&priorities)];
-        let info = vk::DeviceCreateInfo::default().queue_create_infos(&queues);
+        let features =
+            vk::PhysicalDeviceFeatures::default().shader_float64(physical.shader_float64);
+        let info = vk::DeviceCreateInfo::default()
+            .queue_create_infos(&queues)
+            .enabled_features(&features);
         // SAFETY: `physical.raw` belongs to `instance`; `info` points to locals that live
         // until the call returns.
         let raw = unsafe { instance.raw.create_device(physical.raw, &info, None) }

@@ -251,16 +251,17 @@ impl Kernels {
             let p = &self.device.physical;
             let arithmetic =
                 p.subgroup_arithmetic && target(p) as u32 >= shaderc::EnvVersion::Vulkan1_1 as u32;
-            let spirv = compile(
-                SOURCES,
-                KERNEL_FILE,
-                &kernel_defines(features, arithmetic),
-                target(p),
-            )
-            .map_err(|e| match e {
-                Error::Shader(m) => Error::Shader(format!("{m}\n(kernel for features {features})")),
-                e => e,
-            })?;
+            let mut defines = kernel_defines(features, arithmetic);
+            if p.shader_float64 {
+                defines.push(("HAS_FLOAT64".to_string(), "1".to_string()));
+            }
+            let spirv =
+                compile(SOURCES, KERNEL_FILE, &defines, target(p)).map_err(|e| match e {
+                    Error::Shader(m) => {
+                        Error::Shader(format!("{m}\n(kernel for features {features})"))
+                    }
+                    e => e,
+                })?;
             let pipeline = self.create(spirv)?;
             self.cache.insert(features, pipeline);
         }
