@@ -43,3 +43,36 @@ fn corpus_is_deterministic_and_chunkable() {
         assert!(cases.contains(&case), "{case:?} missing from the corpus");
     }
 }
+
+#[test]
+fn the_fast_precision_variant_keeps_the_policy() {
+    use vkbrdf::precision::Precision;
+    for mut backend in common::backends() {
+        let report = stress::run_with(
+            backend.as_mut(),
+            Precision::Fast,
+            50_000,
+            9,
+            1 << 15,
+            &mut |_| {},
+        )
+        .expect("stress run");
+        assert!(
+            report.policy_holds(),
+            "fast variant fails the policy on {}:\n{}",
+            report.backend,
+            report.to_markdown(1e-5)
+        );
+        // It is judged against the exact reference, so Schlick's error must show up in F.
+        let f_err = report
+            .errors
+            .iter()
+            .filter(|((q, _), _)| q == "F")
+            .map(|(_, s)| s.max)
+            .fold(0.0, f64::max);
+        assert!(
+            f_err > 1e-3,
+            "fast F error {f_err} should be Schlick's, not zero: was the variant evaluated?"
+        );
+    }
+}
