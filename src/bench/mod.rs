@@ -71,7 +71,24 @@ pub fn time_end_to_end(
 
 /// Max relative error of `brdf` against the reference on at most `sample` evenly spaced rows.
 pub fn max_rel_err(batch: &Batch, materials: &[Material], brdf: &[f32], sample: usize) -> f64 {
-    let step = (batch.len() / sample.max(1)).max(1);
+    brdf_error_stats(batch, materials, brdf, sample).max
+}
+
+/// Relative-error statistics (floor [`ERROR_FLOOR`]) of `brdf` against the reference on at
+/// most `sample` evenly spaced rows of `batch`.
+pub fn brdf_error_stats(
+    batch: &Batch,
+    materials: &[Material],
+    brdf: &[f32],
+    sample: usize,
+) -> ErrorStats {
+    // Rows cycle through the materials (row i uses material i mod M in the generated
+    // batches), so a step sharing a factor with M would sample only some materials: take
+    // the first step from len/sample on that is coprime with M.
+    let mut step = (batch.len() / sample.max(1)).max(1);
+    while gcd(step, materials.len().max(1)) != 1 {
+        step += 1;
+    }
     let mut stats = ErrorStats::default();
     for i in (0..batch.len()).step_by(step) {
         let t = batch.tuple(i);
@@ -83,7 +100,15 @@ pub fn max_rel_err(batch: &Batch, materials: &[Material], brdf: &[f32], sample: 
             );
         }
     }
-    stats.max
+    stats
+}
+
+fn gcd(a: usize, b: usize) -> usize {
+    if b == 0 {
+        a
+    } else {
+        gcd(b, a % b)
+    }
 }
 
 /// Tuples/s of a memory copy moving the bytes a kernel must read and write for `tuples`
