@@ -47,6 +47,10 @@ pub struct VulkanOptions {
     /// Enable `VK_LAYER_KHRONOS_validation` and count its warnings and errors (default:
     /// on when the environment variable `VKBRDF_VALIDATION` is `1`).
     pub validation: bool,
+    /// Extra preprocessor definitions (`NAME`, `VALUE`) for every kernel this backend
+    /// compiles: for measuring kernel variants side by side in one process
+    /// (`examples/kernel_time.rs`). Default: none.
+    pub extra_defines: Vec<(String, String)>,
 }
 
 impl Default for VulkanOptions {
@@ -54,6 +58,7 @@ impl Default for VulkanOptions {
         VulkanOptions {
             max_gpu_memory: 256 << 20,
             validation: validation_from_env(),
+            extra_defines: Vec::new(),
         }
     }
 }
@@ -150,7 +155,7 @@ impl VulkanBackend {
     /// device matches.
     pub fn new(selector: Option<DeviceSelector>, options: VulkanOptions) -> Result<VulkanBackend> {
         let device = Device::new(selector.as_ref(), options.validation)?;
-        let kernels = Kernels::new(&device)?;
+        let kernels = Kernels::new(&device, options.extra_defines.clone())?;
         let commands = CommandPool::new(&device, FRAMES_IN_FLIGHT as u32)?;
         let descriptors = DescriptorPool::new(
             &device,

@@ -195,13 +195,15 @@ pub(crate) struct Kernels {
     probes: HashMap<String, Pipeline>,
     layout: vk::PipelineLayout,
     set_layout: vk::DescriptorSetLayout,
+    extra_defines: Vec<(String, String)>,
     device: Arc<Device>,
 }
 
 impl Kernels {
     /// Creates the shared layouts: `BINDING_COUNT` bindings (storage buffers and the tuple
-    /// texel buffer, see [`descriptor_type`]) and the push constants.
-    pub fn new(device: &Arc<Device>) -> Result<Kernels> {
+    /// texel buffer, see [`descriptor_type`]) and the push constants. `extra_defines` are
+    /// added to every kernel's definitions (variant experiments).
+    pub fn new(device: &Arc<Device>, extra_defines: Vec<(String, String)>) -> Result<Kernels> {
         let bindings: Vec<vk::DescriptorSetLayoutBinding> = (0..BINDING_COUNT)
             .map(|b| {
                 vk::DescriptorSetLayoutBinding::default()
@@ -220,6 +222,7 @@ impl Kernels {
             probes: HashMap::new(),
             layout: vk::PipelineLayout::null(),
             set_layout,
+            extra_defines,
             device: Arc::clone(device),
         };
         let ranges = [vk::PushConstantRange::default()
@@ -255,6 +258,7 @@ impl Kernels {
             if p.shader_float64 {
                 defines.push(("HAS_FLOAT64".to_string(), "1".to_string()));
             }
+            defines.extend(self.extra_defines.iter().cloned());
             let spirv =
                 compile(SOURCES, KERNEL_FILE, &defines, target(p)).map_err(|e| match e {
                     Error::Shader(m) => {

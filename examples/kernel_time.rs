@@ -1,0 +1,72 @@
+//! Profiling aid: kernel-only throughput of `vkbrdf bench` scenarios on Vulkan, for kernel
+//! variants side by side in one process (interleaved rounds, so the machine's drift hits
+//! every variant alike). A variant is a comma-separated list of extra GLSL definitions.
+//!
+//! Usage: cargo run --release --example kernel_time -- [--tuples N] [--rounds R]
+//!            [--variant NAME=VALUE,NAME2 …]… [SCENARIO …]
+//! Without --variant, the kernel as shipped.
+use vkbrdf::backend::Request;
+use vkbrdf::bench::scenarios;
+use vkbrdf::gpu::{VulkanBackend, VulkanOptions};
+
+fn parse_variant(spec: &str) -> Vec<(String, String)> {
+    spec.split(',')
+        .filter(|d| !d.is_empty())
+        .map(|d| match d.split_once('=') {
+            Some((k, v)) => (k.to_string(), v.to_string()),
+            None => (d.to_string(), "1".to_string()),
+        })
+        .collect()
+}
+
+fn main() -> vkbrdf::Result<()> {
+    let (mut n, mut rounds) = (1usize << 22, 3usize);
+    let (mut variants, mut names) = (Vec::new(), Vec::new());
+    let mut args = std::env::args().skip(1);
+    while let Some(a) = args.next() {
+        match a.as_str() {
+            "--tuples" => n = args.next().and_then(|v| v.parse().ok()).expect("--tuples N"),
+            "--rounds" => rounds = args.next().and_then(|v| v.parse().ok()).expect("--rounds R"),
+            "--variant" => variants.push(args.next().expect("--variant SPEC")),
+            _ => names.push(a),
+        }
+    }
+    if variants.is_empty() {
+        variants.push(String::new());
+    }
+    let chosen: Vec<_> = scenarios::all()
+        .into_iter()
+        .filter(|s| names.is_empty() || names.iter().any(|n| n == s.name))
+        .collect();
+    let mut gpus = Vec::new();
+    for v in &variants {
+        let options = VulkanOptions {
+            extra_defines: parse_variant(v),
+            ..VulkanOptions::default()
+        };
+        gpus.push(VulkanBackend::new(None, options)?);
+    }
+    let batches: Vec<_> = chosen.iter().map(|s| scenarios::batch(s, n, 7)).collect();
+    let mut best = vec![vec![0.0f64; variants.len()]; chosen.len()];
+    for _ in 0..rounds {
+        for (i, s) in chosen.iter().enumerate() {
+            for (j, gpu) in gpus.iter_mut().enumerate() {
+                let t = gpu.kernel_seconds(&batches[i], &s.materials, &Request { terms: false }, 3)?;
+                best[i][j] = best[i][j].max(n as f64 / t / 1e6);
+            }
+        }
+    }
+    print!("{:28}", "M/s (best of rounds' medians)");
+    for v in &variants {
+        print!(" {:>18}", if v.is_empty() { "shipped" } else { v });
+    }
+    println!();
+    for (s, row) in chosen.iter().zip(&best) {
+        print!("{:28}", s.name);
+        for b in row {
+            print!(" {b:18.1}");
+        }
+        println!();
+    }
+    Ok(())
+}
