@@ -46,7 +46,19 @@ fn main() -> vkbrdf::Result<()> {
         };
         gpus.push(VulkanBackend::new(None, options)?);
     }
-    let batches: Vec<_> = chosen.iter().map(|s| scenarios::batch(s, n, 7)).collect();
+    let mut batches: Vec<_> = chosen.iter().map(|s| scenarios::batch(s, n, 7)).collect();
+    if std::env::var("HALF_BELOW").is_ok() {
+        // Every other row's V mirrored below the horizon (N = +z): the counts' heavy case.
+        for b in &mut batches {
+            let cols = b.columns();
+            let mut data = b.as_slice().to_vec();
+            for row in data.chunks_mut(cols).step_by(2) {
+                row[5] = -row[5];
+            }
+            let k = chosen[0].materials.len().max(64);
+            *b = vkbrdf::batch::Batch::new(data, cols, k, std::path::Path::new("half-below"))?;
+        }
+    }
     let mut best = vec![vec![0.0f64; variants.len()]; chosen.len()];
     for _ in 0..rounds {
         for (i, s) in chosen.iter().enumerate() {

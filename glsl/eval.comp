@@ -50,6 +50,10 @@ layout(std430, set = 0, binding = BINDING_COUNTS) buffer Counts {
 layout(push_constant) uniform Params {
     uint tuple_count;    // rows in this chunk
     uint material_count; // rows in the material table
+    uint first_row;      // global index of the chunk's first row
+    uint grid_width;     // GENERATE_HALF_DIFF: theta_h columns
+    uint grid_height;    // GENERATE_HALF_DIFF: theta_d rows
+    uint spacing;        // GENERATE_HALF_DIFF: 0 theta_h = x^2 pi/2 (MERL), 1 theta_h = x pi/2
 } params;
 
 #if defined(HAS_TANGENTS)
@@ -110,6 +114,67 @@ Row load_row(uint row) {
 #endif
     return r;
 }
+
+#if defined(GENERATE_HALF_DIFF)
+// Texel `g` of the half/difference slice (src/table/slice.rs, Rusinkiewicz 1998), made on
+// the device instead of read: column i -> x = (i + 1/2)/W, theta_h = x^2 pi/2 (or x pi/2);
+// row j -> theta_d = (j + 1/2)/H pi/2; phi_d = 90 degrees, phi_h = 0, n = +z, material 0,
+// tangent +x. With phi_d = 90 degrees, d = (0, sin theta_d, cos theta_d), l = R_y(theta_h) d
+// and v is l reflected about h = (sin theta_h, 0, cos theta_h): the host's from_half_diff()
+// term for term. No tuple is loaded: on lavapipe the loads are about half of the
+// kernel's time (see README, "Throughput").
+// sin(t pi/2) and cos(t pi/2) for t in [0, 1/2], i.e. angles up to pi/4, by their Taylor
+// polynomials to x^11 and x^12: the first omitted terms are below (pi/4)^13/13! = 7e-12
+// and (pi/4)^14/14! = 4e-13 relative to the results, so the polynomials are as exact as f32.
+vec2 sin_cos_eighth(float t) {
+    float x = t * (0.5 * PI);
+    float x2 = x * x;
+    float s = x * (1.0 - x2 / 6.0 * (1.0 - x2 / 20.0 * (1.0 - x2 / 42.0 * (1.0 - x2 / 72.0
+              * (1.0 - x2 / 110.0)))));
+    float c = 1.0 - x2 / 2.0 * (1.0 - x2 / 12.0 * (1.0 - x2 / 30.0 * (1.0 - x2 / 56.0
+              * (1.0 - x2 / 90.0 * (1.0 - x2 / 132.0)))));
+    return vec2(s, c);
+}
+
+// (sin, cos) of theta = u pi/2 for u in [0, 1], given also ubar = 1 - u computed without
+// cancellation. Above pi/4 the complement is used (sin theta = cos(ubar pi/2)): forming
+// theta, or pi/2 - theta, in f32 would leave ~1e-7 absolute error in the small cosine of
+// a grazing angle, where the host's f64 angle has none (measured: 1.5e-5 relative in the
+// slice against 7e-6 this way). Neither a range reduction nor the built-in sin/cos (which
+// reduce the argument first) is needed.
+vec2 sin_cos_quadrant(float u, float ubar) {
+    return u <= 0.5 ? sin_cos_eighth(u) : sin_cos_eighth(ubar).yx;
+}
+
+Row half_diff_row(uint g) {
+    // j = g / W without an integer division (x86 has no vector one: llvmpipe would divide
+    // lane by lane): g < 2^24 (MAX_GENERATED_TEXELS on the host) is exact in f32, so the
+    // rounded quotient is within one of it, and the correction makes it exact.
+    uint w = params.grid_width;
+    uint j = uint(float(g) / float(w));
+    j = j * w > g ? j - 1u : ((j + 1u) * w <= g ? j + 1u : j);
+    uint i = g - j * w;
+    // Column and row centres x = (i + 1/2)/W, y = (j + 1/2)/H and their complements, each
+    // one rounding.
+    float fw = float(w), fh = float(params.grid_height);
+    float x = (float(i) + 0.5) / fw;
+    float xbar = (fw - float(i) - 0.5) / fw;
+    float y = (float(j) + 0.5) / fh;
+    float ybar = (fh - float(j) - 0.5) / fh;
+    // theta_h = u pi/2 with u = x (linear) or x^2 (MERL), 1 - x^2 = (1 - x)(1 + x).
+    bool linear = params.spacing != 0u;
+    vec2 h = sin_cos_quadrant(linear ? x : x * x, linear ? xbar : xbar * (1.0 + x));
+    vec2 d = sin_cos_quadrant(y, ybar);
+    Row r;
+    r.l = vec3(d.y * h.x, d.x, d.y * h.y);
+    float lh = r.l.x * h.x + r.l.z * h.y; // = cos theta_d
+    r.v = 2.0 * lh * vec3(h.x, 0.0, h.y) - r.l;
+    r.n = vec3(0.0, 0.0, 1.0);
+    r.material = 0.0;
+    r.t = vec3(1.0, 0.0, 0.0);
+    return r;
+}
+#endif
 
 // Builds the frame of FORMULAS.md §1 and classifies the tuple. The invalid test comes first.
 #if defined(HAS_FLOAT64)
@@ -221,7 +286,11 @@ void main() {
     if (row < params.tuple_count) {
         // The batch validated every index; the clamp only keeps a corrupted buffer from
         // reading outside the table.
+#if defined(GENERATE_HALF_DIFF)
+        Row r = half_diff_row(params.first_row + row);
+#else
         Row r = load_row(row);
+#endif
         uint mi = min(uint(r.material), params.material_count - 1u);
         GpuMaterial m = materials[mi];
         Frame f;
@@ -240,42 +309,46 @@ void main() {
 #endif
     }
 
-    // Counts: reduced across the subgroup, then one global atomic per subgroup that has
-    // something to count (below-horizon tuples are common: per-tuple atomics would
-    // serialise on one address). Deliberately not a workgroup reduction in shared memory:
-    // that needs barrier(), and llvmpipe runs any shader with a barrier through coroutines,
-    // which made the whole kernel 2.7x slower on lavapipe (measured: 280 vs 103 ms for 4M
-    // tuples of a load-and-store kernel).
-    bool invalid = status == STATUS_INVALID;
-    bool below = status == STATUS_BELOW_HORIZON;
+    // Counts, only where there is something to count: the block runs for the invocations
+    // whose tuple is invalid or below the horizon, and llvmpipe skips it altogether when a
+    // subgroup has none (the usual case). Subgroup operations inside it reduce over those
+    // active invocations only, so one atomic per subgroup, not per tuple (below-horizon
+    // tuples are common: per-tuple atomics would serialise on one address). Measured on
+    // lavapipe, 4M tuples with nothing to count: Lambert without loads and stores 148 ->
+    // ~270 M/s against a reduction over every invocation (`examples/kernel_time.rs`).
+    // Deliberately not a workgroup reduction in shared memory: that needs barrier(), and
+    // llvmpipe runs any shader with a barrier through coroutines, which made the whole
+    // kernel 2.7x slower on lavapipe (measured: 280 vs 103 ms for 4M tuples of a
+    // load-and-store kernel).
+    if (status != STATUS_VALID) {
+        bool invalid = status == STATUS_INVALID;
 #if defined(USE_SUBGROUP_ARITHMETIC)
-    // Both counts in one reduction: invalid in the low 16 bits, below-horizon in the high
-    // (a subgroup has at most 128 invocations), and the first invalid row only when there
-    // is one (n_invalid is subgroup-uniform, so the branch is too). The counts cost about
-    // a fifth of the Lambert kernel with three reductions per subgroup.
-    uint packed = subgroupAdd((invalid ? 1u : 0u) | (below ? 0x10000u : 0u));
-    uint n_invalid = packed & 0xffffu;
-    uint n_below = packed >> 16u;
-    uint first = 0xffffffffu;
-    if (n_invalid != 0u) {
-        first = subgroupMin(invalid ? row : 0xffffffffu);
-    }
-    if (subgroupElect()) {
+        // Both counts in one reduction: invalid in the low 16 bits, below-horizon in the
+        // high (a subgroup has at most 128 invocations), and the first invalid row only
+        // when there is one (n_invalid is uniform over the active invocations).
+        uint packed = subgroupAdd(invalid ? 1u : 0x10000u);
+        uint n_invalid = packed & 0xffffu;
+        uint n_below = packed >> 16u;
+        uint first = 0xffffffffu;
         if (n_invalid != 0u) {
-            atomicAdd(invalid_count, n_invalid);
-            atomicMin(first_invalid, first);
+            first = subgroupMin(invalid ? row : 0xffffffffu);
         }
-        if (n_below != 0u) {
-            atomicAdd(below_horizon_count, n_below);
+        if (subgroupElect()) {
+            if (n_invalid != 0u) {
+                atomicAdd(invalid_count, n_invalid);
+                atomicMin(first_invalid, first);
+            }
+            if (n_below != 0u) {
+                atomicAdd(below_horizon_count, n_below);
+            }
         }
-    }
 #else
-    if (invalid) {
-        atomicAdd(invalid_count, 1u);
-        atomicMin(first_invalid, row);
-    }
-    if (below) {
-        atomicAdd(below_horizon_count, 1u);
-    }
+        if (invalid) {
+            atomicAdd(invalid_count, 1u);
+            atomicMin(first_invalid, row);
+        } else {
+            atomicAdd(below_horizon_count, 1u);
+        }
 #endif
+    }
 }

@@ -54,6 +54,25 @@ pub struct Output {
     pub counts: Counts,
 }
 
+/// A half/difference slice grid (see [`crate::table::slice`]; its `from_half_diff` makes the directions): `width` θ_h columns ×
+/// `height` θ_d rows, φ_d = 90°, n = +z, tangent +x.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct SliceGrid {
+    /// θ_h columns.
+    pub width: u32,
+    /// θ_d rows.
+    pub height: u32,
+    /// θ_h = x·π/2 (`true`) or x²·π/2, MERL's spacing (`false`).
+    pub linear: bool,
+}
+
+impl SliceGrid {
+    /// Texels in the grid.
+    pub fn texels(&self) -> u64 {
+        u64::from(self.width) * u64::from(self.height)
+    }
+}
+
 /// An evaluator of BRDF batches.
 pub trait Backend {
     /// A short human-readable name (e.g. `cpu-reference`, `vulkan: llvmpipe`).
@@ -67,4 +86,17 @@ pub trait Backend {
         materials: &[Material],
         request: &Request,
     ) -> Result<Output>;
+
+    /// The half/difference slice `grid` of `material` (row-major texels, θ_h fastest)
+    /// with the directions made by the backend itself, or `None` when it has no such path:
+    /// the caller then builds the tuples ([`crate::table::slice::compute`] does). The
+    /// Vulkan backend makes them on the device.
+    fn half_diff_slice(
+        &mut self,
+        _material: &Material,
+        _grid: SliceGrid,
+        _request: &Request,
+    ) -> Option<Result<Output>> {
+        None
+    }
 }

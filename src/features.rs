@@ -72,6 +72,9 @@ features! {
     LAMBDA_GGX = 24, "HAS_LAMBDA_GGX";
     /// A measured (MERL) material: evaluated by the CPU reference only.
     MEASURED = 25, "HAS_MEASURED";
+    /// The kernel makes its own directions: the half/difference slice grid of
+    /// `table slice`, from the push constants (no tuple is read).
+    GENERATED_SLICE = 26, "GENERATE_HALF_DIFF";
 }
 
 impl FeatureSet {
@@ -80,11 +83,11 @@ impl FeatureSet {
 
     /// Every kernel feature (the all-features kernel, the baseline of the specialisation
     /// measurement). `MEASURED` is not a kernel feature: measured materials are evaluated
-    /// by the CPU reference.
+    /// by the CPU reference; `GENERATED_SLICE` is an input mode, not a feature.
     pub fn all() -> FeatureSet {
         FeatureSet::ALL_NAMED
             .iter()
-            .filter(|(f, _)| *f != FeatureSet::MEASURED)
+            .filter(|(f, _)| *f != FeatureSet::MEASURED && *f != FeatureSet::GENERATED_SLICE)
             .fold(FeatureSet::EMPTY, |a, (f, _)| a | *f)
     }
 

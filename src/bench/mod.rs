@@ -128,3 +128,39 @@ pub fn memcpy_ceiling(tuples: usize, columns: usize, repeats: usize) -> f64 {
     }
     tuples as f64 / median(secs)
 }
+
+/// Max relative error (floor [`ERROR_FLOOR`]) of a half/difference slice's `brdf` (as
+/// [`crate::backend::Backend::half_diff_slice`] returns it) against the reference at the
+/// host's directions ([`crate::table::slice::from_half_diff`]), on at most `sample`
+/// evenly spaced texels.
+pub fn slice_max_rel_err(
+    material: &Material,
+    grid: crate::backend::SliceGrid,
+    brdf: &[f32],
+    sample: usize,
+) -> f64 {
+    use crate::table::slice::{from_half_diff, theta_h, Spacing, TANGENT};
+    use std::f64::consts::FRAC_PI_2;
+    let spacing = if grid.linear {
+        Spacing::Linear
+    } else {
+        Spacing::Sqrt
+    };
+    let (w, h) = (grid.width as usize, grid.height as usize);
+    let n = w * h;
+    let mut stats = ErrorStats::default();
+    for g in (0..n).step_by((n / sample.max(1)).max(1)) {
+        let (i, j) = (g % w, g / w);
+        let th = theta_h((i as f64 + 0.5) / w as f64, spacing);
+        let td = (j as f64 + 0.5) / h as f64 * FRAC_PI_2;
+        let (l, v) = from_half_diff(th, td, FRAC_PI_2);
+        let r = crate::reference::evaluate(l, v, [0.0, 0.0, 1.0], Some(TANGENT), material);
+        for c in 0..3 {
+            stats.add(
+                relative_error(f64::from(brdf[3 * g + c]), r.brdf[c], ERROR_FLOOR),
+                g as u64,
+            );
+        }
+    }
+    stats.max
+}

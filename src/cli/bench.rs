@@ -4,7 +4,7 @@ use super::backend_choice::{open_vulkan, DeviceArgs};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::PathBuf;
 use std::process::ExitCode;
-use vkbrdf::backend::Request;
+use vkbrdf::backend::{Request, SliceGrid};
 use vkbrdf::bench::{self, peers, plot, scenarios, ResultRow};
 use vkbrdf::features::FeatureSet;
 use vkbrdf::precision::Precision;
@@ -159,6 +159,35 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
                 all,
                 f64::NAN,
             ));
+            // Directions made on the device (the table kernels): the half/difference slice
+            // of the scenario's material over a square grid of `peer_n` texels, timed as
+            // the kernel alone and end to end (only the material goes in), against the
+            // host-made tuples' kernel above.
+            if let [material] = sc.materials.as_slice() {
+                bar.set_message(format!("{} table kernel", sc.name));
+                let side = (n as f64).sqrt().round() as u32;
+                let grid = SliceGrid {
+                    width: side,
+                    height: side,
+                    linear: false,
+                };
+                let texels = grid.texels() as usize;
+                let request = Request::default();
+                let mut out = v.half_diff_slice(material, grid, &request)?;
+                let mut secs = Vec::new();
+                for _ in 0..repeats {
+                    let t = std::time::Instant::now();
+                    out = v.half_diff_slice(material, grid, &request)?;
+                    secs.push(t.elapsed().as_secs_f64());
+                }
+                let err = bench::slice_max_rel_err(material, grid, &out.brdf, 20_000);
+                let e2e = bench::median(secs);
+                let ksecs = v.half_diff_kernel_seconds(material, grid, repeats)?;
+                let (m, p) = ("table-kernel", "exact");
+                results.push(row("vulkan", sc.name, m, p, texels, ksecs, err));
+                let m = "table-e2e";
+                results.push(row("vulkan", sc.name, m, p, texels, e2e, err));
+            }
             // The fast precision variant on the same batch (same size, same seed) as the
             // exact rows the size loop measured above, judged against the exact reference:
             // the points of the run-time/error chart.
@@ -319,7 +348,7 @@ fn print_report(results: &[ResultRow], peers: &[peers::PeerRow], list: &[scenari
             .filter(|p| Some(p.scenario.as_str()) == sc.peer)
         {
             let Some(pv) = p.evals_per_s else { continue };
-            for mode in ["kernel", "end-to-end"] {
+            for mode in ["kernel", "end-to-end", "table-kernel", "table-e2e"] {
                 if let Some(r) = results.iter().rfind(|r| {
                     r.backend == "vulkan"
                         && r.scenario == sc.name

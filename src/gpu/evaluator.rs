@@ -5,6 +5,7 @@
 //! next rows in, record one dispatch, submit with the slot's fence. While the device works
 //! on chunk `c`, the host is copying chunk `c + 1` in and chunk `c − 2` out.
 
+mod generated;
 mod timing;
 
 use super::context::{Device, DeviceSelector, ValidationCounter};
@@ -345,7 +346,8 @@ impl VulkanBackend {
                 terms: None,
                 first_row: 0,
             };
-            self.submit(0, pipeline, outputs as u32, materials.len() as u32, pending)?;
+            let push = PushConstants::rows(outputs as u32, materials.len() as u32, 0);
+            self.submit(0, pipeline, push, pending)?;
             self.finish(0, &mut out)
         })();
         result.inspect_err(|_| self.recover())?;
@@ -430,7 +432,8 @@ impl VulkanBackend {
                 terms: terms.then(|| start * TERM_COLUMNS..(start + len) * TERM_COLUMNS),
                 first_row: start as u64,
             };
-            self.submit(s, pipeline, len as u32, material_count, pending)?;
+            let push = PushConstants::rows(len as u32, material_count, start as u32);
+            self.submit(s, pipeline, push, pending)?;
         }
         // Drain in submission order: the oldest pending chunk sits in slot `chunks % S`.
         for k in 0..FRAMES_IN_FLIGHT {
@@ -542,23 +545,18 @@ impl VulkanBackend {
         Ok(())
     }
 
-    /// Records and submits one dispatch of `count` invocations on slot `s`.
+    /// Records and submits one dispatch of `push.tuple_count` invocations on slot `s`.
     fn submit(
         &mut self,
         s: usize,
         pipeline: vk::Pipeline,
-        count: u32,
-        material_count: u32,
+        push: PushConstants,
         pending: Pending,
     ) -> Result<()> {
         let (d, layout) = (&self.device.raw, self.kernels.layout());
         let slot = &mut self.slots[s];
         let cmd = slot.cmd;
-        let push = PushConstants {
-            tuple_count: count,
-            material_count,
-        };
-        let groups = count.div_ceil(WORKGROUP_SIZE);
+        let groups = push.tuple_count.div_ceil(WORKGROUP_SIZE);
         // Results must be visible to host reads after the fence: compute writes → host reads.
         let barrier = [vk::MemoryBarrier::default()
             .src_access_mask(vk::AccessFlags::SHADER_WRITE)
@@ -690,6 +688,17 @@ impl Backend for VulkanBackend {
     ) -> Result<Output> {
         let features = FeatureSet::of_batch(batch, materials, request);
         self.run(batch, materials, features)
+    }
+
+    fn half_diff_slice(
+        &mut self,
+        material: &Material,
+        grid: crate::backend::SliceGrid,
+        request: &Request,
+    ) -> Option<Result<Output>> {
+        // Larger grids go through tuples (the caller builds them).
+        (grid.texels() <= generated::MAX_GENERATED_TEXELS)
+            .then(|| VulkanBackend::half_diff_slice(self, material, grid, request))
     }
 }
 

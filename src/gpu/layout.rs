@@ -188,6 +188,28 @@ pub struct PushConstants {
     pub tuple_count: u32,
     /// Rows in the material table.
     pub material_count: u32,
+    /// Global index of the chunk's first row (generated directions: the texel index).
+    pub first_row: u32,
+    /// Generated slice: grid width (θ_h columns).
+    pub grid_width: u32,
+    /// Generated slice: grid height (θ_d rows).
+    pub grid_height: u32,
+    /// Generated slice: θ_h spacing, 0 = `x² π/2` (MERL), 1 = `x π/2`.
+    pub spacing: u32,
+}
+
+impl PushConstants {
+    /// A dispatch over `tuple_count` rows read from the tuple buffer (no generated grid).
+    /// `first_row` (the chunk's place in the batch) is truncated to 32 bits: only the
+    /// generated-direction kernels read it, and their grids are checked to fit.
+    pub fn rows(tuple_count: u32, material_count: u32, first_row: u32) -> PushConstants {
+        PushConstants {
+            tuple_count,
+            material_count,
+            first_row,
+            ..PushConstants::zeroed()
+        }
+    }
 }
 
 // std430 == repr(C) for these types: sizes and offsets pinned at compile time.
@@ -203,7 +225,7 @@ const _: () = {
     assert!(size_of::<GpuCounts>() == 16);
     assert!(offset_of!(GpuCounts, below_horizon) == 4);
     assert!(offset_of!(GpuCounts, first_invalid) == 8);
-    assert!(size_of::<PushConstants>() == 8);
+    assert!(size_of::<PushConstants>() == 24);
 };
 
 fn v4(x: [f64; 3]) -> [f32; 4] {

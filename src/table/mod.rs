@@ -296,6 +296,30 @@ impl<'a> Runner<'a> {
         self.progress.inc(tuples);
     }
 
+    /// The half/difference slice made by the backend itself ([`Backend::half_diff_slice`]),
+    /// or `None` when the backend has no such path. Checked like [`Runner::evaluate`].
+    pub fn half_diff_slice(
+        &mut self,
+        material: &Material,
+        grid: crate::backend::SliceGrid,
+        terms: bool,
+    ) -> Option<Result<Output>> {
+        let out = self
+            .backend
+            .half_diff_slice(material, grid, &Request { terms })?;
+        Some(out.and_then(|out| {
+            if out.counts.invalid > 0 {
+                return Err(Error::Table(format!(
+                    "{}: {} of {} generated texels came back invalid; this is a bug",
+                    self.backend.name(),
+                    out.counts.invalid,
+                    out.counts.tuples
+                )));
+            }
+            Ok(out)
+        }))
+    }
+
     /// Evaluates rows built by [`push_row`] (13 columns when [`needs_tangents`]`(materials)`,
     /// else 10) with `materials`, and checks that the backend found no invalid tuple: the
     /// generators only build valid ones, so an invalid count is a bug worth stopping for.

@@ -8,7 +8,7 @@
 
 use super::exr_out::{self, Channel, Layer, Provenance};
 use super::{needs_tangents, push_row, texel_centre, Grid, Runner, NORMAL};
-use crate::backend::TERM_COLUMNS;
+use crate::backend::{SliceGrid, TERM_COLUMNS};
 use crate::error::Result;
 use crate::material::Material;
 use std::f64::consts::FRAC_PI_2;
@@ -50,8 +50,36 @@ pub fn from_half_diff(theta_h: f64, theta_d: f64, phi_d: f64) -> ([f64; 3], [f64
 /// The tangent every table passes for anisotropic materials.
 pub const TANGENT: [f64; 3] = [1.0, 0.0, 0.0];
 
-/// f (n × 3, row-major texels) and, when `terms`, the terms (n × 6) of the slice.
+/// f (n × 3, row-major texels) and, when `terms`, the terms (n × 6) of the slice: with
+/// the directions made by the backend where it can ([`Runner::half_diff_slice`]; the
+/// Vulkan kernel makes them on the device), else by [`compute_from_tuples`].
 pub fn compute(
+    runner: &mut Runner,
+    material: &Material,
+    grid: Grid,
+    spacing: Spacing,
+    terms: bool,
+) -> Result<(Vec<f32>, Option<Vec<f32>>)> {
+    if let (Ok(width), Ok(height)) = (u32::try_from(grid.width), u32::try_from(grid.height)) {
+        let slice = SliceGrid {
+            width,
+            height,
+            linear: spacing == Spacing::Linear,
+        };
+        runner.start("slice", slice.texels());
+        if let Some(out) = runner.half_diff_slice(material, slice, terms) {
+            let out = out?;
+            runner.advance(slice.texels());
+            runner.finish();
+            return Ok((out.brdf, out.terms));
+        }
+    }
+    compute_from_tuples(runner, material, grid, spacing, terms)
+}
+
+/// [`compute`] with the directions made on the host by [`from_half_diff`] and sent to the
+/// backend as tuples (every backend can; the reference for the device-made directions).
+pub fn compute_from_tuples(
     runner: &mut Runner,
     material: &Material,
     grid: Grid,

@@ -89,7 +89,8 @@ impl VulkanBackend {
                         terms: None,
                         first_row: 0,
                     };
-                    self.submit(0, pipeline, len as u32, materials.len() as u32, pending)?;
+                    let push = PushConstants::rows(len as u32, materials.len() as u32, 0);
+                    self.submit(0, pipeline, push, pending)?;
                     self.finish(0, &mut scratch)?;
                 }
                 secs.push(t.elapsed().as_secs_f64() * n as f64 / (dispatches * len) as f64);
