@@ -57,6 +57,11 @@ float cross_length2(vec3 a, vec3 b) {
 // e^x in f32 to about 2 ULP. Cody–Waite reduction x = k ln2 + r, |r| <= ln2/2, then a
 // degree-7 Taylor polynomial (truncation < 6e-9 relative) and an exact scaling by 2^k.
 float exp_acc(float x) {
+#if defined(FAST_MATH)
+    // The fast precision variant: the device's own exp (on lavapipe up to 65 ulp off; on
+    // GPUs an exp2 instruction), range-limited as below so the result stays defined.
+    return x < -87.3 ? 0.0 : exp(min(x, 88.7));
+#endif
     // Below ln(FLT_MIN) = -87.34 the result is subnormal or 0; returning 0 there keeps k in
     // the normal exponent range (ldexp of a subnormal result is undefined in GLSL) and maps
     // x = -inf (e.g. -tan2/m^2 at cos_h = 0) to 0 instead of converting inf to an int.
@@ -87,6 +92,9 @@ float log1p_small(float y) {
 // ln x for finite x > 0: x = 2^e f with f in [sqrt(1/2), sqrt 2), ln x = e ln2 + ln f, where
 // f - 1 is exact (Sterbenz) and ln f comes from log1p_small. About 2 ULP.
 float log_acc(float x) {
+#if defined(FAST_MATH)
+    return log(x); // the fast variant: the device's own log
+#endif
     int e;
     float f = frexp(x, e); // f in [0.5, 1)
     if (f < 0.70710678) {
@@ -106,6 +114,11 @@ float log1p_acc(float y) {
 // 1 - sin^2/2 and ln(cos) = ln(1 - sin^2)/2 keeps full relative precision; near the horizon
 // cos itself is the accurate number.
 float log_cos(float cos_w, float sin2_w) {
+#if defined(FAST_MATH)
+    // The fast variant: ln cos from cos itself, which near 1 keeps only the absolute
+    // precision of cos (the exact path's log1p(-sin^2)/2 keeps the relative one).
+    return log(cos_w);
+#endif
     return sin2_w < 0.5 ? 0.5 * log1p_acc(-sin2_w) : log_acc(cos_w);
 }
 
@@ -123,6 +136,9 @@ float pow_acc(float x, float e) {
 // atan t = 2 atan(t / (1 + sqrt(1 + t^2))) to |t| <= tan(pi/16) = 0.199, then the Taylor
 // series to t^15 (truncation 0.199^17/17 < 1e-13). A few ULP in all.
 float atan2_positive(float y, float x) {
+#if defined(FAST_MATH)
+    return atan(y, x); // the fast variant: the device's own atan2
+#endif
     bool swap = y > x;
     float t = swap ? x / y : y / x;
     t = t / (1.0 + sqrt(1.0 + t * t));

@@ -5,6 +5,7 @@
 use crate::backend::Request;
 use crate::batch::Batch;
 use crate::material::{Convention, Distribution, Fresnel, Geometry, Material, Model};
+use crate::precision::Precision;
 
 macro_rules! features {
     ($($(#[$doc:meta])* $name:ident = $bit:expr, $define:literal;)*) => {
@@ -75,6 +76,8 @@ features! {
     /// The kernel makes its own directions: the half/difference slice grid of
     /// `table slice`, from the push constants (no tuple is read).
     GENERATED_SLICE = 26, "GENERATE_HALF_DIFF";
+    /// Every material is the fast precision variant: the device's own exp/log/atan2.
+    FAST_MATH = 27, "FAST_MATH";
 }
 
 impl FeatureSet {
@@ -83,11 +86,16 @@ impl FeatureSet {
 
     /// Every kernel feature (the all-features kernel, the baseline of the specialisation
     /// measurement). `MEASURED` is not a kernel feature: measured materials are evaluated
-    /// by the CPU reference; `GENERATED_SLICE` is an input mode, not a feature.
+    /// by the CPU reference; `GENERATED_SLICE` is an input mode and `FAST_MATH` a precision
+    /// variant, not features.
     pub fn all() -> FeatureSet {
         FeatureSet::ALL_NAMED
             .iter()
-            .filter(|(f, _)| *f != FeatureSet::MEASURED && *f != FeatureSet::GENERATED_SLICE)
+            .filter(|(f, _)| {
+                *f != FeatureSet::MEASURED
+                    && *f != FeatureSet::GENERATED_SLICE
+                    && *f != FeatureSet::FAST_MATH
+            })
             .fold(FeatureSet::EMPTY, |a, (f, _)| a | *f)
     }
 
@@ -164,6 +172,17 @@ impl FeatureSet {
             .fold(FeatureSet::EMPTY, |a, (m, _)| {
                 a | FeatureSet::of_material(m)
             });
+        // Built-in math only when every material used asked for the fast variant: an exact
+        // material in the same batch keeps the accurate functions (and fast ones then run
+        // with them, still with their rewritten terms).
+        let used_fast = materials.iter().zip(&used).filter(|(_, &u)| u);
+        if used.iter().any(|&u| u)
+            && used_fast
+                .clone()
+                .all(|(m, _)| m.precision == Precision::Fast)
+        {
+            f |= FeatureSet::FAST_MATH;
+        }
         if batch.has_tangents() {
             f |= FeatureSet::TANGENTS;
         }
@@ -210,5 +229,35 @@ impl std::fmt::Display for FeatureSet {
                 names.join("+")
             }
         )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::material::presets::preset;
+    use crate::precision::apply;
+    use std::path::Path;
+
+    fn batch(materials: &[usize], count: usize) -> Batch {
+        let data = materials
+            .iter()
+            .flat_map(|&m| [0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0, m as f32])
+            .collect();
+        Batch::new(data, 10, count, Path::new("test")).unwrap()
+    }
+
+    #[test]
+    fn fast_math_only_when_every_material_used_is_fast() {
+        let gold = preset("gold").unwrap().unwrap();
+        let fast = apply(&gold, Precision::Fast);
+        let table = [gold, fast];
+        let r = Request::default();
+        let of = |rows: &[usize]| FeatureSet::of_batch(&batch(rows, 2), &table, &r);
+        assert!(of(&[1, 1]).contains(FeatureSet::FAST_MATH));
+        assert!(!of(&[0, 1]).contains(FeatureSet::FAST_MATH));
+        assert!(!of(&[0]).contains(FeatureSet::FAST_MATH));
+        assert!(!of(&[]).contains(FeatureSet::FAST_MATH));
+        assert!(!FeatureSet::all().contains(FeatureSet::FAST_MATH));
     }
 }

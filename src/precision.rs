@@ -8,7 +8,12 @@
 //!   rational `smith-fast` (≤ 0.35 % per G1).
 //!
 //! Everything else (the other models, GGX's Smith, which is already a square root) is left
-//! as it is. Errors are always measured against the reference of the **exact** material.
+//! as it is. The material is marked [`Precision::Fast`]; a Vulkan kernel whose materials
+//! are all fast also swaps the kernel's accurate `exp`, `log`, `ln cos` and `atan2` for
+//! the device's built-in functions (`FAST_MATH` in glsl/math.glsl: on lavapipe `exp` is up
+//! to 65 ulp off, `ln cos` from `cos` loses the relative precision near the peak). The CPU
+//! reference evaluates the rewritten terms in f64. Errors are always measured against the
+//! reference of the **exact** material.
 
 use crate::material::{f0_from_ior, Distribution, Fresnel, Geometry, Material, Model};
 
@@ -32,12 +37,13 @@ impl Precision {
     }
 }
 
-/// `m` rewritten for `precision` (a clone for `Exact`).
+/// `m` rewritten for `precision` (a clone for `Exact`; measured materials stay exact).
 pub fn apply(m: &Material, precision: Precision) -> Material {
     let mut out = m.clone();
-    if precision == Precision::Exact {
+    if precision == Precision::Exact || matches!(m.model, Model::Measured(_)) {
         return out;
     }
+    out.precision = Precision::Fast;
     if let Model::CookTorrance(ct) = &mut out.model {
         ct.fresnel = match ct.fresnel {
             Fresnel::Dielectric { ior } => Fresnel::Schlick {

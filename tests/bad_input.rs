@@ -420,3 +420,16 @@ fn measured_material_needs_a_readable_merl_file() {
     );
     assert_material_error(&text, &["key `file`", "bogus.binary"]);
 }
+
+#[test]
+fn a_measured_material_has_no_fast_variant() {
+    assert_material_error(
+        "[[material]]\nname = \"m\"\nmodel = \"merl\"\nfile = \"x.binary\"\nprecision = \"fast\"\n",
+        &[
+            "m.toml:5",
+            "material `m`",
+            "key `precision`",
+            "no fast variant",
+        ],
+    );
+}

@@ -23,6 +23,9 @@ pub struct Material {
     pub diffuse: Rgb,
     /// `c_spec`: specular colour (default white).
     pub specular: Rgb,
+    /// The variant evaluated: `Exact`, or `Fast` once [`crate::precision::apply`] has
+    /// rewritten the terms (the kernel then also uses the device's own exp/log/atan2).
+    pub precision: crate::precision::Precision,
 }
 
 /// The reflection models of FORMULAS.md §6, each with the parameters its formula uses.

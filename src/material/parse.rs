@@ -430,11 +430,18 @@ impl Fields<'_, '_> {
         )?;
         if model == "merl" {
             // Measured data carries its own colour: diffuse/specular do not apply.
+            if self.string("precision", &["exact", "fast"])?.as_deref() == Some("fast") {
+                return Err(self.err(
+                    "precision",
+                    "a measured material has no fast variant (it is a table lookup)".into(),
+                ));
+            }
             return Ok(Material {
                 name: self.name.clone(),
                 model: Model::Measured(self.measured()?),
                 diffuse: [0.0; 3],
                 specular: [1.0; 3],
+                precision: crate::precision::Precision::Exact,
             });
         }
         let diffuse = self.rgb("diffuse", non_negative)?.unwrap_or([0.0; 3]);
@@ -460,15 +467,7 @@ impl Fields<'_, '_> {
             _ => Model::CookTorrance(self.cook_torrance()?),
         };
         let precision = match self.string("precision", &["exact", "fast"])?.as_deref() {
-            Some("fast") if matches!(model, Model::CookTorrance(_)) => {
-                crate::precision::Precision::Fast
-            }
-            Some("fast") => {
-                return Err(self.err(
-                    "precision",
-                    "only cook-torrance materials have a fast variant".into(),
-                ))
-            }
+            Some("fast") => crate::precision::Precision::Fast,
             _ => crate::precision::Precision::Exact,
         };
         let material = Material {
@@ -476,6 +475,7 @@ impl Fields<'_, '_> {
             model,
             diffuse,
             specular,
+            precision: crate::precision::Precision::Exact,
         };
         Ok(crate::precision::apply(&material, precision))
     }

@@ -39,6 +39,9 @@ impl VulkanBackend {
         if request.terms {
             f |= FeatureSet::TERMS;
         }
+        if material.precision == crate::precision::Precision::Fast {
+            f |= FeatureSet::FAST_MATH;
+        }
         Ok(f)
     }
 
