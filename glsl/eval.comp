@@ -279,35 +279,31 @@ Eval evaluate(Frame f, GpuMaterial m) {
     }
 }
 
-void main() {
-    uint row = gl_GlobalInvocationID.x;
-    uint status = STATUS_VALID;
-    // No early return: every invocation of the subgroup takes part in the reduction below.
-    if (row < params.tuple_count) {
-        // The batch validated every index; the clamp only keeps a corrupted buffer from
-        // reading outside the table.
+// Evaluates row `row` of the chunk, stores its outputs and counts it.
+void evaluate_row(uint row) {
+    // The batch validated every index; the clamp only keeps a corrupted buffer from
+    // reading outside the table.
 #if defined(GENERATE_HALF_DIFF)
-        Row r = half_diff_row(params.first_row + row);
+    Row r = half_diff_row(params.first_row + row);
 #else
-        Row r = load_row(row);
+    Row r = load_row(row);
 #endif
-        uint mi = min(uint(r.material), params.material_count - 1u);
-        GpuMaterial m = materials[mi];
-        Frame f;
-        status = make_frame(r, m, f);
-        Eval e = status == STATUS_VALID ? evaluate(f, m) : eval_zero();
-        brdf_out[row * 3u] = e.brdf.r;
-        brdf_out[row * 3u + 1u] = e.brdf.g;
-        brdf_out[row * 3u + 2u] = e.brdf.b;
+    uint mi = min(uint(r.material), params.material_count - 1u);
+    GpuMaterial m = materials[mi];
+    Frame f;
+    uint status = make_frame(r, m, f);
+    Eval e = status == STATUS_VALID ? evaluate(f, m) : eval_zero();
+    brdf_out[row * 3u] = e.brdf.r;
+    brdf_out[row * 3u + 1u] = e.brdf.g;
+    brdf_out[row * 3u + 2u] = e.brdf.b;
 #if defined(WRITE_TERMS)
-        terms_out[row * 6u] = e.d;
-        terms_out[row * 6u + 1u] = e.g;
-        terms_out[row * 6u + 2u] = e.f.r;
-        terms_out[row * 6u + 3u] = e.f.g;
-        terms_out[row * 6u + 4u] = e.f.b;
-        terms_out[row * 6u + 5u] = e.k;
+    terms_out[row * 6u] = e.d;
+    terms_out[row * 6u + 1u] = e.g;
+    terms_out[row * 6u + 2u] = e.f.r;
+    terms_out[row * 6u + 3u] = e.f.g;
+    terms_out[row * 6u + 4u] = e.f.b;
+    terms_out[row * 6u + 5u] = e.k;
 #endif
-    }
 
     // Counts, only where there is something to count: the block runs for the invocations
     // whose tuple is invalid or below the horizon, and llvmpipe skips it altogether when a
@@ -315,7 +311,8 @@ void main() {
     // active invocations only, so one atomic per subgroup, not per tuple (below-horizon
     // tuples are common: per-tuple atomics would serialise on one address). Measured on
     // lavapipe, 4M tuples with nothing to count: Lambert without loads and stores 148 ->
-    // ~270 M/s against a reduction over every invocation (`examples/kernel_time.rs`).
+    // ~270 M/s against a reduction over every invocation; the whole kernel 1.1-1.3x
+    // (`examples/kernel_time.rs`); with half the tuples below the horizon, no change.
     // Deliberately not a workgroup reduction in shared memory: that needs barrier(), and
     // llvmpipe runs any shader with a barrier through coroutines, which made the whole
     // kernel 2.7x slower on lavapipe (measured: 280 vs 103 ms for 4M tuples of a
@@ -350,5 +347,14 @@ void main() {
             atomicAdd(below_horizon_count, 1u);
         }
 #endif
+    }
+}
+
+void main() {
+    uint row = gl_GlobalInvocationID.x;
+    // Out-of-range invocations of the last workgroup simply stop: the counts' subgroup
+    // operations reduce over the invocations still active.
+    if (row < params.tuple_count) {
+        evaluate_row(row);
     }
 }

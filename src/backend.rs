@@ -88,9 +88,10 @@ pub trait Backend {
     ) -> Result<Output>;
 
     /// The half/difference slice `grid` of `material` (row-major texels, θ_h fastest)
-    /// with the directions made by the backend itself, or `None` when it has no such path:
-    /// the caller then builds the tuples ([`crate::table::slice::compute`] does). The
-    /// Vulkan backend makes them on the device.
+    /// with the directions made by the backend itself, or `None` when it has no such path
+    /// (or none for this grid): the caller then builds the tuples
+    /// ([`crate::table::slice::compute`] does). The Vulkan backend makes them on the device
+    /// for grids up to 2²⁴ texels.
     fn half_diff_slice(
         &mut self,
         _material: &Material,

@@ -63,7 +63,9 @@ pub struct MaterialArgs {
 #[command(after_help = "\
 Columns: theta_h = x^2 * 90° (MERL's square-root spacing; --linear: x * 90°); rows:
 theta_d = y * 90°; phi_d = 90°, phi_h = 0, n = +z, t = +x. Layer `brdf` holds R, G, B = f
-in 1/sr; --terms adds layer `terms` with D, G, F.R, F.G, F.B, K.
+in 1/sr; --terms adds layer `terms` with D, G, F.R, F.G, F.B, K. On Vulkan the kernel
+makes the directions itself (nothing but the material is uploaded; up to 2^24 texels);
+--backend cpu evaluates host-made directions with the f64 reference.
 
 Example:
   vkbrdf table slice --materials m.toml --material plastic --output plastic.exr --terms")]
