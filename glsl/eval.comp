@@ -115,7 +115,7 @@ Row load_row(uint row) {
     return r;
 }
 
-#if defined(GENERATE_HALF_DIFF)
+#if defined(GENERATE_HALF_DIFF) || defined(GENERATE_IMPORTANCE)
 // Texel `g` of the half/difference slice (src/table/slice.rs, Rusinkiewicz 1998), made on
 // the device instead of read: column i -> x = (i + 1/2)/W, theta_h = x^2 pi/2 (or x pi/2);
 // row j -> theta_d = (j + 1/2)/H pi/2; phi_d = 90 degrees, phi_h = 0, n = +z, material 0,
@@ -146,13 +146,17 @@ vec2 sin_cos_quadrant(float u, float ubar) {
     return u <= 0.5 ? sin_cos_eighth(u) : sin_cos_eighth(ubar).yx;
 }
 
-Row half_diff_row(uint g) {
-    // j = g / W without an integer division (x86 has no vector one: llvmpipe would divide
-    // lane by lane): g < 2^24 (MAX_GENERATED_TEXELS on the host) is exact in f32, so the
-    // rounded quotient is within one of it, and the correction makes it exact.
-    uint w = params.grid_width;
+// g / w, without an integer division (x86 has no vector one: llvmpipe would divide lane
+// by lane): g < 2^24 (MAX_GENERATED_TEXELS on the host) is exact in f32, so the rounded
+// quotient is within one of the true one, and the correction makes it exact.
+uint quotient(uint g, uint w) {
     uint j = uint(float(g) / float(w));
-    j = j * w > g ? j - 1u : ((j + 1u) * w <= g ? j + 1u : j);
+    return j * w > g ? j - 1u : ((j + 1u) * w <= g ? j + 1u : j);
+}
+
+Row half_diff_row(uint g) {
+    uint w = params.grid_width;
+    uint j = quotient(g, w);
     uint i = g - j * w;
     // Column and row centres x = (i + 1/2)/W, y = (j + 1/2)/H and their complements, each
     // one rounding.
@@ -175,6 +179,7 @@ Row half_diff_row(uint g) {
     return r;
 }
 #endif
+
 
 // Builds the frame of FORMULAS.md §1 and classifies the tuple. The invalid test comes first.
 #if defined(HAS_FLOAT64)
@@ -279,6 +284,98 @@ Eval evaluate(Frame f, GpuMaterial m) {
     }
 }
 
+#if defined(GENERATE_IMPORTANCE)
+// ============================================================ importance-sampled integrals
+// The albedo and split-sum DFG tables (src/table/albedo.rs, which states the method and
+// its accuracy): invocation g integrates SAMPLES_PER_BLOCK samples of one (mu, alpha)
+// point, making each sample's l on the device, and writes the block's sums of
+// x = f cos_i / pdf(l) and x (1 - c)^5; the host adds the blocks in f64. Push constants:
+// grid_width = blocks per point, grid_height = samples per point N, spacing = lobe
+// (0 GGX by its visible normals, 1 Beckmann by D cos_h). Per point, 4 texels of the input
+// (the host's f64 sampling constants, rounded once): (v, G1(v)), (t1, s), (t2, alpha),
+// (v_h, material).
+const uint SAMPLES_PER_BLOCK = 256u;
+
+// (sin, cos) of 2 pi u for u in [0, 1): the quadrant q = floor(4u) by exact f32
+// arithmetic, the rest by sin_cos_quadrant.
+vec2 sin_cos_turn(float u) {
+    float q = floor(4.0 * u);
+    float t = 4.0 * u - q; // exact: 4u is exact and q is its integer part
+    vec2 sc = sin_cos_quadrant(t, 1.0 - t);
+    return q == 0.0 ? sc : q == 1.0 ? vec2(sc.y, -sc.x) : q == 2.0 ? -sc : vec2(-sc.y, sc.x);
+}
+
+void importance_block(uint g) {
+    uint blocks = params.grid_width;
+    uint n = params.grid_height;
+    uint p = quotient(g, blocks);
+    uint b = g - p * blocks;
+    vec4 t0 = texelFetch(tuple_texels, int(4u * p));
+    vec4 t1 = texelFetch(tuple_texels, int(4u * p + 1u));
+    vec4 t2 = texelFetch(tuple_texels, int(4u * p + 2u));
+    vec4 t3 = texelFetch(tuple_texels, int(4u * p + 3u));
+    vec3 v = t0.xyz;
+    float g1 = t0.w, s = t1.w, alpha = t2.w;
+    uint mi = min(uint(t3.w), params.material_count - 1u);
+    GpuMaterial m = materials[mi];
+    bool ggx = params.spacing == 0u;
+    float sum = 0.0, sum5 = 0.0;
+    uint first = b * SAMPLES_PER_BLOCK;
+    uint last = min(first + SAMPLES_PER_BLOCK, n);
+    for (uint k = first; k < last; k++) {
+        // Hammersley point k of n: ((k + 1/2)/n, radical inverse of k).
+        float u1 = (float(k) + 0.5) / float(n);
+        float u2 = float(bitfieldReverse(k)) * (1.0 / 4294967296.0);
+        vec2 phi = sin_cos_turn(u2); // (sin, cos)
+        vec3 h;
+        if (ggx) {
+            // Heitz 2018, "Sampling the GGX Distribution of Visible Normals", listing 1.
+            float r = sqrt(u1);
+            float p1 = r * phi.y;
+            float p2 = (1.0 - s) * sqrt(max(1.0 - p1 * p1, 0.0)) + s * r * phi.x;
+            float p3 = sqrt(max(1.0 - p1 * p1 - p2 * p2, 0.0));
+            vec3 nh = p1 * t1.xyz + p2 * t2.xyz + p3 * t3.xyz;
+            h = normalize(vec3(alpha * nh.x, alpha * nh.y, max(nh.z, 0.0)));
+        } else {
+            // D cos_h: tan^2 = -alpha^2 ln(1 - u1), by log1p (u1 is as small as 1/(2n)).
+            float tan2 = alpha * alpha * -log1p_acc(-u1);
+            float cos_t = inversesqrt(1.0 + tan2);
+            float sin_t = sqrt(tan2) * cos_t;
+            h = vec3(sin_t * phi.y, sin_t * phi.x, cos_t);
+        }
+        vec3 l = 2.0 * dot(v, h) * h - v;
+        if (!(l.z > 0.0)) {
+            continue; // below the horizon: f = 0 (a NaN l from a degenerate h too)
+        }
+        Row r;
+        r.l = l;
+        r.v = v;
+        r.n = vec3(0.0, 0.0, 1.0);
+        r.material = 0.0;
+        r.t = vec3(0.0);
+        Frame f;
+        if (make_frame(r, m, f) != STATUS_VALID) {
+            continue;
+        }
+        Eval e = evaluate(f, m);
+        // pdf(l) from the same f32 frame and D as f, so that D cancels consistently:
+        // GGX G1(v) D / (4 cos_o), Beckmann D cos_h / (4 c).
+        float pdf = ggx ? g1 * e.d / (4.0 * f.cos_o) : e.d * f.cos_h / (4.0 * f.c);
+        float x = e.brdf.r * (f.cos_i / pdf);
+        if (non_finite(x)) {
+            continue; // pdf underflowed to 0: the host drops such samples too
+        }
+        float w = 1.0 - clamp(f.c, 0.0, 1.0);
+        float w2 = w * w;
+        sum += x;
+        sum5 += x * (w2 * w2 * w);
+    }
+    brdf_out[3u * g] = sum;
+    brdf_out[3u * g + 1u] = sum5;
+    brdf_out[3u * g + 2u] = 0.0;
+}
+#endif
+
 // Evaluates row `row` of the chunk, stores its outputs and counts it.
 void evaluate_row(uint row) {
     // The batch validated every index; the clamp only keeps a corrupted buffer from
@@ -355,6 +452,10 @@ void main() {
     // Out-of-range invocations of the last workgroup simply stop: the counts' subgroup
     // operations reduce over the invocations still active.
     if (row < params.tuple_count) {
+#if defined(GENERATE_IMPORTANCE)
+        importance_block(params.first_row + row);
+#else
         evaluate_row(row);
+#endif
     }
 }

@@ -73,6 +73,38 @@ impl SliceGrid {
     }
 }
 
+/// One `(μ, α)` point of an importance-sampled table integral ([`crate::table::albedo`]
+/// states the method): its sampling constants, computed in f64 on the host and rounded
+/// once.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ImportancePoint {
+    /// The view direction `v` (unit, n = +z).
+    pub v: [f32; 3],
+    /// `G1(v)` (GGX's visible-normal density).
+    pub g1: f32,
+    /// GGX: the stretched view's hemisphere frame `t1`, `t2`, `v_h` and `s = (1 + v_h.z)/2`.
+    pub frame: [[f32; 3]; 3],
+    /// See `frame`.
+    pub s: f32,
+    /// The roughness α.
+    pub alpha: f32,
+    /// Index into the job's material table.
+    pub material: u32,
+}
+
+/// An importance-sampled table integral for [`Backend::importance_sums`].
+#[derive(Debug, Clone, Copy)]
+pub struct ImportanceJob<'a> {
+    /// GGX by its visible normals (`true`) or Beckmann by `D cos_h`.
+    pub ggx: bool,
+    /// The points.
+    pub points: &'a [ImportancePoint],
+    /// The materials the points index (F = 1 Cook–Torrance).
+    pub materials: &'a [Material],
+    /// Hammersley points per `(μ, α)` point.
+    pub samples: u32,
+}
+
 /// An evaluator of BRDF batches.
 pub trait Backend {
     /// A short human-readable name (e.g. `cpu-reference`, `vulkan: llvmpipe`).
@@ -98,6 +130,15 @@ pub trait Backend {
         _grid: SliceGrid,
         _request: &Request,
     ) -> Option<Result<Output>> {
+        None
+    }
+
+    /// For each point of `job`, `(1/N) Σ x` and `(1/N) Σ x (1 − c)⁵` over its N samples,
+    /// `x = f cos_i / pdf(l)`, with the sample directions made by the backend itself; or
+    /// `None` when it has no such path (the caller then sends the samples as tuples, as
+    /// [`crate::table::albedo::integrate`] does). The Vulkan backend makes them on the
+    /// device.
+    fn importance_sums(&mut self, _job: &ImportanceJob) -> Option<Result<Vec<[f64; 2]>>> {
         None
     }
 }

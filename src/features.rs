@@ -76,6 +76,9 @@ features! {
     /// The kernel makes its own directions: the half/difference slice grid of
     /// `table slice`, from the push constants (no tuple is read).
     GENERATED_SLICE = 26, "GENERATE_HALF_DIFF";
+    /// The kernel makes importance-sampled directions and sums per block: the albedo and
+    /// DFG tables (no tuple is read but each point's sampling constants).
+    GENERATED_IMPORTANCE = 28, "GENERATE_IMPORTANCE";
     /// Every material is the fast precision variant: the device's own exp/log/atan2.
     FAST_MATH = 27, "FAST_MATH";
 }
@@ -86,7 +89,7 @@ impl FeatureSet {
 
     /// Every kernel feature (the all-features kernel, the baseline of the specialisation
     /// measurement). `MEASURED` is not a kernel feature: measured materials are evaluated
-    /// by the CPU reference; `GENERATED_SLICE` is an input mode and `FAST_MATH` a precision
+    /// by the CPU reference; `GENERATED_SLICE` and `GENERATED_IMPORTANCE` are input modes and `FAST_MATH` a precision
     /// variant, not features.
     pub fn all() -> FeatureSet {
         FeatureSet::ALL_NAMED
@@ -95,6 +98,7 @@ impl FeatureSet {
                 *f != FeatureSet::MEASURED
                     && *f != FeatureSet::GENERATED_SLICE
                     && *f != FeatureSet::FAST_MATH
+                    && *f != FeatureSet::GENERATED_IMPORTANCE
             })
             .fold(FeatureSet::EMPTY, |a, (f, _)| a | *f)
     }

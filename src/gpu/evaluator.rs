@@ -700,6 +700,13 @@ impl Backend for VulkanBackend {
         (grid.texels() <= generated::MAX_GENERATED_TEXELS)
             .then(|| VulkanBackend::half_diff_slice(self, material, grid, request))
     }
+
+    fn importance_sums(
+        &mut self,
+        job: &crate::backend::ImportanceJob,
+    ) -> Option<Result<Vec<[f64; 2]>>> {
+        Some(VulkanBackend::importance_sums(self, job))
+    }
 }
 
 impl Drop for VulkanBackend {

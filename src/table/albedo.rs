@@ -15,6 +15,7 @@
 
 use super::exr_out::{self, Channel, Layer, Provenance};
 use super::{as_f32, push_row, texel_centre, Grid, Runner, NORMAL};
+use crate::backend::{ImportanceJob, ImportancePoint};
 use crate::batch::COLUMNS_PLAIN;
 use crate::error::{Error, Result};
 use crate::material::{Geometry, Material};
@@ -372,6 +373,47 @@ impl Plan<'_> {
     }
 }
 
+/// The integrals of [`integrate`] for the tables' two weightings at once — per point
+/// `(1/N) Σ x` and `(1/N) Σ x (1 − c)⁵`, `x = f cos_i / pdf(l)` — with the sample
+/// directions made by the backend itself ([`Runner::importance_sums`]: the Vulkan kernel
+/// makes them on the device from the same Hammersley points and mappings), or `None` when
+/// the backend has no such path.
+pub fn backend_sums(
+    runner: &mut Runner,
+    spec: &Microfacet,
+    points: &[(f64, f64)],
+    samples: u32,
+    what: &str,
+) -> Option<Result<Vec<[f64; 2]>>> {
+    let (materials, index) = match materials_for(spec, points) {
+        Ok(x) => x,
+        Err(e) => return Some(Err(e)),
+    };
+    let f32s = |a: [f64; 3]| a.map(|x| x as f32);
+    let points: Vec<ImportancePoint> = points
+        .iter()
+        .zip(&index)
+        .map(|(&(mu, alpha), &material)| {
+            let view = View::new(spec.lobe, mu, alpha);
+            ImportancePoint {
+                v: f32s(view.v),
+                g1: view.g1 as f32,
+                frame: view.frame.map(f32s),
+                s: view.s as f32,
+                alpha: alpha as f32,
+                material: material as u32,
+            }
+        })
+        .collect();
+    let job = ImportanceJob {
+        ggx: spec.lobe == Lobe::Ggx,
+        points: &points,
+        materials: &materials,
+        samples,
+    };
+    runner.importance_sums(what, &job)
+}
+
 /// One material per distinct α of `points`, and each point's index into that table.
 fn materials_for(spec: &Microfacet, points: &[(f64, f64)]) -> Result<(Vec<Material>, Vec<usize>)> {
     let mut alphas: Vec<u64> = Vec::new();
@@ -398,6 +440,9 @@ pub fn directional_albedo(
     points: &[(f64, f64)],
     samples: u32,
 ) -> Result<Vec<f64>> {
+    if let Some(sums) = backend_sums(runner, spec, points, samples, "albedo") {
+        return Ok(sums?.into_iter().map(|[x, _]| x).collect());
+    }
     let e = integrate(runner, spec, points, samples, "albedo", |_| [1.0])?;
     Ok(e.into_iter().map(|[x]| x).collect())
 }
@@ -415,7 +460,10 @@ pub fn average_albedo(
         .iter()
         .flat_map(|&a| nodes.iter().map(move |&(mu, _)| (mu, a)))
         .collect();
-    let e = integrate(runner, spec, &points, samples, "E_avg", |_| [1.0])?;
+    let e: Vec<[f64; 1]> = match backend_sums(runner, spec, &points, samples, "E_avg") {
+        Some(sums) => sums?.into_iter().map(|[x, _]| [x]).collect(),
+        None => integrate(runner, spec, &points, samples, "E_avg", |_| [1.0])?,
+    };
     Ok(e.chunks(nodes.len())
         .map(|row| {
             row.iter()

@@ -26,6 +26,10 @@ pub fn split_sum(
     points: &[(f64, f64)],
     samples: u32,
 ) -> Result<Vec<[f64; 2]>> {
+    if let Some(sums) = albedo::backend_sums(runner, spec, points, samples, "dfg") {
+        // A = Σ x (1 − w) = Σ x − Σ x w, B = Σ x w.
+        return Ok(sums?.into_iter().map(|[x, xw]| [x - xw, xw]).collect());
+    }
     albedo::integrate(runner, spec, points, samples, "dfg", |c| {
         let w = schlick_weight(c);
         [1.0 - w, w]

@@ -320,6 +320,21 @@ impl<'a> Runner<'a> {
         }))
     }
 
+    /// The backend's own importance-sampled sums ([`Backend::importance_sums`]), shown on
+    /// the progress bar as `what`, or `None` when the backend has no such path.
+    pub fn importance_sums(
+        &mut self,
+        what: &str,
+        job: &crate::backend::ImportanceJob,
+    ) -> Option<Result<Vec<[f64; 2]>>> {
+        let total = job.points.len() as u64 * u64::from(job.samples);
+        self.start(what, total);
+        let sums = self.backend.importance_sums(job)?;
+        self.advance(total);
+        self.finish();
+        Some(sums)
+    }
+
     /// Evaluates rows built by [`push_row`] (13 columns when [`needs_tangents`]`(materials)`,
     /// else 10) with `materials`, and checks that the backend found no invalid tuple: the
     /// generators only build valid ones, so an invalid count is a bug worth stopping for.

@@ -5,7 +5,8 @@
 //! 40 bytes per texel.
 
 use super::*;
-use crate::backend::SliceGrid;
+use crate::backend::{ImportanceJob, SliceGrid};
+use crate::precision::Precision;
 use std::time::Instant;
 
 /// Largest grid the generated-direction kernel takes: its texel index must be exact in
@@ -39,7 +40,7 @@ impl VulkanBackend {
         if request.terms {
             f |= FeatureSet::TERMS;
         }
-        if material.precision == crate::precision::Precision::Fast {
+        if material.precision == Precision::Fast {
             f |= FeatureSet::FAST_MATH;
         }
         Ok(f)
@@ -149,5 +150,125 @@ impl VulkanBackend {
             Ok(crate::bench::median(secs))
         })();
         result.inspect_err(|_| self.recover())
+    }
+}
+
+/// Samples one invocation of the importance kernel sums (`SAMPLES_PER_BLOCK` in
+/// glsl/eval.comp): enough work per invocation to hide its set-up, enough invocations
+/// (1024 points × 256 blocks at 2¹⁶ samples) to fill a GPU.
+pub const SAMPLES_PER_BLOCK: u32 = 256;
+
+impl VulkanBackend {
+    /// [`Backend::importance_sums`] on the device: one invocation per block of
+    /// [`SAMPLES_PER_BLOCK`] samples of one point, which makes its directions, evaluates f
+    /// and sums in f32; the blocks are added here in f64.
+    pub fn importance_sums(&mut self, job: &ImportanceJob) -> Result<Vec<[f64; 2]>> {
+        let samples = job.samples;
+        if samples == 0 {
+            return Err(Error::Table("--samples must be at least 1".into()));
+        }
+        let blocks = samples.div_ceil(SAMPLES_PER_BLOCK);
+        let total = job.points.len() as u64 * u64::from(blocks);
+        if total > MAX_GENERATED_TEXELS {
+            return Err(Error::Unsupported(format!(
+                "{} points x {blocks} blocks of samples: the importance kernel takes up to 2^24 blocks",
+                job.points.len()
+            )));
+        }
+        let mut features = job
+            .materials
+            .iter()
+            .fold(FeatureSet::GENERATED_IMPORTANCE, |f, m| {
+                f | FeatureSet::of_material(m)
+            });
+        if features.contains(FeatureSet::MEASURED) {
+            return Err(Error::Unsupported(
+                "a measured material has no importance-sampling kernel".into(),
+            ));
+        }
+        if job.materials.iter().all(|m| m.precision == Precision::Fast) {
+            features |= FeatureSet::FAST_MATH;
+        }
+        let input: Vec<f32> = job
+            .points
+            .iter()
+            .flat_map(|p| {
+                let [t1, t2, vh] = p.frame;
+                [
+                    p.v[0],
+                    p.v[1],
+                    p.v[2],
+                    p.g1,
+                    t1[0],
+                    t1[1],
+                    t1[2],
+                    p.s,
+                    t2[0],
+                    t2[1],
+                    t2[2],
+                    p.alpha,
+                    vh[0],
+                    vh[1],
+                    vh[2],
+                    p.material as f32,
+                ]
+            })
+            .collect();
+        let n = total as usize;
+        let chunk = self.chunk_tuples(job.materials.len())?;
+        let pipeline = self.kernels.pipeline(features)?.raw();
+        self.upload_materials(&gpu_materials(job.materials))?;
+        self.last_features = Some(features);
+        let mut out = Output {
+            brdf: vec![0.0; n * 3],
+            ..Output::default()
+        };
+        let result = (|| {
+            let chunks = n.div_ceil(chunk);
+            for c in 0..chunks {
+                let s = c % FRAMES_IN_FLIGHT;
+                self.finish(s, &mut out)?;
+                let (start, len) = (c * chunk, chunk.min(n - c * chunk));
+                self.prepare(s, input.len(), len * 3, 0)?;
+                // SAFETY: the slot's previous chunk was finished above (fence waited).
+                unsafe {
+                    let slot = &mut self.slots[s];
+                    slot.input.as_mut().expect("prepared").write(0, &input);
+                    slot.counts.write(0, &[GpuCounts::INITIAL]);
+                }
+                let pending = Pending {
+                    brdf: start * 3..(start + len) * 3,
+                    terms: None,
+                    first_row: start as u64,
+                };
+                let push = PushConstants {
+                    tuple_count: len as u32,
+                    material_count: job.materials.len() as u32,
+                    first_row: start as u32,
+                    grid_width: blocks,
+                    grid_height: samples,
+                    spacing: u32::from(!job.ggx),
+                };
+                self.submit(s, pipeline, push, pending)?;
+            }
+            for k in 0..FRAMES_IN_FLIGHT {
+                self.finish((chunks + k) % FRAMES_IN_FLIGHT, &mut out)?;
+            }
+            Ok::<(), Error>(())
+        })();
+        result.inspect_err(|_| self.recover())?;
+        let inv = 1.0 / f64::from(samples);
+        Ok(out
+            .brdf
+            .chunks(3 * blocks as usize)
+            .map(|point| {
+                let (mut a, mut b) = (0.0f64, 0.0f64);
+                for block in point.chunks(3) {
+                    a += f64::from(block[0]);
+                    b += f64::from(block[1]);
+                }
+                [a * inv, b * inv]
+            })
+            .collect())
     }
 }
