@@ -25,8 +25,18 @@ fn main() -> vkbrdf::Result<()> {
     let mut args = std::env::args().skip(1);
     while let Some(a) = args.next() {
         match a.as_str() {
-            "--tuples" => n = args.next().and_then(|v| v.parse().ok()).expect("--tuples N"),
-            "--rounds" => rounds = args.next().and_then(|v| v.parse().ok()).expect("--rounds R"),
+            "--tuples" => {
+                n = args
+                    .next()
+                    .and_then(|v| v.parse().ok())
+                    .expect("--tuples N")
+            }
+            "--rounds" => {
+                rounds = args
+                    .next()
+                    .and_then(|v| v.parse().ok())
+                    .expect("--rounds R")
+            }
             "--variant" => variants.push(args.next().expect("--variant SPEC")),
             _ => names.push(a),
         }
@@ -63,7 +73,8 @@ fn main() -> vkbrdf::Result<()> {
     for _ in 0..rounds {
         for (i, s) in chosen.iter().enumerate() {
             for (j, gpu) in gpus.iter_mut().enumerate() {
-                let t = gpu.kernel_seconds(&batches[i], &s.materials, &Request { terms: false }, 3)?;
+                let t =
+                    gpu.kernel_seconds(&batches[i], &s.materials, &Request { terms: false }, 3)?;
                 best[i][j] = best[i][j].max(n as f64 / t / 1e6);
             }
         }

@@ -183,11 +183,10 @@ Row half_diff_row(uint g) {
 
 // Builds the frame of FORMULAS.md §1 and classifies the tuple. The invalid test comes first.
 #if defined(HAS_FLOAT64)
-// a.b / (|a| |b|) in f64 from f32 vectors (both finite and non-zero: checked before).
-double cosine64(vec3 a, vec3 b) {
-    dvec3 da = dvec3(a);
-    dvec3 db = dvec3(b);
-    return dot(da, db) / sqrt(dot(da, da) * dot(db, db));
+// a/|a| in f64 from an f32 vector (finite and non-zero: checked before).
+dvec3 unit64(vec3 a) {
+    dvec3 d = dvec3(a);
+    return d / sqrt(dot(d, d));
 }
 #endif
 
@@ -226,18 +225,38 @@ uint make_frame(Row r, GpuMaterial m, out Frame f) {
     }
 #endif
 #if defined(HAS_FLOAT64)
-    // cos_i and cos_o from the raw f32 inputs in f64: the products of f32 values are exact
-    // in f64 and the lengths carry no cancellation, so the cosines come out with full f32
-    // relative precision even at grazing angles. In f32, normalising l and n first leaves
-    // each cosine ~1e-7 off in absolute terms: K = 1/(4 cos_i cos_o) is then wrong by O(1)
-    // below cos ~1e-6 and the horizon test falls on the wrong side (the stress corpus's
-    // grazing regime). Squares of f32 values (<= 1.2e77) and of subnormals stay in f64 range.
-    f.cos_i = float(cosine64(r.n, r.l));
-    f.cos_o = float(cosine64(r.n, r.v));
+    // The frame's scalars in f64 from the raw f32 inputs (the products of f32 values are
+    // exact in f64; squares of f32 values, <= 1.2e77, and of subnormals stay in range):
+    // - cos_i, cos_o with full f32 relative precision even at grazing angles. In f32,
+    //   normalising l and n first leaves each cosine ~1e-7 off in absolute terms: K =
+    //   1/(4 cos_i cos_o) is then wrong by O(1) below cos ~1e-6 and the horizon test falls
+    //   on the wrong side (the stress corpus's grazing regime).
+    // - h, |l + v|, cos_h, c and |n x h|^2: in f32, l + v of two rounded unit vectors
+    //   carries ~u absolute error, which near l = -v (grazing mirror geometry) is a relative
+    //   error of u/|l + v| in |l + v| and in h's direction: D_GGX, which reads
+    //   cos_h^2 + slope2 rather than a logarithm, was 1e-4 off at |l + v| = 2e-3 even at
+    //   m = 1, where D is constant (found by tests/vulkan_properties.rs).
+    // Cost on lavapipe: 1.05-1.4x the f32 frame's time (examples/kernel_time.rs).
+    dvec3 dn = unit64(r.n), dl = unit64(r.l), dv = unit64(r.v);
+    double cos_i = dot(dn, dl), cos_o = dot(dn, dv);
+    f.cos_i = float(cos_i);
+    f.cos_o = float(cos_o);
+    if (f.cos_i <= 0.0 || f.cos_o <= 0.0) {
+        return STATUS_BELOW_HORIZON;
+    }
+    // |l + v| >= cos_i + cos_o > 0 here, so h is well defined.
+    dvec3 lv = dl + dv;
+    double len = sqrt(dot(lv, lv));
+    dvec3 h = lv / len;
+    f.h = vec3(h);
+    // cos_h = (cos_i + cos_o)/|l + v| and c = |l + v|/2: see the f32 branch.
+    f.cos_h = float((cos_i + cos_o) / len);
+    f.c = float(0.5 * len);
+    dvec3 nxh = cross(dn, h);
+    f.sin2_h = float(dot(nxh, nxh));
 #else
     f.cos_i = dot(f.n, f.l);
     f.cos_o = dot(f.n, f.v);
-#endif
     if (f.cos_i <= 0.0 || f.cos_o <= 0.0) {
         return STATUS_BELOW_HORIZON;
     }
@@ -257,6 +276,7 @@ uint make_frame(Row r, GpuMaterial m, out Frame f) {
     // |l + v|/2 is off by ~u/c.
     f.c = 0.5 * len;
     f.sin2_h = cross_length2(f.n, f.h);
+#endif
     return STATUS_VALID;
 }
 
