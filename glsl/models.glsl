@@ -200,7 +200,7 @@ Eval model_cook_torrance(Frame f, GpuMaterial m) {
     case FRESNEL_DIELECTRIC: e.f = F_Dielectric(f.c, m.fresnel0.rgb); break;
 #endif
 #if defined(HAS_F_CONDUCTOR)
-    case FRESNEL_CONDUCTOR: e.f = F_Conductor(f.c, m.fresnel0.rgb, m.fresnel1.rgb); break;
+    case FRESNEL_CONDUCTOR: e.f = F_Conductor(f.c, m.fresnel0.rgb, m.fresnel1.rgb, m.scale.yzw); break;
 #endif
 #if defined(HAS_F_SCHLICK)
     case FRESNEL_SCHLICK: e.f = F_Schlick(f.c, m.fresnel0.rgb); break;

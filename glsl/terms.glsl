@@ -179,13 +179,16 @@ void csqrt(vec3 x, vec3 y, out vec3 re, out vec3 im) {
 // sin2_t = (1 - c^2)/eta^2, cos_t = sqrt(1 - sin2_t), r_par = (eta c - cos_t)/(eta c + cos_t),
 // r_perp = (c - eta cos_t)/(c + eta cos_t). |r|^2 is taken as |num|^2/|den|^2 (no complex
 // division). With k = 0, n >= 1 it equals F_Dielectric.
-vec3 F_Conductor(float c, vec3 n, vec3 k) {
-    float s2 = (1.0 - c) * (1.0 + c);           // 1 - c^2 without cancellation at c ~ 0
+// cos_t^2 = 1 - sin2_t = (eta^2 - 1 + c^2)/eta^2, with Re(eta^2) - 1 = e2rm1 formed in f64
+// on the host: 1 - (1 - c^2)/eta^2 in f32 loses c^2 below ~6e-8 when eta is near 1, and
+// F then came out 1 instead of ~0 at grazing c (the stress corpus's eta = 1 conductor).
+vec3 F_Conductor(float c, vec3 n, vec3 k, vec3 e2rm1) {
     vec3 e2r = n * n - k * k;                   // eta^2
     vec3 e2i = 2.0 * n * k;
     vec3 inv = 1.0 / (e2r * e2r + e2i * e2i);   // 1/|eta^2|^2
-    vec3 zr = 1.0 - s2 * e2r * inv;             // 1 - s2 / eta^2
-    vec3 zi = s2 * e2i * inv;
+    vec3 ar = e2rm1 + c * c;                    // eta^2 - 1 + c^2 = ar + i e2i
+    vec3 zr = (ar * e2r + e2i * e2i) * inv;     // (ar + i e2i) / eta^2
+    vec3 zi = (1.0 - c) * (1.0 + c) * e2i * inv; // = (e2i e2r - ar e2i) inv, uncancelled
     vec3 ctr, cti;
     csqrt(zr, zi, ctr, cti);                    // cos_t
     vec3 ecr = n * c, eci = k * c;              // eta c

@@ -332,6 +332,12 @@ pub fn gpu_material(m: &Material) -> GpuMaterial {
                 Fresnel::Conductor { ior, extinction } => {
                     g.fresnel0 = v4(ior);
                     g.fresnel1 = v4(extinction);
+                    // Re(η²) − 1 = n² − k² − 1 in f64: in f32, 1 − sin²θ_t/η² cancels for
+                    // η near 1 at grazing c (F came out 1 instead of ~0 at c = 5e-5).
+                    for ch in 0..3 {
+                        let (n, k) = (ior[ch], extinction[ch]);
+                        g.scale[ch + 1] = (n * n - k * k - 1.0) as f32;
+                    }
                     FRESNEL_CONDUCTOR
                 }
                 Fresnel::Schlick { f0 } => {
