@@ -204,6 +204,37 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         bar.inc(1);
     }
     bar.finish_and_clear();
+    // The DFG table integrated on the device (importance-sampled directions made by the
+    // kernel): evaluations per second of a 32×32 table, GGX + smith-correlated, F = 1.
+    if let Some(v) = vulkan.as_mut() {
+        use vkbrdf::table::albedo::{backend_sums, grid_points, Lobe, Microfacet};
+        let spec = Microfacet {
+            lobe: Lobe::Ggx,
+            geometry: vkbrdf::material::Geometry::SmithCorrelated,
+        };
+        let points = grid_points(vkbrdf::table::Grid::new(32, 32)?);
+        let samples = if args.quick { 1 << 12 } else { 1 << 16 };
+        let mut runner = vkbrdf::table::Runner::new(v);
+        let mut secs = Vec::new();
+        for _ in 0..=repeats.min(3) {
+            let t = std::time::Instant::now();
+            backend_sums(&mut runner, &spec, &points, samples, "dfg")
+                .expect("the Vulkan backend integrates on the device")?;
+            secs.push(t.elapsed().as_secs_f64());
+        }
+        secs.remove(0); // compiles the kernel
+        let evals = points.len() * samples as usize;
+        let row = row(
+            "vulkan",
+            "dfg-table-ggx",
+            "table-e2e",
+            "exact",
+            evals,
+            bench::median(secs),
+            f64::NAN,
+        );
+        results.push(row);
+    }
     let mut peer_rows = Vec::new();
     let script = args
         .peers_script
