@@ -197,6 +197,10 @@ uint make_frame(Row r, GpuMaterial m, out Frame f) {
     f.n = safe_normalize(r.n, ok_n);
     f.t = vec3(0.0);
     f.b = vec3(0.0);
+    f.hx = 0.0;
+    f.hy = 0.0;
+    f.rv = 0.0;
+    f.sin2_rv = 0.0;
     if (!(ok_l && ok_v && ok_n)) {
         return STATUS_INVALID;
     }
@@ -254,6 +258,25 @@ uint make_frame(Row r, GpuMaterial m, out Frame f) {
     f.c = float(0.5 * len);
     dvec3 nxh = cross(dn, h);
     f.sin2_h = float(dot(nxh, nxh));
+#if defined(HAS_ANISOTROPIC) && defined(HAS_TANGENTS)
+    if (is_anisotropic(m)) {
+        // h in the tangent frame, built in f64 as in the f32 branch: with roughness ratios
+        // up to 1e4, (h.b/m_y)^2 turns an f32 error of ~1e-7 in h.b into 3e-2 in D (Ward
+        // and Beckmann near the peak, stress corpus).
+        dvec3 nxt = cross(dn, unit64(r.t));
+        dvec3 b = nxt / sqrt(dot(nxt, nxt));
+        f.hx = float(dot(h, cross(b, dn)));
+        f.hy = float(dot(h, b));
+    }
+#endif
+#if defined(HAS_PHONG)
+    if (m.kind.x == MODEL_PHONG) {
+        dvec3 rr = 2.0 * cos_i * dn - dl;
+        dvec3 rxv = cross(rr, dv);
+        f.rv = float(dot(rr, dv));
+        f.sin2_rv = float(dot(rxv, rxv));
+    }
+#endif
 #else
     f.cos_i = dot(f.n, f.l);
     f.cos_o = dot(f.n, f.v);
@@ -276,6 +299,11 @@ uint make_frame(Row r, GpuMaterial m, out Frame f) {
     // |l + v|/2 is off by ~u/c.
     f.c = 0.5 * len;
     f.sin2_h = cross_length2(f.n, f.h);
+    f.hx = dot(f.h, f.t); // 0 for isotropic materials (t = b = 0)
+    f.hy = dot(f.h, f.b);
+    vec3 rr = 2.0 * f.cos_i * f.n - f.l;
+    f.rv = dot(rr, f.v);
+    f.sin2_rv = cross_length2(rr, f.v);
 #endif
     return STATUS_VALID;
 }

@@ -48,9 +48,7 @@ bool is_anisotropic(GpuMaterial m) {
 float slope2_h(Frame f, GpuMaterial m) {
 #if defined(HAS_ANISOTROPIC)
     if (is_anisotropic(m)) {
-        float hx = dot(f.h, f.t);
-        float hy = dot(f.h, f.b);
-        return hx * hx * m.lobe.x + hy * hy * m.lobe.y;
+        return f.hx * f.hx * m.lobe.x + f.hy * f.hy * m.lobe.y;
     }
 #endif
     return f.sin2_h * m.lobe.x;
@@ -103,13 +101,13 @@ Eval model_lambert(GpuMaterial m) {
 // Lewis 1994, "Making Shaders More Physically Plausible" (Phong 1975, modified and
 // normalised): c_diff/pi + c_spec (e+2)/(2 pi) max(0, r.v)^e, r = 2 cos_i n - l.
 // ln(r.v) comes from |r x v|^2 (log_cos), not from r.v itself: near the peak r.v = 1 - x
-// carries an absolute error of ~1e-7 that e = 1000 would turn into 1e-4 relative.
+// carries an absolute error of ~1e-7 that e = 1000 would turn into 1e-4 relative. r.v and
+// |r x v|^2 come from make_frame (in f64 where the device has it: in f32, r.v in the lobe's
+// tail, where it is small, was 7e-4 off relative).
 Eval model_phong(Frame f, GpuMaterial m) {
     float e = m.lobe.x;
-    vec3 r = 2.0 * f.cos_i * f.n - f.l;
-    float rv = dot(r, f.v);
     // pow(0, e): 0, or 1 for e = 0 (GLSL leaves pow(0, y) undefined).
-    float p = rv > 0.0 ? exp_acc(e * log_cos(rv, cross_length2(r, f.v))) : (e == 0.0 ? 1.0 : 0.0);
+    float p = f.rv > 0.0 ? exp_acc(e * log_cos(f.rv, f.sin2_rv)) : (e == 0.0 ? 1.0 : 0.0);
     return eval_lobe(m, m.scale.x * p);
 }
 #endif

@@ -18,6 +18,8 @@ struct Frame {
     float c;           // v.h > 0, the Fresnel angle cosine
     float sin2_h;      // |n x h|^2, not 1 - cos_h^2 (which cancels near the peak)
     vec3 t, b;         // tangent frame, anisotropic materials only (zero otherwise)
+    float hx, hy;      // h.t, h.b: h in the tangent frame (anisotropic materials only)
+    float rv, sin2_rv; // r.v and |r x v|^2, r = 2 cos_i n - l (Phong only)
 };
 
 // ===================================================================== D (FORMULAS.md §2)
