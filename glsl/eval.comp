@@ -201,6 +201,10 @@ uint make_frame(Row r, GpuMaterial m, out Frame f) {
     f.hy = 0.0;
     f.rv = 0.0;
     f.sin2_rv = 0.0;
+    f.sin2_i = 0.0;
+    f.sin2_o = 0.0;
+    f.l_tb = vec2(0.0);
+    f.v_tb = vec2(0.0);
     if (!(ok_l && ok_v && ok_n)) {
         return STATUS_INVALID;
     }
@@ -265,10 +269,16 @@ uint make_frame(Row r, GpuMaterial m, out Frame f) {
         // and Beckmann near the peak, stress corpus).
         dvec3 nxt = cross(dn, unit64(r.t));
         dvec3 b = nxt / sqrt(dot(nxt, nxt));
-        f.hx = float(dot(h, cross(b, dn)));
+        dvec3 t = cross(b, dn);
+        f.hx = float(dot(h, t));
         f.hy = float(dot(h, b));
+        f.l_tb = vec2(dot(dl, t), dot(dl, b));
+        f.v_tb = vec2(dot(dv, t), dot(dv, b));
     }
 #endif
+    dvec3 nxl = cross(dn, dl), nxv = cross(dn, dv);
+    f.sin2_i = float(dot(nxl, nxl));
+    f.sin2_o = float(dot(nxv, nxv));
 #if defined(HAS_PHONG)
     if (m.kind.x == MODEL_PHONG) {
         dvec3 rr = 2.0 * cos_i * dn - dl;
@@ -301,6 +311,10 @@ uint make_frame(Row r, GpuMaterial m, out Frame f) {
     f.sin2_h = cross_length2(f.n, f.h);
     f.hx = dot(f.h, f.t); // 0 for isotropic materials (t = b = 0)
     f.hy = dot(f.h, f.b);
+    f.l_tb = vec2(dot(f.l, f.t), dot(f.l, f.b));
+    f.v_tb = vec2(dot(f.v, f.t), dot(f.v, f.b));
+    f.sin2_i = cross_length2(f.n, f.l);
+    f.sin2_o = cross_length2(f.n, f.v);
     vec3 rr = 2.0 * f.cos_i * f.n - f.l;
     f.rv = dot(rr, f.v);
     f.sin2_rv = cross_length2(rr, f.v);

@@ -56,18 +56,18 @@ float slope2_h(Frame f, GpuMaterial m) {
 
 #if defined(HAS_G_SMITH) || defined(HAS_G_SMITH_CORRELATED) || defined(HAS_G_SMITH_FAST)
 // m^2 tan^2(w) = m^2 |n x w|^2 / (n.w)^2, anisotropic (mx^2 (w.t)^2 + my^2 (w.b)^2) / (n.w)^2
-// (FORMULAS.md §3): the argument of Smith's Lambda and of the smith-fast fit.
-float smith_q2(Frame f, GpuMaterial m, vec3 w, float cos_w) {
+// (FORMULAS.md §3): the argument of Smith's Lambda and of the smith-fast fit. w.t, w.b and
+// |n x w|^2 come from make_frame (in f64 where the device has it: with roughness ratios
+// up to 1e4 the f32 tangent frame's error put G 3e-4 off at grazing, stress corpus).
+float smith_q2(GpuMaterial m, vec2 w_tb, float sin2_w, float cos_w) {
     float num;
 #if defined(HAS_ANISOTROPIC)
     if (is_anisotropic(m)) {
-        float wt = dot(w, f.t);
-        float wb = dot(w, f.b);
-        num = m.lobe.z * wt * wt + m.lobe.w * wb * wb;
+        num = m.lobe.z * w_tb.x * w_tb.x + m.lobe.w * w_tb.y * w_tb.y;
     } else
 #endif
     {
-        num = m.lobe.z * cross_length2(f.n, w);
+        num = m.lobe.z * sin2_w;
     }
     return num / (cos_w * cos_w);
 }
@@ -174,19 +174,19 @@ Eval model_cook_torrance(Frame f, GpuMaterial m) {
 #endif
 #if defined(HAS_G_SMITH)
     case GEOM_SMITH:
-        e.g = G_Smith(smith_lambda(m, smith_q2(f, m, f.v, f.cos_o)),
-                      smith_lambda(m, smith_q2(f, m, f.l, f.cos_i)));
+        e.g = G_Smith(smith_lambda(m, smith_q2(m, f.v_tb, f.sin2_o, f.cos_o)),
+                      smith_lambda(m, smith_q2(m, f.l_tb, f.sin2_i, f.cos_i)));
         break;
 #endif
 #if defined(HAS_G_SMITH_CORRELATED)
     case GEOM_SMITH_CORRELATED:
-        e.g = G_SmithCorrelated(smith_lambda(m, smith_q2(f, m, f.v, f.cos_o)),
-                                smith_lambda(m, smith_q2(f, m, f.l, f.cos_i)));
+        e.g = G_SmithCorrelated(smith_lambda(m, smith_q2(m, f.v_tb, f.sin2_o, f.cos_o)),
+                                smith_lambda(m, smith_q2(m, f.l_tb, f.sin2_i, f.cos_i)));
         break;
 #endif
 #if defined(HAS_G_SMITH_FAST)
     case GEOM_SMITH_FAST:
-        e.g = G1_SmithFast(smith_q2(f, m, f.v, f.cos_o)) * G1_SmithFast(smith_q2(f, m, f.l, f.cos_i));
+        e.g = G1_SmithFast(smith_q2(m, f.v_tb, f.sin2_o, f.cos_o)) * G1_SmithFast(smith_q2(m, f.l_tb, f.sin2_i, f.cos_i));
         break;
 #endif
     default: break;

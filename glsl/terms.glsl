@@ -20,6 +20,8 @@ struct Frame {
     vec3 t, b;         // tangent frame, anisotropic materials only (zero otherwise)
     float hx, hy;      // h.t, h.b: h in the tangent frame (anisotropic materials only)
     float rv, sin2_rv; // r.v and |r x v|^2, r = 2 cos_i n - l (Phong only)
+    float sin2_i, sin2_o; // |n x l|^2, |n x v|^2 (Smith's tan^2 numerators)
+    vec2 l_tb, v_tb;   // (l.t, l.b), (v.t, v.b) (anisotropic materials only)
 };
 
 // ===================================================================== D (FORMULAS.md §2)
