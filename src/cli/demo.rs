@@ -151,28 +151,28 @@ fn tables(backend: &mut dyn vkbrdf::backend::Backend, dir: &std::path::Path) -> 
     let t = Instant::now();
     dfg::write(&mut runner, &dfg_job)?;
     println!(
-        "  {:<28} {:>7.2} s  split-sum DFG, GGX + smith-correlated, 32×32 (R = A, G = B)",
+        "  {:<32} {:>6.2} s  split-sum DFG, GGX + smith-correlated, 32×32 (R = A, G = B)",
         "dfg.exr",
         t.elapsed().as_secs_f64()
     );
     let t = Instant::now();
     albedo::write(&mut runner, &albedo_job)?;
     println!(
-        "  {:<28} {:>7.2} s  E(μ, α) and E_avg(α), GGX + smith-correlated, F = 1",
+        "  {:<32} {:>6.2} s  E(μ, α) and E_avg(α), GGX + smith-correlated, F = 1",
         "albedo.exr, albedo-average.exr",
         t.elapsed().as_secs_f64()
     );
     let t = Instant::now();
     slice::write(&mut runner, &slice_job)?;
     println!(
-        "  {:<28} {:>7.2} s  gold, f(θ_h, θ_d) at φ_d = 90°, 90×90, with terms",
+        "  {:<32} {:>6.2} s  gold, f(θ_h, θ_d) at φ_d = 90°, 90×90, with terms",
         "slice-gold.exr",
         t.elapsed().as_secs_f64()
     );
     let t = Instant::now();
     preview::write(&mut runner, &preview_job)?;
     println!(
-        "  {:<28} {:>7.2} s  gold: lit sphere and polar lobe at 45°",
+        "  {:<32} {:>6.2} s  gold: lit sphere and polar lobe at 45°",
         "gold-sphere.png, gold-polar.png",
         t.elapsed().as_secs_f64()
     );
