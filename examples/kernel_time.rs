@@ -4,7 +4,8 @@
 //!
 //! Usage: cargo run --release --example kernel_time -- [--tuples N] [--rounds R]
 //!            [--variant NAME=VALUE,NAME2 …]… [SCENARIO …]
-//! Without --variant, the kernel as shipped.
+//! Without --variant, the kernel as shipped. The variant token NO_GROUPING turns off the
+//! grouping of mixed-material batches by material (`VulkanOptions::group_by_material`).
 use vkbrdf::backend::Request;
 use vkbrdf::bench::scenarios;
 use vkbrdf::gpu::{VulkanBackend, VulkanOptions};
@@ -50,13 +51,30 @@ fn main() -> vkbrdf::Result<()> {
         .collect();
     let mut gpus = Vec::new();
     for v in &variants {
+        // The token NO_GROUPING turns the grouping of mixed batches by material off.
+        let defines: Vec<_> = parse_variant(v)
+            .into_iter()
+            .filter(|(k, _)| k != "NO_GROUPING")
+            .collect();
         let options = VulkanOptions {
-            extra_defines: parse_variant(v),
+            extra_defines: defines,
+            group_by_material: !v.split(',').any(|d| d == "NO_GROUPING"),
             ..VulkanOptions::default()
         };
         gpus.push(VulkanBackend::new(None, options)?);
     }
     let mut batches: Vec<_> = chosen.iter().map(|s| scenarios::batch(s, n, 7)).collect();
+    if std::env::var("SORT_BY_MATERIAL").is_ok() {
+        // Rows grouped by material (a stable counting sort): subgroups see one material.
+        for (b, sc) in batches.iter_mut().zip(&chosen) {
+            let cols = b.columns();
+            let mut rows: Vec<&[f32]> = b.as_slice().chunks(cols).collect();
+            rows.sort_by_key(|r| r[9] as usize);
+            let data: Vec<f32> = rows.concat();
+            let k = sc.materials.len();
+            *b = vkbrdf::batch::Batch::new(data, cols, k, std::path::Path::new("sorted"))?;
+        }
+    }
     if std::env::var("HALF_BELOW").is_ok() {
         // Every other row's V mirrored below the horizon (N = +z): the counts' heavy case.
         for b in &mut batches {

@@ -40,6 +40,17 @@ layout(std430, set = 0, binding = BINDING_TERMS) writeonly buffer Terms {
     float terms_out[];
 };
 #endif
+#if defined(BUCKETED)
+// The host uploads a chunk's rows grouped by material (src/gpu/evaluator.rs, bucket_order)
+// and puts the outputs back in place: llvmpipe runs a subgroup's lanes in SIMD, and a
+// subgroup mixing models executes every model's path (mixed 8-material batch: 3.3x). Row
+// i of the chunk as uploaded is row order[i] of the batch's chunk, which only the first
+// invalid row's report needs. (Reading the rows in place through order[] instead kept the
+// lanes coherent but scattered their loads: 1.5x, not 3.3x.)
+layout(std430, set = 0, binding = BINDING_ORDER) readonly buffer Order {
+    uint order[];
+};
+#endif
 // Chunk totals; the host sets them to (0, 0, 0xffffffff) before each dispatch.
 layout(std430, set = 0, binding = BINDING_COUNTS) buffer Counts {
     uint invalid_count;
@@ -438,6 +449,15 @@ void importance_block(uint g) {
 }
 #endif
 
+// The chunk row that uploaded row `row` came from (see Order).
+uint original_row(uint row) {
+#if defined(BUCKETED)
+    return order[row];
+#else
+    return row;
+#endif
+}
+
 // Evaluates row `row` of the chunk, stores its outputs and counts it.
 void evaluate_row(uint row) {
     // The batch validated every index; the clamp only keeps a corrupted buffer from
@@ -487,7 +507,7 @@ void evaluate_row(uint row) {
         uint n_below = packed >> 16u;
         uint first = 0xffffffffu;
         if (n_invalid != 0u) {
-            first = subgroupMin(invalid ? row : 0xffffffffu);
+            first = subgroupMin(invalid ? original_row(row) : 0xffffffffu);
         }
         if (subgroupElect()) {
             if (n_invalid != 0u) {
@@ -501,7 +521,7 @@ void evaluate_row(uint row) {
 #else
         if (invalid) {
             atomicAdd(invalid_count, 1u);
-            atomicMin(first_invalid, row);
+            atomicMin(first_invalid, original_row(row));
         } else {
             atomicAdd(below_horizon_count, 1u);
         }

@@ -79,6 +79,10 @@ features! {
     /// The kernel makes importance-sampled directions and sums per block: the albedo and
     /// DFG tables (no tuple is read but each point's sampling constants).
     GENERATED_IMPORTANCE = 28, "GENERATE_IMPORTANCE";
+    /// The batch uses several materials: each chunk is evaluated in an order grouped by
+    /// material (a host-side counting sort), so a subgroup's lanes share one material's
+    /// code path (mixed-8 kernel 3.3x on lavapipe).
+    BUCKETED = 29, "BUCKETED";
     /// Every material is the fast precision variant: the device's own exp/log/atan2.
     FAST_MATH = 27, "FAST_MATH";
 }
@@ -89,7 +93,7 @@ impl FeatureSet {
 
     /// Every kernel feature (the all-features kernel, the baseline of the specialisation
     /// measurement). `MEASURED` is not a kernel feature: measured materials are evaluated
-    /// by the CPU reference; `GENERATED_SLICE` and `GENERATED_IMPORTANCE` are input modes and `FAST_MATH` a precision
+    /// by the CPU reference; `GENERATED_SLICE`, `GENERATED_IMPORTANCE` and `BUCKETED` are input modes and `FAST_MATH` a precision
     /// variant, not features.
     pub fn all() -> FeatureSet {
         FeatureSet::ALL_NAMED
@@ -99,8 +103,14 @@ impl FeatureSet {
                     && *f != FeatureSet::GENERATED_SLICE
                     && *f != FeatureSet::FAST_MATH
                     && *f != FeatureSet::GENERATED_IMPORTANCE
+                    && *f != FeatureSet::BUCKETED
             })
             .fold(FeatureSet::EMPTY, |a, (f, _)| a | *f)
+    }
+
+    /// `self` less the features of `other`.
+    pub fn without(self, other: FeatureSet) -> FeatureSet {
+        FeatureSet(self.0 & !other.0)
     }
 
     /// Whether every feature of `other` is in `self`.
@@ -163,7 +173,8 @@ impl FeatureSet {
     }
 
     /// What evaluating `batch` with `materials` needs: the union over the materials the
-    /// batch actually references, plus tangents and outputs.
+    /// batch actually references, plus tangents and outputs, and `BUCKETED` when it
+    /// references more than one material.
     pub fn of_batch(batch: &Batch, materials: &[Material], request: &Request) -> FeatureSet {
         let mut used = vec![false; materials.len()];
         for i in 0..batch.len() {
@@ -186,6 +197,9 @@ impl FeatureSet {
                 .all(|(m, _)| m.precision == Precision::Fast)
         {
             f |= FeatureSet::FAST_MATH;
+        }
+        if used.iter().filter(|&&u| u).count() > 1 {
+            f |= FeatureSet::BUCKETED;
         }
         if batch.has_tangents() {
             f |= FeatureSet::TANGENTS;

@@ -35,9 +35,9 @@ pub const FRAMES_IN_FLIGHT: usize = 3;
 pub const MAX_CHUNK_TUPLES: usize = 1 << 18;
 
 /// Bytes one tuple can occupy in a slot at the widest layout: 13 input floats (tangents),
-/// 3 BRDF floats, 6 term floats. Chunks are sized for it, so the slot buffers never exceed
+/// its place in the evaluation order (a u32), 3 BRDF floats, 6 term floats. Chunks are sized for it, so the slot buffers never exceed
 /// the memory budget whatever mix of batches the backend sees.
-const WORST_CASE_BYTES_PER_TUPLE: u64 = 4 * (COLUMNS_TANGENT + 3 + TERM_COLUMNS) as u64;
+const WORST_CASE_BYTES_PER_TUPLE: u64 = 4 * (COLUMNS_TANGENT + 1 + 3 + TERM_COLUMNS) as u64;
 
 /// Settings of a [`VulkanBackend`].
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -52,6 +52,9 @@ pub struct VulkanOptions {
     /// compiles: for measuring kernel variants side by side in one process
     /// (`examples/kernel_time.rs`). Default: none.
     pub extra_defines: Vec<(String, String)>,
+    /// Upload batches that mix materials grouped by material (the `BUCKETED` kernels;
+    /// default on). Off only to measure what the grouping gains.
+    pub group_by_material: bool,
 }
 
 impl Default for VulkanOptions {
@@ -60,6 +63,7 @@ impl Default for VulkanOptions {
             max_gpu_memory: 256 << 20,
             validation: validation_from_env(),
             extra_defines: Vec::new(),
+            group_by_material: true,
         }
     }
 }
@@ -101,6 +105,9 @@ struct Pending {
     terms: Option<Range<usize>>,
     /// Batch row of the chunk's first tuple (turns chunk-relative rows into batch rows).
     first_row: u64,
+    /// The order the chunk's rows were uploaded in (`BUCKETED`): output row i belongs to
+    /// chunk row `order[i]`.
+    order: Option<Vec<u32>>,
 }
 
 /// One frame in flight: its buffers, descriptor set, command buffer and fence.
@@ -108,6 +115,8 @@ struct Slot {
     /// The RGBA32F view of `input` (declared first: dropped before the buffer it views).
     input_view: Option<TexelView>,
     input: Option<Buffer>,
+    /// The chunk's evaluation order (`BUCKETED` kernels only).
+    order: Option<Buffer>,
     brdf: Option<Buffer>,
     terms: Option<Buffer>,
     counts: Buffer,
@@ -170,6 +179,7 @@ impl VulkanBackend {
             slots.push(Slot {
                 input_view: None,
                 input: None,
+                order: None,
                 brdf: None,
                 terms: None,
                 counts: Buffer::new(
@@ -296,7 +306,7 @@ impl VulkanBackend {
         request: &Request,
         forced: FeatureSet,
     ) -> Result<Output> {
-        let features = Self::features_with(batch, materials, request, forced);
+        let features = self.grouping(Self::features_with(batch, materials, request, forced));
         self.run(batch, materials, features)
     }
 
@@ -344,6 +354,7 @@ impl VulkanBackend {
             let pending = Pending {
                 brdf: 0..outputs,
                 terms: None,
+                order: None,
                 first_row: 0,
             };
             let push = PushConstants::rows(outputs as u32, materials.len() as u32, 0);
@@ -352,6 +363,15 @@ impl VulkanBackend {
         })();
         result.inspect_err(|_| self.recover())?;
         Ok(out.brdf)
+    }
+
+    /// `features` without `BUCKETED` when the options turn the grouping off.
+    fn grouping(&self, features: FeatureSet) -> FeatureSet {
+        if self.options.group_by_material {
+            features
+        } else {
+            features.without(FeatureSet::BUCKETED)
+        }
     }
 
     /// Evaluates `batch` with the pipeline for exactly `features`.
@@ -383,11 +403,12 @@ impl VulkanBackend {
         let chunk = self.chunk_tuples(materials.len())?;
         let pipeline = self.kernels.pipeline(features)?.raw();
         self.upload_materials(&gpu_materials(materials))?;
+        let bucketed = features.contains(FeatureSet::BUCKETED);
         self.stream(
             batch,
             materials.len() as u32,
             pipeline,
-            chunk,
+            (chunk, bucketed),
             terms,
             &mut out,
         )
@@ -401,7 +422,7 @@ impl VulkanBackend {
         batch: &Batch,
         material_count: u32,
         pipeline: vk::Pipeline,
-        chunk: usize,
+        (chunk, bucketed): (usize, bool),
         terms: bool,
         out: &mut Output,
     ) -> Result<()> {
@@ -411,26 +432,34 @@ impl VulkanBackend {
             let s = c % FRAMES_IN_FLIGHT;
             self.finish(s, out)?;
             let (start, len) = (c * chunk, chunk.min(n - c * chunk));
-            self.prepare(
+            let mut rows = &data[start * cols..(start + len) * cols];
+            let order = bucketed.then(|| bucket_order(rows, cols, material_count as usize));
+            let grouped = order.as_ref().map(|o| gather_rows(rows, cols, o));
+            if let Some(g) = &grouped {
+                rows = g;
+            }
+            self.prepare_with_order(
                 s,
                 len * cols,
                 len * 3,
                 if terms { len * TERM_COLUMNS } else { 0 },
+                order.as_ref().map_or(0, Vec::len),
             )?;
             let slot = &mut self.slots[s];
             // SAFETY: the slot's previous chunk was finished above (fence waited), so the
             // device no longer reads or writes its buffers.
             unsafe {
-                slot.input
-                    .as_mut()
-                    .expect("prepared")
-                    .write(0, &data[start * cols..(start + len) * cols]);
+                slot.input.as_mut().expect("prepared").write(0, rows);
+                if let Some(order) = &order {
+                    slot.order.as_mut().expect("prepared").write(0, order);
+                }
                 slot.counts.write(0, &[GpuCounts::INITIAL]);
             }
             let pending = Pending {
                 brdf: start * 3..(start + len) * 3,
                 terms: terms.then(|| start * TERM_COLUMNS..(start + len) * TERM_COLUMNS),
                 first_row: start as u64,
+                order,
             };
             let push = PushConstants::rows(len as u32, material_count, start as u32);
             self.submit(s, pipeline, push, pending)?;
@@ -462,6 +491,18 @@ impl VulkanBackend {
         input_floats: usize,
         brdf_floats: usize,
         terms_floats: usize,
+    ) -> Result<()> {
+        self.prepare_with_order(s, input_floats, brdf_floats, terms_floats, 0)
+    }
+
+    /// [`prepare`](Self::prepare) with an order buffer of `order_len` u32s (0: none).
+    fn prepare_with_order(
+        &mut self,
+        s: usize,
+        input_floats: usize,
+        brdf_floats: usize,
+        terms_floats: usize,
+        order_len: usize,
     ) -> Result<()> {
         let slot = &mut self.slots[s];
         debug_assert!(slot.pending.is_none());
@@ -495,6 +536,14 @@ impl VulkanBackend {
                 MemoryUse::Readback,
             )?;
         }
+        if order_len > 0 {
+            ensure(
+                &self.device,
+                &mut slot.order,
+                4 * order_len as u64,
+                MemoryUse::Upload,
+            )?;
+        }
         let materials = self
             .materials
             .as_ref()
@@ -507,6 +556,7 @@ impl VulkanBackend {
             &slot.counts,
             // BINDING_TUPLE_TEXELS: the input again, through its view (written below).
             slot.input.as_ref().expect("ensured"),
+            slot.order.as_ref().unwrap_or(&self.dummy),
         ];
         let ids = wanted.map(Buffer::id);
         if ids != slot.bound {
@@ -619,15 +669,11 @@ impl VulkanBackend {
         // SAFETY: the fence is signalled, so the dispatch and its compute→host barrier have
         // completed: the buffers hold final, host-visible results and nothing writes them.
         unsafe {
-            slot.brdf
-                .as_ref()
-                .expect("prepared")
-                .read(0, &mut out.brdf[p.brdf.clone()]);
+            let brdf = slot.brdf.as_ref().expect("prepared");
+            read_in_place(brdf, &mut out.brdf[p.brdf.clone()], 3, p.order.as_deref());
             if let (Some(range), Some(terms)) = (p.terms.clone(), out.terms.as_mut()) {
-                slot.terms
-                    .as_ref()
-                    .expect("prepared with terms")
-                    .read(0, &mut terms[range]);
+                let buffer = slot.terms.as_ref().expect("prepared with terms");
+                read_in_place(buffer, &mut terms[range], TERM_COLUMNS, p.order.as_deref());
             }
             slot.counts.read(0, &mut counts);
         }
@@ -660,6 +706,58 @@ impl VulkanBackend {
     }
 }
 
+/// The evaluation order of a chunk's `rows` (`cols` floats each, material index in column
+/// 9, already validated against `material_count`): row indices grouped by material, in
+/// row order within a material (a counting sort, O(rows + materials)).
+pub(super) fn bucket_order(rows: &[f32], cols: usize, material_count: usize) -> Vec<u32> {
+    let material = |r: &[f32]| (r[9] as usize).min(material_count.saturating_sub(1));
+    let mut next = vec![0u32; material_count.max(1) + 1];
+    for r in rows.chunks_exact(cols) {
+        next[material(r) + 1] += 1;
+    }
+    for m in 1..next.len() {
+        next[m] += next[m - 1];
+    }
+    let mut order = vec![0u32; rows.len() / cols];
+    for (i, r) in rows.chunks_exact(cols).enumerate() {
+        let slot = &mut next[material(r)];
+        order[*slot as usize] = i as u32;
+        *slot += 1;
+    }
+    order
+}
+
+/// `rows` (`cols` floats each) in the order `order`.
+fn gather_rows(rows: &[f32], cols: usize, order: &[u32]) -> Vec<f32> {
+    let mut out = Vec::with_capacity(rows.len());
+    for &i in order {
+        let i = i as usize;
+        out.extend_from_slice(&rows[i * cols..(i + 1) * cols]);
+    }
+    out
+}
+
+/// Reads `buffer`'s first `out.len()` floats into `out`, rows of `cols`, putting output row
+/// i at row `order[i]` when the rows were uploaded in that order.
+///
+/// # Safety
+/// As [`Buffer::read`]: nothing writes the buffer meanwhile.
+unsafe fn read_in_place(buffer: &Buffer, out: &mut [f32], cols: usize, order: Option<&[u32]>) {
+    match order {
+        // SAFETY: the caller's guarantee.
+        None => unsafe { buffer.read(0, out) },
+        Some(order) => {
+            let mut grouped = vec![0f32; out.len()];
+            // SAFETY: the caller's guarantee.
+            unsafe { buffer.read(0, &mut grouped) };
+            for (src, &dst) in grouped.chunks_exact(cols).zip(order) {
+                let dst = dst as usize;
+                out[dst * cols..(dst + 1) * cols].copy_from_slice(src);
+            }
+        }
+    }
+}
+
 /// Makes `buffer` at least `bytes` large (replacing a smaller one; the old one is freed
 /// first, so the budget holds one of them at a time).
 fn ensure(
@@ -686,7 +784,7 @@ impl Backend for VulkanBackend {
         materials: &[Material],
         request: &Request,
     ) -> Result<Output> {
-        let features = FeatureSet::of_batch(batch, materials, request);
+        let features = self.grouping(FeatureSet::of_batch(batch, materials, request));
         self.run(batch, materials, features)
     }
 

@@ -83,8 +83,11 @@ pub const BINDING_COUNTS: u32 = 4;
 /// over the same bytes as [`BINDING_TUPLES`] (the kernel reads its rows through it: on
 /// lavapipe `texelFetch` of a vec4 is far cheaper than four scalar storage-buffer loads).
 pub const BINDING_TUPLE_TEXELS: u32 = 5;
+/// Descriptor binding of a chunk's evaluation order (`BUCKETED` kernels): invocation `i`
+/// evaluates chunk row `order[i]`, so that rows of one material run side by side.
+pub const BINDING_ORDER: u32 = 6;
 /// Number of descriptor bindings (all storage buffers but [`BINDING_TUPLE_TEXELS`]).
-pub const BINDING_COUNT: u32 = 6;
+pub const BINDING_COUNT: u32 = 7;
 
 /// The integer codes the GLSL compares against, injected as `#define NAME <value>u`.
 pub const SHADER_CODES: &[(&str, u32)] = &[
@@ -133,6 +136,7 @@ pub const SHADER_BINDINGS: &[(&str, u32)] = &[
     ("BINDING_TERMS", BINDING_TERMS),
     ("BINDING_COUNTS", BINDING_COUNTS),
     ("BINDING_TUPLE_TEXELS", BINDING_TUPLE_TEXELS),
+    ("BINDING_ORDER", BINDING_ORDER),
 ];
 
 /// One material as the kernel reads it (`struct GpuMaterial` in `glsl/layout.glsl`; the

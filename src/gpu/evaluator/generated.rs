@@ -96,6 +96,7 @@ impl VulkanBackend {
                 let pending = Pending {
                     brdf: start * 3..(start + len) * 3,
                     terms: terms.then(|| start * TERM_COLUMNS..(start + len) * TERM_COLUMNS),
+                    order: None,
                     first_row: start as u64,
                 };
                 let push = push(&grid, start as u32, len as u32);
@@ -138,6 +139,7 @@ impl VulkanBackend {
                     let pending = Pending {
                         brdf: 0..0,
                         terms: None,
+                        order: None,
                         first_row: start as u64,
                     };
                     self.submit(0, pipeline, push(&grid, start as u32, len as u32), pending)?;
@@ -239,6 +241,7 @@ impl VulkanBackend {
                 let pending = Pending {
                     brdf: start * 3..(start + len) * 3,
                     terms: None,
+                    order: None,
                     first_row: start as u64,
                 };
                 let push = PushConstants {

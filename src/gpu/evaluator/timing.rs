@@ -51,26 +51,37 @@ impl VulkanBackend {
         if n == 0 {
             return Ok(0.0);
         }
-        let features = Self::features_with(batch, materials, request, forced);
+        let features = self.grouping(Self::features_with(batch, materials, request, forced));
         let chunk = self.chunk_tuples(materials.len())?;
         let pipeline = self.kernels.pipeline(features)?.raw();
         self.upload_materials(&gpu_materials(materials))?;
         let (len, cols) = (n.min(chunk), batch.columns());
         let terms = features.contains(FeatureSet::TERMS);
         let result = (|| {
-            self.prepare(
+            let mut rows = &batch.as_slice()[..len * cols];
+            // The grouping by material is done once, outside the timed loop: it is host
+            // work, which the end-to-end timing includes.
+            let order = features
+                .contains(FeatureSet::BUCKETED)
+                .then(|| bucket_order(rows, cols, materials.len()));
+            let grouped = order.as_ref().map(|o| gather_rows(rows, cols, o));
+            if let Some(g) = &grouped {
+                rows = g;
+            }
+            self.prepare_with_order(
                 0,
                 len * cols,
                 len * 3,
                 if terms { len * TERM_COLUMNS } else { 0 },
+                order.as_ref().map_or(0, Vec::len),
             )?;
             // SAFETY: slot 0 has no pending work (nothing is pending between calls).
             unsafe {
-                self.slots[0]
-                    .input
-                    .as_mut()
-                    .expect("prepared")
-                    .write(0, &batch.as_slice()[..len * cols])
+                let slot = &mut self.slots[0];
+                slot.input.as_mut().expect("prepared").write(0, rows);
+                if let Some(order) = &order {
+                    slot.order.as_mut().expect("prepared").write(0, order);
+                }
             };
             let dispatches = n.div_ceil(len);
             let mut scratch = Output {
@@ -87,6 +98,7 @@ impl VulkanBackend {
                     let pending = Pending {
                         brdf: 0..0,
                         terms: None,
+                        order: None,
                         first_row: 0,
                     };
                     let push = PushConstants::rows(len as u32, materials.len() as u32, 0);
