@@ -16,7 +16,10 @@ fn main() -> vkbrdf::Result<()> {
         }
         None => vec![vkbrdf::material::presets::preset("gold").unwrap()?],
     };
-    let n = args.next().and_then(|a| a.parse().ok()).unwrap_or(1_000_000);
+    let n = args
+        .next()
+        .and_then(|a| a.parse().ok())
+        .unwrap_or(1_000_000);
     let tangents = materials.iter().any(|m| m.is_anisotropic());
     let batch = vkbrdf::sample::sample_batch(n, materials.len(), 1, tangents);
     let request = Request { terms: true };
