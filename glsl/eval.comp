@@ -62,9 +62,10 @@ layout(push_constant) uniform Params {
     uint tuple_count;    // rows in this chunk
     uint material_count; // rows in the material table
     uint first_row;      // global index of the chunk's first row
-    uint grid_width;     // GENERATE_HALF_DIFF: theta_h columns
-    uint grid_height;    // GENERATE_HALF_DIFF: theta_d rows
-    uint spacing;        // GENERATE_HALF_DIFF: 0 theta_h = x^2 pi/2 (MERL), 1 theta_h = x pi/2
+    uint grid_width;     // GENERATE_HALF_DIFF: theta_h columns; GENERATE_IMPORTANCE: blocks per point
+    uint grid_height;    // GENERATE_HALF_DIFF: theta_d rows; GENERATE_IMPORTANCE: samples per point
+    uint spacing;        // GENERATE_HALF_DIFF: 0 theta_h = x^2 pi/2 (MERL), 1 x pi/2;
+                         // GENERATE_IMPORTANCE: 0 GGX, 1 Beckmann
 } params;
 
 #if defined(HAS_TANGENTS)

@@ -194,11 +194,12 @@ pub struct PushConstants {
     pub material_count: u32,
     /// Global index of the chunk's first row (generated directions: the texel index).
     pub first_row: u32,
-    /// Generated slice: grid width (θ_h columns).
+    /// Generated slice: grid width (θ_h columns). Importance sums: blocks per point.
     pub grid_width: u32,
-    /// Generated slice: grid height (θ_d rows).
+    /// Generated slice: grid height (θ_d rows). Importance sums: samples per point.
     pub grid_height: u32,
-    /// Generated slice: θ_h spacing, 0 = `x² π/2` (MERL), 1 = `x π/2`.
+    /// Generated slice: θ_h spacing, 0 = `x² π/2` (MERL), 1 = `x π/2`. Importance sums:
+    /// the lobe, 0 = GGX, 1 = Beckmann.
     pub spacing: u32,
 }
 
