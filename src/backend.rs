@@ -138,7 +138,12 @@ pub trait Backend {
     /// `None` when it has no such path (the caller then sends the samples as tuples, as
     /// [`crate::table::albedo::integrate`] does). The Vulkan backend makes them on the
     /// device.
-    fn importance_sums(&mut self, _job: &ImportanceJob) -> Option<Result<Vec<[f64; 2]>>> {
+    /// `progress` is called with the number of samples done since its last call.
+    fn importance_sums(
+        &mut self,
+        _job: &ImportanceJob,
+        _progress: &mut dyn FnMut(u64),
+    ) -> Option<Result<Vec<[f64; 2]>>> {
         None
     }
 }

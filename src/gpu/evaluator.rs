@@ -802,8 +802,12 @@ impl Backend for VulkanBackend {
     fn importance_sums(
         &mut self,
         job: &crate::backend::ImportanceJob,
+        progress: &mut dyn FnMut(u64),
     ) -> Option<Result<Vec<[f64; 2]>>> {
-        Some(VulkanBackend::importance_sums(self, job))
+        // Beyond the kernel's 2^24 blocks the caller sends the samples as tuples.
+        let blocks = u64::from(job.samples.div_ceil(generated::SAMPLES_PER_BLOCK));
+        (job.points.len() as u64 * blocks <= generated::MAX_GENERATED_TEXELS)
+            .then(|| VulkanBackend::importance_sums(self, job, progress))
     }
 }
 

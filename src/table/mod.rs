@@ -329,8 +329,9 @@ impl<'a> Runner<'a> {
     ) -> Option<Result<Vec<[f64; 2]>>> {
         let total = job.points.len() as u64 * u64::from(job.samples);
         self.start(what, total);
-        let sums = self.backend.importance_sums(job)?;
-        self.advance(total);
+        let bar = &self.progress;
+        let sums = self.backend.importance_sums(job, &mut |n| bar.inc(n))?;
+        bar.set_position(total); // the last block of each point may be partial
         self.finish();
         Some(sums)
     }

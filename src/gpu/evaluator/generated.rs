@@ -164,7 +164,12 @@ impl VulkanBackend {
     /// [`Backend::importance_sums`] on the device: one invocation per block of
     /// [`SAMPLES_PER_BLOCK`] samples of one point, which makes its directions, evaluates f
     /// and sums in f32; the blocks are added here in f64.
-    pub fn importance_sums(&mut self, job: &ImportanceJob) -> Result<Vec<[f64; 2]>> {
+    /// `progress` is called with the samples of each chunk as it finishes.
+    pub fn importance_sums(
+        &mut self,
+        job: &ImportanceJob,
+        progress: &mut dyn FnMut(u64),
+    ) -> Result<Vec<[f64; 2]>> {
         let samples = job.samples;
         if samples == 0 {
             return Err(Error::Table("--samples must be at least 1".into()));
@@ -227,9 +232,14 @@ impl VulkanBackend {
         };
         let result = (|| {
             let chunks = n.div_ceil(chunk);
+            // Samples per chunk of `len` blocks, reported when the chunk is read back.
+            let samples_of = |len: usize| len as u64 * u64::from(SAMPLES_PER_BLOCK);
             for c in 0..chunks {
                 let s = c % FRAMES_IN_FLIGHT;
-                self.finish(s, &mut out)?;
+                if self.slots[s].pending.is_some() {
+                    self.finish(s, &mut out)?;
+                    progress(samples_of(chunk));
+                }
                 let (start, len) = (c * chunk, chunk.min(n - c * chunk));
                 self.prepare(s, input.len(), len * 3, 0)?;
                 // SAFETY: the slot's previous chunk was finished above (fence waited).
@@ -255,7 +265,11 @@ impl VulkanBackend {
                 self.submit(s, pipeline, push, pending)?;
             }
             for k in 0..FRAMES_IN_FLIGHT {
-                self.finish((chunks + k) % FRAMES_IN_FLIGHT, &mut out)?;
+                let s = (chunks + k) % FRAMES_IN_FLIGHT;
+                if self.slots[s].pending.is_some() {
+                    self.finish(s, &mut out)?;
+                    progress(samples_of(chunk.min(n)));
+                }
             }
             Ok::<(), Error>(())
         })();
