@@ -217,6 +217,7 @@ uint make_frame(Row r, GpuMaterial m, out Frame f) {
     f.sin2_o = 0.0;
     f.l_tb = vec2(0.0);
     f.v_tb = vec2(0.0);
+    f.c_exact = 0.0;
     if (!(ok_l && ok_v && ok_n)) {
         return STATUS_INVALID;
     }
@@ -272,6 +273,7 @@ uint make_frame(Row r, GpuMaterial m, out Frame f) {
     // cos_h = (cos_i + cos_o)/|l + v| and c = |l + v|/2: see the f32 branch.
     f.cos_h = float((cos_i + cos_o) / len);
     f.c = float(0.5 * len);
+    f.c_exact = 0.5 * len;
     dvec3 nxh = cross(dn, h);
     f.sin2_h = float(dot(nxh, nxh));
 #if defined(HAS_ANISOTROPIC) && defined(HAS_TANGENTS)
@@ -320,6 +322,7 @@ uint make_frame(Row r, GpuMaterial m, out Frame f) {
     // as 1/|l + v|) into a relative error of ~u/(2c^2) in c (1e-3 at c = 0.005), where
     // |l + v|/2 is off by ~u/c.
     f.c = 0.5 * len;
+    f.c_exact = f.c;
     f.sin2_h = cross_length2(f.n, f.h);
     f.hx = dot(f.h, f.t); // 0 for isotropic materials (t = b = 0)
     f.hy = dot(f.h, f.b);

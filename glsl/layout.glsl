@@ -31,7 +31,8 @@ struct GpuMaterial {
     // x: the lobe's normalisation constant (beckmann 1/(k mx my), ggx 1/(pi mx my),
     // ward 1/(4 pi mx my), blinn and phong (e+2)/(2 pi), rtr (e+8)/(8 pi), blinn-phong 1/pi,
     // gaussian 1). yzw: conductor Fresnel n^2 - k^2 - 1 per channel, formed in f64 (it
-    // cancels in f32 for eta near 1); 0 otherwise.
+    // cancels in f32 for eta near 1); dielectric: the f32 rounding error of fresnel0.rgb
+    // (mu^2 - 1 = fresnel0 + this, to ~48 bits); 0 otherwise.
     vec4 scale;
     // x: MODEL_*, y: DIST_*, z: GEOM_*, w: FRESNEL_* | CONV_* << 8 | FLAG_ANISOTROPIC.
     uvec4 kind;

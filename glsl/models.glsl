@@ -195,7 +195,7 @@ Eval model_cook_torrance(Frame f, GpuMaterial m) {
     e.f = vec3(1.0);
     switch (fresnel) {
 #if defined(HAS_F_DIELECTRIC)
-    case FRESNEL_DIELECTRIC: e.f = F_Dielectric(f.c, m.fresnel0.rgb); break;
+    case FRESNEL_DIELECTRIC: e.f = F_Dielectric(f.c, m.fresnel0.rgb, m.scale.yzw, f.c_exact); break;
 #endif
 #if defined(HAS_F_CONDUCTOR)
     case FRESNEL_CONDUCTOR: e.f = F_Conductor(f.c, m.fresnel0.rgb, m.fresnel1.rgb, m.scale.yzw); break;

@@ -10,6 +10,12 @@
 #include "math.glsl"
 
 // The derived quantities of FORMULAS.md §1 for one valid, above-horizon tuple.
+#if defined(HAS_FLOAT64)
+#define double_or_float double
+#else
+#define double_or_float float
+#endif
+
 struct Frame {
     vec3 n, l, v, h;   // unit vectors
     float cos_i;       // n.l > 0
@@ -21,6 +27,7 @@ struct Frame {
     float hx, hy;      // h.t, h.b: h in the tangent frame (anisotropic materials only)
     float rv, sin2_rv; // r.v and |r x v|^2, r = 2 cos_i n - l (Phong only)
     float sin2_i, sin2_o; // |n x l|^2, |n x v|^2 (Smith's tan^2 numerators)
+    double_or_float c_exact; // c before rounding to f32 (f64 where the device has it)
     vec2 l_tb, v_tb;   // (l.t, l.b), (v.t, v.b) (anisotropic materials only)
 };
 
@@ -142,9 +149,19 @@ float G_SmithCorrelated(float lambda_o, float lambda_i) {
 // g^2 = mu^2 + c^2 - 1, F = 1/2 ((g-c)/(g+c))^2 (1 + ((c(g+c) - 1)/(c(g-c) + 1))^2), F = 1
 // under total internal reflection (g^2 < 0). mu2m1 = mu^2 - 1 is formed in f64 on the host;
 // g - c is computed as (mu^2 - 1)/(g + c), which does not cancel when mu is near 1.
-vec3 F_Dielectric(float c, vec3 mu2m1) {
+vec3 F_Dielectric(float c, vec3 mu2m1, vec3 mu2m1_lo, double_or_float c_exact) {
+#if defined(HAS_FLOAT64)
+    // g^2 = mu^2 - 1 + c^2 in f64, from c before its rounding to f32 and mu^2 - 1 to ~48
+    // bits: near the critical angle of total internal reflection g^2 -> 0 is a difference
+    // of O(1) terms, and in f32 the rounding of c alone (6e-8) moved it by O(1) relative
+    // there, F by up to 5e-4 (stress corpus, IOR 0.5).
+    dvec3 g2d = dvec3(mu2m1) + dvec3(mu2m1_lo) + c_exact * c_exact;
+    vec3 g2 = vec3(g2d);
+    vec3 g = vec3(sqrt(max(g2d, 0.0)));
+#else
     vec3 g2 = mu2m1 + c * c;
     vec3 g = sqrt(max(g2, 0.0));
+#endif
     vec3 gpc = g + c;                 // >= c > 0
     vec3 gmc = mu2m1 / gpc;           // = g - c
     vec3 a = gmc / gpc;

@@ -330,8 +330,15 @@ pub fn gpu_material(m: &Material) -> GpuMaterial {
             let fresnel = match ct.fresnel {
                 Fresnel::None => FRESNEL_NONE,
                 Fresnel::Dielectric { ior } => {
-                    // μ² − 1 in f64: in f32 it cancels for μ near 1, where F ~ (μ−1)².
-                    g.fresnel0 = v4(ior.map(|mu| mu * mu - 1.0));
+                    // μ² − 1 in f64: in f32 it cancels for μ near 1, where F ~ (μ−1)². Its
+                    // f32 rounding error goes in scale.yzw: with f64, the kernel forms
+                    // g² = μ² − 1 + c² from both, which near the critical angle of total
+                    // internal reflection (g² → 0) needs more than f32's 24 bits.
+                    let mu2m1 = ior.map(|mu| mu * mu - 1.0);
+                    g.fresnel0 = v4(mu2m1);
+                    for ch in 0..3 {
+                        g.scale[ch + 1] = (mu2m1[ch] - f64::from(mu2m1[ch] as f32)) as f32;
+                    }
                     FRESNEL_DIELECTRIC
                 }
                 Fresnel::Conductor { ior, extinction } => {
