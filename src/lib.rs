@@ -5,7 +5,7 @@
 //! without the cosine) and, on request, the terms D, G, F and K come out.
 //!
 //! The contract for every number is `FORMULAS.md` (mirrored section by section by
-//! [`reference`]); the data flow is materials → [`batch::Batch`] → [`features::FeatureSet`]
+//! [`reference`](mod@reference)); the data flow is materials → [`batch::Batch`] → [`features::FeatureSet`]
 //! → [`backend::Backend::evaluate`] → [`backend::Output`].
 //!
 //! ```

@@ -162,7 +162,7 @@ pub const SAMPLES_PER_BLOCK: u32 = 256;
 
 impl VulkanBackend {
     /// [`Backend::importance_sums`] on the device: one invocation per block of
-    /// [`SAMPLES_PER_BLOCK`] samples of one point, which makes its directions, evaluates f
+    /// `SAMPLES_PER_BLOCK` (256) samples of one point, which makes its directions, evaluates f
     /// and sums in f32; the blocks are added here in f64.
     /// `progress` is called with the samples of each chunk as it finishes.
     pub fn importance_sums(
