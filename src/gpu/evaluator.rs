@@ -6,6 +6,7 @@
 //! on chunk `c`, the host is copying chunk `c + 1` in and chunk `c − 2` out.
 
 mod generated;
+mod grouping;
 mod timing;
 
 use super::context::{Device, DeviceSelector, ValidationCounter};
@@ -23,6 +24,7 @@ use crate::error::{Error, Result};
 use crate::features::FeatureSet;
 use crate::material::Material;
 use ash::vk;
+use grouping::{bucket_order, gather_rows, read_in_place};
 use std::ops::Range;
 use std::sync::Arc;
 
@@ -702,58 +704,6 @@ impl VulkanBackend {
                     .raw
                     .reset_command_buffer(slot.cmd, vk::CommandBufferResetFlags::empty())
             };
-        }
-    }
-}
-
-/// The evaluation order of a chunk's `rows` (`cols` floats each, material index in column
-/// 9, already validated against `material_count`): row indices grouped by material, in
-/// row order within a material (a counting sort, O(rows + materials)).
-pub(super) fn bucket_order(rows: &[f32], cols: usize, material_count: usize) -> Vec<u32> {
-    let material = |r: &[f32]| (r[9] as usize).min(material_count.saturating_sub(1));
-    let mut next = vec![0u32; material_count.max(1) + 1];
-    for r in rows.chunks_exact(cols) {
-        next[material(r) + 1] += 1;
-    }
-    for m in 1..next.len() {
-        next[m] += next[m - 1];
-    }
-    let mut order = vec![0u32; rows.len() / cols];
-    for (i, r) in rows.chunks_exact(cols).enumerate() {
-        let slot = &mut next[material(r)];
-        order[*slot as usize] = i as u32;
-        *slot += 1;
-    }
-    order
-}
-
-/// `rows` (`cols` floats each) in the order `order`.
-fn gather_rows(rows: &[f32], cols: usize, order: &[u32]) -> Vec<f32> {
-    let mut out = Vec::with_capacity(rows.len());
-    for &i in order {
-        let i = i as usize;
-        out.extend_from_slice(&rows[i * cols..(i + 1) * cols]);
-    }
-    out
-}
-
-/// Reads `buffer`'s first `out.len()` floats into `out`, rows of `cols`, putting output row
-/// i at row `order[i]` when the rows were uploaded in that order.
-///
-/// # Safety
-/// As [`Buffer::read`]: nothing writes the buffer meanwhile.
-unsafe fn read_in_place(buffer: &Buffer, out: &mut [f32], cols: usize, order: Option<&[u32]>) {
-    match order {
-        // SAFETY: the caller's guarantee.
-        None => unsafe { buffer.read(0, out) },
-        Some(order) => {
-            let mut grouped = vec![0f32; out.len()];
-            // SAFETY: the caller's guarantee.
-            unsafe { buffer.read(0, &mut grouped) };
-            for (src, &dst) in grouped.chunks_exact(cols).zip(order) {
-                let dst = dst as usize;
-                out[dst * cols..(dst + 1) * cols].copy_from_slice(src);
-            }
         }
     }
 }

@@ -336,8 +336,8 @@ pub fn gpu_material(m: &Material) -> GpuMaterial {
                     // internal reflection (g² → 0) needs more than f32's 24 bits.
                     let mu2m1 = ior.map(|mu| mu * mu - 1.0);
                     g.fresnel0 = v4(mu2m1);
-                    for ch in 0..3 {
-                        g.scale[ch + 1] = (mu2m1[ch] - f64::from(mu2m1[ch] as f32)) as f32;
+                    for (lo, hi) in g.scale[1..].iter_mut().zip(mu2m1) {
+                        *lo = (hi - f64::from(hi as f32)) as f32;
                     }
                     FRESNEL_DIELECTRIC
                 }
