@@ -105,6 +105,21 @@ pub struct ImportanceJob<'a> {
     pub samples: u32,
 }
 
+impl Output {
+    /// All-zero outputs for `n` tuples (terms too when `terms`), `counts.tuples = n`: what a
+    /// backend fills in.
+    pub fn zeroed(n: usize, terms: bool) -> Output {
+        Output {
+            brdf: vec![0.0; n * 3],
+            terms: terms.then(|| vec![0.0; n * TERM_COLUMNS]),
+            counts: Counts {
+                tuples: n as u64,
+                ..Counts::default()
+            },
+        }
+    }
+}
+
 /// An evaluator of BRDF batches.
 pub trait Backend {
     /// A short human-readable name (e.g. `cpu-reference`, `vulkan: llvmpipe`).

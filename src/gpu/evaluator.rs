@@ -390,14 +390,7 @@ impl VulkanBackend {
         }
         let n = batch.len();
         let terms = features.contains(FeatureSet::TERMS);
-        let mut out = Output {
-            brdf: vec![0.0; n * 3],
-            terms: terms.then(|| vec![0.0; n * TERM_COLUMNS]),
-            counts: Counts {
-                tuples: n as u64,
-                ..Counts::default()
-            },
-        };
+        let mut out = Output::zeroed(n, terms);
         self.last_features = Some(features);
         if n == 0 {
             return Ok(out);
@@ -434,29 +427,8 @@ impl VulkanBackend {
             let s = c % FRAMES_IN_FLIGHT;
             self.finish(s, out)?;
             let (start, len) = (c * chunk, chunk.min(n - c * chunk));
-            let mut rows = &data[start * cols..(start + len) * cols];
-            let order = bucketed.then(|| bucket_order(rows, cols, material_count as usize));
-            let grouped = order.as_ref().map(|o| gather_rows(rows, cols, o));
-            if let Some(g) = &grouped {
-                rows = g;
-            }
-            self.prepare_with_order(
-                s,
-                len * cols,
-                len * 3,
-                if terms { len * TERM_COLUMNS } else { 0 },
-                order.as_ref().map_or(0, Vec::len),
-            )?;
-            let slot = &mut self.slots[s];
-            // SAFETY: the slot's previous chunk was finished above (fence waited), so the
-            // device no longer reads or writes its buffers.
-            unsafe {
-                slot.input.as_mut().expect("prepared").write(0, rows);
-                if let Some(order) = &order {
-                    slot.order.as_mut().expect("prepared").write(0, order);
-                }
-                slot.counts.write(0, &[GpuCounts::INITIAL]);
-            }
+            let rows = &data[start * cols..(start + len) * cols];
+            let order = self.load_chunk(s, rows, cols, material_count as usize, bucketed, terms)?;
             let pending = Pending {
                 brdf: start * 3..(start + len) * 3,
                 terms: terms.then(|| start * TERM_COLUMNS..(start + len) * TERM_COLUMNS),
@@ -471,6 +443,43 @@ impl VulkanBackend {
             self.finish((chunks + k) % FRAMES_IN_FLIGHT, out)?;
         }
         Ok(())
+    }
+
+    /// Loads `rows` (`cols` floats each) into slot `s` — grouped by material when
+    /// `bucketed`, with its order — sizes the outputs (terms too when `terms`) and resets
+    /// the counts. Returns the order the rows went in, if grouped. Precondition: slot `s`
+    /// is not pending.
+    fn load_chunk(
+        &mut self,
+        s: usize,
+        rows: &[f32],
+        cols: usize,
+        material_count: usize,
+        bucketed: bool,
+        terms: bool,
+    ) -> Result<Option<Vec<u32>>> {
+        let len = rows.len() / cols;
+        let order = bucketed.then(|| bucket_order(rows, cols, material_count));
+        let grouped = order.as_ref().map(|o| gather_rows(rows, cols, o));
+        self.prepare_with_order(
+            s,
+            rows.len(),
+            len * 3,
+            if terms { len * TERM_COLUMNS } else { 0 },
+            order.as_ref().map_or(0, Vec::len),
+        )?;
+        let slot = &mut self.slots[s];
+        // SAFETY: slot `s` is not pending (precondition), so the device neither reads nor
+        // writes its buffers.
+        unsafe {
+            let input = grouped.as_deref().unwrap_or(rows);
+            slot.input.as_mut().expect("prepared").write(0, input);
+            if let Some(order) = &order {
+                slot.order.as_mut().expect("prepared").write(0, order);
+            }
+            slot.counts.write(0, &[GpuCounts::INITIAL]);
+        }
+        Ok(order)
     }
 
     /// Copies the material table into its buffer (growing it when needed).

@@ -1,6 +1,8 @@
 //! Shared test helpers: every backend, so one test body runs on each (STYLE.md 6).
 #![allow(dead_code)]
 
+pub mod strategies;
+
 use vkbrdf::backend::Backend;
 use vkbrdf::gpu::{DeviceSelector, VulkanBackend, VulkanOptions};
 use vkbrdf::reference::CpuReference;

@@ -71,14 +71,7 @@ impl VulkanBackend {
         let n = Self::check_grid(&grid)?;
         let features = Self::slice_features(material, request)?;
         let terms = request.terms;
-        let mut out = Output {
-            brdf: vec![0.0; n * 3],
-            terms: terms.then(|| vec![0.0; n * TERM_COLUMNS]),
-            counts: Counts {
-                tuples: n as u64,
-                ..Counts::default()
-            },
-        };
+        let mut out = Output::zeroed(n, terms);
         self.last_features = Some(features);
         let chunk = self.chunk_tuples(1)?;
         let pipeline = self.kernels.pipeline(features)?.raw();

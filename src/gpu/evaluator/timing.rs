@@ -58,31 +58,11 @@ impl VulkanBackend {
         let (len, cols) = (n.min(chunk), batch.columns());
         let terms = features.contains(FeatureSet::TERMS);
         let result = (|| {
-            let mut rows = &batch.as_slice()[..len * cols];
             // The grouping by material is done once, outside the timed loop: it is host
             // work, which the end-to-end timing includes.
-            let order = features
-                .contains(FeatureSet::BUCKETED)
-                .then(|| bucket_order(rows, cols, materials.len()));
-            let grouped = order.as_ref().map(|o| gather_rows(rows, cols, o));
-            if let Some(g) = &grouped {
-                rows = g;
-            }
-            self.prepare_with_order(
-                0,
-                len * cols,
-                len * 3,
-                if terms { len * TERM_COLUMNS } else { 0 },
-                order.as_ref().map_or(0, Vec::len),
-            )?;
-            // SAFETY: slot 0 has no pending work (nothing is pending between calls).
-            unsafe {
-                let slot = &mut self.slots[0];
-                slot.input.as_mut().expect("prepared").write(0, rows);
-                if let Some(order) = &order {
-                    slot.order.as_mut().expect("prepared").write(0, order);
-                }
-            };
+            let rows = &batch.as_slice()[..len * cols];
+            let bucketed = features.contains(FeatureSet::BUCKETED);
+            self.load_chunk(0, rows, cols, materials.len(), bucketed, terms)?;
             let dispatches = n.div_ceil(len);
             let mut scratch = Output {
                 brdf: Vec::new(),
