@@ -290,9 +290,11 @@ uint make_frame(Row r, GpuMaterial m, out Frame f) {
         f.v_tb = vec2(dot(dv, t), dot(dv, b));
     }
 #endif
-    dvec3 nxl = cross(dn, dl), nxv = cross(dn, dv);
+#if defined(HAS_G_SMITH) || defined(HAS_G_SMITH_CORRELATED) || defined(HAS_G_SMITH_FAST)
+    dvec3 nxl = cross(dn, dl), nxv = cross(dn, dv); // only Smith's tan^2 reads them
     f.sin2_i = float(dot(nxl, nxl));
     f.sin2_o = float(dot(nxv, nxv));
+#endif
 #if defined(HAS_PHONG)
     if (m.kind.x == MODEL_PHONG) {
         dvec3 rr = 2.0 * cos_i * dn - dl;
@@ -324,15 +326,22 @@ uint make_frame(Row r, GpuMaterial m, out Frame f) {
     f.c = 0.5 * len;
     f.c_exact = f.c;
     f.sin2_h = cross_length2(f.n, f.h);
+    // Only what the kernel's models read (the same guards as the f64 branch).
+#if defined(HAS_ANISOTROPIC)
     f.hx = dot(f.h, f.t); // 0 for isotropic materials (t = b = 0)
     f.hy = dot(f.h, f.b);
     f.l_tb = vec2(dot(f.l, f.t), dot(f.l, f.b));
     f.v_tb = vec2(dot(f.v, f.t), dot(f.v, f.b));
+#endif
+#if defined(HAS_G_SMITH) || defined(HAS_G_SMITH_CORRELATED) || defined(HAS_G_SMITH_FAST)
     f.sin2_i = cross_length2(f.n, f.l);
     f.sin2_o = cross_length2(f.n, f.v);
+#endif
+#if defined(HAS_PHONG)
     vec3 rr = 2.0 * f.cos_i * f.n - f.l;
     f.rv = dot(rr, f.v);
     f.sin2_rv = cross_length2(rr, f.v);
+#endif
 #endif
     return STATUS_VALID;
 }

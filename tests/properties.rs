@@ -13,6 +13,7 @@
 
 mod common;
 
+use common::quadrature::for_each_half_vector;
 use common::strategies::{direction, material_toml};
 use proptest::prelude::*;
 use rand::{Rng, SeedableRng};
@@ -47,32 +48,6 @@ fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
 // the same smooth bump at u ≈ 0, decaying exponentially in u on both sides (r² near the
 // normal, r⁻² or faster toward grazing), and periodic in ψ: the trapezoid rule on such
 // integrands converges exponentially, so a uniform grid handles m = 0.05 as well as m = 1.
-
-/// A trapezoid grid in (u, ψ): `u_steps + 1` values over `[u_lo, u_hi]` (end weights ½),
-/// `psi_steps` values of ψ (periodic). Calls `f(h, weight)` where `weight` is h's share
-/// of solid angle.
-fn for_each_half_vector(
-    (mx, my): (f64, f64),
-    (u_lo, u_hi, u_steps): (f64, f64, u32),
-    psi_steps: u32,
-    mut f: impl FnMut([f64; 3], f64),
-) {
-    let du = (u_hi - u_lo) / f64::from(u_steps);
-    let dpsi = 2.0 * PI / f64::from(psi_steps);
-    for i in 0..=u_steps {
-        let u = u_lo + du * f64::from(i);
-        let end = if i == 0 || i == u_steps { 0.5 } else { 1.0 };
-        let r = u.exp();
-        for j in 0..psi_steps {
-            let psi = dpsi * (f64::from(j) + 0.5);
-            let (sx, sy) = (mx * r * psi.cos(), my * r * psi.sin());
-            let len = (1.0 + sx * sx + sy * sy).sqrt();
-            let h = [sx / len, sy / len, 1.0 / len];
-            let cos3 = h[2] * h[2] * h[2];
-            f(h, end * cos3 * mx * my * r * r * du * dpsi);
-        }
-    }
-}
 
 // ---------------------------------------------------------------------------------------
 // (a) ∫ D cos_h dω_h

@@ -27,6 +27,7 @@
 
 mod common;
 
+use common::quadrature::for_each_half_vector;
 use common::strategies::{direction, material_toml};
 use proptest::prelude::*;
 use proptest::test_runner::{Config, TestCaseError, TestError, TestRunner};
@@ -626,30 +627,6 @@ fn ggx_d_is_constant_at_unit_roughness() {
 const Z: [f64; 3] = [0.0, 0.0, 1.0];
 /// The tangent of the quadrature frame (t = +x, b = +y).
 const X: [f64; 3] = [1.0, 0.0, 0.0];
-
-/// A trapezoid grid in (u, ψ): `u_steps + 1` values over `[u_lo, u_hi]` (end weights ½),
-/// `psi_steps` values of ψ. Calls `f(h, weight)` with h's share of solid angle.
-fn for_each_half_vector(
-    (mx, my): (f64, f64),
-    (u_lo, u_hi, u_steps): (f64, f64, u32),
-    psi_steps: u32,
-    mut f: impl FnMut([f64; 3], f64),
-) {
-    let du = (u_hi - u_lo) / f64::from(u_steps);
-    let dpsi = TAU / f64::from(psi_steps);
-    for i in 0..=u_steps {
-        let u = u_lo + du * f64::from(i);
-        let end = if i == 0 || i == u_steps { 0.5 } else { 1.0 };
-        let r = u.exp();
-        for j in 0..psi_steps {
-            let psi = dpsi * (f64::from(j) + 0.5);
-            let (sx, sy) = (mx * r * psi.cos(), my * r * psi.sin());
-            let len = (1.0 + sx * sx + sy * sy).sqrt();
-            let h = [sx / len, sy / len, 1.0 / len];
-            f(h, end * h[2].powi(3) * mx * my * r * r * du * dpsi);
-        }
-    }
-}
 
 // ---------------------------------------------------------------------------------------
 // 4. White furnace

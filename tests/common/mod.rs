@@ -1,6 +1,7 @@
 //! Shared test helpers: every backend, so one test body runs on each (STYLE.md 6).
 #![allow(dead_code)]
 
+pub mod quadrature;
 pub mod strategies;
 
 use vkbrdf::backend::Backend;
