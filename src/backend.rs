@@ -134,6 +134,11 @@ pub trait Backend {
         request: &Request,
     ) -> Result<Output>;
 
+    /// Gives the backend a cancellation token: [`Backend::evaluate`] and the table paths
+    /// check it between chunks and return [`crate::Error::Cancelled`] once it is set. The
+    /// default ignores it (an engine that never checks still finishes correctly).
+    fn set_cancel(&mut self, _cancel: crate::cancel::Cancel) {}
+
     /// The half/difference slice `grid` of `material` (row-major texels, θ_h fastest)
     /// with the directions made by the backend itself, or `None` when it has no such path
     /// (or none for this grid): the caller then builds the tuples

@@ -2,6 +2,7 @@
 //! `Lx Ly Lz Vx Vy Vz Nx Ny Nz material [Tx Ty Tz]` (FORMULAS.md §1), read from and written
 //! to `.npy` with the `npyz` crate.
 
+use crate::cancel::Cancel;
 use crate::error::{Error, Result};
 use std::path::{Path, PathBuf};
 
@@ -184,11 +185,23 @@ fn truncated(path: &Path, e: std::io::Error) -> Error {
 }
 
 /// Writes a 2-D float32 array `rows × cols` to `path` atomically: the data goes to a
-/// temporary file in the same directory, which is renamed over `path` only when complete.
+/// temporary file in the same directory, which is renamed over `path` only when complete
+/// (see [`crate::atomic`] for symlinks, FIFOs, devices and `-`).
 pub fn write_npy_f32(path: &Path, data: &[f32], cols: usize) -> Result<()> {
+    crate::atomic::commit(vec![stage_npy_f32(path, data, cols, &Cancel::new())?])
+}
+
+/// Stages a 2-D float32 `.npy` for [`crate::atomic::commit`] (several files that must
+/// appear together), checking `cancel` as it writes.
+pub fn stage_npy_f32(
+    path: &Path,
+    data: &[f32],
+    cols: usize,
+    cancel: &Cancel,
+) -> Result<crate::atomic::Staged> {
     use npyz::WriterBuilder;
     let rows = (data.len() / cols.max(1)) as u64;
-    crate::atomic::write(path, |w| {
+    crate::atomic::stage(path, cancel, |w| {
         let mut writer = npyz::WriteOptions::<f32>::new()
             .default_dtype()
             .shape(&[rows, cols as u64])

@@ -30,6 +30,21 @@ pub enum Error {
         source: std::io::Error,
     },
 
+    /// An output that cannot be written without harm (the same file as an input or as
+    /// another output, a directory, a missing or read-only directory); found before any work.
+    #[error("{}: {message}", path.display())]
+    Output {
+        /// The output as given.
+        path: PathBuf,
+        /// What is wrong.
+        message: String,
+    },
+
+    /// The operation was cancelled through its [`crate::cancel::Cancel`] token (the CLI:
+    /// SIGINT or SIGTERM); nothing was written.
+    #[error("cancelled; nothing was written")]
+    Cancelled,
+
     /// `--strict` was asked for and some tuples were invalid.
     #[error("{invalid} of {total} tuples are invalid (zero or non-finite L, V, N, or a bad tangent); first invalid row: {first_row}")]
     InvalidTuples {

@@ -30,6 +30,7 @@ pub mod atomic;
 pub mod backend;
 pub mod batch;
 pub mod bench;
+pub mod cancel;
 pub mod check;
 pub mod error;
 pub mod features;

@@ -1,5 +1,6 @@
 //! The `vkbrdf` command line: a thin layer over the library. Exit codes: 0 success,
-//! 1 a check failed (`check`, `eval --strict`), 2 an error (bad input, no device, I/O).
+//! 1 a check failed (`check`, `eval --strict`), 2 an error (bad input, no device, I/O),
+//! 130 cancelled (SIGINT or SIGTERM; nothing was written).
 
 mod cli;
 
@@ -8,11 +9,23 @@ use std::process::ExitCode;
 
 fn main() -> ExitCode {
     let args = cli::Cli::parse();
-    match cli::run(args) {
+    let cancel = vkbrdf::cancel::Cancel::new();
+    // The first SIGINT or SIGTERM sets the token: the running operation stops at its next
+    // check and removes its temporary files. A second SIGINT exits at once (an escape
+    // hatch should a check never come).
+    for signal in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
+        let _ = signal_hook::flag::register_conditional_shutdown(signal, 130, cancel.flag());
+        let _ = signal_hook::flag::register(signal, cancel.flag());
+    }
+    match cli::run(args, cancel) {
         Ok(code) => code,
         Err(e) => {
             eprintln!("error: {e:#}");
-            ExitCode::from(2)
+            if matches!(e.downcast_ref(), Some(vkbrdf::Error::Cancelled)) {
+                ExitCode::from(130)
+            } else {
+                ExitCode::from(2)
+            }
         }
     }
 }

@@ -31,9 +31,10 @@ pub struct DeviceArgs {
     /// present, else lavapipe; the environment variable VKBRDF_DEVICE does the same).
     #[arg(long, value_name = "NAME|INDEX")]
     pub device: Option<DeviceSelector>,
-    /// Device memory budget for the tuple and output buffers, e.g. 256M or 2G; larger
-    /// batches stream through in chunks.
-    #[arg(long, value_name = "BYTES", value_parser = parse_bytes, default_value = "256M")]
+    /// Device memory budget for the tuple and output buffers, e.g. 256M or 2G, from 1K
+    /// to 1024G; larger batches stream through in chunks.
+    #[arg(long, value_name = "BYTES", value_parser = parse_bytes, default_value = "256M",
+          allow_negative_numbers = true)]
     pub max_gpu_memory: u64,
 }
 
@@ -50,10 +51,13 @@ pub fn parse_bytes(s: &str) -> Result<u64, String> {
         .trim()
         .parse()
         .map_err(|_| format!("`{s}` is not a size like 256M or 2G"))?;
-    if !(n.is_finite() && n > 0.0) {
-        return Err(format!("`{s}`: the budget must be positive"));
+    let bytes = n * mult as f64;
+    if !(n.is_finite() && (1024.0..=(1u64 << 40) as f64).contains(&bytes)) {
+        return Err(format!(
+            "`{s}` is out of range; give a size from 1K to 1024G"
+        ));
     }
-    Ok((n * mult as f64) as u64)
+    Ok(bytes as u64)
 }
 
 /// Opens the Vulkan backend on the selected device.
@@ -69,12 +73,20 @@ pub fn open_vulkan(args: &DeviceArgs) -> anyhow::Result<VulkanBackend> {
 /// Opens the requested backend. Without `--backend`, Vulkan is tried first and the CPU
 /// reference used (with a message saying how to get Vulkan) when no driver is found.
 pub fn open(args: &BackendArgs) -> anyhow::Result<Box<dyn Backend>> {
+    let mut backend = open_uncancellable(args)?;
+    backend.set_cancel(super::cancel());
+    Ok(backend)
+}
+
+fn open_uncancellable(args: &BackendArgs) -> anyhow::Result<Box<dyn Backend>> {
     match args.backend {
         Some(BackendKind::Cpu) => Ok(Box::new(CpuReference::new())),
         Some(BackendKind::Vulkan) => Ok(Box::new(open_vulkan(&args.device)?)),
         None => match open_vulkan(&args.device) {
             Ok(b) => Ok(Box::new(b)),
-            Err(e) if args.device.device.is_none() => {
+            // Only when nothing asked for a device: a selector (flag or VKBRDF_DEVICE)
+            // that matches no device is the user's error, not a reason to switch engines.
+            Err(e) if args.device.device.is_none() && DeviceSelector::from_env().is_none() => {
                 eprintln!(
                     "note: no Vulkan device ({e:#});\n      falling back to the CPU reference (--backend cpu). For Vulkan on any machine, install lavapipe:\n      sudo apt-get install mesa-vulkan-drivers libvulkan1"
                 );

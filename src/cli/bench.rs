@@ -33,8 +33,9 @@ pub struct Args {
     /// Write SVG plots into this directory.
     #[arg(long, value_name = "DIR")]
     pub plot: Option<PathBuf>,
-    /// Timed repeats per point (median reported).
-    #[arg(long)]
+    /// Timed repeats per point (median reported), 1 to 1000.
+    #[arg(long, allow_negative_numbers = true,
+          value_parser = super::ranges::integer::<usize>(1, 1000))]
     pub repeats: Option<usize>,
     /// Only these scenarios (repeatable); default all.
     #[arg(long)]
@@ -395,12 +396,18 @@ fn row(
 }
 
 fn print_report(results: &[ResultRow], peers: &[peers::PeerRow], list: &[scenarios::Scenario]) {
-    println!(
+    outln!(
         "{:<26} {:<7} {:<11} {:<13} {:>9} {:>12} {:>11}",
-        "scenario", "backend", "mode", "variant", "tuples", "M evals/s", "max rel err"
+        "scenario",
+        "backend",
+        "mode",
+        "variant",
+        "tuples",
+        "M evals/s",
+        "max rel err"
     );
     for r in results {
-        println!(
+        outln!(
             "{:<26} {:<7} {:<11} {:<13} {:>9} {:>12.2} {:>11.2e}",
             r.scenario,
             r.backend,
@@ -411,21 +418,21 @@ fn print_report(results: &[ResultRow], peers: &[peers::PeerRow], list: &[scenari
             r.max_rel_err
         );
     }
-    println!("\npeers (same directions, same run):");
+    outln!("\npeers (same directions, same run):");
     for p in peers {
         match (p.evals_per_s, &p.skipped) {
-            (Some(v), _) => println!(
+            (Some(v), _) => outln!(
                 "  {:<8} {:<20} {:>9} tuples {:>10.2} M evals/s",
                 p.name,
                 p.scenario,
                 p.tuples,
                 v / 1e6
             ),
-            (None, Some(why)) => println!("  {:<8} {:<20} skipped: {why}", p.name, p.scenario),
+            (None, Some(why)) => outln!("  {:<8} {:<20} skipped: {why}", p.name, p.scenario),
             _ => {}
         }
     }
-    println!("\nratios, Vulkan over peer (same BRDF, same batch size):");
+    outln!("\nratios, Vulkan over peer (same BRDF, same batch size):");
     for sc in list.iter().filter(|s| s.peer.is_some()) {
         for p in peers
             .iter()
@@ -440,7 +447,7 @@ fn print_report(results: &[ResultRow], peers: &[peers::PeerRow], list: &[scenari
                         && r.precision == "exact"
                         && r.tuples == p.tuples
                 }) {
-                    println!(
+                    outln!(
                         "  {:<18} vs {:<8} {:<11} {:.2}×",
                         sc.name,
                         p.name,
@@ -463,7 +470,7 @@ fn print_report(results: &[ResultRow], peers: &[peers::PeerRow], list: &[scenari
                 && r.precision == "exact"
                 && r.tuples == n
         }) {
-            println!(
+            outln!(
                 "  lambert kernel vs memory-copy ceiling: {:.0} %",
                 100.0 * r.evals_per_s / m
             );

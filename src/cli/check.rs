@@ -36,11 +36,14 @@ pub struct Args {
     /// present, else lavapipe; the environment variable VKBRDF_DEVICE does the same).
     #[arg(long, value_name = "NAME|INDEX")]
     pub device: Option<DeviceSelector>,
-    /// Random tuples per combination.
-    #[arg(long, value_name = "N", default_value_t = 2000)]
+    /// Random tuples per combination, 1 to 10,000,000.
+    #[arg(long, value_name = "N", default_value_t = 2000, allow_negative_numbers = true,
+          value_parser = super::ranges::integer::<usize>(1, super::ranges::MAX_CHECK_TUPLES))]
     pub tuples: usize,
-    /// Seed of the random materials and tuples (the same seed gives the same table).
-    #[arg(long, default_value_t = 1)]
+    /// Seed of the random materials and tuples, 0 to 2^64 − 1 (the same seed gives the
+    /// same table).
+    #[arg(long, default_value_t = 1, allow_negative_numbers = true,
+          value_parser = super::ranges::integer::<u64>(0, u64::MAX))]
     pub seed: u64,
     /// Only the combinations whose name contains this text, e.g. `ward`, `ggx-aniso`,
     /// `seed beckmann`.
@@ -68,18 +71,18 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         seed: args.seed,
         only: args.filter.clone(),
     };
-    println!("backend:   {}", gpu.name());
-    println!("reference: cpu-reference (f64)");
-    println!("tolerance: {}", check::tolerance());
-    println!();
-    println!("{}", CombinationReport::header());
+    outln!("backend:   {}", gpu.name());
+    outln!("reference: cpu-reference (f64)");
+    outln!("tolerance: {}", check::tolerance());
+    outln!();
+    outln!("{}", CombinationReport::header());
     let t0 = Instant::now();
     let verbose = args.verbose;
     let reports = check::run(&mut gpu, &check_options, &mut |r| {
-        println!("{}", r.row());
+        outln!("{}", r.row());
         if verbose || !r.pass() {
             if let Some(w) = &r.worst {
-                println!("{w}");
+                outln!("{w}");
             }
         }
     })?;
@@ -95,17 +98,17 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         .iter()
         .map(|r| r.max_rel_well_conditioned)
         .fold(0.0, f64::max);
-    println!();
-    println!(
+    outln!();
+    outln!(
         "{} combinations × {} tuples in {elapsed:.1} s: {} pass, {failed} fail; most tolerance used {max_used:.3}",
         reports.len(),
         args.tuples,
         reports.len() - failed
     );
-    println!("largest relative error {max_rel:.2e} overall, {well:.2e} where f32 inputs determine the value well");
+    outln!("largest relative error {max_rel:.2e} overall, {well:.2e} where f32 inputs determine the value well");
     let messages = counter.count();
     if messages > 0 {
-        println!(
+        outln!(
             "validation layer: {messages} warning(s)/error(s); the first:\n{}",
             counter.messages().join("\n")
         );

@@ -16,11 +16,14 @@ use vkbrdf::material::presets;
 Example:
   vkbrdf demo --tuples 2000000")]
 pub struct Args {
-    /// Number of sample tuples (spread evenly over the presets).
-    #[arg(long, short = 'n', default_value_t = 1_000_000)]
+    /// Number of sample tuples (spread evenly over the presets), 1 to 100,000,000.
+    #[arg(long, short = 'n', default_value_t = 1_000_000, allow_negative_numbers = true,
+          value_parser = super::ranges::integer::<usize>(1, super::ranges::MAX_IN_MEMORY_TUPLES))]
     pub tuples: usize,
-    /// Tuples per preset re-evaluated on the f64 reference for the error column.
-    #[arg(long, default_value_t = 2000)]
+    /// Tuples per preset re-evaluated on the f64 reference for the error column, 1 to
+    /// 10,000,000 (a check of nothing would pass having checked nothing).
+    #[arg(long, default_value_t = 2000, allow_negative_numbers = true,
+          value_parser = super::ranges::integer::<usize>(1, super::ranges::MAX_CHECK_TUPLES))]
     pub check: usize,
     /// Directory for the default table set.
     #[arg(long, default_value = "vkbrdf-out", value_name = "DIR")]
@@ -44,7 +47,7 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
     let t = Instant::now();
     let out = backend.evaluate(&batch, &materials, &Request::default())?;
     let secs = t.elapsed().as_secs_f64();
-    println!(
+    outln!(
         "{} tuples of {} presets on {}: {:.3} s ({:.1} M tuples/s); {} below the horizon, {} invalid",
         batch.len(),
         materials.len(),
@@ -54,9 +57,13 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         out.counts.below_horizon,
         out.counts.invalid
     );
-    println!(
+    outln!(
         "{:<15} {:>9} {:>27} {:>12} {:>13}",
-        "preset", "tuples", "mean f (R, G, B) 1/sr", "max f (G)", "max rel err"
+        "preset",
+        "tuples",
+        "mean f (R, G, B) 1/sr",
+        "max f (G)",
+        "max rel err"
     );
     for (mi, m) in materials.iter().enumerate() {
         let rows: Vec<usize> = (0..batch.len())
@@ -79,7 +86,7 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
                 max_rel = max_rel.max(rel);
             }
         }
-        println!(
+        outln!(
             "{:<15} {:>9} {:>27} {:>12.4} {:>13.2e}",
             m.name,
             rows.len(),
@@ -146,32 +153,32 @@ fn tables(backend: &mut dyn vkbrdf::backend::Backend, dir: &std::path::Path) -> 
     albedo_job.check()?;
     slice_job.check()?;
     preview_job.check()?;
-    println!("\ntables on {} (in {}):", backend.name(), dir.display());
+    outln!("\ntables on {} (in {}):", backend.name(), dir.display());
     let mut runner = Runner::new(backend).with_progress(true);
     let t = Instant::now();
     dfg::write(&mut runner, &dfg_job)?;
-    println!(
+    outln!(
         "  {:<32} {:>6.2} s  split-sum DFG, GGX + smith-correlated, 32×32 (R = A, G = B)",
         "dfg.exr",
         t.elapsed().as_secs_f64()
     );
     let t = Instant::now();
     albedo::write(&mut runner, &albedo_job)?;
-    println!(
+    outln!(
         "  {:<32} {:>6.2} s  E(μ, α) and E_avg(α), GGX + smith-correlated, F = 1",
         "albedo.exr, albedo-average.exr",
         t.elapsed().as_secs_f64()
     );
     let t = Instant::now();
     slice::write(&mut runner, &slice_job)?;
-    println!(
+    outln!(
         "  {:<32} {:>6.2} s  gold, f(θ_h, θ_d) at φ_d = 90°, 90×90, with terms",
         "slice-gold.exr",
         t.elapsed().as_secs_f64()
     );
     let t = Instant::now();
     preview::write(&mut runner, &preview_job)?;
-    println!(
+    outln!(
         "  {:<32} {:>6.2} s  gold: lit sphere and polar lobe at 45°",
         "gold-sphere.png, gold-polar.png",
         t.elapsed().as_secs_f64()

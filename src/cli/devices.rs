@@ -1,7 +1,7 @@
 //! `vkbrdf devices`: the Vulkan devices of this machine and which one vkbrdf uses.
 
 use std::process::ExitCode;
-use vkbrdf::gpu::{list_devices, INSTALL_HINT};
+use vkbrdf::gpu::{list_devices, DeviceSelector, INSTALL_HINT};
 
 /// Arguments of `vkbrdf devices`.
 #[derive(clap::Args, Debug, Clone)]
@@ -28,10 +28,22 @@ pub fn run(_args: &Args) -> anyhow::Result<ExitCode> {
         anyhow::bail!("the Vulkan loader found no device; {INSTALL_HINT}");
     }
     for d in &devices {
-        print!("{d}");
+        out!("{d}");
     }
     if let Ok(sel) = std::env::var("VKBRDF_DEVICE") {
-        println!("VKBRDF_DEVICE={sel} is set: it overrides the default choice.");
+        let matched = match sel.parse::<DeviceSelector>() {
+            Ok(DeviceSelector::Index(i)) => devices.iter().any(|d| d.index == i),
+            Ok(DeviceSelector::Name(n)) => devices
+                .iter()
+                .any(|d| d.name.to_lowercase().contains(&n.to_lowercase())),
+            Err(_) => false,
+        };
+        if !matched {
+            anyhow::bail!(
+                "VKBRDF_DEVICE={sel:?} matches none of the devices listed above; give an index or part of a name, or unset it"
+            );
+        }
+        outln!("VKBRDF_DEVICE={sel} is set: it overrides the default choice.");
     }
     Ok(ExitCode::SUCCESS)
 }

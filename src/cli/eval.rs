@@ -19,7 +19,14 @@ columns are needed only by anisotropic materials).
 
 Output: BRDF.npy, float32 (n, 3): RGB f in 1/sr (no cosine); TERMS.npy, float32 (n, 6):
 D, G, F_r, F_g, F_b, K. Invalid tuples (zero or non-finite vectors, a bad tangent) and
-tuples below the horizon give 0; both are counted. Files are written atomically.
+tuples below the horizon give 0; both are counted.
+
+Outputs never destroy data: an output that is an input (after links) or named twice is
+refused before any work, as is a missing or read-only directory. Regular files are
+written atomically (temporary file + rename; a symlink is written through, the link
+kept): a failure, a full disk or Ctrl-C leaves the previous files intact, and BRDF and
+TERMS appear both or neither. A FIFO, a device or `-` (standard output) is written
+directly once the evaluation has succeeded (atomicity is a promise for regular files).
 
 Example:
   vkbrdf generate --materials m.toml --tuples 1000000 --output t.npy
@@ -68,10 +75,23 @@ impl From<PrecisionArg> for Precision {
 
 /// Runs `vkbrdf eval`.
 pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
+    let cancel = super::cancel();
     let materials = precision::apply_all(
         &vkbrdf::material::load_materials(&args.materials)?,
         args.precision.into(),
     );
+    // Every output is checked before any work: not an input (the measured materials'
+    // MERL files included), not named twice, in a directory that accepts new files.
+    let mut inputs = vec![args.materials.as_path(), args.input.as_path()];
+    for m in &materials {
+        if let vkbrdf::material::Model::Measured(d) = &m.model {
+            inputs.push(d.path.as_path());
+        }
+    }
+    let outputs: Vec<&std::path::Path> = std::iter::once(args.output.as_path())
+        .chain(args.terms.as_deref())
+        .collect();
+    vkbrdf::atomic::check_outputs(&outputs, &inputs)?;
     let t0 = Instant::now();
     let batch = Batch::read_npy(&args.input, materials.len())?;
     let read_s = t0.elapsed().as_secs_f64();
@@ -80,7 +100,9 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         .any(|m| matches!(m.model, vkbrdf::material::Model::Measured(_)));
     let mut backend = if measured && args.backend.backend.is_none() {
         eprintln!("note: measured (MERL) materials are evaluated by the CPU reference");
-        Box::new(vkbrdf::reference::CpuReference::new())
+        let mut reference = Box::new(vkbrdf::reference::CpuReference::new());
+        vkbrdf::backend::Backend::set_cancel(reference.as_mut(), cancel.clone());
+        reference
     } else {
         backend_choice::open(&args.backend)?
     };
@@ -111,9 +133,15 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         eprintln!("error: {e} (--strict: nothing written)");
         return Ok(ExitCode::from(1));
     }
+    // Both files are staged, then appear together: both or neither.
+    let mut staged = vec![batch::stage_npy_f32(&args.output, &out.brdf, 3, &cancel)
+        .with_context(|| "writing the BRDF values")?];
     if let (Some(path), Some(terms)) = (&args.terms, &out.terms) {
-        batch::write_npy_f32(path, terms, TERM_COLUMNS).with_context(|| "writing the terms")?;
+        staged.push(
+            batch::stage_npy_f32(path, terms, TERM_COLUMNS, &cancel)
+                .with_context(|| "writing the terms")?,
+        );
     }
-    batch::write_npy_f32(&args.output, &out.brdf, 3).with_context(|| "writing the BRDF values")?;
+    vkbrdf::atomic::commit(staged).with_context(|| "writing the outputs")?;
     Ok(ExitCode::SUCCESS)
 }

@@ -16,14 +16,16 @@ pub struct Args {
     /// Materials file whose table the material column indexes.
     #[arg(long, short = 'm', value_name = "M.toml")]
     pub materials: PathBuf,
-    /// Number of tuples.
-    #[arg(long, short = 'n', default_value_t = 1_000_000)]
+    /// Number of tuples, 1 to 100,000,000 (the batch is built in memory).
+    #[arg(long, short = 'n', default_value_t = 1_000_000, allow_negative_numbers = true,
+          value_parser = super::ranges::integer::<usize>(1, super::ranges::MAX_IN_MEMORY_TUPLES))]
     pub tuples: usize,
     /// Append tangent columns (13 columns instead of 10).
     #[arg(long)]
     pub tangents: bool,
-    /// Random seed (same seed, same file).
-    #[arg(long, default_value_t = 1)]
+    /// Random seed, 0 to 2^64 − 1 (same seed, same file).
+    #[arg(long, default_value_t = 1, allow_negative_numbers = true,
+          value_parser = super::ranges::integer::<u64>(0, u64::MAX))]
     pub seed: u64,
     /// Output .npy file (float32).
     #[arg(long, short = 'o', value_name = "T.npy")]
@@ -33,9 +35,13 @@ pub struct Args {
 /// Runs `vkbrdf generate`.
 pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
     let materials = vkbrdf::material::load_materials(&args.materials)?;
+    vkbrdf::atomic::check_outputs(&[args.output.as_path()], &[args.materials.as_path()])?;
     let batch =
         vkbrdf::sample::sample_batch(args.tuples, materials.len(), args.seed, args.tangents);
-    vkbrdf::batch::write_npy_f32(&args.output, batch.as_slice(), batch.columns())?;
+    let cancel = super::cancel();
+    let staged =
+        vkbrdf::batch::stage_npy_f32(&args.output, batch.as_slice(), batch.columns(), &cancel)?;
+    vkbrdf::atomic::commit(vec![staged])?;
     eprintln!(
         "wrote {} tuples × {} columns to {}",
         batch.len(),

@@ -26,6 +26,8 @@ use vkbrdf::material::{self, Distribution, Fresnel, Material, Model, Roughness};
   specular = [1.0, 1.0, 1.0]  # c_spec (default white)
   specular_weight = 1.0       # s (default 1)
   diffuse_weight = 0.0        # d (default 0)
+  precision = "exact"         # exact (default) | fast: Schlick for exact Fresnel,
+                              # smith-fast for Smith-Beckmann (any analytic model)
 
   [[material]]
   name = "measured"
@@ -52,9 +54,9 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         Some(path) => material::load_materials(path)?,
         None => material::presets::all(),
     };
-    println!("{:<16} definition", "name");
+    outln!("{:<16} definition", "name");
     for m in &list {
-        println!("{:<16} {}", m.name, summary(m));
+        outln!("{:<16} {}", m.name, summary(m));
     }
     Ok(ExitCode::SUCCESS)
 }
@@ -99,10 +101,18 @@ pub fn summary(m: &Material) -> String {
                 Fresnel::Schlick { f0 } => format!("schlick f0={}", rgb(f0)),
             };
             format!(
-                "cook-torrance ({:?}) {d}, G={:?}, {f}, s={} d={}",
-                ct.convention, ct.geometry, ct.specular_weight, ct.diffuse_weight
+                "cook-torrance ({}) {d}, G={}, {f}, s={} d={}",
+                ct.convention.toml_name(),
+                ct.geometry.toml_name(),
+                ct.specular_weight,
+                ct.diffuse_weight
             )
         }
+    };
+    let body = if m.precision == vkbrdf::precision::Precision::Fast {
+        format!("{body}, precision=fast")
+    } else {
+        body
     };
     if matches!(m.model, Model::Lambert | Model::Measured(_)) {
         body

@@ -1,5 +1,26 @@
 //! Subcommands. Each module parses its own arguments (clap derive) and returns an exit code.
 
+/// `println!` for a command's results: a standard output closed early (`vkbrdf materials |
+/// head`) ends the process quietly, as it does other Unix tools, instead of panicking.
+macro_rules! outln {
+    ($($t:tt)*) => {{
+        use std::io::Write as _;
+        if let Err(e) = writeln!(std::io::stdout(), $($t)*) {
+            $crate::cli::stdout_failed(e)
+        }
+    }};
+}
+
+/// `print!` with [`outln!`]'s handling of a closed standard output.
+macro_rules! out {
+    ($($t:tt)*) => {{
+        use std::io::Write as _;
+        if let Err(e) = write!(std::io::stdout(), $($t)*) {
+            $crate::cli::stdout_failed(e)
+        }
+    }};
+}
+
 mod backend_choice;
 mod bench;
 mod check;
@@ -8,11 +29,13 @@ mod devices;
 mod eval;
 mod generate;
 mod materials;
+mod ranges;
 mod stress;
 mod table;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
+use vkbrdf::cancel::Cancel;
 
 /// Evaluate BRDFs in bulk on Vulkan compute, checked against an f64 CPU reference.
 ///
@@ -61,8 +84,27 @@ enum Command {
     Table(table::Args),
 }
 
-/// Runs the parsed command line.
-pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
+/// Ends the process after a failed write to standard output: quietly with 141 (as a
+/// shell reports a process ended by SIGPIPE) when the reader has gone, else with 2.
+pub fn stdout_failed(e: std::io::Error) -> ! {
+    if e.kind() == std::io::ErrorKind::BrokenPipe {
+        std::process::exit(141);
+    }
+    eprintln!("error: writing to standard output: {e}");
+    std::process::exit(2)
+}
+
+/// The process's cancellation token, set by the signal handler in `main`.
+static CANCEL: std::sync::OnceLock<Cancel> = std::sync::OnceLock::new();
+
+/// The token every command hands to its backend and its output writes.
+pub fn cancel() -> Cancel {
+    CANCEL.get().cloned().unwrap_or_default()
+}
+
+/// Runs the parsed command line; `cancel` is set when the user asks the process to stop.
+pub fn run(cli: Cli, cancel: Cancel) -> anyhow::Result<ExitCode> {
+    let _ = CANCEL.set(cancel);
     match cli.command {
         Command::Eval(a) => eval::run(&a),
         Command::Materials(a) => materials::run(&a),

@@ -18,23 +18,27 @@ Examples:
   vkbrdf stress --tuples 200000                  # Vulkan and the CPU reference
   vkbrdf stress --tuples 10000000 --backend vulkan --backend cpu --report stress.md")]
 pub struct Args {
-    /// Number of corpus tuples per backend.
-    #[arg(long, short = 'n', default_value_t = 1_000_000)]
+    /// Number of corpus tuples per backend, 1 to 10^10 (evaluated in chunks).
+    #[arg(long, short = 'n', default_value_t = 1_000_000, allow_negative_numbers = true,
+          value_parser = super::ranges::integer::<usize>(1, super::ranges::MAX_STRESS_TUPLES))]
     pub tuples: usize,
     /// Backends to stress (repeat the flag for several).
     #[arg(long, value_enum)]
     pub backend: Vec<BackendKind>,
-    /// Corpus seed.
-    #[arg(long, default_value_t = 7)]
+    /// Corpus seed, 0 to 2^64 − 1.
+    #[arg(long, default_value_t = 7, allow_negative_numbers = true,
+          value_parser = super::ranges::integer::<u64>(0, u64::MAX))]
     pub seed: u64,
     /// Write the Markdown report here (atomically).
     #[arg(long, value_name = "FILE.md")]
     pub report: Option<PathBuf>,
-    /// Relative-error target marked in the table.
-    #[arg(long, default_value_t = 1e-5)]
+    /// Relative-error target marked in the table, in (0, 1].
+    #[arg(long, default_value_t = 1e-5, allow_negative_numbers = true,
+          value_parser = super::ranges::real(0.0, 1.0, true, false))]
     pub target: f64,
-    /// Tuples per evaluation call (bounds memory).
-    #[arg(long, default_value_t = 1 << 20)]
+    /// Tuples per evaluation call (bounds memory), 1 to 2^26.
+    #[arg(long, default_value_t = 1 << 20, allow_negative_numbers = true,
+          value_parser = super::ranges::integer::<usize>(1, 1 << 26))]
     pub chunk: usize,
     /// Precision variant the backend evaluates (judged against the exact reference).
     #[arg(long, value_enum, default_value = "exact")]
@@ -45,18 +49,34 @@ pub struct Args {
 
 /// Runs `vkbrdf stress`.
 pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
-    let kinds = if args.backend.is_empty() {
-        vec![BackendKind::Cpu]
+    if let Some(path) = &args.report {
+        vkbrdf::atomic::check_outputs(&[path.as_path()], &[])?;
+    }
+    let open = |kind| {
+        backend_choice::open(&BackendArgs {
+            backend: Some(kind),
+            device: args.device.clone(),
+        })
+    };
+    // Default: every backend this machine has — the Vulkan kernel when a device opens,
+    // and the reference (which judges itself against its own invariants).
+    let backends = if args.backend.is_empty() {
+        let mut list = Vec::new();
+        match open(BackendKind::Vulkan) {
+            Ok(b) => list.push(b),
+            Err(e) => eprintln!("note: stressing the CPU reference only: no Vulkan device ({e:#})"),
+        }
+        list.push(open(BackendKind::Cpu)?);
+        list
     } else {
-        args.backend.clone()
+        args.backend
+            .iter()
+            .map(|&k| open(k))
+            .collect::<anyhow::Result<Vec<_>>>()?
     };
     let mut md = String::from("## Stress report\n\n");
     let mut ok = true;
-    for kind in kinds {
-        let mut backend = backend_choice::open(&BackendArgs {
-            backend: Some(kind),
-            device: args.device.clone(),
-        })?;
+    for mut backend in backends {
         let bar = ProgressBar::new(args.tuples as u64).with_style(
             ProgressStyle::with_template(
                 "{msg} [{bar:30}] {pos}/{len} tuples, {elapsed} (eta {eta})",
@@ -74,7 +94,7 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         )?;
         bar.finish_and_clear();
         let section = report.to_markdown(args.target);
-        println!("{section}");
+        outln!("{section}");
         md += &section;
         md += "\n";
         if !report.policy_holds() {

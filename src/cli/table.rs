@@ -76,7 +76,8 @@ pub struct SliceArgs {
     #[arg(long, short = 'o', value_name = "S.exr")]
     output: PathBuf,
     /// Table size WxH (or N for NxN).
-    #[arg(long, value_name = "WxH", default_value = "90x90", value_parser = parse_grid)]
+    #[arg(long, value_name = "WxH", default_value = "90x90", value_parser = parse_grid,
+          allow_negative_numbers = true)]
     size: Grid,
     /// θ_h linear in x instead of MERL's square-root spacing.
     #[arg(long)]
@@ -101,11 +102,14 @@ pub struct ModelArgs {
     #[arg(long, value_enum, default_value = "smith-correlated")]
     geometry: GeometryArg,
     /// Table size WxH (or N): x = μ = cos_o, y = α, at texel centres.
-    #[arg(long, value_name = "WxH", default_value = "32x32", value_parser = parse_grid)]
+    #[arg(long, value_name = "WxH", default_value = "32x32", value_parser = parse_grid,
+          allow_negative_numbers = true)]
     size: Grid,
-    /// Quasi-Monte Carlo samples per texel (accuracy ≤ 1e-4 at the default; see --help).
+    /// Quasi-Monte Carlo samples per texel, 1 to 2^26 (accuracy ≤ 1e-4 at the default;
+    /// see --help).
     #[arg(long, value_name = "N", default_value_t = albedo::DEFAULT_SAMPLES,
-          value_parser = clap::value_parser!(u32).range(1..))]
+          allow_negative_numbers = true,
+          value_parser = super::ranges::integer::<u32>(1, 1 << 26))]
     samples: u32,
     /// Write float16 instead of float32.
     #[arg(long)]
@@ -120,7 +124,7 @@ pub struct ModelArgs {
 E(mu, alpha) = integral of f cos_i over the hemisphere for modern Cook-Torrance with F = 1
 (white, no diffuse). Integration: 65536 Hammersley points per texel, GGX sampled by its
 visible normals (Heitz 2018), Beckmann by D cos_h; measured error <= 1e-4 absolute against
-an independent quadrature for alpha >= 1/64 (tests/tables.rs). --average writes
+an independent quadrature for alpha >= 1/1024 and mu >= 1/64 (tests/tables.rs). --average writes
 E_avg(alpha) = 2 * integral of E(mu) mu dmu (Kulla-Conty) as an H x 1 table (x = alpha).
 
 Example:
@@ -176,6 +180,7 @@ pub struct MerlArgs {
 
 /// Arguments of `vkbrdf table preview`.
 #[derive(clap::Args, Debug)]
+#[command(group(clap::ArgGroup::new("pictures").required(true).multiple(true)))]
 #[command(after_help = "\
 The sphere: orthographic, lit by one directional light from the upper left (irradiance
 pi * exposure: a white Lambertian facing it shows 1), Reinhard tone mapping, sRGB. The
@@ -188,21 +193,25 @@ Example:
 pub struct PreviewArgs {
     #[command(flatten)]
     material: MaterialArgs,
-    /// Lit-sphere PNG.
-    #[arg(long, value_name = "SPHERE.png", required_unless_present = "polar")]
+    /// Lit-sphere PNG (give --sphere, --polar or both).
+    #[arg(long, value_name = "SPHERE.png", group = "pictures")]
     sphere: Option<PathBuf>,
-    /// Polar-plot PNG.
-    #[arg(long, value_name = "POLAR.png")]
+    /// Polar-plot PNG (give --sphere, --polar or both).
+    #[arg(long, value_name = "POLAR.png", group = "pictures")]
     polar: Option<PathBuf>,
-    /// Sphere image size in pixels.
+    /// Sphere image size in pixels, 1 to 16384.
     #[arg(long, default_value_t = preview::DEFAULT_SPHERE_SIZE as u32,
-          value_parser = clap::value_parser!(u32).range(1..=16384))]
+          allow_negative_numbers = true,
+          value_parser = super::ranges::integer::<u32>(1, 16384))]
     size: u32,
     /// Light angle from the normal for the polar plot, degrees in [0, 90).
-    #[arg(long, value_name = "DEG", default_value_t = preview::DEFAULT_INCIDENCE_DEG)]
+    #[arg(long, value_name = "DEG", default_value_t = preview::DEFAULT_INCIDENCE_DEG,
+          allow_negative_numbers = true,
+          value_parser = super::ranges::real(0.0, 90.0, false, true))]
     incidence: f64,
-    /// Exposure of the sphere before tone mapping.
-    #[arg(long, default_value_t = 1.0)]
+    /// Exposure of the sphere before tone mapping, in (0, 10^6].
+    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true,
+          value_parser = super::ranges::real(0.0, 1e6, true, false))]
     exposure: f64,
     #[command(flatten)]
     backend: BackendArgs,
@@ -279,7 +288,9 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
     let (job, backend_args, outputs) = prepare(&args.kind)?;
     let mut backend = backend_choice::open(backend_args)?;
     let name = backend.name();
-    let mut runner = Runner::new(backend.as_mut()).with_progress(true);
+    let mut runner = Runner::new(backend.as_mut())
+        .with_progress(true)
+        .with_cancel(super::cancel());
     match &job {
         Job::Slice(j) => slice::write(&mut runner, j)?,
         Job::Albedo(j) => albedo::write(&mut runner, j)?,
@@ -295,6 +306,16 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         t0.elapsed().as_secs_f64()
     );
     Ok(ExitCode::SUCCESS)
+}
+
+/// The material a job evaluates, for the jobs that have one.
+fn material_of(job: &Job) -> Option<&Material> {
+    match job {
+        Job::Slice(j) => Some(&j.material),
+        Job::Merl(m, _) => Some(m),
+        Job::Preview(j) => Some(&j.material),
+        Job::Albedo(_) | Job::Dfg(_) => None,
+    }
 }
 
 /// The checked job, its backend options and the files it will write.
@@ -366,5 +387,19 @@ fn prepare(kind: &Kind) -> anyhow::Result<(Job, &BackendArgs, Vec<PathBuf>)> {
         Job::Merl(_, path) => vec![path.clone()],
         Job::Preview(j) => j.sphere.iter().chain(&j.polar).cloned().collect(),
     };
+    // No output may be an input (the materials file, a measured material's MERL file) or
+    // name the same file as another output.
+    let (materials_file, material) = match kind {
+        Kind::Slice(a) => (a.material.materials.as_deref(), material_of(&job)),
+        Kind::Merl(a) => (a.material.materials.as_deref(), material_of(&job)),
+        Kind::Preview(a) => (a.material.materials.as_deref(), material_of(&job)),
+        Kind::Albedo(_) | Kind::Dfg(_) => (None, None),
+    };
+    let mut inputs: Vec<&std::path::Path> = materials_file.into_iter().collect();
+    if let Some(vkbrdf::material::Model::Measured(d)) = material.map(|m| &m.model) {
+        inputs.push(d.path.as_path());
+    }
+    let refs: Vec<&std::path::Path> = outputs.iter().map(PathBuf::as_path).collect();
+    vkbrdf::atomic::check_outputs(&refs, &inputs)?;
     Ok((job, backend, outputs))
 }

@@ -18,7 +18,8 @@ use std::sync::{Arc, Mutex};
 /// What to tell a user whose machine has no usable Vulkan driver.
 pub const INSTALL_HINT: &str = "install a Vulkan driver and loader (on Debian/Ubuntu: \
 `apt-get install mesa-vulkan-drivers libvulkan1`, which includes lavapipe, a CPU \
-implementation), or run on the CPU reference with `--backend cpu`";
+implementation); the commands that take `--backend` (eval, demo, stress, table) can \
+run on the CPU reference with `--backend cpu` instead";
 
 /// The name of the Khronos validation layer.
 const VALIDATION_LAYER: &CStr = c"VK_LAYER_KHRONOS_validation";

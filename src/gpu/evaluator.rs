@@ -157,6 +157,8 @@ pub struct VulkanBackend {
     kernels: Kernels,
     last_features: Option<FeatureSet>,
     options: VulkanOptions,
+    /// Checked before each chunk is submitted.
+    cancel: crate::cancel::Cancel,
     device: Arc<Device>,
 }
 
@@ -205,6 +207,7 @@ impl VulkanBackend {
             kernels,
             last_features: None,
             options,
+            cancel: crate::cancel::Cancel::new(),
             device,
         })
     }
@@ -424,6 +427,7 @@ impl VulkanBackend {
         let (n, cols, data) = (batch.len(), batch.columns(), batch.as_slice());
         let chunks = n.div_ceil(chunk);
         for c in 0..chunks {
+            self.cancel.check()?;
             let s = c % FRAMES_IN_FLIGHT;
             self.finish(s, out)?;
             let (start, len) = (c * chunk, chunk.min(n - c * chunk));
@@ -735,6 +739,10 @@ fn ensure(
 impl Backend for VulkanBackend {
     fn name(&self) -> String {
         format!("vulkan: {}", self.device_name())
+    }
+
+    fn set_cancel(&mut self, cancel: crate::cancel::Cancel) {
+        self.cancel = cancel;
     }
 
     fn evaluate(

@@ -132,6 +132,17 @@ pub enum Convention {
     Modern,
 }
 
+impl Convention {
+    /// The spelling in a materials file (`convention = "..."`).
+    pub fn toml_name(self) -> &'static str {
+        match self {
+            Convention::Seed => "seed",
+            Convention::CookTorrance1982 => "cook-torrance-1982",
+            Convention::Modern => "modern",
+        }
+    }
+}
+
 /// Microfacet distribution D (FORMULAS.md §2) with its parameter.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Distribution {
@@ -164,6 +175,19 @@ pub enum Geometry {
     SmithCorrelated,
     /// Walter et al. 2007 rational fit of Smith–Beckmann (Beckmann only).
     SmithFast,
+}
+
+impl Geometry {
+    /// The spelling in a materials file (`geometry = "..."`).
+    pub fn toml_name(self) -> &'static str {
+        match self {
+            Geometry::None => "none",
+            Geometry::CookTorrance => "cook-torrance",
+            Geometry::Smith => "smith",
+            Geometry::SmithCorrelated => "smith-correlated",
+            Geometry::SmithFast => "smith-fast",
+        }
+    }
 }
 
 /// Fresnel term F (FORMULAS.md §4), per RGB channel.

@@ -14,6 +14,7 @@ pub mod models;
 
 use crate::backend::{Backend, Counts, Output, Request, TERM_COLUMNS};
 use crate::batch::{Batch, Tuple};
+use crate::cancel::Cancel;
 use crate::error::Result;
 use crate::material::Material;
 
@@ -92,6 +93,7 @@ pub fn evaluate_tuple(t: &Tuple, m: &Material) -> Evaluation {
 #[derive(Debug, Clone)]
 pub struct CpuReference {
     threads: usize,
+    cancel: Cancel,
 }
 
 impl Default for CpuReference {
@@ -104,13 +106,20 @@ impl CpuReference {
     /// A reference backend using every available core.
     pub fn new() -> CpuReference {
         let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
-        CpuReference { threads }
+        CpuReference {
+            threads,
+            cancel: Cancel::new(),
+        }
     }
 }
 
 impl Backend for CpuReference {
     fn name(&self) -> String {
         "cpu-reference (f64)".to_string()
+    }
+
+    fn set_cancel(&mut self, cancel: Cancel) {
+        self.cancel = cancel;
     }
 
     fn evaluate(
@@ -127,6 +136,7 @@ impl Backend for CpuReference {
             Vec::new()
         };
         let per_thread = n.div_ceil(self.threads.max(1)).max(1);
+        let cancel = &self.cancel;
         let counts: Vec<Counts> = std::thread::scope(|s| {
             let term_chunks: Vec<Option<&mut [f32]>> = if request.terms {
                 terms
@@ -145,6 +155,9 @@ impl Backend for CpuReference {
                         let start = c * per_thread;
                         let mut counts = Counts::default();
                         for (j, rgb) in out.chunks_exact_mut(3).enumerate() {
+                            if j % 4096 == 0 && cancel.is_cancelled() {
+                                break;
+                            }
                             let i = start + j;
                             let tuple = batch.tuple(i);
                             let e = evaluate_tuple(&tuple, &materials[tuple.material]);
@@ -177,6 +190,7 @@ impl Backend for CpuReference {
                 .map(|h| h.join().expect("reference worker panicked"))
                 .collect()
         });
+        self.cancel.check()?;
         let mut total = Counts {
             tuples: n as u64,
             ..Counts::default()

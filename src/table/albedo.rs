@@ -563,7 +563,7 @@ pub fn write(runner: &mut Runner, job: &AlbedoJob) -> Result<()> {
         job.samples,
         sampling(job.spec.lobe)
     );
-    exr_out::write(
+    let mut staged = vec![exr_out::stage(
         &job.output,
         job.grid,
         vec![single("albedo", "Y", &e)],
@@ -573,13 +573,14 @@ pub fn write(runner: &mut Runner, job: &AlbedoJob) -> Result<()> {
             per_texel.clone(),
         ),
         job.half,
-    )?;
+        runner.cancel(),
+    )?];
     if let Some(path) = &job.average {
         let alphas: Vec<f64> = (0..job.grid.height)
             .map(|j| texel_centre(j, job.grid.height))
             .collect();
         let avg = average_albedo(runner, &job.spec, &alphas, job.samples)?;
-        exr_out::write(
+        staged.push(exr_out::stage(
             path,
             Grid::new(job.grid.height, 1)?,
             vec![single("albedo-average", "Y", &avg)],
@@ -589,9 +590,11 @@ pub fn write(runner: &mut Runner, job: &AlbedoJob) -> Result<()> {
                 format!("{AVERAGE_NODES}-point Gauss-Legendre in mu, each E with {per_texel}"),
             ),
             job.half,
-        )?;
+            runner.cancel(),
+        )?);
     }
-    Ok(())
+    // The table and its average appear together or not at all.
+    crate::atomic::commit(staged)
 }
 
 /// How the lobe is sampled, for provenance.

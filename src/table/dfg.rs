@@ -86,5 +86,12 @@ pub fn write(runner: &mut Runner, job: &DfgJob) -> Result<()> {
         name: "dfg".into(),
         channels: vec![channel("R", 0), channel("G", 1)],
     };
-    exr_out::write(&job.output, job.grid, vec![layer], &provenance, job.half)
+    exr_out::write(
+        &job.output,
+        job.grid,
+        vec![layer],
+        &provenance,
+        job.half,
+        runner.cancel(),
+    )
 }

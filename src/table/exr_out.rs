@@ -6,6 +6,8 @@
 //! `values[j·W + i]`, matching [`super::TEXEL_CENTRES`].
 
 use super::Grid;
+use crate::atomic::Staged;
+use crate::cancel::Cancel;
 use crate::error::{Error, Result};
 use exr::prelude::{
     f16, AnyChannel, AnyChannels, AttributeValue, Encoding, FlatSamples, Image, ImageAttributes,
@@ -67,14 +69,29 @@ impl Provenance {
     }
 }
 
-/// Writes `layers` of a `grid` table to `path` (float16 when `half`), atomically.
+/// Writes `layers` of a `grid` table to `path` (float16 when `half`), atomically,
+/// stopping when `cancel` is set.
 pub fn write(
     path: &Path,
     grid: Grid,
     layers: Vec<Layer>,
     provenance: &Provenance,
     half: bool,
+    cancel: &Cancel,
 ) -> Result<()> {
+    crate::atomic::commit(vec![stage(path, grid, layers, provenance, half, cancel)?])
+}
+
+/// [`write`] without making the file visible: for tables written as a set
+/// ([`crate::atomic::commit`]).
+pub fn stage(
+    path: &Path,
+    grid: Grid,
+    layers: Vec<Layer>,
+    provenance: &Provenance,
+    half: bool,
+    cancel: &Cancel,
+) -> Result<Staged> {
     for layer in &layers {
         for c in &layer.channels {
             if c.values.len() != grid.texels() {
@@ -123,7 +140,7 @@ pub fn write(
         ImageAttributes::new(IntegerBounds::from_dimensions(size)),
         exr_layers,
     );
-    crate::atomic::write(path, |w| {
+    crate::atomic::stage(path, cancel, |w| {
         image.write().to_unbuffered(w).map_err(|e| match e {
             exr::error::Error::Io(io) => io,
             other => std::io::Error::other(format!("OpenEXR encoding: {other}")),

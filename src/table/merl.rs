@@ -119,11 +119,20 @@ pub fn check(path: &Path) -> Result<()> {
 pub fn write(runner: &mut Runner, material: &Material, path: &Path) -> Result<()> {
     check(path)?;
     let values = compute(runner, material)?;
-    write_values(path, &values)
+    write_values_cancellable(path, &values, runner.cancel())
 }
 
 /// Writes stored values (R, G, B blocks) as a MERL binary, atomically.
 pub fn write_values(path: &Path, values: &[f64]) -> Result<()> {
+    write_values_cancellable(path, values, &crate::cancel::Cancel::new())
+}
+
+/// [`write_values`], stopping when `cancel` is set.
+pub fn write_values_cancellable(
+    path: &Path,
+    values: &[f64],
+    cancel: &crate::cancel::Cancel,
+) -> Result<()> {
     if values.len() != 3 * SAMPLES {
         return Err(Error::Table(format!(
             "{}: {} values given, a MERL table holds {}",
@@ -132,7 +141,7 @@ pub fn write_values(path: &Path, values: &[f64]) -> Result<()> {
             3 * SAMPLES
         )));
     }
-    crate::atomic::write(path, |w| {
+    crate::atomic::write_cancellable(path, cancel, |w| {
         use std::io::Write;
         for dim in [THETA_H_BINS, THETA_D_BINS, PHI_D_BINS] {
             w.write_all(&(dim as i32).to_le_bytes())?;

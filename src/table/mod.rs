@@ -25,6 +25,7 @@ pub mod slice;
 
 use crate::backend::{Backend, Output, Request};
 use crate::batch::{Batch, COLUMNS_PLAIN, COLUMNS_TANGENT};
+use crate::cancel::Cancel;
 use crate::error::{Error, Result};
 use crate::material::{Convention, Material};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -135,39 +136,10 @@ pub fn table_bytes(grid: Grid, per_texel: u64) -> Option<u128> {
     texels.checked_mul(per_texel as u128)?.checked_add(chunk)
 }
 
-/// Fails early, before any evaluation, when `path` cannot be written: creates (and
-/// removes) a temporary file in its directory, as the final atomic write will.
+/// Fails early, before any evaluation, when `path` cannot be written
+/// ([`crate::atomic::check_outputs`]: a directory, a missing or read-only directory).
 pub fn check_output(path: &Path) -> Result<()> {
-    let io = |source| Error::Io {
-        path: path.to_owned(),
-        source,
-    };
-    if path.is_dir() {
-        return Err(io(std::io::Error::other(
-            "is a directory; give a file name",
-        )));
-    }
-    let dir = match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p,
-        _ => Path::new("."),
-    };
-    tempfile::Builder::new()
-        .prefix(".vkbrdf-")
-        .suffix(".partial")
-        .tempfile_in(dir)
-        .map(drop)
-        .map_err(|e| {
-            // tempfile's message names its random file; name the directory instead.
-            let why = match e.kind() {
-                std::io::ErrorKind::NotFound => "no such directory".to_string(),
-                std::io::ErrorKind::PermissionDenied => "permission denied".to_string(),
-                kind => kind.to_string(),
-            };
-            io(std::io::Error::new(
-                e.kind(),
-                format!("cannot create a file in `{}`: {why}", dir.display()),
-            ))
-        })
+    crate::atomic::check_outputs(&[path], &[])
 }
 
 /// The material called `name`: from `materials_file` when given, else from the presets.
@@ -236,6 +208,7 @@ pub struct Runner<'a> {
     backend: &'a mut dyn Backend,
     progress: ProgressBar,
     chunk_tuples: usize,
+    cancel: Cancel,
 }
 
 impl<'a> Runner<'a> {
@@ -245,7 +218,21 @@ impl<'a> Runner<'a> {
             backend,
             progress: ProgressBar::hidden(),
             chunk_tuples: DEFAULT_CHUNK_TUPLES,
+            cancel: Cancel::new(),
         }
+    }
+
+    /// Stops the job (evaluation and the writing of its files) once `cancel` is set; the
+    /// backend gets the token too.
+    pub fn with_cancel(mut self, cancel: Cancel) -> Runner<'a> {
+        self.backend.set_cancel(cancel.clone());
+        self.cancel = cancel;
+        self
+    }
+
+    /// The job's cancellation token.
+    pub fn cancel(&self) -> &Cancel {
+        &self.cancel
     }
 
     /// Shows a progress bar on stderr (drawn only when stderr is a terminal).
@@ -331,6 +318,7 @@ impl<'a> Runner<'a> {
         self.start(what, total);
         let bar = &self.progress;
         let sums = self.backend.importance_sums(job, &mut |n| bar.inc(n))?;
+        let sums = sums.and_then(|s| self.cancel.check().map(|()| s));
         bar.set_position(total); // the last block of each point may be partial
         self.finish();
         Some(sums)
@@ -345,6 +333,7 @@ impl<'a> Runner<'a> {
         materials: &[Material],
         terms: bool,
     ) -> Result<Output> {
+        self.cancel.check()?;
         let columns = if needs_tangents(materials) {
             COLUMNS_TANGENT
         } else {

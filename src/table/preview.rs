@@ -4,6 +4,7 @@
 //! into an RGB8 buffer and written as PNG (atomically), with provenance as text chunks.
 
 use super::{needs_tangents, push_row, Runner};
+use crate::cancel::Cancel;
 use crate::error::{Error, Result};
 use crate::material::Material;
 use crate::reference::frame::{cross, normalize};
@@ -70,21 +71,20 @@ impl PreviewJob {
 pub fn write(runner: &mut Runner, job: &PreviewJob) -> Result<()> {
     job.check()?;
     let backend = runner.backend_name();
+    let mut staged = Vec::new();
     if let Some(path) = &job.sphere {
         let canvas = sphere(runner, &job.material, job.size, job.exposure)?;
-        write_png(
-            path,
-            &canvas,
-            &provenance(&job.material, "preview-sphere", &backend),
-        )?;
+        let text = provenance(&job.material, "preview-sphere", &backend);
+        staged.push(stage_png(path, &canvas, &text, runner.cancel())?);
     }
     if let Some(path) = &job.polar {
         let canvas = polar(runner, &job.material, job.incidence_deg)?;
         let mut text = provenance(&job.material, "preview-polar", &backend);
         text.push(("vkbrdf.incidence", format!("{} degrees", job.incidence_deg)));
-        write_png(path, &canvas, &text)?;
+        staged.push(stage_png(path, &canvas, &text, runner.cancel())?);
     }
-    Ok(())
+    // Both pictures appear together or not at all.
+    crate::atomic::commit(staged)
 }
 
 fn check_incidence(deg: f64) -> Result<()> {
@@ -288,7 +288,17 @@ fn draw_polar(angles: &[f64], f: &[f32], ti: f64) -> Canvas {
 
 /// Writes `canvas` as an 8-bit sRGB PNG with `text` chunks (keyword, value), atomically.
 pub fn write_png(path: &Path, canvas: &Canvas, text: &[(&str, String)]) -> Result<()> {
-    crate::atomic::write(path, |w| {
+    crate::atomic::commit(vec![stage_png(path, canvas, text, &Cancel::new())?])
+}
+
+/// [`write_png`] without making the file visible yet ([`crate::atomic::commit`]).
+pub fn stage_png(
+    path: &Path,
+    canvas: &Canvas,
+    text: &[(&str, String)],
+    cancel: &Cancel,
+) -> Result<crate::atomic::Staged> {
+    crate::atomic::stage(path, cancel, |w| {
         let mut enc = png::Encoder::new(w, canvas.width as u32, canvas.height as u32);
         enc.set_color(png::ColorType::Rgb);
         enc.set_depth(png::BitDepth::Eight);
