@@ -59,6 +59,9 @@ struct Report {
 
 /// Runs `vkbrdf bench`.
 pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
+    if let Some(path) = &args.json {
+        vkbrdf::atomic::check_outputs(&[path.as_path()], &[])?;
+    }
     let sizes: Vec<usize> = if args.quick {
         vec![1_000, 10_000, 100_000, 1 << 20]
     } else {
