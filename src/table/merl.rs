@@ -154,12 +154,24 @@ pub struct MeasuredMerl {
 /// Reads and validates a MERL binary: its dimensions must be 90 × 90 × 180 and its size
 /// exactly [`FILE_BYTES`]; errors name the file.
 pub fn read(path: &Path) -> Result<MeasuredMerl> {
-    let bytes = std::fs::read(path).map_err(|source| Error::Io {
+    let io = |source| Error::Io {
         path: path.to_owned(),
         source,
-    })?;
+    };
     let bad =
         |message: String| Error::Table(format!("{}: not a MERL BRDF: {message}", path.display()));
+    // Before reading: a directory reads as a bare EISDIR, and a FIFO or a device would
+    // block or never end.
+    let meta = std::fs::metadata(path).map_err(io)?;
+    if meta.is_dir() {
+        return Err(bad("a directory, not a .binary file".into()));
+    }
+    if !meta.is_file() {
+        return Err(bad(
+            "not a regular file (a FIFO, socket or device); give the .binary file itself".into(),
+        ));
+    }
+    let bytes = std::fs::read(path).map_err(io)?;
     if bytes.len() < 12 {
         return Err(bad(format!(
             "{} bytes, shorter than the 12-byte header",
