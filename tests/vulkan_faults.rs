@@ -84,7 +84,10 @@ fn a_fault_names_the_chunk_its_rows_and_what_to_try() {
     let chunk = probe.chunk_tuples(materials.len()).unwrap();
     drop(probe);
     let chunks = TUPLES.div_ceil(chunk);
-    assert!(chunks > 5, "want many chunks, got {chunks} of {chunk} tuples");
+    assert!(
+        chunks > 5,
+        "want many chunks, got {chunks} of {chunk} tuples"
+    );
     for (i, (result, advice)) in cases.into_iter().enumerate() {
         // Every code at a chunk in the ring's steady state; the first one too at the first
         // chunk and at the last (drained after the loop).
@@ -120,7 +123,9 @@ fn a_fault_names_the_chunk_its_rows_and_what_to_try() {
             }
             // Recovered: the same backend evaluates a batch short of the faulty chunk.
             let short = vkbrdf::sample::sample_batch(k * chunk, materials.len(), 4, false);
-            let got = gpu.evaluate(&short, &materials, &Request::default()).unwrap();
+            let got = gpu
+                .evaluate(&short, &materials, &Request::default())
+                .unwrap();
             let want = CpuReference::new()
                 .evaluate(&short, &materials, &Request::default())
                 .unwrap();
@@ -142,7 +147,9 @@ fn a_fault_past_the_last_chunk_never_fires() {
     let Some(mut gpu) = faulty(fault(vk::Result::ERROR_DEVICE_LOST, 1 << 20)) else {
         return;
     };
-    let got = gpu.evaluate(&batch, &materials, &Request::default()).unwrap();
+    let got = gpu
+        .evaluate(&batch, &materials, &Request::default())
+        .unwrap();
     assert_eq!(got.counts.tuples, TUPLES as u64);
 }
 
@@ -164,7 +171,13 @@ fn fault_specifications_parse_or_say_what_is_expected() {
         ok("out-of-host-memory@7").result,
         vk::Result::ERROR_OUT_OF_HOST_MEMORY
     );
-    for bad in ["device-lost", "lost@2", "device-lost@-1", "device-lost@x", ""] {
+    for bad in [
+        "device-lost",
+        "lost@2",
+        "device-lost@-1",
+        "device-lost@x",
+        "",
+    ] {
         let e = bad.parse::<InjectedFault>().unwrap_err();
         assert!(e.contains("KIND@CHUNK") && e.contains("device-lost"), "{e}");
     }

@@ -563,7 +563,7 @@ pub fn write(runner: &mut Runner, job: &AlbedoJob) -> Result<()> {
         job.samples,
         sampling(job.spec.lobe)
     );
-    exr_out::write(
+    let clamped = exr_out::write(
         &job.output,
         job.grid,
         vec![single("albedo", "Y", &e)],
@@ -574,12 +574,13 @@ pub fn write(runner: &mut Runner, job: &AlbedoJob) -> Result<()> {
         ),
         job.half,
     )?;
+    runner.warn_clamped(&job.output, &clamped);
     if let Some(path) = &job.average {
         let alphas: Vec<f64> = (0..job.grid.height)
             .map(|j| texel_centre(j, job.grid.height))
             .collect();
         let avg = average_albedo(runner, &job.spec, &alphas, job.samples)?;
-        exr_out::write(
+        let clamped = exr_out::write(
             path,
             Grid::new(job.grid.height, 1)?,
             vec![single("albedo-average", "Y", &avg)],
@@ -590,6 +591,7 @@ pub fn write(runner: &mut Runner, job: &AlbedoJob) -> Result<()> {
             ),
             job.half,
         )?;
+        runner.warn_clamped(path, &clamped);
     }
     Ok(())
 }

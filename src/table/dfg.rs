@@ -86,5 +86,7 @@ pub fn write(runner: &mut Runner, job: &DfgJob) -> Result<()> {
         name: "dfg".into(),
         channels: vec![channel("R", 0), channel("G", 1)],
     };
-    exr_out::write(&job.output, job.grid, vec![layer], &provenance, job.half)
+    let clamped = exr_out::write(&job.output, job.grid, vec![layer], &provenance, job.half)?;
+    runner.warn_clamped(&job.output, &clamped);
+    Ok(())
 }

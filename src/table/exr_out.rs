@@ -67,14 +67,30 @@ impl Provenance {
     }
 }
 
+/// Texels of one layer clamped to [`HALF_MAX`] when written as float16.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Clamped {
+    /// The layer's name.
+    pub layer: String,
+    /// Texels with at least one channel clamped.
+    pub texels: usize,
+}
+
+/// The largest finite float16, 65504: float16 values beyond it are written as it.
+pub const HALF_MAX: f32 = 65504.0;
+
 /// Writes `layers` of a `grid` table to `path` (float16 when `half`), atomically.
+///
+/// float16 tops out at [`HALF_MAX`]: a finite value beyond it (a sharp lobe's peak, K near
+/// grazing) is written as ±[`HALF_MAX`] instead of ±inf, and the layers where that happened
+/// are returned with the number of texels clamped, for the caller to report.
 pub fn write(
     path: &Path,
     grid: Grid,
-    layers: Vec<Layer>,
+    mut layers: Vec<Layer>,
     provenance: &Provenance,
     half: bool,
-) -> Result<()> {
+) -> Result<Vec<Clamped>> {
     for layer in &layers {
         for c in &layer.channels {
             if c.values.len() != grid.texels() {
@@ -90,6 +106,11 @@ pub fn write(
             }
         }
     }
+    let clamped = if half {
+        layers.iter_mut().filter_map(clamp_to_half).collect()
+    } else {
+        Vec::new()
+    };
     let multi = layers.len() > 1;
     let size = (grid.width, grid.height);
     let exr_layers: Vec<_> = layers
@@ -128,6 +149,28 @@ pub fn write(
             exr::error::Error::Io(io) => io,
             other => std::io::Error::other(format!("OpenEXR encoding: {other}")),
         })
+    })?;
+    Ok(clamped)
+}
+
+/// Clamps `layer`'s finite values to ±[`HALF_MAX`] (which float16 would round to ±inf
+/// beyond 65520); returns the layer and its clamped texels, if any. Non-finite values are
+/// left alone: they are not an overflow of the format.
+fn clamp_to_half(layer: &mut Layer) -> Option<Clamped> {
+    let texels = layer.channels.first().map_or(0, |c| c.values.len());
+    let mut hit = vec![false; texels];
+    for c in &mut layer.channels {
+        for (x, hit) in c.values.iter_mut().zip(&mut hit) {
+            if x.is_finite() && x.abs() > HALF_MAX {
+                *x = HALF_MAX.copysign(*x);
+                *hit = true;
+            }
+        }
+    }
+    let texels = hit.iter().filter(|&&h| h).count();
+    (texels > 0).then(|| Clamped {
+        layer: layer.name.clone(),
+        texels,
     })
 }
 

@@ -72,6 +72,12 @@ pub fn bin_directions(i: usize, j: usize, k: usize) -> ([f64; 3], [f64; 3]) {
 pub fn compute(runner: &mut Runner, material: &Material) -> Result<Vec<f64>> {
     let materials = std::slice::from_ref(material);
     let tangent = needs_tangents(materials).then_some(TANGENT);
+    if tangent.is_some() {
+        runner.warn(format!(
+            "material `{}` is anisotropic, but MERL is an isotropic format: it was sampled at φ_h = 0 only (half vector in the plane of the tangent t = +x and n = +z), so the file holds one azimuth of the material, not an average over φ_h",
+            material.name
+        ));
+    }
     let mut values = vec![INVALID; 3 * SAMPLES];
     runner.start("merl", SAMPLES as u64);
     let mut next = 0;

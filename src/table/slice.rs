@@ -173,7 +173,9 @@ pub fn write(runner: &mut Runner, job: &SliceJob) -> Result<()> {
         samples: "1 point sample at each texel centre".into(),
         backend: runner.backend_name(),
     };
-    exr_out::write(&job.output, job.grid, layers, &provenance, job.half)
+    let clamped = exr_out::write(&job.output, job.grid, layers, &provenance, job.half)?;
+    runner.warn_clamped(&job.output, &clamped);
+    Ok(())
 }
 
 /// A layer from `n × k` interleaved values, one channel per name.
