@@ -4,6 +4,7 @@
 
 use crate::cancel::Cancel;
 use crate::error::{Error, Result};
+use crate::material::Material;
 use std::path::{Path, PathBuf};
 
 /// Columns of a batch without tangents.
@@ -78,6 +79,16 @@ impl Batch {
             .find(|&(_, m)| !(m >= 0.0 && m.fract() == 0.0 && (m as f64) < material_count as f64))
     }
 
+    /// Checks that every row whose material is anisotropic has a tangent: a batch without
+    /// tangent columns whose rows reference an anisotropic material (roughness `[mx, my]`)
+    /// is an [`Error::Batch`] naming the material, its first row and `source`, instead of
+    /// rows that would all come back invalid (FORMULAS.md §1). One pass over the material
+    /// column, none when the batch has tangents or no material is anisotropic; see
+    /// [`check_tangent_rows`] for the same check chunk by chunk.
+    pub fn check_tangents(&self, materials: &[Material], source: &Path) -> Result<()> {
+        check_tangent_rows(&self.data, self.columns, 0, materials, source)
+    }
+
     /// Number of tuples.
     pub fn len(&self) -> usize {
         self.data.len() / self.columns
@@ -135,6 +146,46 @@ impl Batch {
         }
         Batch::new(data, shape[1] as usize, material_count, path)
     }
+}
+
+/// [`Batch::check_tangents`] on part of a batch: `rows` (row-major, `columns` floats per
+/// row) are batch rows `first_row..`, so a reader that streams a batch can check each chunk
+/// as it arrives. Material values that are not an index into `materials` are left to
+/// [`Batch::new`]'s check.
+pub fn check_tangent_rows(
+    rows: &[f32],
+    columns: usize,
+    first_row: u64,
+    materials: &[Material],
+    source: &Path,
+) -> Result<()> {
+    if columns != COLUMNS_PLAIN || !materials.iter().any(Material::is_anisotropic) {
+        return Ok(());
+    }
+    let needs_tangent = |m: f32| {
+        m >= 0.0
+            && m.fract() == 0.0
+            && materials
+                .get(m as usize)
+                .is_some_and(Material::is_anisotropic)
+    };
+    let Some((row, m)) = rows
+        .chunks_exact(columns)
+        .map(|row| row[9])
+        .enumerate()
+        .find(|&(_, m)| needs_tangent(m))
+    else {
+        return Ok(());
+    };
+    Err(Error::Batch {
+        path: source.to_owned(),
+        message: format!(
+            "row {}: material {} (`{}`) is anisotropic (roughness [mx, my]) and needs a tangent, but the batch has no tangent columns (shape (n, 10)); add Tx Ty Tz (shape (n, 13)), e.g. with `vkbrdf generate`, which adds them for such materials",
+            first_row + row as u64,
+            m as usize,
+            materials[m as usize].name
+        ),
+    })
 }
 
 /// Reads a C-order float32/float64 `.npy` file as `f32` with its shape.

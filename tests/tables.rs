@@ -855,11 +855,12 @@ fn unwritable_paths_fail_before_work_and_leave_nothing() {
             half: false,
             output: output.clone(),
         };
+        // Refused as an unusable output (before any evaluation), naming it.
         let e = slice::write(&mut Runner::new(&mut cpu), &job).unwrap_err();
-        assert!(matches!(e, vkbrdf::Error::Io { .. }), "{e}");
+        assert!(matches!(e, vkbrdf::Error::Output { .. }), "{e}");
         assert!(e.to_string().contains(&*output.to_string_lossy()), "{e}");
         let e = merl::write(&mut Runner::new(&mut cpu), &gold, &output).unwrap_err();
-        assert!(matches!(e, vkbrdf::Error::Io { .. }), "{e}");
+        assert!(matches!(e, vkbrdf::Error::Output { .. }), "{e}");
     }
     no_files_left(dir.path());
     // A good file is not clobbered by a failing run.

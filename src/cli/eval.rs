@@ -94,6 +94,7 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
     vkbrdf::atomic::check_outputs(&outputs, &inputs)?;
     let t0 = Instant::now();
     let batch = Batch::read_npy(&args.input, materials.len())?;
+    batch.check_tangents(&materials, &args.input)?;
     let read_s = t0.elapsed().as_secs_f64();
     let measured = materials
         .iter()

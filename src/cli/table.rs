@@ -298,6 +298,9 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         Job::Merl(m, path) => merl::write(&mut runner, m, path)?,
         Job::Preview(j) => preview::write(&mut runner, j)?,
     }
+    for w in runner.take_warnings() {
+        eprintln!("warning: {w}");
+    }
     let written: Vec<String> = outputs.iter().map(|p| p.display().to_string()).collect();
     eprintln!(
         "wrote {} ({} backend, {:.2} s)",

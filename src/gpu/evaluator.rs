@@ -20,7 +20,7 @@ use super::sync::{CommandPool, DescriptorPool, Fence};
 use super::vk_error;
 use crate::backend::{Backend, Counts, Output, Request, TERM_COLUMNS};
 use crate::batch::{Batch, COLUMNS_TANGENT};
-use crate::error::{Error, Result};
+use crate::error::{Error, FailedChunk, Result};
 use crate::features::FeatureSet;
 use crate::material::Material;
 use ash::vk;
@@ -57,6 +57,62 @@ pub struct VulkanOptions {
     /// Upload batches that mix materials grouped by material (the `BUCKETED` kernels;
     /// default on). Off only to measure what the grouping gains.
     pub group_by_material: bool,
+    /// Testing aid: a fault to inject into batch evaluations (see [`InjectedFault`]).
+    /// Default: none, or what the environment variable `VKBRDF_INJECT_VK_FAULT` says
+    /// (read by [`VulkanBackend::new`]).
+    #[doc(hidden)]
+    pub inject_fault: Option<InjectedFault>,
+}
+
+/// Testing aid: the wait for chunk `chunk` (0-based) of every batch evaluation
+/// ([`Backend::evaluate`]) reports `result` after the chunk really completed, as a
+/// lost device or exhausted memory would, so the error path (the message naming the
+/// chunk, the recovery, the teardown, the CLI writing nothing) can be tested on any device.
+/// Set by [`VulkanOptions::inject_fault`] or by the environment variable
+/// `VKBRDF_INJECT_VK_FAULT=KIND@CHUNK`, KIND one of `device-lost`, `out-of-device-memory`,
+/// `out-of-host-memory`, `timeout` (e.g. `device-lost@2`).
+#[doc(hidden)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct InjectedFault {
+    /// What the wait returns.
+    pub result: vk::Result,
+    /// 0-based chunk index within a batch.
+    pub chunk: usize,
+}
+
+/// The environment variable [`InjectedFault`] is read from.
+const INJECT_FAULT_VAR: &str = "VKBRDF_INJECT_VK_FAULT";
+
+impl std::str::FromStr for InjectedFault {
+    type Err = String;
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        let usage = || {
+            format!("`{s}`: expected KIND@CHUNK, KIND one of device-lost, out-of-device-memory, out-of-host-memory, timeout, CHUNK a 0-based chunk index (e.g. device-lost@2)")
+        };
+        let (kind, chunk) = s.split_once('@').ok_or_else(usage)?;
+        let result = match kind.trim() {
+            "device-lost" => vk::Result::ERROR_DEVICE_LOST,
+            "out-of-device-memory" => vk::Result::ERROR_OUT_OF_DEVICE_MEMORY,
+            "out-of-host-memory" => vk::Result::ERROR_OUT_OF_HOST_MEMORY,
+            "timeout" => vk::Result::TIMEOUT,
+            _ => return Err(usage()),
+        };
+        let chunk = chunk.trim().parse().map_err(|_| usage())?;
+        Ok(InjectedFault { result, chunk })
+    }
+}
+
+impl InjectedFault {
+    /// The fault `VKBRDF_INJECT_VK_FAULT` asks for, if set (an unparsable value is an error).
+    fn from_env() -> Result<Option<InjectedFault>> {
+        match std::env::var(INJECT_FAULT_VAR) {
+            Ok(v) if !v.is_empty() => v
+                .parse()
+                .map(Some)
+                .map_err(|e| Error::Unsupported(format!("{INJECT_FAULT_VAR}={e}"))),
+            _ => Ok(None),
+        }
+    }
 }
 
 impl Default for VulkanOptions {
@@ -66,6 +122,7 @@ impl Default for VulkanOptions {
             validation: validation_from_env(),
             extra_defines: Vec::new(),
             group_by_material: true,
+            inject_fault: None,
         }
     }
 }
@@ -167,7 +224,13 @@ impl VulkanBackend {
     /// best one (discrete > integrated > virtual > CPU) — and creates the backend's
     /// persistent objects. Fails with [`Error::NoDevice`] when Vulkan is not installed or no
     /// device matches.
-    pub fn new(selector: Option<DeviceSelector>, options: VulkanOptions) -> Result<VulkanBackend> {
+    pub fn new(
+        selector: Option<DeviceSelector>,
+        mut options: VulkanOptions,
+    ) -> Result<VulkanBackend> {
+        if options.inject_fault.is_none() {
+            options.inject_fault = InjectedFault::from_env()?;
+        }
         let device = Device::new(selector.as_ref(), options.validation)?;
         let kernels = Kernels::new(&device, options.extra_defines.clone())?;
         let commands = CommandPool::new(&device, FRAMES_IN_FLIGHT as u32)?;
@@ -426,27 +489,53 @@ impl VulkanBackend {
     ) -> Result<()> {
         let (n, cols, data) = (batch.len(), batch.columns(), batch.as_slice());
         let chunks = n.div_ceil(chunk);
+        // A failure names the chunk it happened in (index, rows) and the memory budget.
+        let max_gpu_memory = self.options.max_gpu_memory;
+        let failed = |c: usize| FailedChunk {
+            index: c as u64,
+            count: chunks as u64,
+            rows: (c * chunk) as u64..n.min((c + 1) * chunk) as u64,
+            max_gpu_memory,
+        };
         for c in 0..chunks {
             self.cancel.check()?;
             let s = c % FRAMES_IN_FLIGHT;
-            self.finish(s, out)?;
+            // Slot `s` holds chunk `c − S`, if any.
+            if let Some(done) = c.checked_sub(FRAMES_IN_FLIGHT) {
+                self.finish_chunk(s, done, out)
+                    .map_err(|e| e.in_chunk(failed(done)))?;
+            }
             let (start, len) = (c * chunk, chunk.min(n - c * chunk));
             let rows = &data[start * cols..(start + len) * cols];
-            let order = self.load_chunk(s, rows, cols, material_count as usize, bucketed, terms)?;
-            let pending = Pending {
-                brdf: start * 3..(start + len) * 3,
-                terms: terms.then(|| start * TERM_COLUMNS..(start + len) * TERM_COLUMNS),
-                first_row: start as u64,
-                order,
-            };
+            let pending = self
+                .load_chunk(s, rows, cols, material_count as usize, bucketed, terms)
+                .map(|order| Pending {
+                    brdf: start * 3..(start + len) * 3,
+                    terms: terms.then(|| start * TERM_COLUMNS..(start + len) * TERM_COLUMNS),
+                    first_row: start as u64,
+                    order,
+                })
+                .map_err(|e| e.in_chunk(failed(c)))?;
             let push = PushConstants::rows(len as u32, material_count, start as u32);
-            self.submit(s, pipeline, push, pending)?;
+            self.submit(s, pipeline, push, pending)
+                .map_err(|e| e.in_chunk(failed(c)))?;
         }
         // Drain in submission order: the oldest pending chunk sits in slot `chunks % S`.
-        for k in 0..FRAMES_IN_FLIGHT {
-            self.finish((chunks + k) % FRAMES_IN_FLIGHT, out)?;
+        for done in chunks.saturating_sub(FRAMES_IN_FLIGHT)..chunks {
+            self.finish_chunk(done % FRAMES_IN_FLIGHT, done, out)
+                .map_err(|e| e.in_chunk(failed(done)))?;
         }
         Ok(())
+    }
+
+    /// [`finish`](Self::finish) of slot `s`, which holds chunk `c` of a batch; then the
+    /// [`InjectedFault`] for chunk `c`, if one is set.
+    fn finish_chunk(&mut self, s: usize, c: usize, out: &mut Output) -> Result<()> {
+        self.finish(s, out)?;
+        match self.options.inject_fault {
+            Some(fault) if fault.chunk == c => Err(vk_error("vkWaitForFences")(fault.result)),
+            _ => Ok(()),
+        }
     }
 
     /// Loads `rows` (`cols` floats each) into slot `s` — grouped by material when

@@ -80,7 +80,15 @@
 //!   holds an `Arc` of the instance: parents outlive children. [`VulkanBackend`]'s `Drop`
 //!   waits for the device to go idle; its fields then drop in reverse creation order.
 //! - **Errors.** Every `vk::Result` is mapped at its call site to
-//!   [`Error::Vulkan`]` { call: "vkCreateBuffer", .. }`; nothing unwraps a driver result.
+//!   [`Error::Vulkan`]` { call: "vkCreateBuffer", result, .. }`, which keeps the
+//!   `vk::Result` itself; nothing unwraps a driver result. A failure while a batch streams
+//!   also names its chunk ([`FailedChunk`](crate::error::FailedChunk): index, rows, memory
+//!   budget), and the message says what to try for `ERROR_DEVICE_LOST`, the out-of-memory
+//!   codes and `TIMEOUT`. After any error the backend waits for the device and forgets the
+//!   pending chunks (`recover`), so it stays usable and drops cleanly. The error path is
+//!   tested by fault injection: `VKBRDF_INJECT_VK_FAULT=device-lost@2` (or the hidden
+//!   `VulkanOptions::inject_fault`) makes the wait for chunk 2 of every batch report
+//!   `ERROR_DEVICE_LOST` (also `out-of-device-memory`, `out-of-host-memory`, `timeout`).
 #![allow(unsafe_code)]
 
 mod context;
@@ -94,8 +102,8 @@ mod sync;
 pub use context::{DeviceSelector, ValidationCounter, INSTALL_HINT};
 pub use devices::{list_devices, DeviceInfo, HeapInfo};
 pub use evaluator::{
-    validation_from_env, BufferBytes, VulkanBackend, VulkanOptions, FRAMES_IN_FLIGHT,
-    MAX_CHUNK_TUPLES,
+    validation_from_env, BufferBytes, InjectedFault, VulkanBackend, VulkanOptions,
+    FRAMES_IN_FLIGHT, MAX_CHUNK_TUPLES,
 };
 
 use crate::error::Error;
@@ -103,8 +111,9 @@ use ash::vk;
 
 /// Maps a failed `vk::Result` of `call` to [`Error::Vulkan`].
 pub(crate) fn vk_error(call: &'static str) -> impl Fn(vk::Result) -> Error {
-    move |r| Error::Vulkan {
+    move |result| Error::Vulkan {
         call,
-        result: format!("{r:?} ({r})"),
+        result,
+        chunk: None,
     }
 }

@@ -4,7 +4,7 @@
 use super::context::Device;
 use super::layout::descriptor_type;
 use super::vk_error;
-use crate::error::{Error, Result};
+use crate::error::Result;
 use ash::vk;
 use std::sync::Arc;
 
@@ -40,21 +40,14 @@ impl Fence {
     /// Waits until the fence is signalled, then resets it.
     pub fn wait_and_reset(&self) -> Result<()> {
         let fences = [self.raw];
+        // A `TIMEOUT` comes back as an error too; its message says what it means.
         // SAFETY: the fence belongs to this device; waiting has no other precondition.
-        match unsafe {
+        unsafe {
             self.device
                 .raw
                 .wait_for_fences(&fences, true, FENCE_TIMEOUT_NS)
-        } {
-            Ok(()) => {}
-            Err(vk::Result::TIMEOUT) => {
-                return Err(Error::Vulkan {
-                    call: "vkWaitForFences",
-                    result: "TIMEOUT: a chunk took more than 10 minutes (hung device?)".into(),
-                })
-            }
-            Err(r) => return Err(vk_error("vkWaitForFences")(r)),
         }
+        .map_err(vk_error("vkWaitForFences"))?;
         // SAFETY: the fence is signalled, so no queue operation still refers to it.
         unsafe { self.device.raw.reset_fences(&fences) }.map_err(vk_error("vkResetFences"))
     }

@@ -500,8 +500,17 @@ impl Fields<'_, '_> {
             )),
         };
         let path = self.ctx.base.join(&file);
-        let data = crate::table::merl::read(&path)
-            .map_err(|e| self.err("file", format!("cannot use `{file}`: {e}")))?;
+        // The whole chain: an I/O error's own text names only the path, its source says
+        // why (no such file, permission denied).
+        let data = crate::table::merl::read(&path).map_err(|e| {
+            let mut why = e.to_string();
+            let mut source = std::error::Error::source(&e);
+            while let Some(s) = source {
+                why += &format!(": {s}");
+                source = s.source();
+            }
+            self.err("file", format!("cannot use `{file}`: {why}"))
+        })?;
         Ok(Measured {
             path,
             data: std::sync::Arc::new(data),

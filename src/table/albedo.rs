@@ -563,7 +563,7 @@ pub fn write(runner: &mut Runner, job: &AlbedoJob) -> Result<()> {
         job.samples,
         sampling(job.spec.lobe)
     );
-    let mut staged = vec![exr_out::stage(
+    let (table, clamped) = exr_out::stage(
         &job.output,
         job.grid,
         vec![single("albedo", "Y", &e)],
@@ -574,13 +574,15 @@ pub fn write(runner: &mut Runner, job: &AlbedoJob) -> Result<()> {
         ),
         job.half,
         runner.cancel(),
-    )?];
+    )?;
+    runner.warn_clamped(&job.output, &clamped);
+    let mut staged = vec![table];
     if let Some(path) = &job.average {
         let alphas: Vec<f64> = (0..job.grid.height)
             .map(|j| texel_centre(j, job.grid.height))
             .collect();
         let avg = average_albedo(runner, &job.spec, &alphas, job.samples)?;
-        staged.push(exr_out::stage(
+        let (average, clamped) = exr_out::stage(
             path,
             Grid::new(job.grid.height, 1)?,
             vec![single("albedo-average", "Y", &avg)],
@@ -591,7 +593,9 @@ pub fn write(runner: &mut Runner, job: &AlbedoJob) -> Result<()> {
             ),
             job.half,
             runner.cancel(),
-        )?);
+        )?;
+        runner.warn_clamped(path, &clamped);
+        staged.push(average);
     }
     // The table and its average appear together or not at all.
     crate::atomic::commit(staged)

@@ -86,12 +86,14 @@ pub fn write(runner: &mut Runner, job: &DfgJob) -> Result<()> {
         name: "dfg".into(),
         channels: vec![channel("R", 0), channel("G", 1)],
     };
-    exr_out::write(
+    let clamped = exr_out::write(
         &job.output,
         job.grid,
         vec![layer],
         &provenance,
         job.half,
         runner.cancel(),
-    )
+    )?;
+    runner.warn_clamped(&job.output, &clamped);
+    Ok(())
 }

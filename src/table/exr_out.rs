@@ -69,8 +69,24 @@ impl Provenance {
     }
 }
 
+/// Texels of one layer clamped to [`HALF_MAX`] when written as float16.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Clamped {
+    /// The layer's name.
+    pub layer: String,
+    /// Texels with at least one channel clamped.
+    pub texels: usize,
+}
+
+/// The largest finite float16, 65504: float16 values beyond it are written as it.
+pub const HALF_MAX: f32 = 65504.0;
+
 /// Writes `layers` of a `grid` table to `path` (float16 when `half`), atomically,
 /// stopping when `cancel` is set.
+///
+/// float16 tops out at [`HALF_MAX`]: a finite value beyond it (a sharp lobe's peak, K near
+/// grazing) is written as ±[`HALF_MAX`] instead of ±inf, and the layers where that happened
+/// are returned with the number of texels clamped, for the caller to report.
 pub fn write(
     path: &Path,
     grid: Grid,
@@ -78,8 +94,10 @@ pub fn write(
     provenance: &Provenance,
     half: bool,
     cancel: &Cancel,
-) -> Result<()> {
-    crate::atomic::commit(vec![stage(path, grid, layers, provenance, half, cancel)?])
+) -> Result<Vec<Clamped>> {
+    let (staged, clamped) = stage(path, grid, layers, provenance, half, cancel)?;
+    crate::atomic::commit(vec![staged])?;
+    Ok(clamped)
 }
 
 /// [`write`] without making the file visible: for tables written as a set
@@ -87,11 +105,11 @@ pub fn write(
 pub fn stage(
     path: &Path,
     grid: Grid,
-    layers: Vec<Layer>,
+    mut layers: Vec<Layer>,
     provenance: &Provenance,
     half: bool,
     cancel: &Cancel,
-) -> Result<Staged> {
+) -> Result<(Staged, Vec<Clamped>)> {
     for layer in &layers {
         for c in &layer.channels {
             if c.values.len() != grid.texels() {
@@ -107,6 +125,11 @@ pub fn stage(
             }
         }
     }
+    let clamped = if half {
+        layers.iter_mut().filter_map(clamp_to_half).collect()
+    } else {
+        Vec::new()
+    };
     let multi = layers.len() > 1;
     let size = (grid.width, grid.height);
     let exr_layers: Vec<_> = layers
@@ -140,11 +163,33 @@ pub fn stage(
         ImageAttributes::new(IntegerBounds::from_dimensions(size)),
         exr_layers,
     );
-    crate::atomic::stage(path, cancel, |w| {
+    let staged = crate::atomic::stage(path, cancel, |w| {
         image.write().to_unbuffered(w).map_err(|e| match e {
             exr::error::Error::Io(io) => io,
             other => std::io::Error::other(format!("OpenEXR encoding: {other}")),
         })
+    })?;
+    Ok((staged, clamped))
+}
+
+/// Clamps `layer`'s finite values to ±[`HALF_MAX`] (which float16 would round to ±inf
+/// beyond 65520); returns the layer and its clamped texels, if any. Non-finite values are
+/// left alone: they are not an overflow of the format.
+fn clamp_to_half(layer: &mut Layer) -> Option<Clamped> {
+    let texels = layer.channels.first().map_or(0, |c| c.values.len());
+    let mut hit = vec![false; texels];
+    for c in &mut layer.channels {
+        for (x, hit) in c.values.iter_mut().zip(&mut hit) {
+            if x.is_finite() && x.abs() > HALF_MAX {
+                *x = HALF_MAX.copysign(*x);
+                *hit = true;
+            }
+        }
+    }
+    let texels = hit.iter().filter(|&&h| h).count();
+    (texels > 0).then(|| Clamped {
+        layer: layer.name.clone(),
+        texels,
     })
 }
 

@@ -72,6 +72,12 @@ pub fn bin_directions(i: usize, j: usize, k: usize) -> ([f64; 3], [f64; 3]) {
 pub fn compute(runner: &mut Runner, material: &Material) -> Result<Vec<f64>> {
     let materials = std::slice::from_ref(material);
     let tangent = needs_tangents(materials).then_some(TANGENT);
+    if tangent.is_some() {
+        runner.warn(format!(
+            "material `{}` is anisotropic, but MERL is an isotropic format: it was sampled at φ_h = 0 only (half vector in the plane of the tangent t = +x and n = +z), so the file holds one azimuth of the material, not an average over φ_h",
+            material.name
+        ));
+    }
     let mut values = vec![INVALID; 3 * SAMPLES];
     runner.start("merl", SAMPLES as u64);
     let mut next = 0;
@@ -163,12 +169,24 @@ pub struct MeasuredMerl {
 /// Reads and validates a MERL binary: its dimensions must be 90 × 90 × 180 and its size
 /// exactly [`FILE_BYTES`]; errors name the file.
 pub fn read(path: &Path) -> Result<MeasuredMerl> {
-    let bytes = std::fs::read(path).map_err(|source| Error::Io {
+    let io = |source| Error::Io {
         path: path.to_owned(),
         source,
-    })?;
+    };
     let bad =
         |message: String| Error::Table(format!("{}: not a MERL BRDF: {message}", path.display()));
+    // Before reading: a directory reads as a bare EISDIR, and a FIFO or a device would
+    // block or never end.
+    let meta = std::fs::metadata(path).map_err(io)?;
+    if meta.is_dir() {
+        return Err(bad("a directory, not a .binary file".into()));
+    }
+    if !meta.is_file() {
+        return Err(bad(
+            "not a regular file (a FIFO, socket or device); give the .binary file itself".into(),
+        ));
+    }
+    let bytes = std::fs::read(path).map_err(io)?;
     if bytes.len() < 12 {
         return Err(bad(format!(
             "{} bytes, shorter than the 12-byte header",

@@ -209,6 +209,7 @@ pub struct Runner<'a> {
     progress: ProgressBar,
     chunk_tuples: usize,
     cancel: Cancel,
+    warnings: Vec<String>,
 }
 
 impl<'a> Runner<'a> {
@@ -219,6 +220,7 @@ impl<'a> Runner<'a> {
             progress: ProgressBar::hidden(),
             chunk_tuples: DEFAULT_CHUNK_TUPLES,
             cancel: Cancel::new(),
+            warnings: Vec::new(),
         }
     }
 
@@ -276,6 +278,31 @@ impl<'a> Runner<'a> {
     /// Ends the current job's progress bar.
     pub fn finish(&self) {
         self.progress.finish_and_clear();
+    }
+
+    /// Records a warning about the table being made (something written that is not
+    /// exactly what was asked for), for the caller to show: [`Runner::take_warnings`].
+    pub fn warn(&mut self, message: String) {
+        self.warnings.push(message);
+    }
+
+    /// Records a warning for each layer of `path` that [`exr_out::write`] clamped to
+    /// float16's largest finite value.
+    pub fn warn_clamped(&mut self, path: &Path, clamped: &[exr_out::Clamped]) {
+        for c in clamped {
+            self.warn(format!(
+                "{}: {} texel(s) of layer `{}` exceed float16's largest finite value and were written as {} (use float32, without --half, for the exact values)",
+                path.display(),
+                c.texels,
+                c.layer,
+                exr_out::HALF_MAX
+            ));
+        }
+    }
+
+    /// The warnings recorded so far, leaving none.
+    pub fn take_warnings(&mut self) -> Vec<String> {
+        std::mem::take(&mut self.warnings)
     }
 
     /// Advances the progress bar by `tuples` (generated, whether evaluated or skipped).

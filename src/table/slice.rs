@@ -173,14 +173,16 @@ pub fn write(runner: &mut Runner, job: &SliceJob) -> Result<()> {
         samples: "1 point sample at each texel centre".into(),
         backend: runner.backend_name(),
     };
-    exr_out::write(
+    let clamped = exr_out::write(
         &job.output,
         job.grid,
         layers,
         &provenance,
         job.half,
         runner.cancel(),
-    )
+    )?;
+    runner.warn_clamped(&job.output, &clamped);
+    Ok(())
 }
 
 /// A layer from `n × k` interleaved values, one channel per name.
