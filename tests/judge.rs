@@ -1,10 +1,12 @@
 //! The judge judged: the f64 CPU reference (`src/reference/`) against an arbitrary-precision
-//! evaluation of the contract (FORMULAS.md §1–§6) in 768 bits (≈ 231 decimal digits).
+//! evaluation of the contract (FORMULAS.md §1–§6) in 1024 bits (≈ 308 decimal digits).
 //!
 //! The exact side is written from the contract's formulas as printed, with none of the
-//! reference's rearrangements: at 768 bits a literal `1 − c²` or `μ² + c² − 1` loses at
+//! reference's rearrangements: at 1024 bits a literal `1 − c²` or `μ² + c² − 1` loses at
 //! most ~300 bits to cancellation (cosines down to the smallest f32 denormal, 1.4e-45), which
-//! leaves far more than the 50 digits a 1e-12 check needs. Its inputs are the exact values
+//! leaves far more than the 50 digits a 1e-12 check needs; an exact 0 (F of an index-matched
+//! interface) then comes out below 1e-400 even after K ~ 1e89 multiplies it, under the 1e-250
+//! floor below. Its inputs are the exact values
 //! of the f32 numbers the reference receives, so nothing is excused by "the input was
 //! rounded": the reference is judged against the exact value of the rounded input.
 //!
@@ -37,14 +39,12 @@
 use astro_float::{BigFloat, Consts, RoundingMode};
 use std::cell::RefCell;
 use std::collections::BTreeMap;
-use vkbrdf::material::{
-    Convention, Distribution, Fresnel, Geometry, Material, Model, Roughness,
-};
+use vkbrdf::material::{Convention, Distribution, Fresnel, Geometry, Material, Model, Roughness};
 use vkbrdf::reference::{evaluate_tuple, Evaluation, Status};
 use vkbrdf::stress::corpus;
 
 /// Working precision in bits.
-const P: usize = 768;
+const P: usize = 1024;
 const RM: RoundingMode = RoundingMode::ToEven;
 
 thread_local! {
@@ -336,9 +336,7 @@ fn erfc(a: &X) -> X {
         let mut term = x(1.0);
         let mut n = 1u32;
         loop {
-            let next = term
-                .mul(&x(-(2.0 * n as f64 - 1.0)))
-                .div(&a2.mul(&x(2.0)));
+            let next = term.mul(&x(-(2.0 * n as f64 - 1.0))).div(&a2.mul(&x(2.0)));
             if next.abs().le(&x(2f64.powi(-(P as i32)))) || term.abs().le(&next.abs()) {
                 break;
             }
@@ -460,10 +458,7 @@ fn exact(raw: &[[f64; 4]; 3], t: Option<[f64; 3]>, m: &Material) -> Exact {
         .map(|(t, b)| (dot(&fr.h, t), dot(&fr.h, b), fr.cos_h.clone()));
     let aniso_slope = |mx: f64, my: f64| {
         let (hx, hy, hz) = hloc.clone().expect("anisotropic frame");
-        hx.div(&x(mx))
-            .sq()
-            .add(&hy.div(&x(my)).sq())
-            .div(&hz.sq())
+        hx.div(&x(mx)).sq().add(&hy.div(&x(my)).sq()).div(&hz.sq())
     };
     match &m.model {
         Model::Lambert => lobe_model(x(0.0)),
@@ -477,11 +472,7 @@ fn exact(raw: &[[f64; 4]; 3], t: Option<[f64; 3]>, m: &Material) -> Exact {
             } else {
                 x(0.0)
             };
-            lobe_model(
-                x(exponent + 2.0)
-                    .div(&x(2.0).mul(&pi()))
-                    .mul(&p),
-            )
+            lobe_model(x(exponent + 2.0).div(&x(2.0).mul(&pi())).mul(&p))
         }
         Model::BlinnPhong { exponent } => {
             lobe_model(fr.cos_h.powf(*exponent).div(&pi().mul(&fr.cos_i)))
@@ -497,13 +488,15 @@ fn exact(raw: &[[f64; 4]; 3], t: Option<[f64; 3]>, m: &Material) -> Exact {
                 Roughness::Anisotropic(..) => aniso_slope(mx, my).neg(),
                 Roughness::Isotropic(m) => tan2_h.div(&x(*m).sq()).neg(),
             };
-            lobe_model(arg.exp().div(
-                &x(4.0)
-                    .mul(&pi())
-                    .mul(&x(mx))
-                    .mul(&x(my))
-                    .mul(&fr.cos_i.mul(&fr.cos_o).sqrt()),
-            ))
+            lobe_model(
+                arg.exp().div(
+                    &x(4.0)
+                        .mul(&pi())
+                        .mul(&x(mx))
+                        .mul(&x(my))
+                        .mul(&fr.cos_i.mul(&fr.cos_o).sqrt()),
+                ),
+            )
         }
         Model::CookTorrance(ct) => {
             let cos4 = fr.cos_h.sq().sq();
@@ -534,11 +527,7 @@ fn exact(raw: &[[f64; 4]; 3], t: Option<[f64; 3]>, m: &Material) -> Exact {
                 }
                 Distribution::Ggx(Roughness::Anisotropic(mx, my)) => {
                     let (hx, hy, hz) = hloc.clone().expect("anisotropic frame");
-                    let s = hx
-                        .div(&x(mx))
-                        .sq()
-                        .add(&hy.div(&x(my)).sq())
-                        .add(&hz.sq());
+                    let s = hx.div(&x(mx)).sq().add(&hy.div(&x(my)).sq()).add(&hz.sq());
                     x(1.0).div(&pi().mul(&x(mx)).mul(&x(my)).mul(&s.sq()))
                 }
                 Distribution::Blinn { exponent } => x(exponent + 2.0)
@@ -568,15 +557,14 @@ fn exact(raw: &[[f64; 4]; 3], t: Option<[f64; 3]>, m: &Material) -> Exact {
                     let li = lambda(ct.distribution, &q2(&fr.l, &fr.cos_i));
                     x(1.0).div(&x(1.0).add(&lo).add(&li))
                 }
-                Geometry::SmithFast => smith_fast_g1(&q2(&fr.v, &fr.cos_o))
-                    .mul(&smith_fast_g1(&q2(&fr.l, &fr.cos_i))),
+                Geometry::SmithFast => {
+                    smith_fast_g1(&q2(&fr.v, &fr.cos_o)).mul(&smith_fast_g1(&q2(&fr.l, &fr.cos_i)))
+                }
             };
             let f: [X; 3] = std::array::from_fn(|ch| fresnel(&fr.c, &ct.fresnel, ch));
             let k = match ct.convention {
                 Convention::Seed => x(1.0).div(&fr.cos_o),
-                Convention::CookTorrance1982 => {
-                    x(1.0).div(&pi().mul(&fr.cos_i).mul(&fr.cos_o))
-                }
+                Convention::CookTorrance1982 => x(1.0).div(&pi().mul(&fr.cos_i).mul(&fr.cos_o)),
                 Convention::Modern => x(1.0).div(&x(4.0).mul(&fr.cos_i).mul(&fr.cos_o)),
             };
             let brdf = std::array::from_fn(|ch| {
@@ -626,7 +614,11 @@ const TOL: f64 = 1e-12;
 /// Relative input perturbation of the spread.
 const PERTURB: f64 = 1.0 / (1u64 << 50) as f64;
 
-fn perturbed(raw: &[[f64; 4]; 3], t: Option<[f64; 3]>, pattern: u32) -> ([[f64; 4]; 3], Option<[f64; 3]>) {
+fn perturbed(
+    raw: &[[f64; 4]; 3],
+    t: Option<[f64; 3]>,
+    pattern: u32,
+) -> ([[f64; 4]; 3], Option<[f64; 3]>) {
     // Deterministic signs from the bits of a small hash of (pattern, component).
     let sign = |k: u32| {
         let h = (k.wrapping_mul(0x9E37_79B9) ^ pattern.wrapping_mul(0x85EB_CA6B)).rotate_left(13);
@@ -749,7 +741,13 @@ impl MaxWith for X {
 
 /// The extreme-grazing tuples: N = +z (times 2), and f32 directions whose z-component is
 /// exactly the cosine, so the f32 input's cosine is that small number.
-fn extreme_grazing(materials: usize) -> Vec<(String, usize, ([f32; 3], [f32; 3], [f32; 3], Option<[f32; 3]>))> {
+fn extreme_grazing(
+    materials: usize,
+) -> Vec<(
+    String,
+    usize,
+    ([f32; 3], [f32; 3], [f32; 3], Option<[f32; 3]>),
+)> {
     let mut out = Vec::new();
     let cosines: [f32; 8] = [1e-4, 1e-8, 1e-12, 1e-20, 1e-30, 1e-38, 1e-41, 1e-45];
     for (mi, _) in (0..materials).enumerate() {
@@ -759,16 +757,29 @@ fn extreme_grazing(materials: usize) -> Vec<(String, usize, ([f32; 3], [f32; 3],
             let n = [0.0, 0.0, 2.0];
             let t = Some([0.6, -0.2, 0.4]);
             // exact mirror: h = n exactly, c = cos_i = cos_o
-            out.push((format!("mirror cos {c:e}"), mi, ([co, s, c], [-co, -s, c], n, t)));
+            out.push((
+                format!("mirror cos {c:e}"),
+                mi,
+                ([co, s, c], [-co, -s, c], n, t),
+            ));
             // both grazing, 3° off the mirror azimuth
             let p2 = phi + std::f64::consts::PI + 0.05;
             out.push((
                 format!("off-mirror cos {c:e}"),
                 mi,
-                ([co, s, c], [p2.cos() as f32, p2.sin() as f32, c * 3.0], n, t),
+                (
+                    [co, s, c],
+                    [p2.cos() as f32, p2.sin() as f32, c * 3.0],
+                    n,
+                    t,
+                ),
             ));
             // one grazing, the other at 45°
-            out.push((format!("one grazing cos {c:e}"), mi, ([co, s, c], [-0.5, 0.2, 0.6], n, t)));
+            out.push((
+                format!("one grazing cos {c:e}"),
+                mi,
+                ([co, s, c], [-0.5, 0.2, 0.6], n, t),
+            ));
         }
     }
     out
@@ -785,7 +796,9 @@ fn reference_matches_the_arbitrary_precision_contract() {
     let mut failures = Vec::new();
     let mut record = |regime: String, mat: &Material, v: Verdict, what: String| {
         let conditioned = v.spread > 1e-14;
-        let e = stats.entry((regime.clone(), conditioned)).or_insert((0, 0.0, String::new()));
+        let e = stats
+            .entry((regime.clone(), conditioned))
+            .or_insert((0, 0.0, String::new()));
         e.0 += 1;
         if v.err > e.1 || (v.err.is_nan()) {
             e.1 = v.err;
@@ -806,13 +819,19 @@ fn reference_matches_the_arbitrary_precision_contract() {
     }
     for (label, mi, tuple) in extreme_grazing(m) {
         let v = judge_one(tuple, &materials[mi]);
-        let regime = format!("extreme grazing {}", label.split(" cos ").next().unwrap_or(""));
+        let regime = format!(
+            "extreme grazing {}",
+            label.split(" cos ").next().unwrap_or("")
+        );
         record(regime, &materials[mi], v, label);
     }
     println!("| regime | conditioned | tuples | max rel err | worst |");
     println!("|---|---|---|---|---|");
     for ((regime, cond), (count, err, worst)) in &stats {
-        println!("| {regime} | {} | {count} | {err:.3e} | {worst} |", if *cond { "yes" } else { "no" });
+        println!(
+            "| {regime} | {} | {count} | {err:.3e} | {worst} |",
+            if *cond { "yes" } else { "no" }
+        );
     }
     assert!(
         failures.is_empty(),
