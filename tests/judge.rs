@@ -213,8 +213,7 @@ impl C {
             self.1.mul(&o.0).sub(&self.0.mul(&o.1)).div(&d),
         )
     }
-    /// Principal square root (Re ≥ 0; Im has the sign of the input's Im, + for a
-    /// non-negative... or zero imaginary part of a negative real).
+    /// Principal square root: Re ≥ 0, Im with the sign of the input's Im (+ for Im = 0).
     fn sqrt(&self) -> C {
         let r = self.norm_sqr().sqrt();
         let re = r.add(&self.0).div(&x(2.0)).sqrt();
@@ -644,6 +643,9 @@ fn perturbed(
     (r, t)
 }
 
+/// Raw f32 inputs of one tuple: L, V, N and the tangent.
+type Raw32 = ([f32; 3], [f32; 3], [f32; 3], Option<[f32; 3]>);
+
 /// One judged tuple: (worst relative error over the outputs, worst spread, which output).
 struct Verdict {
     err: f64,
@@ -653,7 +655,7 @@ struct Verdict {
     status_ok: bool,
 }
 
-fn judge_one(raw32: ([f32; 3], [f32; 3], [f32; 3], Option<[f32; 3]>), m: &Material) -> Verdict {
+fn judge_one(raw32: Raw32, m: &Material) -> Verdict {
     let (l, v, n, t) = raw32;
     let w = |a: [f32; 3]| [a[0] as f64, a[1] as f64, a[2] as f64, 0.0];
     let raw = [w(l), w(v), w(n)];
@@ -741,16 +743,10 @@ impl MaxWith for X {
 
 /// The extreme-grazing tuples: N = +z (times 2), and f32 directions whose z-component is
 /// exactly the cosine, so the f32 input's cosine is that small number.
-fn extreme_grazing(
-    materials: usize,
-) -> Vec<(
-    String,
-    usize,
-    ([f32; 3], [f32; 3], [f32; 3], Option<[f32; 3]>),
-)> {
+fn extreme_grazing(materials: usize) -> Vec<(String, usize, Raw32)> {
     let mut out = Vec::new();
     let cosines: [f32; 8] = [1e-4, 1e-8, 1e-12, 1e-20, 1e-30, 1e-38, 1e-41, 1e-45];
-    for (mi, _) in (0..materials).enumerate() {
+    for mi in 0..materials {
         for (ci, &c) in cosines.iter().enumerate() {
             let phi = 0.37 + 0.91 * (mi * 8 + ci) as f64;
             let (s, co) = (phi.sin() as f32, phi.cos() as f32);

@@ -70,7 +70,7 @@ fn diff_of_products(a: f64, b: f64, c: f64, d: f64) -> f64 {
     a.mul_add(b, -cd) + err
 }
 
-/// `a × b` with each component accurate to a few ulps of itself (see [`diff_of_products`]).
+/// `a × b` with each component accurate to a few ulps of itself (Kahan's fused multiply-add difference of products).
 pub fn cross_accurate(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
     [
         diff_of_products(a[1], b[2], a[2], b[1]),

@@ -64,6 +64,7 @@ fn csqrt(z: Complex64) -> Complex64 {
 ///   `r∥ = (η² − 1)((η² + 1)c² − 1)/(η² (ηc + cos θt)²)`. Its second factor still vanishes
 ///   at the (pseudo-)Brewster angle, as r∥ itself does; there |r∥|² ≪ |r⊥|² and F keeps its
 ///   relative precision.
+///
 /// The denominators have positive real parts (`c > 0`, `n > 0`, `Re cos θt ≥ 0`), so they
 /// do not cancel.
 pub fn conductor_f(c: f64, ior: f64, extinction: f64) -> f64 {
