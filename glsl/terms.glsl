@@ -181,7 +181,12 @@ vec3 cmul_im(vec3 ar, vec3 ai, vec3 br, vec3 bi) { return ar * bi + ai * br; }
 // cancel when |x| >> |y|). Branch-free: both candidates are computed and one is selected
 // per channel, so lanes never diverge.
 void csqrt(vec3 x, vec3 y, out vec3 re, out vec3 im) {
-    vec3 r = sqrt(x * x + y * y); // |z|; components here are O(1) to O(k^2), no overflow
+    // |z| scaled by the larger component: sqrt(x^2 + y^2) underflows for |z| < ~1e-19 in
+    // f32 (x = cos_t^2 = c^2 of an index-matched conductor at c = 1e-12 gave |z| = 0, cos_t
+    // 0.7e-12 instead of 1e-12 and F ~ 1 instead of 0). max(.., 1e-37) keeps z = 0 from 0/0.
+    vec3 m = max(max(abs(x), abs(y)), vec3(1e-37));
+    vec3 xs = x / m, ys = y / m;
+    vec3 r = m * sqrt(xs * xs + ys * ys);
     vec3 sp = sqrt(0.5 * (r + x)); // the real part when x >= 0
     vec3 sn = sqrt(0.5 * (r - x)); // |the imaginary part| when x < 0
     // max(.., 1e-30): sp = 0 only for z = 0 (then y = 0 and the quotient must be 0), and

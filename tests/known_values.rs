@@ -1253,3 +1253,186 @@ fn grazing_product_is_never_nan() {
         s.name
     );
 }
+
+// ---------------------------------------------------------------------------------------
+// Index-matched interfaces at grazing incidence (issue 10, item 6), on the reference and
+// on every backend (Vulkan on lavapipe in CI).
+//
+// Geometry: N = +z, L = (1, 0, ε), V = (−1, 0, ε) in f32, ε ∈ {1e-4, 1e-8, 1e-12} (each
+// the f32 number nearest to it, so the expectations use exactly what the backends read).
+// An exact mirror configuration: l + v = (0, 0, 2ε)/|L|, so h = n, cos_h = 1, sin²δ = 0,
+// and cos_i = cos_o = c = γ = ε/√(1 + ε²).
+//
+// Materials: Cook–Torrance, GGX m = 1/2 (D = m²/(π m⁴) = 1/(π m²) = 4/π at cos_h = 1),
+// geometry none (G = 1), modern convention (K = 1/(4γ²)), diffuse 0.2 at weight 0.5, so
+// f = 0.5·0.2/π + D·G·F·K = 0.1/π + (4/π)·F/(4γ²).
+//
+// - Conductor η = 1 + 0i: sin²θt = 1 − c², cos θt = c, so r∥ = (c − c)/(2c) = 0 and
+//   r⊥ = 0: F = 0 exactly, and f = 0.1/π = 0.0318 (the old reference gave F = 1 at
+//   ε = 1e-8 and f = 1/(π γ²)·… ≈ 2e5 here; the issue's 201,302).
+// - Dielectric μ = 1: g² = c², g = c, F = ½·0²·(…) = 0 exactly; f = 0.1/π.
+// - Conductor η = 1 + ik with k = 1e-13 at ε = 1e-4 (k ≪ c²): with g = η cos θt =
+//   √(η² − 1 + c²) = c(1 + ik/c² + O(k²/c⁴)), r⊥ = (1 − η²)/(c + g)² and
+//   r∥ = (η² − 1)((η² + 1)c² − 1)/(η² (ηc + cos θt)²) give |r⊥|² = k²/(4c⁴)·(1 + O(k²/c⁴)),
+//   |r∥|² = k²(1 − 2c²)²/(4c⁴)·(1 + O(k²/c⁴)), so F = k²/(8c⁴)·(1 + (1 − 2c²)²) to a
+//   relative 1e-10 (= (k/c²)²). F ≈ 2.5e-13: the old reference, which formed 1 − (1 − c²)/η²,
+//   was 1e-3 off.
+// - Conductor η = 1 + ik with k = 1e-6 at ε = 1e-8 and 1e-12 (c ≪ √k): to first order in
+//   c/g, r⊥ = −1 + 2c/g and r∥ = −1 + 2η²c/g, so F = 1 − 2c·Re((1 + η²)/g); with
+//   η² = 1 + 2ik − k² and g = √(2ik − k² + c²) = √k (1 + i)(1 + O(k) + O(c²/k)) this is
+//   F = 1 − 2c/√k to an absolute 1e-9 (the dropped terms are O(c k^½) and O(c²/k)).
+
+mod common;
+
+const GRAZING: [f32; 3] = [1e-4, 1e-8, 1e-12];
+
+fn grazing_mirror(eps: f32) -> ([f32; 3], [f32; 3], [f32; 3]) {
+    ([1.0, 0.0, eps], [-1.0, 0.0, eps], [0.0, 0.0, 1.0])
+}
+
+/// γ = ε/√(1 + ε²) of the f32 ε.
+fn gamma(eps: f32) -> f64 {
+    let e = eps as f64;
+    e / (1.0 + e * e).sqrt()
+}
+
+fn index_matched_body(fresnel_lines: &str) -> String {
+    format!(
+        "model = \"cook-torrance\"\ndistribution = \"ggx\"\nroughness = 0.5\ngeometry = \"none\"\n\
+         {fresnel_lines}\ndiffuse = 0.2\ndiffuse_weight = 0.5"
+    )
+}
+
+/// `(label, fresnel lines, ε, expected F, |F error| allowed on the reference)`.
+fn index_matched_cases() -> Vec<(String, String, f32, f64, f64)> {
+    let mut v = Vec::new();
+    for eps in GRAZING {
+        v.push((
+            format!("conductor η = 1 + 0i, ε = {eps:e}"),
+            "fresnel = \"conductor\"\nior = 1.0\nextinction = 0.0".to_string(),
+            eps,
+            0.0,
+            0.0,
+        ));
+        v.push((
+            format!("dielectric μ = 1, ε = {eps:e}"),
+            "fresnel = \"dielectric\"\nior = 1.0".to_string(),
+            eps,
+            0.0,
+            0.0,
+        ));
+    }
+    let (k, eps) = (1e-13f64, 1e-4f32);
+    let c = gamma(eps);
+    let c2 = c * c;
+    let f = k * k / (8.0 * c2 * c2) * (1.0 + (1.0 - 2.0 * c2).powi(2));
+    v.push((
+        format!("conductor η = 1 + {k:e}i, ε = {eps:e}"),
+        format!("fresnel = \"conductor\"\nior = 1.0\nextinction = {k:e}"),
+        eps,
+        f,
+        1e-8 * f,
+    ));
+    for eps in [1e-8f32, 1e-12] {
+        let k = 1e-6f64;
+        v.push((
+            format!("conductor η = 1 + {k:e}i, ε = {eps:e}"),
+            format!("fresnel = \"conductor\"\nior = 1.0\nextinction = {k:e}"),
+            eps,
+            1.0 - 2.0 * gamma(eps) / k.sqrt(),
+            1e-9,
+        ));
+    }
+    v
+}
+
+#[test]
+fn index_matched_interfaces_at_grazing_incidence_on_the_reference() {
+    for (label, fresnel_lines, eps, want_f, f_tol) in index_matched_cases() {
+        let body = index_matched_body(&fresnel_lines);
+        let m = material(&body);
+        let (l, v, n) = grazing_mirror(eps);
+        let w = |a: [f32; 3]| a.map(f64::from);
+        let e = evaluate(w(l), w(v), w(n), None, &m);
+        let g = gamma(eps);
+        let (d, k) = (4.0 / PI, 1.0 / (4.0 * g * g));
+        let want_brdf = 0.1 / PI + d * want_f * k;
+        assert_eq!(e.status, Status::Valid, "[{label}] {e:?}");
+        for (ch, &f) in e.f.iter().enumerate() {
+            assert!(
+                (f - want_f).abs() <= f_tol,
+                "[{label}] F[{ch}] = {f:e}, want {want_f:e} ± {f_tol:e}"
+            );
+        }
+        assert!(close(e.d, d, TOL), "[{label}] D = {:e}, want {d:e}", e.d);
+        assert!(close(e.k, k, TOL), "[{label}] K = {:e}, want {k:e}", e.k);
+        assert_eq!(e.g, 1.0, "[{label}]");
+        // f's tolerance: the reference's own 1e-12 plus F's allowance carried through D·K.
+        let f_abs = TOL * want_brdf + d * k * f_tol;
+        for (ch, &b) in e.brdf.iter().enumerate() {
+            assert!(
+                (b - want_brdf).abs() <= f_abs,
+                "[{label}] f[{ch}] = {b:e}, want {want_brdf:e} ± {f_abs:e}"
+            );
+        }
+    }
+}
+
+#[test]
+fn index_matched_interfaces_at_grazing_incidence_on_every_backend() {
+    use vkbrdf::backend::Request;
+    use vkbrdf::batch::{memory_source, Batch, COLUMNS_PLAIN};
+    let cases = index_matched_cases();
+    let materials: Vec<Material> = cases
+        .iter()
+        .map(|(_, lines, ..)| material(&index_matched_body(lines)))
+        .collect();
+    let mut data = Vec::new();
+    for (i, (_, _, eps, ..)) in cases.iter().enumerate() {
+        let (l, v, n) = grazing_mirror(*eps);
+        data.extend_from_slice(&l);
+        data.extend_from_slice(&v);
+        data.extend_from_slice(&n);
+        data.push(i as f32);
+    }
+    let batch =
+        Batch::new(data, COLUMNS_PLAIN, materials.len(), &memory_source()).expect("valid batch");
+    for mut backend in common::backends() {
+        let out = backend
+            .evaluate(&batch, &materials, &Request { terms: true })
+            .expect("evaluates");
+        let terms = out.terms.expect("terms requested");
+        for (i, (label, _, eps, want_f, _)) in cases.iter().enumerate() {
+            let g = gamma(*eps);
+            let (d, k) = (4.0 / PI, 1.0 / (4.0 * g * g));
+            let want_brdf = 0.1 / PI + d * want_f * k;
+            // The f32 outputs, judged as the stress test does: relative 1e-5 above an
+            // absolute floor of 1e-6 (F of 2.5e-13 is compared absolutely).
+            let ok =
+                |got: f32, want: f64| ((got as f64) - want).abs() <= 1e-5 * want.abs().max(1e-6);
+            let name = backend.name();
+            for ch in 0..3 {
+                let f = out.brdf[3 * i + ch];
+                assert!(
+                    ok(f, want_brdf),
+                    "{name} [{label}] f[{ch}] = {f:e}, want {want_brdf:e}"
+                );
+                let fr = terms[6 * i + 2 + ch];
+                assert!(
+                    ok(fr, *want_f),
+                    "{name} [{label}] F[{ch}] = {fr:e}, want {want_f:e}"
+                );
+            }
+            assert!(
+                ok(terms[6 * i], d),
+                "{name} [{label}] D = {:e}",
+                terms[6 * i]
+            );
+            assert!(
+                ok(terms[6 * i + 5], k),
+                "{name} [{label}] K = {:e}",
+                terms[6 * i + 5]
+            );
+        }
+    }
+}

@@ -61,10 +61,77 @@ pub struct Frame {
     pub tb: Option<([f64; 3], [f64; 3])>,
 }
 
+/// `a·b − c·d` to within ~1.5 ulp (Kahan's algorithm with a fused multiply-add): the plain
+/// difference of two rounded products loses every digit when they nearly cancel, as the
+/// components of `n × w` do for `w` near `n` and those of `l × v` for `l` near `−v`.
+fn diff_of_products(a: f64, b: f64, c: f64, d: f64) -> f64 {
+    let cd = c * d;
+    let err = (-c).mul_add(d, cd); // cd − c·d exactly
+    a.mul_add(b, -cd) + err
+}
+
+/// `a × b` with each component accurate to a few ulps of itself (Kahan's fused multiply-add difference of products).
+pub fn cross_accurate(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [
+        diff_of_products(a[1], b[2], a[2], b[1]),
+        diff_of_products(a[2], b[0], a[0], b[2]),
+        diff_of_products(a[0], b[1], a[1], b[0]),
+    ]
+}
+
+/// `a · b` as if computed in twice the working precision and rounded once (Ogita, Rump &
+/// Oishi 2005, "Accurate sum and dot product", Dot2: error-free products by fused
+/// multiply-add, error-free sums, the errors added back). Its relative error is ~u +
+/// u²·cond, where the plain dot product's is u·cond: at a grazing cosine of 1e-30 between
+/// f32 inputs, cond is ~1e30 and the plain dot product of normalised vectors has no correct
+/// digit (its absolute error, ~1e-16, dwarfs the cosine), while this one is exact to an ulp.
+pub fn dot_accurate(a: [f64; 3], b: [f64; 3]) -> f64 {
+    let (mut s, mut err) = (0.0f64, 0.0f64);
+    for k in 0..3 {
+        let p = a[k] * b[k];
+        let pe = a[k].mul_add(b[k], -p); // a·b − p exactly
+        let t = s + p;
+        let z = t - s;
+        let se = (s - (t - z)) + (p - z); // s + p − t exactly (TwoSum)
+        s = t;
+        err += pe + se;
+    }
+    s + err
+}
+
+/// `a` scaled by a power of two so that its largest |component| is in [0.5, 1): exact (no
+/// rounding), and it keeps `|a|²` clear of under- and overflow for components from the
+/// smallest f64 denormal to the largest finite value. `None` for a zero or non-finite `a`.
+fn scaled(a: [f64; 3]) -> Option<[f64; 3]> {
+    if !a.iter().all(|x| x.is_finite()) {
+        return None;
+    }
+    let max = a.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    if max == 0.0 {
+        return None;
+    }
+    let e = libm::ilogb(max) + 1;
+    Some(a.map(|x| libm::scalbn(x, -e)))
+}
+
 impl Frame {
     /// Builds the frame, or `None` when the tuple is invalid (FORMULAS.md §1): a zero or
     /// non-finite L, V or N, or for anisotropic materials a missing, zero, non-finite
     /// tangent or one parallel to N (`|T − n(n·T)| ≤ 1e-12 |T|`).
+    ///
+    /// The scalars are formed from the raw inputs, not from the normalised vectors, so that
+    /// each keeps its relative precision where the textbook `dot(n, l)` of unit vectors
+    /// (absolute error ~1e-16) has none:
+    /// - `cos_i = N·L / (|N||L|)` with an accurate dot product: without it K = 1/(cos_i cos_o)
+    ///   and the horizon test are wrong below cosines of ~1e-8 (f32 inputs reach 1e-45);
+    /// - `1 + l·v` from Lagrange's identity `|L|²|V|² − (L·V)² = |L × V|²` when `L·V < 0`,
+    ///   so `c = |l + v|/2 = √((1 + l·v)/2)` keeps its relative precision at grazing mirror
+    ///   geometry (l ≈ −v), where `dot(v, h)` came out with a relative error of ~u/c²
+    ///   (`c = v·h` of 1e-8 had no correct digit, and F, G and the Fresnel angle with it);
+    /// - `cos_h = (cos_i + cos_o)/|l + v|`, exact as the quotient of accurate positives,
+    ///   where `dot(n, h)` inherits the direction error of `h = (l + v)/|l + v|`, ~u/|l + v|;
+    /// - `sin²δ = |n × h|²` near the peak (where `1 − cos_h²` cancels) but `(1 − cos_h)(1 +
+    ///   cos_h)` once `cos²δ ≤ 1/2`, where it is exact and `h`'s direction error is not.
     pub fn new(
         l: [f64; 3],
         v: [f64; 3],
@@ -72,27 +139,56 @@ impl Frame {
         t: Option<[f64; 3]>,
         anisotropic: bool,
     ) -> Option<Frame> {
-        let (l, v, n) = (normalize(l)?, normalize(v)?, normalize(n)?);
+        let (ls, vs, ns) = (scaled(l)?, scaled(v)?, scaled(n)?);
+        let len = |a: [f64; 3]| dot_accurate(a, a).sqrt();
+        let (nl, nv, nn) = (len(ls), len(vs), len(ns));
+        let (l, v, n) = (ls.map(|x| x / nl), vs.map(|x| x / nv), ns.map(|x| x / nn));
         let tb = if anisotropic {
-            let t = normalize(t?)?; // unit T: the 1e-12 |T| test becomes 1e-12
-            let nt = dot(n, t);
-            let perp = [t[0] - n[0] * nt, t[1] - n[1] * nt, t[2] - n[2] * nt];
-            // |T − n(n·T)| = |n × T| exactly, and the cross product keeps its relative
-            // precision when T is nearly parallel to N, where the subtraction cancels.
-            if length_squared(cross(n, t)).sqrt() <= 1e-12 {
+            let ts = scaled(t?)?;
+            let nt = len(ts);
+            // |T − n(n·T)|/|T| = |n × t|, from the accurate cross product: Gram–Schmidt's
+            // subtraction cancels when T is nearly parallel to N.
+            let nxt = cross_accurate(ns, ts);
+            let s = len(nxt) / (nn * nt);
+            if s <= 1e-12 {
                 return None;
             }
-            let t = normalize(perp)?;
-            Some((t, cross(n, t)))
+            // b = n × t/|n × t| and t = b × n: the same frame as t = normalize(T − n(n·T)),
+            // b = n × t, but Gram–Schmidt leaves t tilted out of the tangent plane by
+            // ~u/|n × t| when T is near N, which h (mostly along n) turns into an error of
+            // h·t; b × n is perpendicular to n to within u.
+            let lb = len(nxt);
+            let b = nxt.map(|x| x / lb);
+            Some((cross(b, n), b))
         } else {
             None
         };
-        let cos_i = dot(n, l);
-        let cos_o = dot(n, v);
-        // l + v is zero for l = −v; then h is undefined, but that tuple is below the
-        // horizon (cos_i = −cos_o), and the caller returns before reading h.
-        let h = normalize([l[0] + v[0], l[1] + v[1], l[2] + v[2]]).unwrap_or(n);
-        let cos_h = dot(n, h);
+        let cos_i = dot_accurate(ns, ls) / (nn * nl);
+        let cos_o = dot_accurate(ns, vs) / (nn * nv);
+        let p = dot_accurate(ls, vs);
+        let q = nl * nv;
+        // 1 + l·v = (q + p)/q; for p < 0 that sum cancels near l = −v, and Lagrange's
+        // identity turns it into |L × V|²/(q (q − p)), a quotient of positives.
+        let one_plus_lv = if p >= 0.0 {
+            1.0 + p / q
+        } else {
+            let lxv = len(cross_accurate(ls, vs));
+            (lxv / q) * (lxv / (q - p))
+        };
+        let lv_len = (2.0 * one_plus_lv).sqrt(); // |l + v|
+                                                 // l = −v exactly gives |l + v| = 0 and no h, but that tuple is below the horizon
+                                                 // (cos_i = −cos_o), and the caller returns before reading h.
+        let h = if lv_len > 0.0 {
+            [0, 1, 2].map(|k| (l[k] + v[k]) / lv_len)
+        } else {
+            n
+        };
+        let cos_h = ((cos_i + cos_o) / lv_len).min(1.0);
+        let sin2_h = if cos_h * cos_h > 0.5 {
+            length_squared(cross(n, h))
+        } else {
+            (1.0 - cos_h) * (1.0 + cos_h)
+        };
         Some(Frame {
             l,
             v,
@@ -101,8 +197,8 @@ impl Frame {
             cos_i,
             cos_o,
             cos_h,
-            c: dot(v, h),
-            sin2_h: length_squared(cross(n, h)),
+            c: 0.5 * lv_len,
+            sin2_h,
             tb,
         })
     }

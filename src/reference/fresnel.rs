@@ -7,30 +7,81 @@ use num_complex::Complex64;
 /// `g² = μ² + c² − 1`; `g² < 0` is total internal reflection (F = 1); else
 /// `F = ½ ((g−c)/(g+c))² (1 + ((c(g+c) − 1)/(c(g−c) + 1))²)`.
 pub fn dielectric_f(c: f64, ior: f64) -> f64 {
-    let g2 = ior * ior + c * c - 1.0;
+    // μ² − 1 as (μ − 1)(μ + 1): `μ·μ − 1` rounds μ² first and, for μ = 1 + 1e-9, keeps
+    // only ~7 of its digits (μ − 1 is exact by Sterbenz's lemma for μ in [0.5, 2]).
+    let mu2m1 = (ior - 1.0) * (ior + 1.0);
+    // g² = (μ² − 1) + c², not μ² + c² − 1: for μ = 1 the latter rounds c² ≤ 1e-16 away next
+    // to 1 (g² = 0 instead of c², g − c = −c and F = 1 instead of 0 at grazing c).
+    let g2 = mu2m1 + c * c;
     if g2 < 0.0 {
         return 1.0;
     }
     let g = g2.sqrt();
     // g − c = (μ² − 1)/(g + c): the subtraction cancels for μ ≈ 1 (F ≈ 0 there, and its
     // relative error would be unbounded); the product form is exact to a few ulps.
-    let g_minus_c = (ior * ior - 1.0) / (g + c);
+    let g_minus_c = mu2m1 / (g + c);
     let r = g_minus_c / (g + c);
     let q = (c * (g + c) - 1.0) / (c * g_minus_c + 1.0);
     0.5 * r * r * (1.0 + q * q)
+}
+
+/// Principal square root of `z` (Re ≥ 0, the sign of Im kept), computed from the larger of
+/// `(|z| + x)/2` and `(|z| − x)/2` with the other part by division: the polar form
+/// (`num_complex`'s) takes `cos(θ/2)` of a rounded angle, which has no relative precision
+/// when `z` is nearly a negative real (a conductor with n < 1 and small k at grazing c), and
+/// the direct formulas `√((|z| ± x)/2)` cancel there too.
+fn csqrt(z: Complex64) -> Complex64 {
+    let (x, y) = (z.re, z.im);
+    let r = x.hypot(y);
+    if r == 0.0 {
+        return Complex64::new(0.0, 0.0);
+    }
+    if x >= 0.0 {
+        let re = (0.5 * (r + x)).sqrt();
+        Complex64::new(re, 0.5 * y / re)
+    } else {
+        let im = (0.5 * (r - x)).sqrt();
+        Complex64::new(0.5 * y.abs() / im, if y < 0.0 { -im } else { im })
+    }
 }
 
 /// Exact conductor Fresnel for complex `η = n + ik` (Born & Wolf, "Principles of Optics",
 /// §14.2; the form of pbrt-v4's `FrComplex`): `sin²θt = (1 − c²)/η²`,
 /// `cos θt = √(1 − sin²θt)` (principal root), `r∥ = (ηc − cos θt)/(ηc + cos θt)`,
 /// `r⊥ = (c − η cos θt)/(c + η cos θt)`, `F = (|r∥|² + |r⊥|²)/2`.
+///
+/// Evaluated in the same values rearranged so that nothing cancels:
+/// - `cos²θt = 1 − (1 − c²)/η² = (η² − 1 + c²)/η²`, with `Re(η² − 1 + c²) = (n − 1)(n + 1) +
+///   (c − k)(c + k)` formed directly. The printed form rounds `c²` away next to 1: for
+///   η = 1 (F = 0 exactly) at c = 1e-8 it gave cos θt = 0 and F = 1, and f at a grazing
+///   mirror configuration was 201,302 instead of 0.0318.
+/// - `c − η cos θt = (c² − η² cos²θt)/(c + η cos θt) = (1 − η²)/(c + η cos θt)`, so
+///   `r⊥ = (1 − η²)/(c + η cos θt)²`: the difference of two nearly equal numbers (η ≈ 1,
+///   where F ≈ 0 and its relative error would be unbounded) becomes the exact factor
+///   `1 − η² = −((n − 1)(n + 1) − k²) − 2ink`.
+/// - likewise `ηc − cos θt = (η²c² − cos²θt)/(ηc + cos θt)` with
+///   `η²c² − cos²θt = (η² − 1)((η² + 1)c² − 1)/η²`, so
+///   `r∥ = (η² − 1)((η² + 1)c² − 1)/(η² (ηc + cos θt)²)`. Its second factor still vanishes
+///   at the (pseudo-)Brewster angle, as r∥ itself does; there |r∥|² ≪ |r⊥|² and F keeps its
+///   relative precision.
+///
+/// The denominators have positive real parts (`c > 0`, `n > 0`, `Re cos θt ≥ 0`), so they
+/// do not cancel.
 pub fn conductor_f(c: f64, ior: f64, extinction: f64) -> f64 {
-    let eta = Complex64::new(ior, extinction);
-    let sin2_i = (1.0 - c) * (1.0 + c); // 1 − c², without cancellation near c = 1
-    let sin2_t = Complex64::new(sin2_i, 0.0) / (eta * eta);
-    let cos_t = (Complex64::new(1.0, 0.0) - sin2_t).sqrt();
-    let r_par = (eta * c - cos_t) / (eta * c + cos_t);
-    let r_perp = (c - eta * cos_t) / (c + eta * cos_t);
+    let (n, k) = (ior, extinction);
+    let eta = Complex64::new(n, k);
+    let eta2 = eta * eta;
+    let n2m1 = (n - 1.0) * (n + 1.0); // n² − 1 without rounding n² first
+    let eta2m1 = Complex64::new(n2m1 - k * k, 2.0 * n * k); // η² − 1
+    let g2 = Complex64::new(n2m1 + (c - k) * (c + k), 2.0 * n * k); // η² − 1 + c²
+    let cos_t = csqrt(g2 / eta2);
+    let eta_cos_t = eta * cos_t;
+    let u = c + eta_cos_t;
+    let r_perp = -eta2m1 / (u * u);
+    let w = eta * c + cos_t;
+    // (η² + 1)c² − 1 = Re(η²)c² − (1 − c)(1 + c) + i Im(η²)c²
+    let brewster = Complex64::new(eta2.re * c * c - (1.0 - c) * (1.0 + c), eta2.im * c * c);
+    let r_par = (eta2m1 / eta2) * (brewster / (w * w));
     (r_par.norm_sqr() + r_perp.norm_sqr()) / 2.0
 }
 

@@ -28,10 +28,17 @@ pub fn beckmann_lambda(a2_inv: f64) -> f64 {
 /// Smith's Λ for GGX (Walter et al. 2007; Heitz 2014): `(−1 + √(1 + m² tan²θ))/2`, given
 /// `x = m² tan²θ`.
 ///
-/// Evaluated as `x / (2 (1 + √(1 + x)))`: the textbook form cancels for small `x` (near
-/// normal incidence or tiny m) and returns 0 for x < 1e-16.
+/// Evaluated as `x / (2 (1 + √(1 + x)))` for `x ≤ 1`: the textbook form cancels for small
+/// `x` (near normal incidence or tiny m) and returns 0 for x < 1e-16. For `x > 1` the
+/// textbook form has no cancellation and stays ∞ (G = 0) where `x` overflows, where the
+/// quotient would be ∞/∞ = NaN.
 pub fn ggx_lambda(x: f64) -> f64 {
-    x / (2.0 * (1.0 + (1.0 + x).sqrt()))
+    let r = (1.0 + x).sqrt();
+    if x <= 1.0 {
+        x / (2.0 * (1.0 + r))
+    } else {
+        0.5 * (r - 1.0)
+    }
 }
 
 /// Separable Smith: `G1(v) · G1(l)`, `G1 = 1/(1 + Λ)`.

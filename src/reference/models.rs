@@ -74,22 +74,38 @@ fn specular_product(d: f64, g: f64, f: f64, k: f64, ln_k: f64) -> f64 {
 /// Lewis 1994, "Making shaders more physically plausible" (modified, normalised Phong):
 /// `(e+2)/(2π) max(0, r·v)^e` with `r = 2 cos_i n − l`.
 pub fn phong_lobe(fr: &Frame, e: f64) -> f64 {
-    // r·v = 2 cos_i cos_o − l·v, the same value without forming r.
-    let r_dot_v = (2.0 * fr.cos_i * fr.cos_o - dot(fr.l, fr.v)).max(0.0);
-    (e + 2.0) / (2.0 * PI) * r_dot_v.powf(e)
+    // r·v = 1 − |r − v|²/2 for unit r and v. Near the lobe's peak (r ≈ v) `(r·v)^e` is taken
+    // from |r − v|² (see `cos_pow`): r·v itself is 1 − ε rounded to 53 bits, and
+    // `powf(e)` would turn that into a relative error of ~e·u (1e-11 at e = 10⁴).
+    let r = [0, 1, 2].map(|k| 2.0 * fr.cos_i * fr.n[k] - fr.l[k]);
+    let d = [0, 1, 2].map(|k| r[k] - fr.v[k]);
+    let half_d2 = 0.5 * super::frame::length_squared(d);
+    let lobe = if e == 0.0 {
+        1.0 // max(0, r·v)^0, also where r·v ≤ 0
+    } else if half_d2 < 0.5 {
+        // r·v = 1 − half_d2 > 1/2, and sin² of the angle between r and v is
+        // 1 − (r·v)² = half_d2 (2 − half_d2).
+        distribution::cos_pow(1.0 - half_d2, half_d2 * (2.0 - half_d2), e)
+    } else {
+        // r·v = 2 cos_i cos_o − l·v, the same value without forming r.
+        (2.0 * fr.cos_i * fr.cos_o - dot(fr.l, fr.v))
+            .max(0.0)
+            .powf(e)
+    };
+    (e + 2.0) / (2.0 * PI) * lobe
 }
 
 /// The seed's Blinn–Phong (Blinn 1977), as a BRDF: `cos_h^e / (π cos_i)`. The `1/cos_i`
 /// makes the shading equation's `cos_h^e` independent of the incident cosine; it also
 /// makes the model non-reciprocal.
 pub fn blinn_phong_lobe(fr: &Frame, e: f64) -> f64 {
-    fr.cos_h.powf(e) / (PI * fr.cos_i)
+    distribution::cos_pow(fr.cos_h, fr.sin2_h, e) / (PI * fr.cos_i)
 }
 
 /// Akenine-Möller, Haines & Hoffman, "Real-Time Rendering" 3rd ed. §5.5 (the seed's
 /// shading equation): `(e+8)/(8π) cos_h^e`.
 pub fn rtr_lobe(fr: &Frame, e: f64) -> f64 {
-    (e + 8.0) / (8.0 * PI) * fr.cos_h.powf(e)
+    (e + 8.0) / (8.0 * PI) * distribution::cos_pow(fr.cos_h, fr.sin2_h, e)
 }
 
 /// Ward 1992, "Measuring and modeling anisotropic reflection":
@@ -103,9 +119,9 @@ pub fn ward_lobe(fr: &Frame, roughness: Roughness) -> f64 {
         }
         _ => -fr.tan2_h() / (mx * mx),
     };
-    // exp underflows to 0 long before 1/√(cos_i cos_o) can overflow (cosines ≥ 1e-308
-    // give at most 1e308), so the plain product is safe here.
-    arg.exp() / (4.0 * PI * mx * my * (fr.cos_i * fr.cos_o).sqrt())
+    // √cos_i √cos_o, not √(cos_i cos_o): the product underflows to 0 (and f to ∞) for
+    // cosines below ~1e-162, reachable from f64 callers.
+    arg.exp() / (4.0 * PI * mx * my * fr.cos_i.sqrt() * fr.cos_o.sqrt())
 }
 
 /// The microfacet terms of a Cook–Torrance material.
@@ -153,7 +169,7 @@ pub fn microfacet_d(fr: &Frame, ct: &CookTorrance) -> f64 {
             mx,
             my,
         ),
-        Distribution::Blinn { exponent } => distribution::blinn_d(fr.cos_h, exponent),
+        Distribution::Blinn { exponent } => distribution::blinn_d(fr.cos_h, fr.sin2_h, exponent),
     }
 }
 
