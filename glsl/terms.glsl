@@ -28,6 +28,8 @@ struct Frame {
     float rv, sin2_rv; // r.v and |r x v|^2, r = 2 cos_i n - l (Phong only)
     float sin2_i, sin2_o; // |n x l|^2, |n x v|^2 (Smith's tan^2 numerators)
     double_or_float c_exact; // c before rounding to f32 (f64 where the device has it)
+    double_or_float cos_i_exact, cos_o_exact; // cos_i, cos_o before rounding (FORMULAS.md §1,
+                       // "Overflow": below TINY_COS the models evaluate from these, in f64)
     vec2 l_tb, v_tb;   // (l.t, l.b), (v.t, v.b) (anisotropic materials only)
 };
 
@@ -181,7 +183,7 @@ vec3 cmul_im(vec3 ar, vec3 ai, vec3 br, vec3 bi) { return ar * bi + ai * br; }
 // cancel when |x| >> |y|). Branch-free: both candidates are computed and one is selected
 // per channel, so lanes never diverge.
 void csqrt(vec3 x, vec3 y, out vec3 re, out vec3 im) {
-    vec3 r = sqrt(x * x + y * y); // |z|; components here are O(1) to O(k^2), no overflow
+    vec3 r = sqrt(x * x + y * y); // |z| <= 1 + 1/|eta|^2 <= 1e12 + 1 (ior >= 1e-6): no overflow
     vec3 sp = sqrt(0.5 * (r + x)); // the real part when x >= 0
     vec3 sn = sqrt(0.5 * (r - x)); // |the imaginary part| when x < 0
     // max(.., 1e-30): sp = 0 only for z = 0 (then y = 0 and the quotient must be 0), and
@@ -203,13 +205,17 @@ void csqrt(vec3 x, vec3 y, out vec3 re, out vec3 im) {
 // cos_t^2 = 1 - sin2_t = (eta^2 - 1 + c^2)/eta^2, with Re(eta^2) - 1 = e2rm1 formed in f64
 // on the host: 1 - (1 - c^2)/eta^2 in f32 loses c^2 below ~6e-8 when eta is near 1, and
 // F then came out 1 instead of ~0 at grazing c (the stress corpus's eta = 1 conductor).
+// The division by eta^2 goes through q = |eta|^2 = n^2 + k^2, one factor at a time: the
+// direct 1/|eta^2|^2 = 1/q^2 overflows float32 for |eta| > 4e9, and with extinction 1e10 it
+// was inf * 0 = NaN (issue 10). The parser bounds n and k by 1e18, so q <= 2e36.
 vec3 F_Conductor(float c, vec3 n, vec3 k, vec3 e2rm1) {
     vec3 e2r = n * n - k * k;                   // eta^2
     vec3 e2i = 2.0 * n * k;
-    vec3 inv = 1.0 / (e2r * e2r + e2i * e2i);   // 1/|eta^2|^2
+    vec3 q = n * n + k * k;                     // |eta|^2 = |eta^2|
+    vec3 a = e2r / q, b = e2i / q;              // eta^2 / |eta^2|, components in [-1, 1]
     vec3 ar = e2rm1 + c * c;                    // eta^2 - 1 + c^2 = ar + i e2i
-    vec3 zr = (ar * e2r + e2i * e2i) * inv;     // (ar + i e2i) / eta^2
-    vec3 zi = (1.0 - c) * (1.0 + c) * e2i * inv; // = (e2i e2r - ar e2i) inv, uncancelled
+    vec3 zr = (ar * a + e2i * b) / q;           // (ar + i e2i) / eta^2
+    vec3 zi = (1.0 - c) * (1.0 + c) * b / q;    // = (e2i e2r - ar e2i) / q^2, uncancelled
     vec3 ctr, cti;
     csqrt(zr, zi, ctr, cti);                    // cos_t
     vec3 ecr = n * c, eci = k * c;              // eta c
