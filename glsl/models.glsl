@@ -311,7 +311,15 @@ Eval model_cook_torrance(Frame f, GpuMaterial m) {
     case FRESNEL_DIELECTRIC: e.f = F_Dielectric(f.c, m.fresnel0.rgb, m.scale.yzw, f.c_exact); break;
 #endif
 #if defined(HAS_F_CONDUCTOR)
-    case FRESNEL_CONDUCTOR: e.f = F_Conductor(f.c, m.fresnel0.rgb, m.fresnel1.rgb, m.scale.yzw); break;
+    case FRESNEL_CONDUCTOR:
+#if defined(HAS_FLOAT64)
+        if (f.c_exact < 1e-12) {
+            e.f = F_Conductor_f64(f.c_exact, m.fresnel0.rgb, m.fresnel1.rgb, m.scale.yzw);
+            break;
+        }
+#endif
+        e.f = F_Conductor(f.c, m.fresnel0.rgb, m.fresnel1.rgb, m.scale.yzw);
+        break;
 #endif
 #if defined(HAS_F_SCHLICK)
     case FRESNEL_SCHLICK: e.f = F_Schlick(f.c, m.fresnel0.rgb); break;

@@ -229,6 +229,36 @@ vec3 F_Conductor(float c, vec3 n, vec3 k, vec3 e2rm1) {
 }
 #endif
 
+#if defined(HAS_F_CONDUCTOR) && defined(HAS_FLOAT64)
+// F_Conductor in f64, for c below 1e-12 (the kernel takes it there): in float32, c^2 and
+// (eta c)^2 underflow, and an index-matched conductor (eta = 1, F = 0 exactly) gave
+// r_par = 0/0 = NaN at c = 1e-45 (stress corpus). Same formula, line for line.
+vec3 F_Conductor_f64(double c, vec3 n32, vec3 k32, vec3 e2rm1) {
+    dvec3 n = dvec3(n32), k = dvec3(k32);
+    dvec3 e2r = n * n - k * k, e2i = 2.0 * n * k, q = n * n + k * k;
+    dvec3 a = e2r / q, b = e2i / q;
+    dvec3 ar = dvec3(e2rm1) + c * c;
+    dvec3 zr = (ar * a + e2i * b) / q;
+    dvec3 zi = (1.0 - c) * (1.0 + c) * b / q;
+    // Principal square root of zr + i zi (as csqrt; here q >= 1e-12 and c >= 1.4e-45 keep
+    // every square in range, and the max() keeps 0/0 out of the candidate not taken).
+    dvec3 r = sqrt(zr * zr + zi * zi);
+    dvec3 sp = sqrt(0.5 * (r + zr)), sn = sqrt(0.5 * (r - zr));
+    dvec3 im_p = 0.5 * zi / max(sp, dvec3(1e-300));
+    dvec3 re_n = 0.5 * abs(zi) / max(sn, dvec3(1e-300));
+    dvec3 im_n = mix(sn, -sn, lessThan(zi, dvec3(0.0)));
+    bvec3 neg = lessThan(zr, dvec3(0.0));
+    dvec3 ctr = mix(sp, re_n, neg), cti = mix(im_p, im_n, neg);
+    dvec3 ecr = n * c, eci = k * c;
+    dvec3 pr = ecr - ctr, pi_ = eci - cti, qr = ecr + ctr, qi = eci + cti;
+    dvec3 r_par = (pr * pr + pi_ * pi_) / (qr * qr + qi * qi);
+    dvec3 ecr2 = n * ctr - k * cti, eci2 = n * cti + k * ctr;
+    dvec3 ur = c - ecr2, wr = c + ecr2;
+    dvec3 r_perp = (ur * ur + eci2 * eci2) / (wr * wr + eci2 * eci2);
+    return vec3(0.5 * (r_par + r_perp));
+}
+#endif
+
 #if defined(HAS_F_SCHLICK)
 // Schlick 1994, "An Inexpensive BRDF Model for Physically-based Rendering":
 // F0 + (1 - F0)(1 - c)^5, F0 given or derived from ior/extinction at parse time.

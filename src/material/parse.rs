@@ -409,7 +409,7 @@ impl Fields<'_, '_> {
         self.scalar("exponent", exponent_range)?.ok_or_else(|| {
             self.err(
                 "exponent",
-                format!("missing; {required_for} needs `exponent` (a number in [0, 1e38])"),
+                format!("missing; {required_for} needs `exponent` (a number in [0, 1e24])"),
             )
         })
     }
@@ -670,10 +670,13 @@ impl Fields<'_, '_> {
 fn roughness_range(x: f64) -> Option<&'static str> {
     (!(x.is_finite() && (1e-7..=1e4).contains(&x))).then_some("must be in [1e-7, 1e4]")
 }
-/// Exponent in [0, 1e38]: the kernel holds `e` and `(e + 8)/(8π)` as float32, whose
-/// largest finite value is 3.4e38.
+/// Exponent in [0, 1e24]. A lobe `cos^e` is `exp(e ln cos)`, and at its peak `ln cos` is
+/// known only to the f64 frame's resolution, `|δ sin²| ~ 1e-32`: above 1e24 that moves the
+/// lobe by more than 1e-8 relative, and by 1e38 it decides between the peak and 0 (the
+/// reference and the kernel then disagree on which). Such a lobe is narrower (1/√e rad)
+/// than any geometry f32 inputs and an f64 frame can resolve.
 fn exponent_range(x: f64) -> Option<&'static str> {
-    (!(x.is_finite() && (0.0..=1e38).contains(&x))).then_some("must be in [0, 1e38]")
+    (!(x.is_finite() && (0.0..=1e24).contains(&x))).then_some("must be in [0, 1e24]")
 }
 /// IOR in [1e-6, 1e18]: `|η|²` (and `1/|η|²` for the conductor's `cos θ_t`) must stay
 /// within float32's range in the kernel's Fresnel terms.

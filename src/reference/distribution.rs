@@ -63,6 +63,6 @@ pub fn ggx_aniso_d(h_local: [f64; 3], mx: f64, my: f64) -> f64 {
 
 /// Blinn 1977, "Models of light reflection for computer synthesized pictures", normalised
 /// so that `∫ D cos_h dω = 1`: `(e + 2)/(2π) cos_h^e`.
-pub fn blinn_d(cos_h: f64, exponent: f64) -> f64 {
-    (exponent + 2.0) / (2.0 * PI) * cos_h.powf(exponent)
+pub fn blinn_d(cos_h: f64, sin2_h: f64, exponent: f64) -> f64 {
+    (exponent + 2.0) / (2.0 * PI) * super::models::pow_cos(cos_h, sin2_h, exponent)
 }

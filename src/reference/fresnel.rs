@@ -26,9 +26,12 @@ pub fn dielectric_f(c: f64, ior: f64) -> f64 {
 /// `r⊥ = (c − η cos θt)/(c + η cos θt)`, `F = (|r∥|² + |r⊥|²)/2`.
 pub fn conductor_f(c: f64, ior: f64, extinction: f64) -> f64 {
     let eta = Complex64::new(ior, extinction);
-    let sin2_i = (1.0 - c) * (1.0 + c); // 1 − c², without cancellation near c = 1
-    let sin2_t = Complex64::new(sin2_i, 0.0) / (eta * eta);
-    let cos_t = (Complex64::new(1.0, 0.0) - sin2_t).sqrt();
+    // cos²θt = 1 − (1 − c²)/η² = (η² − 1 + c²)/η², with Re η² − 1 = n² − k² − 1 formed
+    // before c² is added: 1 − (1 − c²)/η² loses c² entirely below c ~ 1e-8 when η = 1
+    // (index-matched, F = 0 exactly), and F came out 1 (the kernel has the same form).
+    let eta2 = eta * eta;
+    let cos2_t = Complex64::new((ior * ior - 1.0 - extinction * extinction) + c * c, eta2.im) / eta2;
+    let cos_t = cos2_t.sqrt();
     let r_par = (eta * c - cos_t) / (eta * c + cos_t);
     let r_perp = (c - eta * cos_t) / (c + eta * cos_t);
     (r_par.norm_sqr() + r_perp.norm_sqr()) / 2.0

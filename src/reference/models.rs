@@ -76,20 +76,38 @@ fn specular_product(d: f64, g: f64, f: f64, k: f64, ln_k: f64) -> f64 {
 pub fn phong_lobe(fr: &Frame, e: f64) -> f64 {
     // r·v = 2 cos_i cos_o − l·v, the same value without forming r.
     let r_dot_v = (2.0 * fr.cos_i * fr.cos_o - dot(fr.l, fr.v)).max(0.0);
-    (e + 2.0) / (2.0 * PI) * r_dot_v.powf(e)
+    let r = [0, 1, 2].map(|i| 2.0 * fr.cos_i * fr.n[i] - fr.l[i]);
+    let sin2_rv = super::frame::length_squared(super::frame::cross(r, fr.v));
+    (e + 2.0) / (2.0 * PI) * pow_cos(r_dot_v, sin2_rv, e)
+}
+
+/// `cos^e` for the cosine of an angle given also its `sin² = |a × b|²`, as the kernel's
+/// `log_cos` forms it: near the peak `exp(e/2 · ln(1 − sin²))`. The direct `cos.powf(e)`
+/// fails there for large exponents: the rounded cosine can come out above 1, and with
+/// e = 1e24, (1 + 2e-16)^e is +inf where the exact value is 1 (then 0 · inf = NaN with a
+/// zero colour); and a cosine 1 − 1e-16 gives 0 instead of ~1.
+pub fn pow_cos(cos: f64, sin2: f64, e: f64) -> f64 {
+    if cos <= 0.0 {
+        return if e == 0.0 { 1.0 } else { 0.0 };
+    }
+    if sin2 < 0.5 {
+        (0.5 * e * (-sin2).ln_1p()).exp()
+    } else {
+        cos.powf(e)
+    }
 }
 
 /// The seed's Blinn–Phong (Blinn 1977), as a BRDF: `cos_h^e / (π cos_i)`. The `1/cos_i`
 /// makes the shading equation's `cos_h^e` independent of the incident cosine; it also
 /// makes the model non-reciprocal.
 pub fn blinn_phong_lobe(fr: &Frame, e: f64) -> f64 {
-    fr.cos_h.powf(e) / (PI * fr.cos_i)
+    pow_cos(fr.cos_h, fr.sin2_h, e) / (PI * fr.cos_i)
 }
 
 /// Akenine-Möller, Haines & Hoffman, "Real-Time Rendering" 3rd ed. §5.5 (the seed's
 /// shading equation): `(e+8)/(8π) cos_h^e`.
 pub fn rtr_lobe(fr: &Frame, e: f64) -> f64 {
-    (e + 8.0) / (8.0 * PI) * fr.cos_h.powf(e)
+    (e + 8.0) / (8.0 * PI) * pow_cos(fr.cos_h, fr.sin2_h, e)
 }
 
 /// Ward 1992, "Measuring and modeling anisotropic reflection":
@@ -153,7 +171,7 @@ pub fn microfacet_d(fr: &Frame, ct: &CookTorrance) -> f64 {
             mx,
             my,
         ),
-        Distribution::Blinn { exponent } => distribution::blinn_d(fr.cos_h, exponent),
+        Distribution::Blinn { exponent } => distribution::blinn_d(fr.cos_h, fr.sin2_h, exponent),
     }
 }
 
