@@ -336,7 +336,7 @@ impl Fields<'_, '_> {
         }
         let x = self.number_of(key, &v)?;
         match check(x) {
-            Some(msg) => Err(self.err(key, format!("{msg} (got {x})"))),
+            Some(msg) => Err(self.err(key, format!("{msg} (got {})", shown(x)))),
             None => Ok(Some(x)),
         }
     }
@@ -371,7 +371,7 @@ impl Fields<'_, '_> {
         };
         for &x in &xs {
             if let Some(msg) = check(x) {
-                return Err(self.err(key, format!("{msg} (got {x})")));
+                return Err(self.err(key, format!("{msg} (got {})", shown(x))));
             }
         }
         Ok(Some(xs))
@@ -656,6 +656,15 @@ impl Fields<'_, '_> {
             }
         }
         Ok(())
+    }
+}
+
+/// A number as an error message shows it: 1e40, not forty-one digits.
+fn shown(x: f64) -> String {
+    if x != 0.0 && !(1e-4..1e16).contains(&x.abs()) {
+        format!("{x:e}")
+    } else {
+        format!("{x}")
     }
 }
 
