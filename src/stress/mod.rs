@@ -106,6 +106,10 @@ pub struct StressReport {
     /// Saturated tuples (an output beyond `f32::MAX`, FORMULAS.md §1) as counted by the
     /// backend and by the reference (of the variant the backend evaluated).
     pub saturated: (u64, u64),
+    /// Whether the backend evaluated the exact materials. Only then must the saturated
+    /// counts agree: the fast variant's approximations (device exp/log, Schlick; measured,
+    /// up to 1e-3 and more on the sharpest lobes) can move a value across f32::MAX.
+    pub exact: bool,
     /// Invalid or below-horizon tuples (per the reference) with a non-zero output, beyond
     /// the f32 horizon ambiguity ([`HORIZON_EPS`]).
     pub nonzero_rejects: u64,
@@ -158,6 +162,7 @@ pub fn run_with(
     };
     let mut report = StressReport {
         backend: backend_label,
+        exact: precision == Precision::Exact,
         ..StressReport::default()
     };
     let mut start = 0;
@@ -316,19 +321,20 @@ fn min_cosine(t: &crate::batch::Tuple, m: &Material) -> f64 {
 }
 
 impl StressReport {
-    /// Whether the policy holds: no non-finite output, the invalid and saturated counts
-    /// agree, and no invalid or clearly-below-horizon tuple has a non-zero output.
+    /// Whether the policy holds: no non-finite output, the invalid and (for the exact
+    /// materials) saturated counts agree, and no invalid or clearly-below-horizon tuple has
+    /// a non-zero output.
     pub fn policy_holds(&self) -> bool {
         self.non_finite == 0
             && self.invalid.0 == self.invalid.1
-            && self.saturated.0 == self.saturated.1
+            && (!self.exact || self.saturated.0 == self.saturated.1)
             && self.nonzero_rejects == 0
     }
 
     /// The report as Markdown: the policy summary and the error table.
     pub fn to_markdown(&self, target: f64) -> String {
         let mut s = format!(
-            "### {}: {} stress tuples\n\n- non-finite outputs: **{}**\n- invalid tuples: {} (reference {})\n- below the horizon: {} (reference {})\n- saturated (an output beyond f32::MAX, stored as f32::MAX): {} (reference {})\n- invalid/below-horizon tuples with a non-zero output: {}\n- below-horizon tuples within {HORIZON_EPS:e} of the horizon evaluated anyway (f32 ambiguity): {}\n- policy (finite outputs, invalid and saturated counts agree, zero rejects): **{}**\n\n",
+            "### {}: {} stress tuples\n\n- non-finite outputs: **{}**\n- invalid tuples: {} (reference {})\n- below the horizon: {} (reference {})\n- saturated (an output beyond f32::MAX, stored as f32::MAX): {} (reference {})\n- invalid/below-horizon tuples with a non-zero output: {}\n- below-horizon tuples within {HORIZON_EPS:e} of the horizon evaluated anyway (f32 ambiguity): {}\n- policy (finite outputs, invalid and (exact precision) saturated counts agree, zero rejects): **{}**\n\n",
             self.backend,
             self.tuples,
             self.non_finite,
