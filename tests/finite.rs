@@ -5,7 +5,7 @@
 mod common;
 
 use std::f64::consts::PI;
-use vkbrdf::backend::{Backend, Request, TERM_COLUMNS};
+use vkbrdf::backend::{Request, TERM_COLUMNS};
 use vkbrdf::batch::{memory_source, Batch};
 use vkbrdf::material::{parse_materials, Material};
 
@@ -68,7 +68,12 @@ fn conductor_with_extinction_1e10_is_finite_and_exact() {
             .expect("evaluates");
         all_finite(&out, &name);
         for c in 0..3 {
-            assert_close(out.brdf[c], want, 1e-5, &format!("{name}: f at normal incidence"));
+            assert_close(
+                out.brdf[c],
+                want,
+                1e-5,
+                &format!("{name}: f at normal incidence"),
+            );
         }
         let terms = out.terms.as_deref().unwrap();
         assert_close(terms[2], f, 1e-6, &format!("{name}: F at normal incidence"));
@@ -79,7 +84,12 @@ fn conductor_with_extinction_1e10_is_finite_and_exact() {
     let (ref_name, reference) = &outputs[0];
     for (name, brdf) in &outputs[1..] {
         for (i, (&x, &r)) in brdf.iter().zip(reference).enumerate() {
-            assert_close(x, r as f64, 1e-5, &format!("{name} vs {ref_name}, value {i}"));
+            assert_close(
+                x,
+                r as f64,
+                1e-5,
+                &format!("{name} vs {ref_name}, value {i}"),
+            );
         }
     }
 }
@@ -112,7 +122,11 @@ fn gold_at_a_grazing_mirror_is_exact_or_saturated() {
             let f = 1.0 / (4.0 * PI * m_r * m_r * c * (c * c + m_r * m_r * (1.0 - c * c)).sqrt());
             let what = format!("{name}: f at cos = {c32:e}");
             if f > f64::from(f32::MAX) {
-                assert!(out.brdf[3 * i..3 * i + 3].iter().all(|&x| x == f32::MAX), "{what}: {:?} should be f32::MAX", &out.brdf[3 * i..3 * i + 3]);
+                assert!(
+                    out.brdf[3 * i..3 * i + 3].iter().all(|&x| x == f32::MAX),
+                    "{what}: {:?} should be f32::MAX",
+                    &out.brdf[3 * i..3 * i + 3]
+                );
             } else {
                 for ch in 0..3 {
                     assert_close(out.brdf[3 * i + ch], f, 1e-5, &what);
@@ -120,11 +134,19 @@ fn gold_at_a_grazing_mirror_is_exact_or_saturated() {
             }
             let t = &terms[TERM_COLUMNS * i..TERM_COLUMNS * (i + 1)];
             assert_close(t[0], 1.0 / (PI * m_r * m_r), 1e-6, &format!("{name}: D"));
-            assert_eq!(t[5], f32::MAX, "{name}: K = 1/(4c²) at c = {c32:e} saturates");
+            assert_eq!(
+                t[5],
+                f32::MAX,
+                "{name}: K = 1/(4c²) at c = {c32:e} saturates"
+            );
         }
         assert_eq!(out.counts.saturated, 4, "{name}: every tuple's K saturates");
         // 1e-38 is the case where f is representable although K is not.
-        assert!(out.brdf[6] < f32::MAX && out.brdf[6] > 2.9e38, "{name}: {}", out.brdf[6]);
+        assert!(
+            out.brdf[6] < f32::MAX && out.brdf[6] > 2.9e38,
+            "{name}: {}",
+            out.brdf[6]
+        );
         // The count does not depend on the request: without terms, the same tuples.
         let plain = backend
             .evaluate(&b, &m, &Request { terms: false })
@@ -192,13 +214,37 @@ fn phong_exponent_is_bounded_and_finite_at_the_bound() {
 fn parameters_beyond_their_float32_range_are_refused_with_the_range() {
     let ct = "model = \"cook-torrance\"\ndistribution = \"ggx\"\ngeometry = \"smith\"";
     let cases = [
-        ("model = \"ward\"\nroughness = 1e-8", "roughness", "[1e-7, 1e4]"),
-        ("model = \"ward\"\nroughness = [0.1, 2e4]", "roughness", "[1e-7, 1e4]"),
+        (
+            "model = \"ward\"\nroughness = 1e-8",
+            "roughness",
+            "[1e-7, 1e4]",
+        ),
+        (
+            "model = \"ward\"\nroughness = [0.1, 2e4]",
+            "roughness",
+            "[1e-7, 1e4]",
+        ),
         ("model = \"rtr\"\nexponent = 1e25", "exponent", "[0, 1e24]"),
-        (&format!("{ct}\nroughness = 0.1\nfresnel = \"conductor\"\nior = 1\nextinction = 1e19"), "extinction", "[0, 1e18]"),
-        (&format!("{ct}\nroughness = 0.1\nfresnel = \"dielectric\"\nior = 1e-7"), "ior", "[1e-6, 1e18]"),
-        (&format!("{ct}\nroughness = 0.1\nfresnel = \"none\"\nspecular_weight = 1e19"), "specular_weight", "[0, 1e18]"),
-        ("model = \"lambert\"\ndiffuse = [1, 1e19, 1]", "diffuse", "[0, 1e18]"),
+        (
+            &format!("{ct}\nroughness = 0.1\nfresnel = \"conductor\"\nior = 1\nextinction = 1e19"),
+            "extinction",
+            "[0, 1e18]",
+        ),
+        (
+            &format!("{ct}\nroughness = 0.1\nfresnel = \"dielectric\"\nior = 1e-7"),
+            "ior",
+            "[1e-6, 1e18]",
+        ),
+        (
+            &format!("{ct}\nroughness = 0.1\nfresnel = \"none\"\nspecular_weight = 1e19"),
+            "specular_weight",
+            "[0, 1e18]",
+        ),
+        (
+            "model = \"lambert\"\ndiffuse = [1, 1e19, 1]",
+            "diffuse",
+            "[0, 1e18]",
+        ),
     ];
     for (body, key, range) in cases {
         let text = format!("[[material]]\nname = \"x\"\n{body}\n");
@@ -219,7 +265,11 @@ fn tiny_cosine_corpus_is_finite_with_equal_counts() {
             .expect("stress run");
         assert_eq!(r.non_finite, 0, "{}", r.to_markdown(1e-5));
         assert_eq!(r.saturated.0, r.saturated.1, "{}", r.to_markdown(1e-5));
-        assert!(r.saturated.1 > 100, "the corpus saturates outputs: {:?}", r.saturated);
+        assert!(
+            r.saturated.1 > 100,
+            "the corpus saturates outputs: {:?}",
+            r.saturated
+        );
         reports.push(r.saturated.0);
     }
     assert!(reports.windows(2).all(|w| w[0] == w[1]), "{reports:?}");

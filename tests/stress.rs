@@ -18,8 +18,7 @@ fn stress_policy_holds_on_every_backend() {
         // every parameter's bound, and the saturated count equals the reference's.
         assert_eq!(report.non_finite, 0, "{}", report.to_markdown(1e-5));
         assert_eq!(
-            report.saturated.0,
-            report.saturated.1,
+            report.saturated.0, report.saturated.1,
             "saturated count on {}",
             report.backend
         );
@@ -35,7 +34,11 @@ fn stress_policy_holds_on_every_backend() {
             report.invalid.1 > TUPLES as u64 / 20 && report.below_horizon.1 > TUPLES as u64 / 20
         );
         // ... and it reaches the overflow rule: saturated tuples exist.
-        assert!(report.saturated.1 > TUPLES as u64 / 100, "{:?}", report.saturated);
+        assert!(
+            report.saturated.1 > TUPLES as u64 / 100,
+            "{:?}",
+            report.saturated
+        );
     }
 }
 

@@ -627,7 +627,8 @@ impl Fields<'_, '_> {
                 let extinction = self.rgb("extinction", extinction_range)?.ok_or_else(|| {
                     self.err(
                         "extinction",
-                        "missing; fresnel `conductor` needs `extinction` (RGB k in [0, 1e18])".into(),
+                        "missing; fresnel `conductor` needs `extinction` (RGB k in [0, 1e18])"
+                            .into(),
                     )
                 })?;
                 Fresnel::Conductor { ior, extinction }

@@ -30,7 +30,8 @@ pub fn conductor_f(c: f64, ior: f64, extinction: f64) -> f64 {
     // before c² is added: 1 − (1 − c²)/η² loses c² entirely below c ~ 1e-8 when η = 1
     // (index-matched, F = 0 exactly), and F came out 1 (the kernel has the same form).
     let eta2 = eta * eta;
-    let cos2_t = Complex64::new((ior * ior - 1.0 - extinction * extinction) + c * c, eta2.im) / eta2;
+    let cos2_t =
+        Complex64::new((ior * ior - 1.0 - extinction * extinction) + c * c, eta2.im) / eta2;
     let cos_t = cos2_t.sqrt();
     let r_par = (eta * c - cos_t) / (eta * c + cos_t);
     let r_perp = (c - eta * cos_t) / (c + eta * cos_t);

@@ -277,19 +277,16 @@ fn judge(
                         let regime = regime(m, judged.cases[i]);
                         let row = (offset + i) as u64;
                         let mut add = |q: &str, x: f32, want: f64| {
-                            p.errors
-                                .entry((q.to_string(), regime))
-                                .or_default()
-                                .add(
-                                    // Judged against the output the contract asks for:
-                                    // beyond f32::MAX, f32::MAX (FORMULAS.md §1).
-                                    relative_error(
-                                        x as f64,
-                                        want.min(f64::from(f32::MAX)),
-                                        ERROR_FLOOR,
-                                    ),
-                                    row,
-                                );
+                            p.errors.entry((q.to_string(), regime)).or_default().add(
+                                // Judged against the output the contract asks for:
+                                // beyond f32::MAX, f32::MAX (FORMULAS.md §1).
+                                relative_error(
+                                    x as f64,
+                                    want.min(f64::from(f32::MAX)),
+                                    ERROR_FLOOR,
+                                ),
+                                row,
+                            );
                         };
                         for (&x, want) in got_f.iter().zip(r.brdf) {
                             add(model_label(m), x, want);
