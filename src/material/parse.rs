@@ -678,7 +678,8 @@ fn shown(x: f64) -> String {
 /// of float32 directions (~6e-8 rad), so no f32 input can resolve it; above 1e4,
 /// `m² tan²θ` at the smallest cosine the float32 path takes (1e-15) leaves float32's range.
 fn roughness_range(x: f64) -> Option<&'static str> {
-    (!(x.is_finite() && (1e-7..=1e4).contains(&x))).then_some("must be in [1e-7, 1e4]")
+    (!(x.is_finite() && (1e-7..=1e4).contains(&x)))
+        .then_some("must be a finite number > 0, in [1e-7, 1e4]")
 }
 /// Exponent in [0, 1e24]. A lobe `cos^e` is `exp(e ln cos)`, and at its peak `ln cos` is
 /// known only to the f64 frame's resolution, `|δ sin²| ~ 1e-32`: above 1e24 that moves the
@@ -686,22 +687,26 @@ fn roughness_range(x: f64) -> Option<&'static str> {
 /// reference and the kernel then disagree on which). Such a lobe is narrower (1/√e rad)
 /// than any geometry f32 inputs and an f64 frame can resolve.
 fn exponent_range(x: f64) -> Option<&'static str> {
-    (!(x.is_finite() && (0.0..=1e24).contains(&x))).then_some("must be in [0, 1e24]")
+    (!(x.is_finite() && (0.0..=1e24).contains(&x)))
+        .then_some("must be a finite number ≥ 0, in [0, 1e24]")
 }
 /// IOR in [1e-6, 1e18]: `|η|²` (and `1/|η|²` for the conductor's `cos θ_t`) must stay
 /// within float32's range in the kernel's Fresnel terms.
 fn ior_range(x: f64) -> Option<&'static str> {
-    (!(x.is_finite() && (1e-6..=1e18).contains(&x))).then_some("must be in [1e-6, 1e18]")
+    (!(x.is_finite() && (1e-6..=1e18).contains(&x)))
+        .then_some("must be a finite number > 0, in [1e-6, 1e18]")
 }
 /// Extinction in [0, 1e18], for the same reason as [`ior_range`]; beyond it F is 1 to
 /// every digit anyway.
 fn extinction_range(x: f64) -> Option<&'static str> {
-    (!(x.is_finite() && (0.0..=1e18).contains(&x))).then_some("must be in [0, 1e18]")
+    (!(x.is_finite() && (0.0..=1e18).contains(&x)))
+        .then_some("must be a finite number ≥ 0, in [0, 1e18]")
 }
 /// Colours and weights in [0, 1e18]: the kernel multiplies a weight by a colour in float32
 /// (`s · c_spec`, `d · c_diff / π`), and 1e18 · 1e18 stays below 3.4e38.
 fn colour_range(x: f64) -> Option<&'static str> {
-    (!(x.is_finite() && (0.0..=1e18).contains(&x))).then_some("must be in [0, 1e18]")
+    (!(x.is_finite() && (0.0..=1e18).contains(&x)))
+        .then_some("must be a finite number ≥ 0, in [0, 1e18]")
 }
 fn unit_interval(x: f64) -> Option<&'static str> {
     (!(x.is_finite() && (0.0..=1.0).contains(&x))).then_some("must be in [0, 1]")
