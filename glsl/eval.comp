@@ -51,11 +51,12 @@ layout(std430, set = 0, binding = BINDING_ORDER) readonly buffer Order {
     uint order[];
 };
 #endif
-// Chunk totals; the host sets them to (0, 0, 0xffffffff) before each dispatch.
+// Chunk totals; the host sets them to (0, 0, 0xffffffff, 0) before each dispatch.
 layout(std430, set = 0, binding = BINDING_COUNTS) buffer Counts {
     uint invalid_count;
     uint below_horizon_count;
     uint first_invalid; // chunk-relative row, 0xffffffff when none
+    uint saturated_count; // valid tuples with an output clamped to FLT_MAX
 };
 
 layout(push_constant) uniform Params {
@@ -218,6 +219,8 @@ uint make_frame(Row r, GpuMaterial m, out Frame f) {
     f.l_tb = vec2(0.0);
     f.v_tb = vec2(0.0);
     f.c_exact = 0.0;
+    f.cos_i_exact = 0.0;
+    f.cos_o_exact = 0.0;
     if (!(ok_l && ok_v && ok_n)) {
         return STATUS_INVALID;
     }
@@ -262,7 +265,12 @@ uint make_frame(Row r, GpuMaterial m, out Frame f) {
     double cos_i = dot(dn, dl), cos_o = dot(dn, dv);
     f.cos_i = float(cos_i);
     f.cos_o = float(cos_o);
-    if (f.cos_i <= 0.0 || f.cos_o <= 0.0) {
+    f.cos_i_exact = cos_i;
+    f.cos_o_exact = cos_o;
+    // The horizon test on the f64 cosines, as the reference decides it: a cosine below
+    // 7e-46 rounds to 0 in f32, and testing the f32 value put such tuples below the horizon
+    // while the reference evaluates them (FORMULAS.md §1: every representable cosine).
+    if (cos_i <= 0.0 || cos_o <= 0.0) {
         return STATUS_BELOW_HORIZON;
     }
     // |l + v| >= cos_i + cos_o > 0 here, so h is well defined.
@@ -306,6 +314,8 @@ uint make_frame(Row r, GpuMaterial m, out Frame f) {
 #else
     f.cos_i = dot(f.n, f.l);
     f.cos_o = dot(f.n, f.v);
+    f.cos_i_exact = f.cos_i;
+    f.cos_o_exact = f.cos_o;
     if (f.cos_i <= 0.0 || f.cos_o <= 0.0) {
         return STATUS_BELOW_HORIZON;
     }
@@ -485,6 +495,19 @@ void evaluate_row(uint row) {
     Frame f;
     uint status = make_frame(r, m, f);
     Eval e = status == STATUS_VALID ? evaluate(f, m) : eval_zero();
+    // FORMULAS.md §1, "Overflow": an output beyond FLT_MAX (here +inf) is stored as FLT_MAX
+    // and the tuple counted as saturated. Every output counts, the terms too whether or not
+    // they are written, so the count does not depend on the request (as on the reference).
+    bool saturated = false;
+    e.brdf.r = saturate_output(e.brdf.r, saturated);
+    e.brdf.g = saturate_output(e.brdf.g, saturated);
+    e.brdf.b = saturate_output(e.brdf.b, saturated);
+    e.d = saturate_output(e.d, saturated);
+    e.g = saturate_output(e.g, saturated);
+    e.f.r = saturate_output(e.f.r, saturated);
+    e.f.g = saturate_output(e.f.g, saturated);
+    e.f.b = saturate_output(e.f.b, saturated);
+    e.k = saturate_output(e.k, saturated);
     brdf_out[row * 3u] = e.brdf.r;
     brdf_out[row * 3u + 1u] = e.brdf.g;
     brdf_out[row * 3u + 2u] = e.brdf.b;
@@ -498,7 +521,7 @@ void evaluate_row(uint row) {
 #endif
 
     // Counts, only where there is something to count: the block runs for the invocations
-    // whose tuple is invalid or below the horizon, and llvmpipe skips it altogether when a
+    // whose tuple is invalid, below the horizon or saturated, and llvmpipe skips it altogether when a
     // subgroup has none (the usual case). Subgroup operations inside it reduce over those
     // active invocations only, so one atomic per subgroup, not per tuple (below-horizon
     // tuples are common: per-tuple atomics would serialise on one address). Measured on
@@ -509,15 +532,17 @@ void evaluate_row(uint row) {
     // llvmpipe runs any shader with a barrier through coroutines, which made the whole
     // kernel 2.7x slower on lavapipe (measured: 280 vs 103 ms for 4M tuples of a
     // load-and-store kernel).
-    if (status != STATUS_VALID) {
+    if (status != STATUS_VALID || saturated) {
         bool invalid = status == STATUS_INVALID;
+        bool below = status == STATUS_BELOW_HORIZON;
 #if defined(USE_SUBGROUP_ARITHMETIC)
-        // Both counts in one reduction: invalid in the low 16 bits, below-horizon in the
-        // high (a subgroup has at most 128 invocations), and the first invalid row only
-        // when there is one (n_invalid is uniform over the active invocations).
-        uint packed = subgroupAdd(invalid ? 1u : 0x10000u);
-        uint n_invalid = packed & 0xffffu;
-        uint n_below = packed >> 16u;
+        // The three counts in one reduction, 10 bits each (a subgroup has at most 128
+        // invocations): invalid, below-horizon << 10, saturated << 20; and the first invalid
+        // row only when there is one (n_invalid is uniform over the active invocations).
+        uint packed = subgroupAdd(invalid ? 1u : below ? 0x400u : 0x100000u);
+        uint n_invalid = packed & 0x3ffu;
+        uint n_below = (packed >> 10u) & 0x3ffu;
+        uint n_saturated = packed >> 20u;
         uint first = 0xffffffffu;
         if (n_invalid != 0u) {
             first = subgroupMin(invalid ? original_row(row) : 0xffffffffu);
@@ -530,13 +555,18 @@ void evaluate_row(uint row) {
             if (n_below != 0u) {
                 atomicAdd(below_horizon_count, n_below);
             }
+            if (n_saturated != 0u) {
+                atomicAdd(saturated_count, n_saturated);
+            }
         }
 #else
         if (invalid) {
             atomicAdd(invalid_count, 1u);
             atomicMin(first_invalid, original_row(row));
-        } else {
+        } else if (below) {
             atomicAdd(below_horizon_count, 1u);
+        } else {
+            atomicAdd(saturated_count, 1u);
         }
 #endif
     }

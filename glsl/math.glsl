@@ -15,6 +15,28 @@ const float INV_SQRT_PI = 0.56418958354775628695;
 const float LN2_HI = 0.693145751953125;       // ln 2 rounded to 15 bits: k * LN2_HI is exact for |k| < 256
 const float LN2_LO = 1.42860682030941723212e-6; // ln 2 - LN2_HI
 const float LOG2E = 1.44269504088896340736;
+const float FLT_MAX = 3.40282347e38; // the largest finite float32: outputs saturate to it
+
+// ------------------------------------------------------------------ overflow (FORMULAS.md §1)
+
+// An output value as stored: beyond FLT_MAX (only +inf reaches here: every evaluation path
+// turns an exact value beyond FLT_MAX into +inf, and never into NaN) it is FLT_MAX, and the
+// tuple is counted as saturated.
+float saturate_output(float x, inout bool saturated) {
+    if (x > FLT_MAX) {
+        saturated = true;
+        return FLT_MAX;
+    }
+    return x;
+}
+
+#if defined(HAS_FLOAT64)
+// x rounded to float32, +inf when it exceeds FLT_MAX (then saturate_output clamps and counts
+// it). Explicit because converting an out-of-range double to float is not defined by GLSL.
+float float_or_inf(double x) {
+    return x > double(FLT_MAX) ? uintBitsToFloat(0x7f800000u) : float(x);
+}
+#endif
 
 // ---------------------------------------------------------------- finiteness and normalise
 

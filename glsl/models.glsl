@@ -40,6 +40,30 @@ Eval eval_lobe(GpuMaterial m, float lobe) {
     return e;
 }
 
+#if defined(HAS_FLOAT64)
+// FORMULAS.md §1, "Overflow": below this cosine the float32 path no longer holds the
+// products the models form (K = 1/(4 cos_i cos_o) leaves float32 below ~1e-19, m^2 tan^2
+// at roughness 1e4 below 1e-15, cos^2 becomes subnormal below 1e-19 and a cosine under
+// 7e-46 rounds to 0), so the cosine-dependent factors are formed in f64 from the frame's
+// f64 cosines instead. Above it every such factor is finite in float32 (K <= 2.5e29,
+// m^2 tan^2 <= 1e38 with the parser's roughness <= 1e4). Taken by a vanishing fraction of
+// tuples, so the branch costs nothing measurable.
+const double TINY_COS = 1e-15;
+
+// A non-microfacet model whose lobe was formed in f64: c_diff/pi + c_spec * lobe in f64,
+// each output rounded once (+inf beyond FLT_MAX, saturated by the caller).
+Eval eval_lobe_f64(GpuMaterial m, double lobe) {
+    Eval e;
+    dvec3 brdf = dvec3(m.diffuse.rgb) + dvec3(m.specular.rgb) * lobe;
+    e.brdf = vec3(float_or_inf(brdf.x), float_or_inf(brdf.y), float_or_inf(brdf.z));
+    e.d = float_or_inf(lobe);
+    e.g = 1.0;
+    e.f = vec3(1.0);
+    e.k = 1.0;
+    return e;
+}
+#endif
+
 bool is_anisotropic(GpuMaterial m) {
     return (m.kind.w & FLAG_ANISOTROPIC) != 0u;
 }
@@ -117,6 +141,12 @@ Eval model_phong(Frame f, GpuMaterial m) {
 // (not reciprocal; the 1/pi is in m.scale.x).
 Eval model_blinn_phong(Frame f, GpuMaterial m) {
     float p = exp_acc(m.lobe.x * log_cos(f.cos_h, f.sin2_h));
+#if defined(HAS_FLOAT64)
+    // 1/cos_i overflows float32 (or cos_i rounded to 0, and 0/0 = NaN) below TINY_COS.
+    if (f.cos_i_exact < TINY_COS) {
+        return eval_lobe_f64(m, double(m.scale.x * p) / f.cos_i_exact);
+    }
+#endif
     return eval_lobe(m, m.scale.x * p / f.cos_i);
 }
 #endif
@@ -135,10 +165,93 @@ Eval model_rtr(Frame f, GpuMaterial m) {
 // 1/(4 pi mx my) is m.scale.x.
 Eval model_ward(Frame f, GpuMaterial m) {
     float x = exp_acc(-slope2_h(f, m) / (f.cos_h * f.cos_h));
-    // Where exp underflows to 0 the lobe is 0; the guard keeps 0 * inf (cos_i, cos_o both
+#if defined(HAS_FLOAT64)
+    // 1/sqrt(cos_i cos_o) overflows float32 below TINY_COS, or a cosine rounded to 0 gives
+    // inversesqrt(0) = inf; in f64 the product of two cosines >= 1.4e-45 is normal.
+    if (min(f.cos_i_exact, f.cos_o_exact) < TINY_COS) {
+        return eval_lobe_f64(m, double(m.scale.x * x) / sqrt(f.cos_i_exact * f.cos_o_exact));
+    }
+#endif    // Where exp underflows to 0 the lobe is 0; the guard keeps 0 * inf (cos_i, cos_o both
     // ~1e-38) from becoming NaN. One inversesqrt per cosine: their product cannot overflow.
     float lobe = x == 0.0 ? 0.0 : m.scale.x * x * inversesqrt(f.cos_i) * inversesqrt(f.cos_o);
     return eval_lobe(m, lobe);
+}
+#endif
+
+#if defined(HAS_COOK_TORRANCE) && defined(HAS_FLOAT64)
+// Smith's Lambda in f64 for direction w with n.w = cos_w (f64): float32's for cos_w >=
+// TINY_COS; below it from q2 = m^2 tan^2 in f64 (in float32 it is +inf, Lambda +inf and G 0,
+// where the exact G is as small as 1e-45 and G K is finite).
+double smith_lambda_f64(GpuMaterial m, vec2 w_tb, float sin2_w, double cos_w) {
+    if (cos_w >= TINY_COS) {
+#if defined(HAS_G_SMITH) || defined(HAS_G_SMITH_CORRELATED)
+        return double(smith_lambda(m, smith_q2(m, w_tb, sin2_w, float(cos_w))));
+#else
+        return 0.0;
+#endif
+    }
+#if defined(HAS_G_SMITH) || defined(HAS_G_SMITH_CORRELATED) || defined(HAS_G_SMITH_FAST)
+    double q2 = double(smith_q2(m, w_tb, sin2_w, 1.0)) / (cos_w * cos_w);
+#else
+    double q2 = 0.0;
+#endif
+#if defined(HAS_LAMBDA_BECKMANN)
+    if (m.kind.y == DIST_BECKMANN) {
+        // a = 1/(m tan) < TINY_COS/(1e-7 sin) ~ 1e-8 (roughness >= 1e-7): exp(-a^2) = 1
+        // and erfc(a) = 1 - 2a/sqrt(pi) to O(a^2) < 1e-16 relative, so Lambda =
+        // (exp(-a^2)/(a sqrt(pi)) - erfc(a))/2 = 1/(2 a sqrt(pi)) - 1/2 + a/sqrt(pi).
+        double a = 1.0 / sqrt(q2);
+        return 0.5 / (a * double(1.0 / INV_SQRT_PI)) - 0.5 + a * double(INV_SQRT_PI);
+    }
+#endif
+    // GGX: (sqrt(1 + q2) - 1)/2; q2 >= 1e14 here, so the subtraction does not cancel.
+    return 0.5 * (sqrt(1.0 + q2) - 1.0);
+}
+
+// G1 of Walter et al. 2007's rational fit (G1_SmithFast) in f64 for one direction.
+double smith_fast_g1_f64(GpuMaterial m, vec2 w_tb, float sin2_w, double cos_w) {
+#if defined(HAS_G_SMITH_FAST)
+    if (cos_w >= TINY_COS) {
+        return double(G1_SmithFast(smith_q2(m, w_tb, sin2_w, float(cos_w))));
+    }
+    double a = cos_w / sqrt(double(smith_q2(m, w_tb, sin2_w, 1.0))); // < 1.6 here
+    return (3.535 * a + 2.181 * a * a) / (1.0 + 2.276 * a + 2.577 * a * a);
+#else
+    return 1.0;
+#endif
+}
+
+// G and K in f64 for a tuple with min(cos_i, cos_o) < TINY_COS, where float32 overflows K
+// and underflows G although their product stays finite (FORMULAS.md §1, "Overflow").
+void cook_torrance_gk_f64(Frame f, GpuMaterial m, uint convention, out double g, out double k) {
+    double ci = f.cos_i_exact, co = f.cos_o_exact;
+    g = 1.0;
+    switch (m.kind.z) {
+    case GEOM_COOK_TORRANCE: {
+        double t = 2.0 * double(f.cos_h) / f.c_exact;
+        g = min(1.0, min(t * co, t * ci));
+        break;
+    }
+    case GEOM_SMITH:
+        g = 1.0 / ((1.0 + smith_lambda_f64(m, f.v_tb, f.sin2_o, co))
+                   * (1.0 + smith_lambda_f64(m, f.l_tb, f.sin2_i, ci)));
+        break;
+    case GEOM_SMITH_CORRELATED:
+        g = 1.0 / (1.0 + smith_lambda_f64(m, f.v_tb, f.sin2_o, co)
+                   + smith_lambda_f64(m, f.l_tb, f.sin2_i, ci));
+        break;
+    case GEOM_SMITH_FAST:
+        g = smith_fast_g1_f64(m, f.v_tb, f.sin2_o, co) * smith_fast_g1_f64(m, f.l_tb, f.sin2_i, ci);
+        break;
+    default: break;
+    }
+    k = 1.0;
+    switch (convention) {
+    case CONV_SEED: k = 1.0 / co; break;
+    case CONV_CT1982: k = double(INV_PI) / (ci * co); break;
+    case CONV_MODERN: k = 0.25 / (ci * co); break;
+    default: break;
+    }
 }
 #endif
 
@@ -198,7 +311,15 @@ Eval model_cook_torrance(Frame f, GpuMaterial m) {
     case FRESNEL_DIELECTRIC: e.f = F_Dielectric(f.c, m.fresnel0.rgb, m.scale.yzw, f.c_exact); break;
 #endif
 #if defined(HAS_F_CONDUCTOR)
-    case FRESNEL_CONDUCTOR: e.f = F_Conductor(f.c, m.fresnel0.rgb, m.fresnel1.rgb, m.scale.yzw); break;
+    case FRESNEL_CONDUCTOR:
+#if defined(HAS_FLOAT64)
+        if (f.c_exact < 1e-12) {
+            e.f = F_Conductor_f64(f.c_exact, m.fresnel0.rgb, m.fresnel1.rgb, m.scale.yzw);
+            break;
+        }
+#endif
+        e.f = F_Conductor(f.c, m.fresnel0.rgb, m.fresnel1.rgb, m.scale.yzw);
+        break;
 #endif
 #if defined(HAS_F_SCHLICK)
     case FRESNEL_SCHLICK: e.f = F_Schlick(f.c, m.fresnel0.rgb); break;
@@ -220,9 +341,30 @@ Eval model_cook_torrance(Frame f, GpuMaterial m) {
     default: break;
     }
 
-    // D = 0 wins: K can be inf when both cosines are ~1e-38, and 0 * inf would be NaN.
-    float dgk = e.d == 0.0 ? 0.0 : e.d * e.g * e.k;
-    e.brdf = m.diffuse.rgb + m.specular.rgb * (dgk * e.f);
+    // K last: D G F <= D is finite, so an overflow here means the exact product exceeds
+    // FLT_MAX (before the colour). A zero factor wins: without f64, K is +inf when both
+    // cosines are ~1e-38, and 0 * inf would be NaN.
+    vec3 dgf = (e.d * e.g) * e.f;
+    vec3 spec = mix(dgf * e.k, vec3(0.0), equal(dgf, vec3(0.0)));
+    e.brdf = m.diffuse.rgb + m.specular.rgb * spec;
+#if defined(HAS_FLOAT64)
+    // Below TINY_COS, G and K in f64 (float32 overflows K and underflows G); and where the
+    // float32 product overflowed (a sharp lobe at grazing, or before a colour < 1 could
+    // bring it back in range), the product again in f64, where it cannot: the output is then
+    // +inf only if the exact value exceeds FLT_MAX (saturated by the caller).
+    bool tiny = min(f.cos_i_exact, f.cos_o_exact) < TINY_COS;
+    if (tiny || any_non_finite(e.brdf)) {
+        double g64 = double(e.g), k64 = double(e.k);
+        if (tiny) {
+            cook_torrance_gk_f64(f, m, convention, g64, k64);
+            e.g = float(g64);
+            e.k = float_or_inf(k64);
+        }
+        dvec3 b = dvec3(m.diffuse.rgb)
+            + dvec3(m.specular.rgb) * ((double(e.d) * g64 * k64) * dvec3(e.f));
+        e.brdf = vec3(float_or_inf(b.x), float_or_inf(b.y), float_or_inf(b.z));
+    }
+#endif
     return e;
 }
 #endif

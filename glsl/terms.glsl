@@ -28,6 +28,8 @@ struct Frame {
     float rv, sin2_rv; // r.v and |r x v|^2, r = 2 cos_i n - l (Phong only)
     float sin2_i, sin2_o; // |n x l|^2, |n x v|^2 (Smith's tan^2 numerators)
     double_or_float c_exact; // c before rounding to f32 (f64 where the device has it)
+    double_or_float cos_i_exact, cos_o_exact; // cos_i, cos_o before rounding (FORMULAS.md §1,
+                       // "Overflow": below TINY_COS the models evaluate from these, in f64)
     vec2 l_tb, v_tb;   // (l.t, l.b), (v.t, v.b) (anisotropic materials only)
 };
 
@@ -208,13 +210,17 @@ void csqrt(vec3 x, vec3 y, out vec3 re, out vec3 im) {
 // cos_t^2 = 1 - sin2_t = (eta^2 - 1 + c^2)/eta^2, with Re(eta^2) - 1 = e2rm1 formed in f64
 // on the host: 1 - (1 - c^2)/eta^2 in f32 loses c^2 below ~6e-8 when eta is near 1, and
 // F then came out 1 instead of ~0 at grazing c (the stress corpus's eta = 1 conductor).
+// The division by eta^2 goes through q = |eta|^2 = n^2 + k^2, one factor at a time: the
+// direct 1/|eta^2|^2 = 1/q^2 overflows float32 for |eta| > 4e9, and with extinction 1e10 it
+// was inf * 0 = NaN (issue 10). The parser bounds n and k by 1e18, so q <= 2e36.
 vec3 F_Conductor(float c, vec3 n, vec3 k, vec3 e2rm1) {
     vec3 e2r = n * n - k * k;                   // eta^2
     vec3 e2i = 2.0 * n * k;
-    vec3 inv = 1.0 / (e2r * e2r + e2i * e2i);   // 1/|eta^2|^2
+    vec3 q = n * n + k * k;                     // |eta|^2 = |eta^2|
+    vec3 a = e2r / q, b = e2i / q;              // eta^2 / |eta^2|, components in [-1, 1]
     vec3 ar = e2rm1 + c * c;                    // eta^2 - 1 + c^2 = ar + i e2i
-    vec3 zr = (ar * e2r + e2i * e2i) * inv;     // (ar + i e2i) / eta^2
-    vec3 zi = (1.0 - c) * (1.0 + c) * e2i * inv; // = (e2i e2r - ar e2i) inv, uncancelled
+    vec3 zr = (ar * a + e2i * b) / q;           // (ar + i e2i) / eta^2
+    vec3 zi = (1.0 - c) * (1.0 + c) * b / q;    // = (e2i e2r - ar e2i) / q^2, uncancelled
     vec3 ctr, cti;
     csqrt(zr, zi, ctr, cti);                    // cos_t
     vec3 ecr = n * c, eci = k * c;              // eta c
@@ -225,6 +231,36 @@ vec3 F_Conductor(float c, vec3 n, vec3 k, vec3 e2rm1) {
     vec3 ur = c - ecr2, wr = c + ecr2;
     vec3 r_perp = (ur * ur + eci2 * eci2) / (wr * wr + eci2 * eci2);
     return 0.5 * (r_par + r_perp);
+}
+#endif
+
+#if defined(HAS_F_CONDUCTOR) && defined(HAS_FLOAT64)
+// F_Conductor in f64, for c below 1e-12 (the kernel takes it there): in float32, c^2 and
+// (eta c)^2 underflow, and an index-matched conductor (eta = 1, F = 0 exactly) gave
+// r_par = 0/0 = NaN at c = 1e-45 (stress corpus). Same formula, line for line.
+vec3 F_Conductor_f64(double c, vec3 n32, vec3 k32, vec3 e2rm1) {
+    dvec3 n = dvec3(n32), k = dvec3(k32);
+    dvec3 e2r = n * n - k * k, e2i = 2.0 * n * k, q = n * n + k * k;
+    dvec3 a = e2r / q, b = e2i / q;
+    dvec3 ar = dvec3(e2rm1) + c * c;
+    dvec3 zr = (ar * a + e2i * b) / q;
+    dvec3 zi = (1.0 - c) * (1.0 + c) * b / q;
+    // Principal square root of zr + i zi (as csqrt; here q >= 1e-12 and c >= 1.4e-45 keep
+    // every square in range, and the max() keeps 0/0 out of the candidate not taken).
+    dvec3 r = sqrt(zr * zr + zi * zi);
+    dvec3 sp = sqrt(0.5 * (r + zr)), sn = sqrt(0.5 * (r - zr));
+    dvec3 im_p = 0.5 * zi / max(sp, dvec3(1e-300));
+    dvec3 re_n = 0.5 * abs(zi) / max(sn, dvec3(1e-300));
+    dvec3 im_n = mix(sn, -sn, lessThan(zi, dvec3(0.0)));
+    bvec3 neg = lessThan(zr, dvec3(0.0));
+    dvec3 ctr = mix(sp, re_n, neg), cti = mix(im_p, im_n, neg);
+    dvec3 ecr = n * c, eci = k * c;
+    dvec3 pr = ecr - ctr, pi_ = eci - cti, qr = ecr + ctr, qi = eci + cti;
+    dvec3 r_par = (pr * pr + pi_ * pi_) / (qr * qr + qi * qi);
+    dvec3 ecr2 = n * ctr - k * cti, eci2 = n * cti + k * ctr;
+    dvec3 ur = c - ecr2, wr = c + ecr2;
+    dvec3 r_perp = (ur * ur + eci2 * eci2) / (wr * wr + eci2 * eci2);
+    return vec3(0.5 * (r_par + r_perp));
 }
 #endif
 

@@ -22,17 +22,24 @@ pub struct Counts {
     pub invalid: u64,
     /// Valid tuples with `cos_i ≤ 0` or `cos_o ≤ 0`: their outputs are 0.
     pub below_horizon: u64,
+    /// Valid tuples with an output whose exact value exceeds the largest finite float32
+    /// (`f32::MAX`): that output is `f32::MAX` (FORMULAS.md §1, "Overflow"). Every output
+    /// the evaluation computes counts (the three BRDF channels and the terms D, G, F, K),
+    /// whether or not the terms were requested, so the count does not depend on the
+    /// request.
+    pub saturated: u64,
     /// Row of the first invalid tuple, if any.
     pub first_invalid: Option<u64>,
 }
 
 impl Counts {
-    /// Adds the invalid and below-horizon counts of another part of the batch (a chunk or a
+    /// Adds the invalid, below-horizon and saturated counts of another part of the batch (a chunk or a
     /// thread's share); the first invalid row is the smaller of the two. `tuples` is left
     /// to the caller, who knows the batch.
     pub fn absorb(&mut self, part: &Counts) {
         self.invalid += part.invalid;
         self.below_horizon += part.below_horizon;
+        self.saturated += part.saturated;
         self.first_invalid = match (self.first_invalid, part.first_invalid) {
             (Some(a), Some(b)) => Some(a.min(b)),
             (a, b) => a.or(b),
@@ -50,7 +57,7 @@ pub struct Output {
     pub brdf: Vec<f32>,
     /// `n × 6` terms (D, G, F_r, F_g, F_b, K) when requested.
     pub terms: Option<Vec<f32>>,
-    /// Invalid / below-horizon counts.
+    /// Invalid / below-horizon / saturated counts.
     pub counts: Counts,
 }
 

@@ -124,9 +124,12 @@ pub struct CombinationReport {
     /// Largest relative error among well-conditioned values: those whose sensitivity
     /// allowance is below the relative one (so the rule is at most 2e-5 relative).
     pub max_rel_well_conditioned: f64,
-    /// Whether the invalid / below-horizon counts and first invalid row equal the
-    /// reference's.
+    /// Whether the invalid / below-horizon / saturated counts and first invalid row equal
+    /// the reference's.
     pub counts_match: bool,
+    /// Saturated tuples (an output beyond `f32::MAX`, FORMULAS.md §1) as counted by the
+    /// backend and by the reference; part of `counts_match`.
+    pub saturated: (u64, u64),
     /// The value that used the most of its tolerance.
     pub worst: Option<WorstCase>,
 }
@@ -641,7 +644,7 @@ pub fn check_combination(
     let mut used = ErrorStats::default();
     let mut column_max = [0f64; 9];
     let mut well_conditioned = 0f64;
-    let (mut invalid, mut below, mut first_invalid) = (0u64, 0u64, None);
+    let (mut invalid, mut below, mut saturated, mut first_invalid) = (0u64, 0u64, 0u64, None);
     for row in 0..batch.len() {
         let tuple = batch.tuple(row);
         let material = &c.materials[tuple.material];
@@ -652,10 +655,12 @@ pub fn check_combination(
                 first_invalid.get_or_insert(row as u64);
             }
             Status::BelowHorizon => below += 1,
-            Status::Valid => {}
+            Status::Valid => saturated += u64::from(e.saturated()),
         }
         let sensitivity = f32_sensitivity(&tuple, material);
         for (col, r) in columns_of(&e).into_iter().enumerate() {
+            // The output the contract asks for: beyond f32::MAX, f32::MAX (FORMULAS.md §1).
+            let r = r.min(f64::from(f32::MAX));
             let x = value(row, col);
             let err = relative_error(x, r, FLOOR);
             column_max[col] = column_max[col].max(err);
@@ -701,8 +706,10 @@ pub fn check_combination(
         column_max,
         max_used: used.max,
         max_rel_well_conditioned: well_conditioned,
+        saturated: (counts.saturated, saturated),
         counts_match: counts.invalid == invalid
             && counts.below_horizon == below
+            && counts.saturated == saturated
             && counts.first_invalid == first_invalid,
         worst,
     })

@@ -1,5 +1,6 @@
-//! The CI stress pass: 200,000 adversarial tuples per backend; any non-finite output, count
-//! disagreement or non-zero reject fails. (`vkbrdf stress --tuples 10000000` is the full run.)
+//! The CI stress pass: 200,000 adversarial tuples per backend (cosines down to the smallest
+//! positive float32, every parameter at the parser's bounds); any non-finite output, count
+//! disagreement (saturated included) or non-zero reject fails. (`vkbrdf stress --tuples 10000000` is the full run.)
 
 mod common;
 
@@ -13,6 +14,15 @@ fn stress_policy_holds_on_every_backend() {
         let report =
             stress::run(backend.as_mut(), TUPLES, 7, 1 << 16, &mut |_| {}).expect("stress run");
         assert_eq!(report.tuples, TUPLES as u64);
+        // FORMULAS.md §1: no output is ever inf or NaN, down to subnormal cosines and at
+        // every parameter's bound, and the saturated count equals the reference's.
+        assert_eq!(report.non_finite, 0, "{}", report.to_markdown(1e-5));
+        assert_eq!(
+            report.saturated.0, report.saturated.1,
+            "saturated count on {}",
+            report.backend
+        );
+        assert_eq!(report.invalid.0, report.invalid.1);
         assert!(
             report.policy_holds(),
             "stress policy fails on {}:\n{}",
@@ -22,6 +32,12 @@ fn stress_policy_holds_on_every_backend() {
         // The corpus really is adversarial: it holds invalid and below-horizon tuples.
         assert!(
             report.invalid.1 > TUPLES as u64 / 20 && report.below_horizon.1 > TUPLES as u64 / 20
+        );
+        // ... and it reaches the overflow rule: saturated tuples exist.
+        assert!(
+            report.saturated.1 > TUPLES as u64 / 100,
+            "{:?}",
+            report.saturated
         );
     }
 }

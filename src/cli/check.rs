@@ -92,6 +92,9 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         anyhow::bail!("--filter {:?} matches no combination (names look like `cook-torrance modern ggx-aniso smith conductor`)", args.filter.as_deref().unwrap_or(""));
     }
     let failed = reports.iter().filter(|r| !r.pass()).count();
+    let saturated = reports
+        .iter()
+        .fold((0, 0), |(a, b), r| (a + r.saturated.0, b + r.saturated.1));
     let max_rel = reports.iter().map(|r| r.max_rel).fold(0.0, f64::max);
     let max_used = reports.iter().map(|r| r.max_used).fold(0.0, f64::max);
     let well = reports
@@ -104,6 +107,11 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         reports.len(),
         args.tuples,
         reports.len() - failed
+    );
+    outln!(
+        "saturated tuples (an output beyond f32::MAX, stored as f32::MAX): {} (reference {})",
+        saturated.0,
+        saturated.1
     );
     outln!("largest relative error {max_rel:.2e} overall, {well:.2e} where f32 inputs determine the value well");
     let messages = counter.count();

@@ -115,12 +115,13 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
     let eval_s = t1.elapsed().as_secs_f64();
     let c = out.counts;
     eprintln!(
-        "{} tuples on {}: {} evaluated, {} invalid, {} below the horizon ({:.3} s read, {:.3} s evaluate, {:.1} M tuples/s)",
+        "{} tuples on {}: {} evaluated, {} invalid, {} below the horizon, {} saturated ({:.3} s read, {:.3} s evaluate, {:.1} M tuples/s)",
         c.tuples,
         backend.name(),
         c.tuples - c.invalid - c.below_horizon,
         c.invalid,
         c.below_horizon,
+        c.saturated,
         read_s,
         eval_s,
         c.tuples as f64 / eval_s.max(1e-9) / 1e6

@@ -9,10 +9,14 @@ use std::process::ExitCode;
 /// Arguments of `vkbrdf stress`.
 #[derive(clap::Args, Debug)]
 #[command(after_help = "\
-The corpus crosses extreme materials (roughness 1e-4 … 10, anisotropy to 1e4, exponents to
-1e4, IOR 1, 0.5 and 100, extinction 50) with grazing angles from 1e-8, exact normal
-incidence, the specular peak, L = −V, backfacing, vector lengths 1e-20 … 1e20, zero, NaN,
-Inf and denormal components, and tangents parallel to N.
+The corpus crosses extreme materials (every parameter at the bounds the materials parser
+accepts: roughness 1e-7 … 1e4, exponents to 1e18, IOR 1e-6 … 1e18, extinction to 1e18,
+colours and weights to 1e18) with grazing angles from 1e-8, cosines down to the smallest
+positive float32 (1e-20, 1e-30, 1e-38, 1e-45), exact normal incidence, the specular peak,
+L = −V, backfacing, vector lengths 1e-20 … 1e20, zero, NaN, Inf and denormal components,
+and tangents parallel to N. Outputs beyond float32's largest value are stored as it and
+counted as saturated; the policy: no inf or NaN, and invalid and saturated counts equal to
+the reference's.
 
 Examples:
   vkbrdf stress --tuples 200000                  # Vulkan and the CPU reference

@@ -786,6 +786,7 @@ impl VulkanBackend {
             tuples: 0,
             invalid: u64::from(c.invalid),
             below_horizon: u64::from(c.below_horizon),
+            saturated: u64::from(c.saturated),
             // u32::MAX: no invalid tuple in this chunk (GpuCounts::INITIAL).
             first_invalid: (c.first_invalid != u32::MAX)
                 .then(|| p.first_row + u64::from(c.first_invalid)),

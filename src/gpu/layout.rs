@@ -170,8 +170,8 @@ pub struct GpuCounts {
     pub below_horizon: u32,
     /// Chunk-relative row of the first invalid tuple, `u32::MAX` when none.
     pub first_invalid: u32,
-    /// Padding to 16 bytes.
-    pub pad: u32,
+    /// Saturated tuples in the chunk (an output clamped to `f32::MAX`, FORMULAS.md §1).
+    pub saturated: u32,
 }
 
 impl GpuCounts {
@@ -180,7 +180,7 @@ impl GpuCounts {
         invalid: 0,
         below_horizon: 0,
         first_invalid: u32::MAX,
-        pad: 0,
+        saturated: 0,
     };
 }
 
@@ -230,6 +230,7 @@ const _: () = {
     assert!(size_of::<GpuCounts>() == 16);
     assert!(offset_of!(GpuCounts, below_horizon) == 4);
     assert!(offset_of!(GpuCounts, first_invalid) == 8);
+    assert!(offset_of!(GpuCounts, saturated) == 12);
     assert!(size_of::<PushConstants>() == 24);
 };
 

@@ -59,6 +59,14 @@ pub struct Frame {
     pub sin2_h: f64,
     /// Unit tangent `t` and bitangent `b = n × t` (anisotropic materials only).
     pub tb: Option<([f64; 3], [f64; 3])>,
+    /// `l·v` from the raw inputs (accurate dot product), for Phong's `r·v = 2 cos_i cos_o −
+    /// l·v`: with both cosines tiny, `dot(l, v)` of unit vectors (absolute error ~1e-16)
+    /// has no correct digit of an `r·v` of 1e-40.
+    pub l_dot_v: f64,
+    /// `1 − c² = sin²θ_d = (1 − l·v)/2`, from the inputs: near `c = 1` (normal incidence,
+    /// l ≈ v) `1 − c` of the rounded `c` has an absolute error ~u that a dielectric with
+    /// μ ≪ 1 (g² = μ² − (1 − c²)) turns into a relative error of F of ~u/μ².
+    pub sin2_d: f64,
 }
 
 /// `a·b − c·d` to within ~1.5 ulp (Kahan's algorithm with a fused multiply-add): the plain
@@ -175,6 +183,14 @@ impl Frame {
             let lxv = len(cross_accurate(ls, vs));
             (lxv / q) * (lxv / (q - p))
         };
+        // 1 − l·v likewise: direct for p ≤ 0, |L × V|²/(q (q + p)) for p > 0 (near l = v).
+        let one_minus_lv = if p <= 0.0 {
+            1.0 - p / q
+        } else {
+            let lxv = len(cross_accurate(ls, vs));
+            (lxv / q) * (lxv / (q + p))
+        };
+        let sin2_d = 0.5 * one_minus_lv;
         let lv_len = (2.0 * one_plus_lv).sqrt(); // |l + v|
                                                  // l = −v exactly gives |l + v| = 0 and no h, but that tuple is below the horizon
                                                  // (cos_i = −cos_o), and the caller returns before reading h.
@@ -198,6 +214,8 @@ impl Frame {
             cos_o,
             cos_h,
             c: 0.5 * lv_len,
+            l_dot_v: p / q,
+            sin2_d,
             sin2_h,
             tb,
         })

@@ -7,12 +7,26 @@ use num_complex::Complex64;
 /// `g² = μ² + c² − 1`; `g² < 0` is total internal reflection (F = 1); else
 /// `F = ½ ((g−c)/(g+c))² (1 + ((c(g+c) − 1)/(c(g−c) + 1))²)`.
 pub fn dielectric_f(c: f64, ior: f64) -> f64 {
+    // 1 − c² as (1 − c)(1 + c): 1 − c is exact for c in [0.5, 1].
+    dielectric_f_with_sin2(c, (1.0 - c) * (1.0 + c), ior)
+}
+
+/// [`dielectric_f`] given also `s2 = 1 − c²`, accurate near c = 1 where `1 − c` of a
+/// rounded `c` is not (the frame forms it from the inputs: [`super::frame::Frame::sin2_d`]).
+pub fn dielectric_f_with_sin2(c: f64, s2: f64, ior: f64) -> f64 {
     // μ² − 1 as (μ − 1)(μ + 1): `μ·μ − 1` rounds μ² first and, for μ = 1 + 1e-9, keeps
     // only ~7 of its digits (μ − 1 is exact by Sterbenz's lemma for μ in [0.5, 2]).
     let mu2m1 = (ior - 1.0) * (ior + 1.0);
-    // g² = (μ² − 1) + c², not μ² + c² − 1: for μ = 1 the latter rounds c² ≤ 1e-16 away next
-    // to 1 (g² = 0 instead of c², g − c = −c and F = 1 instead of 0 at grazing c).
-    let g2 = mu2m1 + c * c;
+    // g² = μ² + c² − 1 in whichever grouping rounds least (each form's error is ~u times the
+    // sum of its terms' magnitudes): (μ² − 1) + c² near μ = 1, where μ² + c² − 1 rounds
+    // c² ≤ 1e-16 away next to 1 (g² = 0 instead of c², F = 1 instead of 0 at grazing c);
+    // μ² − (1 − c²) near c = 1 with μ ≪ 1, where (μ² − 1) + c² cancels −1 against 1 to
+    // leave μ² (μ = 1e-6 at normal incidence: F off by 2e-10 relative).
+    let g2 = if mu2m1.abs() + c * c <= ior * ior + s2 {
+        mu2m1 + c * c
+    } else {
+        ior * ior - s2
+    };
     if g2 < 0.0 {
         return 1.0;
     }
@@ -21,7 +35,10 @@ pub fn dielectric_f(c: f64, ior: f64) -> f64 {
     // relative error would be unbounded); the product form is exact to a few ulps.
     let g_minus_c = mu2m1 / (g + c);
     let r = g_minus_c / (g + c);
-    let q = (c * (g + c) - 1.0) / (c * g_minus_c + 1.0);
+    // c(g + c) − 1 = c·g − (1 − c²) and c(g − c) + 1 = c·g + (1 − c²): near c = 1 with
+    // g ≪ 1 (μ ≪ 1 at normal incidence) both printed forms cancel 1 against ~1 (the
+    // denominator is ~μ there: F off by 3e-11 relative at μ = 1e-6).
+    let q = (c * g - s2) / (c * g + s2);
     0.5 * r * r * (1.0 + q * q)
 }
 

@@ -63,6 +63,26 @@ impl Evaluation {
     pub fn terms(&self) -> [f64; TERM_COLUMNS] {
         [self.d, self.g, self.f[0], self.f[1], self.f[2], self.k]
     }
+
+    /// Whether any output (a BRDF channel or a term) exceeds the largest finite float32:
+    /// the tuple is *saturated* (FORMULAS.md §1, "Overflow"). Terms count whether or not
+    /// they were requested, so every backend counts the same tuples for any request.
+    pub fn saturated(&self) -> bool {
+        self.brdf
+            .iter()
+            .chain(&self.terms())
+            .any(|&x| x > f64::from(f32::MAX))
+    }
+}
+
+/// `x` as an output float32 (FORMULAS.md §1, "Overflow"): beyond the largest finite
+/// float32 it is `f32::MAX`. Without the clamp, `as f32` rounds it to +inf.
+pub fn to_output_f32(x: f64) -> f32 {
+    if x > f64::from(f32::MAX) {
+        f32::MAX
+    } else {
+        x as f32
+    }
 }
 
 /// Evaluates one tuple given in f64 (any lengths; `t` only read by anisotropic materials).
@@ -167,17 +187,17 @@ impl Backend for CpuReference {
                                     counts.first_invalid.get_or_insert(i as u64);
                                 }
                                 Status::BelowHorizon => counts.below_horizon += 1,
-                                Status::Valid => {}
+                                Status::Valid => counts.saturated += u64::from(e.saturated()),
                             }
                             for (dst, src) in rgb.iter_mut().zip(e.brdf) {
-                                *dst = src as f32;
+                                *dst = to_output_f32(src);
                             }
                             if let Some(t) = tout.as_deref_mut() {
                                 for (dst, src) in t[j * TERM_COLUMNS..(j + 1) * TERM_COLUMNS]
                                     .iter_mut()
                                     .zip(e.terms())
                                 {
-                                    *dst = src as f32;
+                                    *dst = to_output_f32(src);
                                 }
                             }
                         }

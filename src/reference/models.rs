@@ -88,9 +88,7 @@ pub fn phong_lobe(fr: &Frame, e: f64) -> f64 {
         distribution::cos_pow(1.0 - half_d2, half_d2 * (2.0 - half_d2), e)
     } else {
         // r·v = 2 cos_i cos_o − l·v, the same value without forming r.
-        (2.0 * fr.cos_i * fr.cos_o - dot(fr.l, fr.v))
-            .max(0.0)
-            .powf(e)
+        (2.0 * fr.cos_i * fr.cos_o - fr.l_dot_v).max(0.0).powf(e)
     };
     (e + 2.0) / (2.0 * PI) * lobe
 }
@@ -143,7 +141,7 @@ pub fn cook_torrance_terms(fr: &Frame, ct: &CookTorrance) -> Terms {
     Terms {
         d: microfacet_d(fr, ct),
         g: microfacet_g(fr, ct),
-        f: [0, 1, 2].map(|c| fresnel_f(fr.c, &ct.fresnel, c)),
+        f: [0, 1, 2].map(|c| fresnel_f(fr.c, fr.sin2_d, &ct.fresnel, c)),
         k: convention::glare_k(ct.convention, fr.cos_i, fr.cos_o),
     }
 }
@@ -218,11 +216,11 @@ pub fn microfacet_g(fr: &Frame, ct: &CookTorrance) -> f64 {
     }
 }
 
-/// F of §4 for channel `ch`.
-pub fn fresnel_f(c: f64, f: &Fresnel, ch: usize) -> f64 {
+/// F of §4 for channel `ch` at `c = v·h`, given also `sin2_d = 1 − c²` (accurate).
+pub fn fresnel_f(c: f64, sin2_d: f64, f: &Fresnel, ch: usize) -> f64 {
     match *f {
         Fresnel::None => 1.0,
-        Fresnel::Dielectric { ior } => fresnel::dielectric_f(c, ior[ch]),
+        Fresnel::Dielectric { ior } => fresnel::dielectric_f_with_sin2(c, sin2_d, ior[ch]),
         Fresnel::Conductor { ior, extinction } => fresnel::conductor_f(c, ior[ch], extinction[ch]),
         Fresnel::Schlick { f0 } => fresnel::schlick_f(c, f0[ch]),
     }

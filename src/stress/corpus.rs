@@ -32,10 +32,15 @@ pub enum Case {
     Denormal,
     /// A tangent exactly parallel to N (a power-of-two multiple of N).
     ParallelTangent,
+    /// `cos_i` and/or `cos_o` down to the smallest positive float32 (FORMULAS.md §1,
+    /// "Overflow"): log-uniform in [1.4e-45, 1e-8] or exactly 1e-20, 1e-30, 1e-38 or 1e-45
+    /// (subnormal), N along an axis so that the cosine is the tiny component itself; half
+    /// of them at the exact mirror configuration (h = n), where K overflows float32.
+    TinyCosine,
 }
 
 /// Every case, in corpus order.
-pub const CASES: [Case; 10] = [
+pub const CASES: [Case; 11] = [
     Case::WellConditioned,
     Case::Grazing,
     Case::NormalIncidence,
@@ -46,17 +51,20 @@ pub const CASES: [Case; 10] = [
     Case::NonFinite,
     Case::Denormal,
     Case::ParallelTangent,
+    Case::TinyCosine,
 ];
 
 /// The stress materials: every model and term, at the parameter extremes the issue names
 /// (roughness 1e-4 … 10, anisotropy ratios to 1e4, exponents to 1e4, IOR 1, < 1 and 100,
-/// extinction 50), plus ordinary values so the extremes can be told apart.
+/// extinction 50) and at the bounds the parser accepts (roughness 1e-7 and 1e4, exponent
+/// 1e18, IOR 1e-6 and 1e18, extinction 1e10 and 1e18, colours and weights 0 and 1e18),
+/// plus ordinary values so the extremes can be told apart.
 pub fn materials() -> Vec<Material> {
     let mut toml = String::new();
     let mut add =
         |name: &str, body: &str| toml += &format!("[[material]]\nname = \"{name}\"\n{body}\n");
     add("lambert", "model = \"lambert\"\ndiffuse = [0.9, 0.5, 0.1]");
-    for e in ["0", "1", "100", "10000"] {
+    for e in ["0", "1", "100", "10000", "1e18"] {
         add(
             &format!("phong-e{e}"),
             &format!("model = \"phong\"\nexponent = {e}\ndiffuse = 0.1"),
@@ -77,6 +85,9 @@ pub fn materials() -> Vec<Material> {
         "[0.0001, 1.0]",
         "[1.0, 0.0001]",
         "[0.05, 0.5]",
+        "1e-7",
+        "1e4",
+        "[1e-7, 1e4]",
     ] {
         add(
             &format!("ward-{r}"),
@@ -102,6 +113,18 @@ pub fn materials() -> Vec<Material> {
             "fresnel = \"conductor\"\nior = [0.166, 0.430, 1.38]\nextinction = [3.15, 2.46, 1.92]",
         ),
         ("F-schlick", "fresnel = \"schlick\"\nf0 = [0.04, 0.5, 1.0]"),
+        (
+            "F-k1e10",
+            "fresnel = \"conductor\"\nior = 1.0\nextinction = 1e10",
+        ),
+        (
+            "F-cond-bounds",
+            "fresnel = \"conductor\"\nior = [1e-6, 1e18, 1e18]\nextinction = [1e18, 0, 1e18]",
+        ),
+        (
+            "F-diel-bounds",
+            "fresnel = \"dielectric\"\nior = [1e-6, 1e18, 1.0]",
+        ),
     ];
     let conventions = ["modern", "seed", "cook-torrance-1982"];
     let mut k = 0;
@@ -120,7 +143,7 @@ pub fn materials() -> Vec<Material> {
             );
         }
     };
-    for r in ["0.0001", "0.01", "0.5", "10"] {
+    for r in ["1e-7", "0.0001", "0.01", "0.5", "10", "1e4"] {
         let p = format!("roughness = {r}");
         ct(
             "beckmann",
@@ -142,7 +165,13 @@ pub fn materials() -> Vec<Material> {
         );
         ct("gaussian", &p, &["none", "cook-torrance"], false);
     }
-    for r in ["[0.0001, 1.0]", "[1.0, 0.0001]", "[0.1, 0.4]"] {
+    for r in [
+        "[0.0001, 1.0]",
+        "[1.0, 0.0001]",
+        "[0.1, 0.4]",
+        "[1e-7, 1e4]",
+        "[1e4, 1e-7]",
+    ] {
         let p = format!("roughness = {r}");
         ct(
             "beckmann",
@@ -157,7 +186,7 @@ pub fn materials() -> Vec<Material> {
             true,
         );
     }
-    for e in ["0", "50", "10000"] {
+    for e in ["0", "50", "10000", "1e18"] {
         ct(
             "blinn",
             &format!("exponent = {e}"),
@@ -173,6 +202,19 @@ pub fn materials() -> Vec<Material> {
             &format!("model = \"cook-torrance\"\nconvention = \"{conv}\"\ndistribution = \"ggx\"\nroughness = 0.3\ngeometry = \"smith-correlated\"\n{f}"),
         );
     }
+    // Colours and weights at their bounds (1e18 and 0), on a sharp lobe.
+    add(
+        "ct-ggx-bright",
+        "model = \"cook-torrance\"\ndistribution = \"ggx\"\nroughness = 1e-7\ngeometry = \"smith\"\nfresnel = \"none\"\ndiffuse = 1e18\nspecular = [1e18, 0, 1]\ndiffuse_weight = 1e18\nspecular_weight = 1e18",
+    );
+    add(
+        "phong-bright",
+        "model = \"phong\"\nexponent = 1e18\ndiffuse = [1e18, 0, 1]\nspecular = [1e18, 0, 1]",
+    );
+    add(
+        "ct-blinn-dim",
+        "model = \"cook-torrance\"\nconvention = \"seed\"\ndistribution = \"blinn\"\nexponent = 1e18\ngeometry = \"none\"\nfresnel = \"none\"\nspecular_weight = 0",
+    );
     parse_materials(&toml, "stress corpus").expect("the stress materials are legal")
 }
 
@@ -225,7 +267,7 @@ fn log_uniform(rng: &mut Pcg64Mcg, lo: f64, hi: f64) -> f64 {
 
 /// One tuple (13 columns, material in column 9) of the given case.
 fn tuple(rng: &mut Pcg64Mcg, case: Case, material: usize) -> [f32; 13] {
-    let n = unit_vector(rng);
+    let mut n = unit_vector(rng);
     let mut t = unit_vector(rng);
     let (mut l, mut v) = (hemisphere(rng, n, 0.1), hemisphere(rng, n, 0.1));
     let mut scale = [1.0f64; 4];
@@ -262,6 +304,39 @@ fn tuple(rng: &mut Pcg64Mcg, case: Case, material: usize) -> [f32; 13] {
         Case::ExtremeLength => {
             for s in &mut scale {
                 *s = log_uniform(rng, 1e-20, 1e20);
+            }
+        }
+        Case::TinyCosine => {
+            // N along +x, +y or +z: then n·w is the tiny component itself, exactly (a
+            // rotated N would leave ~1e-8 of rounding error in every cosine).
+            let axis = rng.random_range(0..3usize);
+            let along = |tan: [f64; 2], c: f64| {
+                let mut w = [0.0; 3];
+                w[axis] = c;
+                w[(axis + 1) % 3] = tan[0];
+                w[(axis + 2) % 3] = tan[1];
+                w
+            };
+            let tiny = |rng: &mut Pcg64Mcg| match rng.random_range(0..6) {
+                0 => 1e-20,
+                1 => 1e-30,
+                2 => 1e-38,
+                3 => 1e-45,
+                _ => log_uniform(rng, 1.4e-45, 1e-8),
+            };
+            let phi = rng.random_range(0.0..std::f64::consts::TAU);
+            let (s, c) = phi.sin_cos();
+            let ci = tiny(rng);
+            n = along([0.0, 0.0], 1.0);
+            l = along([c, s], ci);
+            v = match rng.random_range(0..4) {
+                // The exact mirror configuration: h = n, c = v·h = cos_o.
+                0 | 1 => along([-c, -s], ci),
+                2 => along([-s, c], tiny(rng)),
+                _ => hemisphere(rng, n, 0.1),
+            };
+            if rng.random_range(0..2) == 1 {
+                std::mem::swap(&mut l, &mut v);
             }
         }
         Case::NonFinite | Case::Denormal | Case::ParallelTangent => {}

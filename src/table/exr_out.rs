@@ -100,7 +100,7 @@ pub fn write(
     Ok(clamped)
 }
 
-/// [`write`] without making the file visible: for tables written as a set
+/// [`write()`] without making the file visible: for tables written as a set
 /// ([`crate::atomic::commit`]).
 pub fn stage(
     path: &Path,
