@@ -130,7 +130,10 @@ fn differences(repo: &BTreeMap<u32, Section>, source: &BTreeMap<u32, Section>) -
     let mut out = Vec::new();
     for (num, src) in source {
         let Some(ours) = repo.get(num) else {
-            out.push(format!("§{num} ({}) is missing from docs/FORMULAS.md", src.title));
+            out.push(format!(
+                "§{num} ({}) is missing from docs/FORMULAS.md",
+                src.title
+            ));
             continue;
         };
         if ours.title != src.title {
@@ -176,7 +179,11 @@ fn read(path: &Path) -> String {
 fn source_path() -> Option<PathBuf> {
     if let Some(p) = std::env::var_os("VKBRDF_SHARED_FORMULAS") {
         let p = PathBuf::from(p);
-        assert!(p.is_file(), "VKBRDF_SHARED_FORMULAS={} is not a file", p.display());
+        assert!(
+            p.is_file(),
+            "VKBRDF_SHARED_FORMULAS={} is not a file",
+            p.display()
+        );
         return Some(p);
     }
     repo_root()
@@ -190,13 +197,21 @@ fn source_path() -> Option<PathBuf> {
 /// non-empty table in each of §1–§6, and the names the code dispatches on.
 fn check_structure(repo: &BTreeMap<u32, Section>) {
     let numbers: Vec<u32> = repo.keys().copied().collect();
-    assert_eq!(numbers, (1..=7).collect::<Vec<_>>(), "docs/FORMULAS.md sections");
+    assert_eq!(
+        numbers,
+        (1..=7).collect::<Vec<_>>(),
+        "docs/FORMULAS.md sections"
+    );
     for (num, s) in repo {
         assert!(!s.title.is_empty(), "§{num} has no title");
         assert!(s.body_lines > 0, "§{num} is empty");
         if *num <= 6 {
             assert!(s.tables >= 1, "§{num} ({}) has no table", s.title);
-            assert!(!s.table_names.is_empty(), "§{num} ({}) has an empty table", s.title);
+            assert!(
+                !s.table_names.is_empty(),
+                "§{num} ({}) has an empty table",
+                s.title
+            );
         }
     }
     let has = |num: u32, name: &str| repo[&num].table_names.iter().any(|n| n == name);
@@ -218,11 +233,22 @@ fn check_structure(repo: &BTreeMap<u32, Section>) {
         (5, &["seed", "cook-torrance-1982", "modern"][..]),
         (
             6,
-            &["lambert", "phong", "blinn-phong", "rtr", "ward", "cook-torrance"][..],
+            &[
+                "lambert",
+                "phong",
+                "blinn-phong",
+                "rtr",
+                "ward",
+                "cook-torrance",
+            ][..],
         ),
     ] {
         for name in names {
-            assert!(has(num, name), "§{num} lacks `{name}`: {:?}", repo[&num].table_names);
+            assert!(
+                has(num, name),
+                "§{num} lacks `{name}`: {:?}",
+                repo[&num].table_names
+            );
         }
     }
 }
@@ -258,7 +284,10 @@ fn a_disagreement_is_reported() {
     let text = read(&repo_root().join("docs/FORMULAS.md"));
     let base = parse(&text);
     assert!(differences(&base, &base).is_empty());
-    assert_eq!(cell_name("`beckmann` anisotropic, `m = [mx, my]`"), "beckmann anisotropic");
+    assert_eq!(
+        cell_name("`beckmann` anisotropic, `m = [mx, my]`"),
+        "beckmann anisotropic"
+    );
     assert_eq!(cell_name("`gaussian` (Torrance–Sparrow 1967)"), "gaussian");
     assert_eq!(first_cell("| `l, v, n` | `L/|L|` | x |"), "`l, v, n`");
 
@@ -276,11 +305,16 @@ fn a_disagreement_is_reported() {
     assert!(d.len() == 1 && d[0].starts_with("§2 table names"), "{d:?}");
 
     // The same row moved from §2 to §3's table: both sections disagree.
-    let moved = dropped.replacen("| `none` | 1 |\n", &format!("| `none` | 1 |\n{charlie_row}\n"), 1);
+    let moved = dropped.replacen(
+        "| `none` | 1 |\n",
+        &format!("| `none` | 1 |\n{charlie_row}\n"),
+        1,
+    );
     let d = differences(&parse(&moved), &base);
     assert!(
         d.iter().any(|l| l.starts_with("§2"))
-            && d.iter().any(|l| l.starts_with("§3") && l.contains("charlie")),
+            && d.iter()
+                .any(|l| l.starts_with("§3") && l.contains("charlie")),
         "{d:?}"
     );
 
