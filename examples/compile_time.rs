@@ -1,6 +1,6 @@
 //! Profiling aid: where a one-shot evaluation's time goes — shaderc's GLSL → SPIR-V, the
 //! driver's pipeline creation, and the evaluation itself — for a batch of `TUPLES` tuples
-//! (default 1,000,000) of the README's mixed materials file, or of gold.
+//! (default 1,000,000) of the mixed materials file in docs/MATERIALS.md, or of gold.
 //! Usage: cargo run --release --example compile_time -- [MATERIALS.toml] [TUPLES]
 use std::time::Instant;
 use vkbrdf::backend::{Backend, Request};
