@@ -135,7 +135,7 @@ Row load_row(uint row) {
 // tangent +x. With phi_d = 90 degrees, d = (0, sin theta_d, cos theta_d), l = R_y(theta_h) d
 // and v is l reflected about h = (sin theta_h, 0, cos theta_h): the host's from_half_diff()
 // term for term. No tuple is loaded: on lavapipe the loads are about half of the
-// kernel's time (see README, "Throughput").
+// kernel's time (see docs/THROUGHPUT.md).
 // sin(t pi/2) and cos(t pi/2) for t in [0, 1/2], i.e. angles up to pi/4, by their Taylor
 // polynomials to x^11 and x^12: the first omitted terms are below (pi/4)^13/13! = 7e-12
 // and (pi/4)^14/14! = 4e-13 relative to the results, so the polynomials are as exact as f32.

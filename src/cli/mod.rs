@@ -40,7 +40,7 @@ use vkbrdf::cancel::Cancel;
 /// Evaluate BRDFs in bulk on Vulkan compute, checked against an f64 CPU reference.
 ///
 /// Values are BRDFs f in 1/sr, without the cosine factor. Directions are any length and
-/// are normalised; see FORMULAS in the README for every model, term and convention.
+/// are normalised; see docs/FORMULAS.md for every model, term and convention.
 #[derive(Parser)]
 #[command(
     name = "vkbrdf",

@@ -1,5 +1,5 @@
 //! `vkbrdf stress`: an adversarial corpus ([`corpus`]) evaluated on a backend and judged
-//! against the f64 reference. The policy it checks (README, "Numerical stability"): finite
+//! against the f64 reference. The policy it checks (docs/STABILITY.md): finite
 //! input gives finite output on every backend, invalid input gives 0 and is counted, and
 //! the relative error per term, model and regime is measured, not guessed.
 
