@@ -41,8 +41,9 @@ use ash::vk;
 
 /// Maps a failed `vk::Result` of `call` to [`Error::Vulkan`].
 pub(crate) fn vk_error(call: &'static str) -> impl Fn(vk::Result) -> Error {
-    move |r| Error::Vulkan {
+    move |result| Error::Vulkan {
         call,
-        result: format!("{r:?} ({r})"),
+        result,
+        chunk: None,
     }
 }
