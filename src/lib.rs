@@ -24,6 +24,8 @@
 //! assert!((out.brdf[0] - 0.5 / std::f32::consts::PI).abs() < 1e-7);
 //! ```
 #![deny(unsafe_code)]
+#![deny(unsafe_op_in_unsafe_fn)]
+#![deny(clippy::undocumented_unsafe_blocks)]
 #![warn(missing_docs)]
 
 pub mod atomic;
