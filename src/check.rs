@@ -31,6 +31,7 @@ use crate::error::Result;
 use crate::material::{parse_materials, Material};
 use crate::reference::{self, Status};
 use crate::stats::{relative_error, ErrorStats};
+use crate::vector::{cross, dot, normalize_direct};
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64Mcg;
 use std::fmt;
@@ -403,23 +404,6 @@ fn unit(rng: &mut Pcg64Mcg) -> [f64; 3] {
     crate::sample::unit_vector(rng)
 }
 
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-fn normalized(a: [f64; 3]) -> [f64; 3] {
-    let l = dot(a, a).sqrt();
-    a.map(|x| x / l)
-}
-
 /// `x·t + y·b + z·n`.
 fn local(t: [f64; 3], b: [f64; 3], n: [f64; 3], x: f64, y: f64, z: f64) -> [f64; 3] {
     std::array::from_fn(|k| x * t[k] + y * b[k] + z * n[k])
@@ -467,7 +451,7 @@ pub fn generate(c: &Combination, tuples: usize, seed: u64) -> Result<Batch> {
     for i in 0..tuples {
         let mi = i % c.materials.len();
         let n = unit(&mut rng);
-        let t0 = normalized(cross(
+        let t0 = normalize_direct(cross(
             n,
             if n[0].abs() < 0.9 {
                 [1.0, 0.0, 0.0]
@@ -570,7 +554,7 @@ pub fn f32_sensitivity(t: &Tuple, m: &Material) -> [f64; 9] {
     let rotations = |x: [f64; 3]| -> [[f64; 3]; 2] {
         let len = dot(x, x).sqrt();
         let xn = x.map(|c| c / len);
-        let p1 = normalized(cross(
+        let p1 = normalize_direct(cross(
             xn,
             if xn[0].abs() < 0.9 {
                 [1.0, 0.0, 0.0]
@@ -596,13 +580,13 @@ pub fn f32_sensitivity(t: &Tuple, m: &Material) -> [f64; 9] {
         }
     }
     // The length errors of the unit vectors l and v, seen through h.
-    let (lu, vu) = (normalized(l), normalized(v));
+    let (lu, vu) = (normalize_direct(l), normalize_direct(v));
     let reflect = |d: [f64; 3], h: [f64; 3]| -> [f64; 3] {
         std::array::from_fn(|k| 2.0 * dot(d, h) * h[k] - d[k])
     };
-    let h_l = normalized(std::array::from_fn(|k| (1.0 + U) * lu[k] + vu[k]));
+    let h_l = normalize_direct(std::array::from_fn(|k| (1.0 + U) * lu[k] + vu[k]));
     add(reflect(vu, h_l), v, n, tan);
-    let h_v = normalized(std::array::from_fn(|k| lu[k] + (1.0 + U) * vu[k]));
+    let h_v = normalize_direct(std::array::from_fn(|k| lu[k] + (1.0 + U) * vu[k]));
     add(l, reflect(lu, h_v), n, tan);
     s
 }

@@ -44,5 +44,6 @@ pub mod sample;
 pub mod stats;
 pub mod stress;
 pub mod table;
+pub mod vector;
 
 pub use error::{Error, Result};

@@ -30,6 +30,7 @@
 use std::f64::consts::PI;
 use vkbrdf::material::{parse_materials, Material};
 use vkbrdf::reference::{evaluate, fresnel, Evaluation, Status};
+use vkbrdf::vector::scale;
 
 /// Relative tolerance of the hand-derived values: the inputs are f64 roundings of
 /// irrational numbers and every formula here is well conditioned, so the reference should
@@ -75,10 +76,6 @@ impl Setup {
 fn in_xz(theta_deg: f64) -> [f64; 3] {
     let t = theta_deg.to_radians();
     [t.sin(), 0.0, t.cos()]
-}
-
-fn scale(a: [f64; 3], s: f64) -> [f64; 3] {
-    a.map(|x| x * s)
 }
 
 /// L at 75°, V at 15° (see the module docs), written with exact closed forms.

@@ -21,6 +21,7 @@ use rand_pcg::Pcg64;
 use std::f64::consts::PI;
 use vkbrdf::material::{parse_materials, Material};
 use vkbrdf::reference::{evaluate, Evaluation, Status};
+use vkbrdf::vector::dot;
 
 fn material(body: &str) -> Material {
     let text = format!("[[material]]\nname = \"under-test\"\n{body}");
@@ -33,10 +34,6 @@ fn material(body: &str) -> Material {
 const Z: [f64; 3] = [0.0, 0.0, 1.0];
 /// The tangent used for anisotropic materials in (a) and (c): t = +x, b = n × t = +y.
 const X: [f64; 3] = [1.0, 0.0, 0.0];
-
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
 
 // ---------------------------------------------------------------------------------------
 // Quadrature over half vectors

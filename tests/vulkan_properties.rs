@@ -39,6 +39,7 @@ use vkbrdf::batch::{memory_source, Batch, Tuple, COLUMNS_PLAIN, COLUMNS_TANGENT}
 use vkbrdf::check::{allowed_error, f32_sensitivity};
 use vkbrdf::material::{parse_materials, Material};
 use vkbrdf::reference::{evaluate_tuple, Evaluation, Status};
+use vkbrdf::vector::{cross, dot, normalize_direct};
 
 // ---------------------------------------------------------------------------------------
 // Plumbing: backends, runners, batches
@@ -172,26 +173,6 @@ fn describe(t: &Tuple, body: &str) -> String {
     )
 }
 
-/// `a·b`.
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-/// `a × b`.
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-/// `a / |a|`.
-fn normalized(a: [f64; 3]) -> [f64; 3] {
-    let len = dot(a, a).sqrt();
-    a.map(|x| x / len)
-}
-
 /// Two unit vectors `(t, b)` completing the unit vector `n` to a right-handed frame.
 fn tangent_frame(n: [f64; 3]) -> ([f64; 3], [f64; 3]) {
     let a = if n[0].abs() < 0.9 {
@@ -199,7 +180,7 @@ fn tangent_frame(n: [f64; 3]) -> ([f64; 3], [f64; 3]) {
     } else {
         [0.0, 1.0, 0.0]
     };
-    let t = normalized(cross(n, a));
+    let t = normalize_direct(cross(n, a));
     (t, cross(n, t))
 }
 
@@ -280,7 +261,7 @@ impl RowRecipe {
     /// 1: V has a NaN; 2: N has +∞; 3: L has −∞; 4: T = N (invalid for anisotropic
     /// materials only); 5: N = 0.
     fn inputs(&self) -> ([f64; 3], [f64; 3], [f64; 3], [f64; 3]) {
-        let n = normalized(self.n);
+        let n = normalize_direct(self.n);
         let (t0, b0) = tangent_frame(n);
         let unit = |c: f64, phi: f64| -> [f64; 3] {
             let s = (1.0 - c * c).max(0.0).sqrt();
@@ -568,7 +549,7 @@ fn check_ggx_unit(
     (n, rows): &GrazingCase,
 ) -> Result<f64, TestCaseError> {
     let materials: Vec<Material> = GGX_UNIT.iter().map(|b| material(b)).collect();
-    let nn = normalized(*n);
+    let nn = normalize_direct(*n);
     let (t0, b0) = tangent_frame(nn);
     let mut tuples = Vec::new();
     for (i, &(c, phi, pl, pv)) in rows.iter().enumerate() {

@@ -1,40 +1,7 @@
 //! FORMULAS.md §1: inputs of one evaluation, the validity rule and the derived quantities.
 
-/// `a · b`.
-pub fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-/// `a × b`.
-pub fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-/// `|a|²`.
-pub fn length_squared(a: [f64; 3]) -> f64 {
-    dot(a, a)
-}
-
-/// `a / |a|`, or `None` for a zero-length or non-finite vector (an invalid input).
-///
-/// Scales by the largest |component| first: without it `|a|²` underflows to 0 for inputs
-/// of length ~1e-170 and overflows for ~1e170 (f32 inputs never get there, but f64 callers can).
-pub fn normalize(a: [f64; 3]) -> Option<[f64; 3]> {
-    if !a.iter().all(|x| x.is_finite()) {
-        return None;
-    }
-    let scale = a.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-    if scale == 0.0 {
-        return None;
-    }
-    let s = a.map(|x| x / scale);
-    let len = length_squared(s).sqrt();
-    Some(s.map(|x| x / len))
-}
+// The vector helpers live in `crate::vector`; re-exported for callers that name them here.
+pub use crate::vector::{cross, cross_accurate, dot, dot_accurate, length_squared, normalize};
 
 /// Everything the terms read, derived once per tuple (the table of FORMULAS.md §1).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -67,44 +34,6 @@ pub struct Frame {
     /// l ≈ v) `1 − c` of the rounded `c` has an absolute error ~u that a dielectric with
     /// μ ≪ 1 (g² = μ² − (1 − c²)) turns into a relative error of F of ~u/μ².
     pub sin2_d: f64,
-}
-
-/// `a·b − c·d` to within ~1.5 ulp (Kahan's algorithm with a fused multiply-add): the plain
-/// difference of two rounded products loses every digit when they nearly cancel, as the
-/// components of `n × w` do for `w` near `n` and those of `l × v` for `l` near `−v`.
-fn diff_of_products(a: f64, b: f64, c: f64, d: f64) -> f64 {
-    let cd = c * d;
-    let err = (-c).mul_add(d, cd); // cd − c·d exactly
-    a.mul_add(b, -cd) + err
-}
-
-/// `a × b` with each component accurate to a few ulps of itself (Kahan's fused multiply-add difference of products).
-pub fn cross_accurate(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        diff_of_products(a[1], b[2], a[2], b[1]),
-        diff_of_products(a[2], b[0], a[0], b[2]),
-        diff_of_products(a[0], b[1], a[1], b[0]),
-    ]
-}
-
-/// `a · b` as if computed in twice the working precision and rounded once (Ogita, Rump &
-/// Oishi 2005, "Accurate sum and dot product", Dot2: error-free products by fused
-/// multiply-add, error-free sums, the errors added back). Its relative error is ~u +
-/// u²·cond, where the plain dot product's is u·cond: at a grazing cosine of 1e-30 between
-/// f32 inputs, cond is ~1e30 and the plain dot product of normalised vectors has no correct
-/// digit (its absolute error, ~1e-16, dwarfs the cosine), while this one is exact to an ulp.
-pub fn dot_accurate(a: [f64; 3], b: [f64; 3]) -> f64 {
-    let (mut s, mut err) = (0.0f64, 0.0f64);
-    for k in 0..3 {
-        let p = a[k] * b[k];
-        let pe = a[k].mul_add(b[k], -p); // a·b − p exactly
-        let t = s + p;
-        let z = t - s;
-        let se = (s - (t - z)) + (p - z); // s + p − t exactly (TwoSum)
-        s = t;
-        err += pe + se;
-    }
-    s + err
 }
 
 /// `a` scaled by a power of two so that its largest |component| is in [0.5, 1): exact (no

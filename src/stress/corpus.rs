@@ -6,6 +6,7 @@
 use crate::batch::{Batch, COLUMNS_TANGENT};
 use crate::material::{parse_materials, Material};
 use crate::sample::unit_vector;
+use crate::vector::{axpy, dot, normalize_direct};
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64Mcg;
 
@@ -232,19 +233,6 @@ fn hemisphere(rng: &mut Pcg64Mcg, n: [f64; 3], min_cos: f64) -> [f64; 3] {
     }
 }
 
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-fn axpy(a: f64, x: [f64; 3], y: [f64; 3]) -> [f64; 3] {
-    [a * x[0] + y[0], a * x[1] + y[1], a * x[2] + y[2]]
-}
-
-fn normalize(a: [f64; 3]) -> [f64; 3] {
-    let l = dot(a, a).sqrt();
-    a.map(|x| x / l)
-}
-
 fn reflect_through_plane(w: [f64; 3], n: [f64; 3]) -> [f64; 3] {
     axpy(-2.0 * dot(w, n), n, w)
 }
@@ -255,10 +243,10 @@ fn at_angle(rng: &mut Pcg64Mcg, n: [f64; 3], theta: f64) -> [f64; 3] {
         let r = unit_vector(rng);
         let p = axpy(-dot(r, n), n, r);
         if dot(p, p) > 1e-6 {
-            break normalize(p);
+            break normalize_direct(p);
         }
     };
-    normalize(axpy(theta.cos(), n, p.map(|x| x * theta.sin())))
+    normalize_direct(axpy(theta.cos(), n, p.map(|x| x * theta.sin())))
 }
 
 fn log_uniform(rng: &mut Pcg64Mcg, lo: f64, hi: f64) -> f64 {

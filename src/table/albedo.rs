@@ -20,8 +20,8 @@ use crate::batch::COLUMNS_PLAIN;
 use crate::error::{Error, Result};
 use crate::material::{Geometry, Material};
 use crate::reference::distribution::{beckmann_d, ggx_d};
-use crate::reference::frame::{cross, dot};
 use crate::reference::geometry::ggx_lambda;
+use crate::vector::{cross, dot, normalize_reciprocal};
 use std::f64::consts::{PI, TAU};
 use std::path::PathBuf;
 
@@ -180,11 +180,11 @@ impl View {
     /// The constants for view cosine `mu` and roughness `alpha`.
     pub fn new(lobe: Lobe, mu: f64, alpha: f64) -> View {
         let v = [(1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu];
-        let vf = unit(as_f32(v));
+        let vf = normalize_reciprocal(as_f32(v));
         let tan2_o = (vf[0] * vf[0] + vf[1] * vf[1]) / (vf[2] * vf[2]);
         // Heitz 2018 listing 1: the view stretched to the hemisphere configuration and an
         // orthonormal basis around it.
-        let vh = unit([alpha * v[0], alpha * v[1], v[2]]);
+        let vh = normalize_reciprocal([alpha * v[0], alpha * v[1], v[2]]);
         let len2 = vh[0] * vh[0] + vh[1] * vh[1];
         let t1 = if len2 > 0.0 {
             let inv = 1.0 / len2.sqrt();
@@ -215,7 +215,7 @@ impl View {
                 let p2 = (1.0 - self.s) * u.chord + self.s * u.disk[1];
                 let p3 = (1.0 - p1 * p1 - p2 * p2).max(0.0).sqrt();
                 let n: [f64; 3] = std::array::from_fn(|i| p1 * t1[i] + p2 * t2[i] + p3 * vh[i]);
-                unit([a * n[0], a * n[1], n[2].max(0.0)])
+                normalize_reciprocal([a * n[0], a * n[1], n[2].max(0.0)])
             }
             Lobe::Beckmann => {
                 let tan2 = a * a * u.neg_log;
@@ -235,12 +235,12 @@ impl View {
         let h = self.normal(u);
         let vh = dot(v, h);
         let l: [f64; 3] = std::array::from_fn(|i| 2.0 * vh * h[i] - v[i]);
-        let lf = unit(as_f32(l));
+        let lf = normalize_reciprocal(as_f32(l));
         let (cos_i, cos_o) = (lf[2], vf[2]);
         if cos_i.is_nan() || cos_i <= 0.0 {
             return None; // below the horizon (or a degenerate l)
         }
-        let hf = unit(std::array::from_fn(|i| lf[i] + vf[i]));
+        let hf = normalize_reciprocal(std::array::from_fn(|i| lf[i] + vf[i]));
         let (cos_h, sin2_h, c) = (hf[2], hf[0] * hf[0] + hf[1] * hf[1], dot(vf, hf));
         let pdf = match self.lobe {
             Lobe::Ggx => self.g1 * ggx_d(cos_h, sin2_h, self.alpha) / (4.0 * cos_o),
@@ -249,13 +249,6 @@ impl View {
         let weight = cos_i / pdf;
         weight.is_finite().then_some(Sample { l, weight, c })
     }
-}
-
-/// `a/|a|` without the reference's guards (the sampler's vectors are finite and nonzero;
-/// a degenerate one gives NaN, which [`View::sample`] rejects).
-fn unit(a: [f64; 3]) -> [f64; 3] {
-    let inv = 1.0 / dot(a, a).sqrt();
-    a.map(|x| x * inv)
 }
 
 /// One importance sample: the light direction, `cos_i / pdf(l)`, and `c = v·h`.

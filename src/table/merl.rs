@@ -19,7 +19,7 @@ use super::{as_f32, needs_tangents, push_row, Runner, NORMAL};
 use crate::batch::Batch;
 use crate::error::{Error, Result};
 use crate::material::Material;
-use crate::reference::frame::{cross, dot, normalize};
+use crate::vector::{cross, dot, normalize};
 use std::f64::consts::{FRAC_PI_2, PI};
 use std::path::{Path, PathBuf};
 

@@ -7,7 +7,7 @@ use super::{needs_tangents, push_row, Runner};
 use crate::cancel::Cancel;
 use crate::error::{Error, Result};
 use crate::material::Material;
-use crate::reference::frame::{cross, normalize};
+use crate::vector::{cross, normalize};
 use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
 
