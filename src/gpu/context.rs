@@ -185,19 +185,22 @@ impl Instance {
                 "cannot load the Vulkan loader (libvulkan.so.1): {e}; {INSTALL_HINT}"
             ))
         })?;
-        // SAFETY: plain queries on a loaded entry.
+        // SAFETY: a global command (no handle) through the entry's function pointers, which
+        // the loaded `entry` keeps valid; ash passes a pointer to its own local for the result.
         let loader_version = unsafe { entry.try_enumerate_instance_version() }
             .map_err(vk_error("vkEnumerateInstanceVersion"))?
             .unwrap_or(vk::API_VERSION_1_0);
         let api_version = loader_version.min(vk::API_VERSION_1_3);
         let (layer_ok, debug_ok) = if validation {
-            // SAFETY: plain queries on a loaded entry.
+            // SAFETY: a global command (no handle) through the loaded entry; ash runs the
+            // count-then-fill idiom into a vector it sizes from the count.
             let layers = unsafe { entry.enumerate_instance_layer_properties() }
                 .map_err(vk_error("vkEnumerateInstanceLayerProperties"))?;
             let layer_ok = layers
                 .iter()
                 .any(|l| l.layer_name_as_c_str() == Ok(VALIDATION_LAYER));
-            // SAFETY: as above.
+            // SAFETY: as for the layers; `None` asks for the loader's and implicit layers'
+            // extensions, so no layer-name pointer has to outlive the call.
             let exts = unsafe { entry.enumerate_instance_extension_properties(None) }
                 .map_err(vk_error("vkEnumerateInstanceExtensionProperties"))?;
             let debug_ok = exts
@@ -339,7 +342,8 @@ impl PhysicalInfo {
 
 /// Every physical device of `instance`, with the properties vkbrdf uses.
 pub(crate) fn enumerate(instance: &Instance) -> Result<Vec<PhysicalInfo>> {
-    // SAFETY: plain queries on a live instance.
+    // SAFETY: `instance` is borrowed, so its `Drop` (which destroys the VkInstance) cannot
+    // run during the call; ash sizes the output vector from the count query.
     let devices = unsafe { instance.raw.enumerate_physical_devices() }
         .map_err(vk_error("vkEnumeratePhysicalDevices"))?;
     let mut out = Vec::with_capacity(devices.len());

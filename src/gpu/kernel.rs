@@ -214,7 +214,8 @@ impl Kernels {
             })
             .collect();
         let info = vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings);
-        // SAFETY: valid create info for a live device.
+        // SAFETY: the device is live (`Arc<Device>`, also kept by `Kernels`); `info` points to
+        // `bindings`, a local that outlives the call.
         let set_layout = unsafe { device.raw.create_descriptor_set_layout(&info, None) }
             .map_err(vk_error("vkCreateDescriptorSetLayout"))?;
         let mut kernels = Kernels {
@@ -232,7 +233,8 @@ impl Kernels {
         let info = vk::PipelineLayoutCreateInfo::default()
             .set_layouts(&set_layouts)
             .push_constant_ranges(&ranges);
-        // SAFETY: valid create info referencing the live set layout.
+        // SAFETY: `set_layout` was created above on this device and is destroyed only in
+        // `Kernels::drop`; `info` points to locals that outlive the call.
         kernels.layout = unsafe { device.raw.create_pipeline_layout(&info, None) }
             .map_err(vk_error("vkCreatePipelineLayout"))?;
         Ok(kernels)

@@ -70,7 +70,8 @@ impl Buffer {
             })
             .sharing_mode(vk::SharingMode::EXCLUSIVE);
         let d = &device.raw;
-        // SAFETY: `info` is a valid create info for a live device.
+        // SAFETY: the device is live (`Arc<Device>`, also kept by the buffer); `info` has a
+        // nonzero size, exclusive sharing and no extension chain.
         let raw = unsafe { d.create_buffer(&info, None) }.map_err(vk_error("vkCreateBuffer"))?;
         // Owns `raw` until the memory is bound, so every error path below frees it.
         struct Guard<'a>(&'a ash::Device, vk::Buffer, vk::DeviceMemory);
@@ -108,7 +109,8 @@ impl Buffer {
         let alloc = vk::MemoryAllocateInfo::default()
             .allocation_size(req.size)
             .memory_type_index(type_index);
-        // SAFETY: valid allocate info for a live device.
+        // SAFETY: the device is live; the size is the buffer's requirement and the type
+        // index one of the types its `memory_type_bits` allow.
         let memory =
             unsafe { d.allocate_memory(&alloc, None) }.map_err(vk_error("vkAllocateMemory"))?;
         guard.2 = memory;

@@ -20,7 +20,9 @@ pub(crate) struct Fence {
 
 impl Fence {
     pub fn new(device: &Arc<Device>) -> Result<Fence> {
-        // SAFETY: valid create info for a live device.
+        // SAFETY: `device` is an `Arc<Device>`, so the VkDevice is live for the call (and,
+        // through the clone the fence keeps, until the fence is destroyed); the create info is
+        // the default one (unsignalled, no extension chain).
         let raw = unsafe {
             device
                 .raw
@@ -79,7 +81,8 @@ impl CommandPool {
         let info = vk::CommandPoolCreateInfo::default()
             .queue_family_index(device.queue_family)
             .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER);
-        // SAFETY: valid create info for a live device and its queue family.
+        // SAFETY: the device is live (`Arc<Device>`, also kept by the pool) and
+        // `queue_family` is the family its one queue was created from.
         let raw = unsafe { device.raw.create_command_pool(&info, None) }
             .map_err(vk_error("vkCreateCommandPool"))?;
         let mut pool = CommandPool {
@@ -132,7 +135,8 @@ impl DescriptorPool {
         let info = vk::DescriptorPoolCreateInfo::default()
             .max_sets(count)
             .pool_sizes(&sizes);
-        // SAFETY: valid create info for a live device.
+        // SAFETY: the device is live (`Arc<Device>`, also kept by the pool); `info` points
+        // to `sizes`, a local that outlives the call.
         let raw = unsafe { device.raw.create_descriptor_pool(&info, None) }
             .map_err(vk_error("vkCreateDescriptorPool"))?;
         let mut pool = DescriptorPool {

@@ -84,7 +84,8 @@ impl VulkanBackend {
                 let (start, len) = (c * chunk, chunk.min(n - c * chunk));
                 // One texel of input: the texel view must exist, the kernel reads none.
                 self.prepare(s, 4, len * 3, if terms { len * TERM_COLUMNS } else { 0 })?;
-                // SAFETY: the slot's previous chunk was finished above (fence waited).
+                // SAFETY: `finish(s, ..)` above waited on slot `s`'s fence (or found nothing
+                // pending), so no dispatch uses its `counts` buffer while the host writes it.
                 unsafe { self.slots[s].counts.write(0, &[GpuCounts::INITIAL]) };
                 let pending = Pending {
                     brdf: start * 3..(start + len) * 3,
@@ -127,7 +128,9 @@ impl VulkanBackend {
                 let mut start = 0;
                 while start < n {
                     let len = chunk.min(n - start);
-                    // SAFETY: slot 0's previous dispatch was finished (fence waited) below.
+                    // SAFETY: slot 0 has no work in flight: before the first dispatch nothing was
+                    // submitted since `prepare`, and each later one follows the `finish(0, ..)`
+                    // below, which waited on slot 0's fence; the device does not touch `counts`.
                     unsafe { self.slots[0].counts.write(0, &[GpuCounts::INITIAL]) };
                     let pending = Pending {
                         brdf: 0..0,
@@ -235,7 +238,9 @@ impl VulkanBackend {
                 }
                 let (start, len) = (c * chunk, chunk.min(n - c * chunk));
                 self.prepare(s, input.len(), len * 3, 0)?;
-                // SAFETY: the slot's previous chunk was finished above (fence waited).
+                // SAFETY: slot `s` has no work in flight: it was never submitted, or its previous
+                // chunk was finished just above (its fence waited), so the device neither reads
+                // `input` nor writes `counts` while the host writes them.
                 unsafe {
                     let slot = &mut self.slots[s];
                     slot.input.as_mut().expect("prepared").write(0, &input);

@@ -48,11 +48,12 @@ pub(super) unsafe fn read_in_place(
     order: Option<&[u32]>,
 ) {
     match order {
-        // SAFETY: the caller's guarantee.
+        // SAFETY: nothing writes `buffer` during the call (this function's own contract,
+        // passed on unchanged); `Buffer::read` checks that `out` fits the mapping.
         None => unsafe { buffer.read(0, out) },
         Some(order) => {
             let mut grouped = vec![0f32; out.len()];
-            // SAFETY: the caller's guarantee.
+            // SAFETY: as above; `grouped` has `out`'s length.
             unsafe { buffer.read(0, &mut grouped) };
             for (src, &dst) in grouped.chunks_exact(cols).zip(order) {
                 let dst = dst as usize;

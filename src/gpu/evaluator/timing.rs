@@ -73,7 +73,9 @@ impl VulkanBackend {
             for _ in 0..=repeats.max(1) {
                 let t = Instant::now();
                 for _ in 0..dispatches {
-                    // SAFETY: slot 0's previous dispatch was finished (fence waited) below.
+                    // SAFETY: slot 0 has no work in flight: before the first dispatch nothing was
+                    // submitted since `prepare`, and each later one follows the `finish(0, ..)`
+                    // below, which waited on slot 0's fence; the device does not touch `counts`.
                     unsafe { self.slots[0].counts.write(0, &[GpuCounts::INITIAL]) };
                     let pending = Pending {
                         brdf: 0..0,
