@@ -271,7 +271,15 @@ fn npy_head(reader: &mut impl Read, len: Option<u64>, source: &Path) -> Result<V
     if have < header_len {
         return Err(short_header(have));
     }
-    if let Some((shape, item_size)) = npy_shape(&head[start as usize..]) {
+    let text = &head[start as usize..];
+    let depth = bracket_depth(text);
+    if depth > MAX_HEADER_DEPTH {
+        return Err(err(format!(
+            "not a valid .npy file: the header nests brackets {depth} deep; a float array's \
+             header nests {MAX_HEADER_DEPTH} at most"
+        )));
+    }
+    if let Some((shape, item_size)) = npy_shape(text) {
         let nonzero = shape.iter().filter(|&&d| d != 0);
         let Some(count) = nonzero.copied().try_fold(1u64, u64::checked_mul) else {
             return Err(err(format!(
@@ -294,6 +302,31 @@ fn npy_head(reader: &mut impl Read, len: Option<u64>, source: &Path) -> Result<V
         }
     }
     Ok(head)
+}
+
+/// Deepest bracket nesting a `.npy` header may have: a float array's is the dict and the
+/// shape tuple, 2; structured dtypes (not read here) need a little more. Without this
+/// bound a header of a few dozen bytes stalls the header parser (`py_literal`, which
+/// npyz uses too): it backtracks exponentially in the depth of unclosed brackets, about
+/// a second at 16 `[` and minutes at 16 `{`.
+const MAX_HEADER_DEPTH: usize = 4;
+
+/// The deepest nesting of `(`, `[` and `{` in `text`, counting every bracket character,
+/// inside string literals too (an overcount only refuses headers with brackets in
+/// strings, which no float array's has; an undercount would let the stall through).
+fn bracket_depth(text: &[u8]) -> usize {
+    let (mut depth, mut deepest) = (0usize, 0usize);
+    for &c in text {
+        match c {
+            b'(' | b'[' | b'{' => {
+                depth += 1;
+                deepest = deepest.max(depth);
+            }
+            b')' | b']' | b'}' => depth = depth.saturating_sub(1),
+            _ => {}
+        }
+    }
+    deepest
 }
 
 /// The shape in a `.npy` header's text, and the item size of the dtypes read here (`<f4`,
