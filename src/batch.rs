@@ -337,8 +337,11 @@ fn npy_shape(text: &[u8]) -> Option<(Vec<u64>, Option<u64>)> {
     let Ok(Value::Dict(dict)) = std::str::from_utf8(text).ok()?.parse::<Value>() else {
         return None;
     };
+    // The last of repeated keys, as npyz (which collects the pairs into a map) and Python
+    // take it: checking the first let `'shape'` repeated slip an overflowing shape past.
     let get = |key: &str| {
         dict.iter()
+            .rev()
             .find(|(k, _)| matches!(k, Value::String(s) if s == key))
             .map(|(_, v)| v)
     };

@@ -298,3 +298,29 @@ fn npy_header_with_deeply_nested_brackets_is_refused_at_once() {
     let msg = npy_error(&npy(1, None, header, &[0u8; 8]), None);
     assert!(msg.contains("not supported"), "{msg}");
 }
+
+#[test]
+fn npy_repeated_shape_key_is_checked_as_npyz_reads_it() {
+    // Found by the npy fuzzer: with `'shape'` given twice the check read the first (a
+    // small shape) while npyz takes the last, whose strides overflow (a panic where
+    // overflow checks are on, a wrapped value otherwise).
+    let header = "{'descr': '<f4', 'fortran_order': False, 'shape': (5, 1, 1, 10), \
+                  'shape': (0, 2, 1, 9535570675027320348), }\n";
+    let bytes = npy(1, None, header, &[0u8; 8]);
+    for len in [Some(bytes.len() as u64), None] {
+        let msg = npy_error(&bytes, len);
+        assert!(
+            msg.contains("t.npy") && msg.contains("more than 2^64 values"),
+            "{msg}"
+        );
+    }
+    // The last shape is the one read.
+    let header = "{'descr': '<f4', 'fortran_order': False, 'shape': (7, 7), 'shape': (1, 10), }\n";
+    let (data, shape) = read_npy_f32_from(
+        &npy(1, None, header, &[0u8; 40])[..],
+        None,
+        Path::new("t.npy"),
+    )
+    .unwrap();
+    assert_eq!((data.len(), shape), (10, vec![1, 10]));
+}
