@@ -5,6 +5,8 @@
 use crate::cancel::Cancel;
 use crate::error::{Error, Result};
 use crate::material::Material;
+use std::fs::File;
+use std::io::{BufReader, Read};
 use std::path::{Path, PathBuf};
 
 /// Columns of a batch without tangents.
@@ -134,9 +136,21 @@ impl Batch {
     /// Reads a batch from a `.npy` file: float32 or float64 (float64 is rounded to float32,
     /// the precision every backend evaluates from), C order, shape `(n, 10)` or `(n, 13)`.
     pub fn read_npy(path: &Path, material_count: usize) -> Result<Batch> {
-        let (data, shape) = read_npy_f32(path)?;
+        let (file, len) = open_sized(path)?;
+        Batch::read_npy_from(file, len, material_count, path)
+    }
+
+    /// [`Batch::read_npy`] from any reader: `len` is the stream's total size when known (see
+    /// [`read_npy_f32_from`]), `source` names it in errors.
+    pub fn read_npy_from(
+        reader: impl Read,
+        len: Option<u64>,
+        material_count: usize,
+        source: &Path,
+    ) -> Result<Batch> {
+        let (data, shape) = read_npy_f32_from(reader, len, source)?;
         let err = |message: String| Error::Batch {
-            path: path.to_owned(),
+            path: source.to_owned(),
             message,
         };
         if shape.len() != 2 {
@@ -144,7 +158,7 @@ impl Batch {
                 "expected a 2-D array of shape (n, 10) or (n, 13), found shape {shape:?}"
             )));
         }
-        Batch::new(data, shape[1] as usize, material_count, path)
+        Batch::new(data, shape[1] as usize, material_count, source)
     }
 }
 
@@ -188,17 +202,41 @@ pub fn check_tangent_rows(
     })
 }
 
-/// Reads a C-order float32/float64 `.npy` file as `f32` with its shape.
-pub fn read_npy_f32(path: &Path) -> Result<(Vec<f32>, Vec<u64>)> {
-    let err = |message: String| Error::Batch {
-        path: path.to_owned(),
-        message,
-    };
-    let file = std::fs::File::open(path).map_err(|source| Error::Io {
+/// Opens `path` for reading, with its size when it is a regular file (a pipe's is unknown).
+fn open_sized(path: &Path) -> Result<(BufReader<File>, Option<u64>)> {
+    let file = File::open(path).map_err(|source| Error::Io {
         path: path.to_owned(),
         source,
     })?;
-    let npy = npyz::NpyFile::new(std::io::BufReader::new(file))
+    let len = file
+        .metadata()
+        .ok()
+        .filter(|m| m.is_file())
+        .map(|m| m.len());
+    Ok((BufReader::new(file), len))
+}
+
+/// Reads a C-order float32/float64 `.npy` file as `f32` with its shape.
+pub fn read_npy_f32(path: &Path) -> Result<(Vec<f32>, Vec<u64>)> {
+    let (file, len) = open_sized(path)?;
+    read_npy_f32_from(file, len, path)
+}
+
+/// [`read_npy_f32`] from any reader; `source` names it in errors. `len`, the stream's total
+/// size when known (a file's length), lets a header that claims more data than the stream
+/// holds be rejected before any data is read; without it, memory still grows only with the
+/// data actually read, never with what the header claims.
+pub fn read_npy_f32_from(
+    mut reader: impl Read,
+    len: Option<u64>,
+    source: &Path,
+) -> Result<(Vec<f32>, Vec<u64>)> {
+    let err = |message: String| Error::Batch {
+        path: source.to_owned(),
+        message,
+    };
+    let head = npy_head(&mut reader, len, source)?;
+    let npy = npyz::NpyFile::new(std::io::Cursor::new(head).chain(reader))
         .map_err(|e| err(format!("not a valid .npy file: {e}")))?;
     if npy.order() != npyz::Order::C {
         return Err(err(
@@ -212,10 +250,10 @@ pub fn read_npy_f32(path: &Path) -> Result<(Vec<f32>, Vec<u64>)> {
         .trim_matches(|c| c == '\'' || c == '"')
         .to_string();
     let data: Vec<f32> = match dtype.as_str() {
-        "<f4" => npy.into_vec::<f32>().map_err(|e| truncated(path, e))?,
+        "<f4" => npy.into_vec::<f32>().map_err(|e| truncated(source, e))?,
         "<f8" => npy
             .into_vec::<f64>()
-            .map_err(|e| truncated(path, e))?
+            .map_err(|e| truncated(source, e))?
             .into_iter()
             .map(|x| x as f32)
             .collect(),
@@ -226,6 +264,155 @@ pub fn read_npy_f32(path: &Path) -> Result<(Vec<f32>, Vec<u64>)> {
         }
     };
     Ok((data, shape))
+}
+
+/// The magic, version, header length and header text of a `.npy` stream, read and checked
+/// before npyz sees them (it is then handed these bytes followed by the rest of the
+/// stream). Without these checks npyz allocates whatever header length the file states
+/// (up to 4 GiB, before reading a byte of it), and multiplies the shape's dimensions
+/// unchecked: a shape of `(2^63 + 2, 10)` would wrap to 20 values and read as 2 rows.
+/// What is not understood here (no magic, an unknown version, a header that does not
+/// parse) is left to npyz to report.
+fn npy_head(reader: &mut impl Read, len: Option<u64>, source: &Path) -> Result<Vec<u8>> {
+    let err = |message: String| Error::Batch {
+        path: source.to_owned(),
+        message,
+    };
+    let mut head = Vec::new();
+    let mut read_up_to = |head: &mut Vec<u8>, n: u64| {
+        reader
+            .by_ref()
+            .take(n)
+            .read_to_end(head)
+            .map_err(|e| Error::Io {
+                path: source.to_owned(),
+                source: e,
+            })
+    };
+    read_up_to(&mut head, 8)?;
+    if head.len() < 8 || &head[..6] != b"\x93NUMPY" {
+        return Ok(head);
+    }
+    let size_bytes: usize = match head[6] {
+        1 => 2,
+        2 | 3 => 4,
+        _ => return Ok(head),
+    };
+    read_up_to(&mut head, size_bytes as u64)?;
+    if head.len() < 8 + size_bytes {
+        return Ok(head);
+    }
+    let header_len = head[8..]
+        .iter()
+        .rev()
+        .fold(0u64, |acc, &b| (acc << 8) | u64::from(b));
+    let start = (8 + size_bytes) as u64;
+    let short_header = |have: u64| {
+        err(format!(
+            "not a valid .npy file: the header is {header_len} bytes long by its own count, \
+             but only {have} bytes follow (truncated file?)"
+        ))
+    };
+    if let Some(len) = len {
+        if start + header_len > len {
+            return Err(short_header(len.saturating_sub(start)));
+        }
+    }
+    read_up_to(&mut head, header_len)?;
+    let have = head.len() as u64 - start;
+    if have < header_len {
+        return Err(short_header(have));
+    }
+    let text = &head[start as usize..];
+    let depth = bracket_depth(text);
+    if depth > MAX_HEADER_DEPTH {
+        return Err(err(format!(
+            "not a valid .npy file: the header nests brackets {depth} deep; a float array's \
+             header nests {MAX_HEADER_DEPTH} at most"
+        )));
+    }
+    if let Some((shape, item_size)) = npy_shape(text) {
+        let nonzero = shape.iter().filter(|&&d| d != 0);
+        let Some(count) = nonzero.copied().try_fold(1u64, u64::checked_mul) else {
+            return Err(err(format!(
+                "not a valid .npy file: shape {shape:?} holds more than 2^64 values"
+            )));
+        };
+        let count = if shape.contains(&0) { 0 } else { count };
+        if let (Some(len), Some(item_size)) = (len, item_size) {
+            let needed = count
+                .checked_mul(item_size)
+                .and_then(|b| b.checked_add(start + header_len));
+            if !matches!(needed, Some(needed) if needed <= len) {
+                return Err(err(format!(
+                    "the data is shorter than the header's shape says (truncated file?): \
+                     shape {shape:?} needs {} bytes of data, the file holds {}",
+                    count.saturating_mul(item_size),
+                    len - start - header_len
+                )));
+            }
+        }
+    }
+    Ok(head)
+}
+
+/// Deepest bracket nesting a `.npy` header may have: a float array's is the dict and the
+/// shape tuple, 2; structured dtypes (not read here) need a little more. Without this
+/// bound a header of a few dozen bytes stalls the header parser (`py_literal`, which
+/// npyz uses too): it backtracks exponentially in the depth of unclosed brackets, about
+/// a second at 16 `[` and minutes at 16 `{`.
+const MAX_HEADER_DEPTH: usize = 4;
+
+/// The deepest nesting of `(`, `[` and `{` in `text`, counting every bracket character,
+/// inside string literals too (an overcount only refuses headers with brackets in
+/// strings, which no float array's has; an undercount would let the stall through).
+fn bracket_depth(text: &[u8]) -> usize {
+    let (mut depth, mut deepest) = (0usize, 0usize);
+    for &c in text {
+        match c {
+            b'(' | b'[' | b'{' => {
+                depth += 1;
+                deepest = deepest.max(depth);
+            }
+            b')' | b']' | b'}' => depth = depth.saturating_sub(1),
+            _ => {}
+        }
+    }
+    deepest
+}
+
+/// The shape in a `.npy` header's text, and the item size of the dtypes read here (`<f4`,
+/// `<f8`); `None` where the text does not parse as npyz would parse it.
+fn npy_shape(text: &[u8]) -> Option<(Vec<u64>, Option<u64>)> {
+    use py_literal::Value;
+    let text = text.strip_suffix(b"\n").unwrap_or(text);
+    let Ok(Value::Dict(dict)) = std::str::from_utf8(text).ok()?.parse::<Value>() else {
+        return None;
+    };
+    // The last of repeated keys, as npyz (which collects the pairs into a map) and Python
+    // take it: checking the first let `'shape'` repeated slip an overflowing shape past.
+    let get = |key: &str| {
+        dict.iter()
+            .rev()
+            .find(|(k, _)| matches!(k, Value::String(s) if s == key))
+            .map(|(_, v)| v)
+    };
+    let (Value::Tuple(dims) | Value::List(dims)) = get("shape")? else {
+        return None;
+    };
+    let shape = dims
+        .iter()
+        .map(|d| match d {
+            Value::Integer(i) => u64::try_from(i).ok(),
+            _ => None,
+        })
+        .collect::<Option<Vec<u64>>>()?;
+    let item_size = match get("descr") {
+        Some(Value::String(s)) if s == "<f4" => Some(4),
+        Some(Value::String(s)) if s == "<f8" => Some(8),
+        _ => None,
+    };
+    Some((shape, item_size))
 }
 
 fn truncated(path: &Path, e: std::io::Error) -> Error {

@@ -21,6 +21,7 @@ use crate::error::{Error, Result};
 use crate::material::Material;
 use crate::vector::{cross, dot, normalize};
 use std::f64::consts::{FRAC_PI_2, PI};
+use std::io::Read;
 use std::path::{Path, PathBuf};
 
 /// θ_h bins.
@@ -186,7 +187,29 @@ pub fn read(path: &Path) -> Result<MeasuredMerl> {
             "not a regular file (a FIFO, socket or device); give the .binary file itself".into(),
         ));
     }
-    let bytes = std::fs::read(path).map_err(io)?;
+    let file = std::fs::File::open(path).map_err(io)?;
+    read_from(file, path)
+}
+
+/// [`read`] from any reader; `source` names it in errors and becomes
+/// [`MeasuredMerl::source`]. Reads at most one byte past [`FILE_BYTES`], and memory grows
+/// only with the bytes actually read: a short stream costs no table's worth, an endless one
+/// (`/dev/zero`, `/dev/urandom`) ends with an error instead of exhausting memory.
+pub fn read_from(mut reader: impl Read, source: &Path) -> Result<MeasuredMerl> {
+    let bad =
+        |message: String| Error::Table(format!("{}: not a MERL BRDF: {message}", source.display()));
+    let mut bytes = Vec::new();
+    let mut read_up_to = |bytes: &mut Vec<u8>, n: usize| {
+        reader
+            .by_ref()
+            .take(n as u64)
+            .read_to_end(bytes)
+            .map_err(|e| Error::Io {
+                path: source.to_owned(),
+                source: e,
+            })
+    };
+    read_up_to(&mut bytes, 12)?;
     if bytes.len() < 12 {
         return Err(bad(format!(
             "{} bytes, shorter than the 12-byte header",
@@ -203,10 +226,16 @@ pub fn read(path: &Path) -> Result<MeasuredMerl> {
             dims[0], dims[1], dims[2]
         )));
     }
+    // One byte more than a table: enough to tell a padded file from an exact one.
+    read_up_to(&mut bytes, FILE_BYTES + 1 - 12)?;
     if bytes.len() != FILE_BYTES {
+        let size = if bytes.len() > FILE_BYTES {
+            format!("more than {FILE_BYTES} bytes")
+        } else {
+            format!("{} bytes", bytes.len())
+        };
         return Err(bad(format!(
-            "{} bytes, expected {FILE_BYTES} (12-byte header + 3 x 90x90x180 doubles): truncated or padded",
-            bytes.len()
+            "{size}, expected {FILE_BYTES} (12-byte header + 3 x 90x90x180 doubles): truncated or padded"
         )));
     }
     let values = bytes[12..]
@@ -215,7 +244,7 @@ pub fn read(path: &Path) -> Result<MeasuredMerl> {
         .collect();
     Ok(MeasuredMerl {
         values,
-        source: path.to_owned(),
+        source: source.to_owned(),
     })
 }
 
