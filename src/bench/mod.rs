@@ -39,16 +39,7 @@ pub struct ResultRow {
     pub max_rel_err: f64,
 }
 
-/// Median of a non-empty list.
-pub fn median(mut xs: Vec<f64>) -> f64 {
-    xs.sort_by(f64::total_cmp);
-    let n = xs.len();
-    if n % 2 == 1 {
-        xs[n / 2]
-    } else {
-        (xs[n / 2 - 1] + xs[n / 2]) / 2.0
-    }
-}
+pub use crate::stats::median;
 
 /// Times `backend.evaluate` `repeats` times after one warm-up call (which compiles and
 /// caches the pipeline); returns the median seconds and the last output.

@@ -16,7 +16,10 @@ use vkbrdf::table::{merl, Grid, Runner};
 #[derive(clap::Args, Debug)]
 #[command(after_help = "\
 Every table evaluates f through the chosen backend (--backend vulkan|cpu), writes its file
-atomically (a failed run leaves no partial file), and records its provenance (material,
+atomically (a failed or interrupted run leaves the previous file and no partial one; a
+symlink is written through; several outputs appear together or not at all; a FIFO, a
+device or `-` is written directly after success, atomicity being a promise for regular
+files; an output that is an input is refused before any work), and records its provenance (material,
 convention, parameterisation, texel centres, samples, backend, vkbrdf version) in the
 EXR header. Texel centres: column i <-> x = (i + 0.5)/W, row j <-> y = (j + 0.5)/H.
 

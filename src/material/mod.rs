@@ -4,7 +4,9 @@
 //!
 //! Materials come from TOML ([`parse_materials`]) or from [`presets`].
 
+pub mod merl;
 mod parse;
+pub mod precision;
 pub mod presets;
 
 pub use parse::{load_materials, parse_materials, parse_materials_in};
@@ -23,9 +25,9 @@ pub struct Material {
     pub diffuse: Rgb,
     /// `c_spec`: specular colour (default white).
     pub specular: Rgb,
-    /// The variant evaluated: `Exact`, or `Fast` once [`crate::precision::apply`] has
+    /// The variant evaluated: `Exact`, or `Fast` once [`super::precision::apply`] has
     /// rewritten the terms (the kernel then also uses the device's own exp/log/atan2).
-    pub precision: crate::precision::Precision,
+    pub precision: super::precision::Precision,
 }
 
 /// The reflection models of FORMULAS.md §6, each with the parameters its formula uses.
@@ -66,7 +68,7 @@ pub struct Measured {
     /// The MERL file, as resolved when the materials were loaded.
     pub path: std::path::PathBuf,
     /// The table (shared: a 17 MB file is read once per materials file).
-    pub data: std::sync::Arc<crate::table::merl::MeasuredMerl>,
+    pub data: std::sync::Arc<merl::MeasuredMerl>,
 }
 
 impl PartialEq for Measured {

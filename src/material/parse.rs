@@ -441,7 +441,7 @@ impl Fields<'_, '_> {
                 model: Model::Measured(self.measured()?),
                 diffuse: [0.0; 3],
                 specular: [1.0; 3],
-                precision: crate::precision::Precision::Exact,
+                precision: super::precision::Precision::Exact,
             });
         }
         let diffuse = self.rgb("diffuse", colour_range)?.unwrap_or([0.0; 3]);
@@ -467,17 +467,17 @@ impl Fields<'_, '_> {
             _ => Model::CookTorrance(self.cook_torrance()?),
         };
         let precision = match self.string("precision", &["exact", "fast"])?.as_deref() {
-            Some("fast") => crate::precision::Precision::Fast,
-            _ => crate::precision::Precision::Exact,
+            Some("fast") => super::precision::Precision::Fast,
+            _ => super::precision::Precision::Exact,
         };
         let material = Material {
             name: self.name.clone(),
             model,
             diffuse,
             specular,
-            precision: crate::precision::Precision::Exact,
+            precision: super::precision::Precision::Exact,
         };
-        Ok(crate::precision::apply(&material, precision))
+        Ok(super::precision::apply(&material, precision))
     }
 
     /// `file = "x.binary"`: a MERL file, relative to the materials file's directory.
@@ -502,7 +502,7 @@ impl Fields<'_, '_> {
         let path = self.ctx.base.join(&file);
         // The whole chain: an I/O error's own text names only the path, its source says
         // why (no such file, permission denied).
-        let data = crate::table::merl::read(&path).map_err(|e| {
+        let data = super::merl::read(&path).map_err(|e| {
             let mut why = e.to_string();
             let mut source = std::error::Error::source(&e);
             while let Some(s) = source {

@@ -1,6 +1,6 @@
 //! MERL binary BRDFs (Matusik, Pfister, Brand & McMillan 2003, "A data-driven reflectance
-//! model"): export of an analytic material, reading, and evaluation of a measured material
-//! at arbitrary `(l, v, n)` (FORMULAS.md §7).
+//! model"): export of an analytic material (FORMULAS.md §7). The format itself, reading and
+//! lookup live with the materials ([`crate::material::merl`], re-exported here).
 //!
 //! Layout: three little-endian int32 dimensions `90, 90, 180` (θ_h, θ_d, φ_d), then the R,
 //! G and B blocks of `90·90·180` little-endian f64, bin `(i, j, k)` at
@@ -18,49 +18,12 @@ use super::slice::{from_half_diff, TANGENT};
 use super::{as_f32, needs_tangents, push_row, Runner, NORMAL};
 use crate::batch::Batch;
 use crate::error::{Error, Result};
+pub use crate::material::merl::{
+    bin_angles, bin_index, bin_of, half_diff, read, read_from, MeasuredMerl, BIN_TOLERANCE,
+    FILE_BYTES, INVALID, PHI_D_BINS, SAMPLES, SCALES, THETA_D_BINS, THETA_H_BINS,
+};
 use crate::material::Material;
-use crate::vector::{cross, dot, normalize};
-use std::f64::consts::{FRAC_PI_2, PI};
-use std::io::Read;
-use std::path::{Path, PathBuf};
-
-/// θ_h bins.
-pub const THETA_H_BINS: usize = 90;
-/// θ_d bins.
-pub const THETA_D_BINS: usize = 90;
-/// φ_d bins over `[0, π)`.
-pub const PHI_D_BINS: usize = 180;
-/// Samples per colour channel, `90·90·180`.
-pub const SAMPLES: usize = THETA_H_BINS * THETA_D_BINS * PHI_D_BINS;
-/// Size of a MERL file: 12-byte header plus three blocks of f64.
-pub const FILE_BYTES: usize = 12 + 3 * SAMPLES * 8;
-/// MERL's R, G, B scales: a stored value times its scale is f in 1/sr.
-pub const SCALES: [f64; 3] = [1.0 / 1500.0, 1.15 / 1500.0, 1.66 / 1500.0];
-/// Stored for samples with either direction below the horizon.
-pub const INVALID: f64 = -1.0;
-
-/// Bin tolerance, in bins: a coordinate within 1/1000 of a bin below its lower edge counts
-/// as in that bin. MERL samples each bin at its lower edge, so without this the round-off
-/// of computing angles from directions (1e-16 relative in f64; up to ~1e-4 bins for f32
-/// directions near θ_h = 0, where the square root amplifies) would drop a bin's own sample
-/// point into the bin below about half of the time.
-pub const BIN_TOLERANCE: f64 = 1e-3;
-
-/// The index of bin `(i, j, k)` within one colour block.
-pub fn bin_index(i: usize, j: usize, k: usize) -> usize {
-    k + PHI_D_BINS * (j + THETA_D_BINS * i)
-}
-
-/// `(θ_h, θ_d, φ_d)` of bin `(i, j, k)`'s sample point.
-pub fn bin_angles(i: usize, j: usize, k: usize) -> (f64, f64, f64) {
-    let x = i as f64 / THETA_H_BINS as f64;
-    (
-        x * x * FRAC_PI_2,
-        j as f64 * FRAC_PI_2 / THETA_D_BINS as f64,
-        k as f64 * PI / PHI_D_BINS as f64,
-    )
-}
-
+use std::path::Path;
 /// `(l, v)` of bin `(i, j, k)`'s sample point (`n = +z`, `φ_h = 0`).
 pub fn bin_directions(i: usize, j: usize, k: usize) -> ([f64; 3], [f64; 3]) {
     let (th, td, pd) = bin_angles(i, j, k);
@@ -158,163 +121,6 @@ pub fn write_values_cancellable(
         }
         Ok(())
     })
-}
-
-/// A measured isotropic BRDF in MERL's tabulation.
-#[derive(Debug, Clone, PartialEq)]
-pub struct MeasuredMerl {
-    values: Vec<f64>,
-    source: PathBuf,
-}
-
-/// Reads and validates a MERL binary: its dimensions must be 90 × 90 × 180 and its size
-/// exactly [`FILE_BYTES`]; errors name the file.
-pub fn read(path: &Path) -> Result<MeasuredMerl> {
-    let io = |source| Error::Io {
-        path: path.to_owned(),
-        source,
-    };
-    let bad =
-        |message: String| Error::Table(format!("{}: not a MERL BRDF: {message}", path.display()));
-    // Before reading: a directory reads as a bare EISDIR, and a FIFO or a device would
-    // block or never end.
-    let meta = std::fs::metadata(path).map_err(io)?;
-    if meta.is_dir() {
-        return Err(bad("a directory, not a .binary file".into()));
-    }
-    if !meta.is_file() {
-        return Err(bad(
-            "not a regular file (a FIFO, socket or device); give the .binary file itself".into(),
-        ));
-    }
-    let file = std::fs::File::open(path).map_err(io)?;
-    read_from(file, path)
-}
-
-/// [`read`] from any reader; `source` names it in errors and becomes
-/// [`MeasuredMerl::source`]. Reads at most one byte past [`FILE_BYTES`], and memory grows
-/// only with the bytes actually read: a short stream costs no table's worth, an endless one
-/// (`/dev/zero`, `/dev/urandom`) ends with an error instead of exhausting memory.
-pub fn read_from(mut reader: impl Read, source: &Path) -> Result<MeasuredMerl> {
-    let bad =
-        |message: String| Error::Table(format!("{}: not a MERL BRDF: {message}", source.display()));
-    let mut bytes = Vec::new();
-    let mut read_up_to = |bytes: &mut Vec<u8>, n: usize| {
-        reader
-            .by_ref()
-            .take(n as u64)
-            .read_to_end(bytes)
-            .map_err(|e| Error::Io {
-                path: source.to_owned(),
-                source: e,
-            })
-    };
-    read_up_to(&mut bytes, 12)?;
-    if bytes.len() < 12 {
-        return Err(bad(format!(
-            "{} bytes, shorter than the 12-byte header",
-            bytes.len()
-        )));
-    }
-    let dims: Vec<i32> = bytes[..12]
-        .chunks_exact(4)
-        .map(|b| i32::from_le_bytes(b.try_into().expect("4 bytes")))
-        .collect();
-    if dims != [90, 90, 180] {
-        return Err(bad(format!(
-            "dimensions {}x{}x{}, expected 90x90x180 (theta_h, theta_d, phi_d)",
-            dims[0], dims[1], dims[2]
-        )));
-    }
-    // One byte more than a table: enough to tell a padded file from an exact one.
-    read_up_to(&mut bytes, FILE_BYTES + 1 - 12)?;
-    if bytes.len() != FILE_BYTES {
-        let size = if bytes.len() > FILE_BYTES {
-            format!("more than {FILE_BYTES} bytes")
-        } else {
-            format!("{} bytes", bytes.len())
-        };
-        return Err(bad(format!(
-            "{size}, expected {FILE_BYTES} (12-byte header + 3 x 90x90x180 doubles): truncated or padded"
-        )));
-    }
-    let values = bytes[12..]
-        .chunks_exact(8)
-        .map(|b| f64::from_le_bytes(b.try_into().expect("8 bytes")))
-        .collect();
-    Ok(MeasuredMerl {
-        values,
-        source: source.to_owned(),
-    })
-}
-
-impl MeasuredMerl {
-    /// The file it was read from.
-    pub fn source(&self) -> &Path {
-        &self.source
-    }
-
-    /// The stored value (`f / scale`, or negative) of channel `c` at bin `(i, j, k)`.
-    pub fn stored(&self, c: usize, i: usize, j: usize, k: usize) -> f64 {
-        self.values[c * SAMPLES + bin_index(i, j, k)]
-    }
-
-    /// f (RGB, 1/sr) at half/difference angles: the bin's stored value times its scale,
-    /// 0 for negative (invalid) samples.
-    pub fn lookup_half_diff(&self, theta_h: f64, theta_d: f64, phi_d: f64) -> [f64; 3] {
-        let (i, j, k) = bin_of(theta_h, theta_d, phi_d);
-        std::array::from_fn(|c| self.stored(c, i, j, k).max(0.0) * SCALES[c])
-    }
-
-    /// f (RGB, 1/sr) at `(l, v, n)` (any lengths): 0 for invalid vectors and below the
-    /// horizon, as for analytic materials (FORMULAS.md §1).
-    pub fn lookup(&self, l: [f64; 3], v: [f64; 3], n: [f64; 3]) -> [f64; 3] {
-        match half_diff(l, v, n) {
-            Some((th, td, pd)) => self.lookup_half_diff(th, td, pd),
-            None => [0.0; 3],
-        }
-    }
-}
-
-/// `(θ_h, θ_d, φ_d)` of `(l, v)` about `n` (Rusinkiewicz 1998, with `φ_h` undone), or
-/// `None` for an invalid vector or a direction at or below the horizon. Angles come from
-/// `atan2`, exact near 0 where `acos` loses half the digits.
-pub fn half_diff(l: [f64; 3], v: [f64; 3], n: [f64; 3]) -> Option<(f64, f64, f64)> {
-    let (l, v, n) = (normalize(l)?, normalize(v)?, normalize(n)?);
-    if dot(n, l) <= 0.0 || dot(n, v) <= 0.0 {
-        return None;
-    }
-    let h = normalize(std::array::from_fn(|i| l[i] + v[i]))?;
-    let nxh = cross(n, h);
-    let theta_h = dot(nxh, nxh).sqrt().atan2(dot(n, h));
-    // b: the axis θ_h rotates about (n × h); any axis ⊥ n when h = n.
-    let b = normalize(nxh)
-        .or_else(|| normalize(cross(n, [1.0, 0.0, 0.0])))
-        .or_else(|| normalize(cross(n, [0.0, 1.0, 0.0])))?;
-    let t = cross(b, h);
-    let d = [dot(l, t), dot(l, b), dot(l, h)];
-    let theta_d = (d[0] * d[0] + d[1] * d[1]).sqrt().atan2(d[2]);
-    Some((theta_h, theta_d, d[1].atan2(d[0])))
-}
-
-/// The bin `(i, j, k)` holding `(θ_h, θ_d, φ_d)`: MERL's truncating lookup (θ_h index
-/// `√(θ_h/(π/2))·90`, φ_d folded into `[0, π)`), clamped, with [`BIN_TOLERANCE`].
-pub fn bin_of(theta_h: f64, theta_d: f64, phi_d: f64) -> (usize, usize, usize) {
-    let index = |x: f64, bins: usize| ((x + BIN_TOLERANCE).floor().max(0.0) as usize).min(bins - 1);
-    let i = if theta_h <= 0.0 {
-        0
-    } else {
-        index(
-            (theta_h / FRAC_PI_2).sqrt() * THETA_H_BINS as f64,
-            THETA_H_BINS,
-        )
-    };
-    let j = index(theta_d / FRAC_PI_2 * THETA_D_BINS as f64, THETA_D_BINS);
-    // Reciprocity: swapping l and v maps φ_d to φ_d + π; a point within the tolerance
-    // below π is bin 0's sample point (π ≡ 0).
-    let phi = phi_d.rem_euclid(PI) / PI * PHI_D_BINS as f64;
-    let k = (phi + BIN_TOLERANCE).floor().max(0.0) as usize % PHI_D_BINS;
-    (i, j, k)
 }
 
 /// f (n × 3, RGB, 1/sr) of `merl` at every tuple of `batch` (material column and tangents

@@ -145,7 +145,7 @@ impl VulkanBackend {
                 secs.push(t.elapsed().as_secs_f64());
             }
             secs.remove(0); // the warm-up
-            Ok(crate::bench::median(secs))
+            Ok(crate::stats::median(secs))
         })();
         result.inspect_err(|_| self.recover())
     }
