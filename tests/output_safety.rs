@@ -240,8 +240,8 @@ fn a_full_device_is_an_error_and_stays_a_device() {
         .is_char_device());
 }
 
-/// A full disk: a 64 KiB tmpfs (in a private mount namespace, so the test needs no
-/// cleanup; `unshare -r` maps a non-root user to root inside it) holding yesterday's
+/// A full disk: a 64 KiB tmpfs (mounted directly as root, else in a user and mount
+/// namespace) holding yesterday's
 /// outputs (BRDF 32 KiB, terms 4 KiB; 28 KiB free). The new BRDF (12 KiB) and terms
 /// (24 KiB) each fit alone but not together: both previous files must survive unchanged
 /// and no temporary file may remain. (Written one after the other, terms first, the terms
@@ -254,6 +254,7 @@ fn a_full_disk_leaves_the_previous_files_and_no_temporary_file() {
         r#"set -e
 mnt={dir}/mnt; mkdir -p $mnt
 mount -t tmpfs -o size=64k tmpfs $mnt
+trap 'umount $mnt' EXIT
 head -c 32768 /dev/zero | tr '\0' 'b' > $mnt/brdf.npy
 head -c 4096 /dev/zero | tr '\0' 't' > $mnt/terms.npy
 set +e
@@ -272,11 +273,17 @@ echo "strays=$(ls -A $mnt | grep -c '^\.vkbrdf-' || true)"
         .unwrap()
         .lines()
         .any(|l| l.starts_with("Uid:") && l.split_whitespace().nth(1) == Some("0"));
-    let mut cmd = Command::new("unshare");
-    if !root {
-        cmd.arg("-r");
-    }
-    let o = cmd.args(["-m", "sh", "-c", &script]).output().unwrap();
+    // As root (CI, a chroot) the tmpfs is mounted directly and unmounted by the script's
+    // trap; `unshare -m` would need `/` to be a mount point, which it is not in a chroot.
+    // Otherwise a user namespace (`unshare -r -m`) grants the mount.
+    let o = if root {
+        Command::new("sh").args(["-c", &script]).output().unwrap()
+    } else {
+        Command::new("unshare")
+            .args(["-r", "-m", "sh", "-c", &script])
+            .output()
+            .unwrap()
+    };
     let out = String::from_utf8_lossy(&o.stdout);
     assert!(
         o.status.success(),
@@ -381,8 +388,9 @@ fn sigint_during_a_run_keeps_the_previous_output() {
     while !handles_sigint() {
         std::thread::yield_now();
     }
-    let killed = Command::new("kill")
-        .args(["-INT", &child.id().to_string()])
+    // The shell's built-in kill: a minimal Debian has no kill binary (procps).
+    let killed = Command::new("sh")
+        .args(["-c", "kill -INT \"$1\"", "sh", &child.id().to_string()])
         .status()
         .unwrap();
     assert!(killed.success());
