@@ -2,6 +2,7 @@
 //! [`Backend`], so tests, tables and benchmarks take any backend.
 
 use crate::batch::Batch;
+use crate::directions::{ImportanceJob, SliceGrid};
 use crate::error::Result;
 use crate::material::Material;
 
@@ -61,57 +62,6 @@ pub struct Output {
     pub counts: Counts,
 }
 
-/// A half/difference slice grid (see [`crate::table::slice`]; its `from_half_diff` makes the directions): `width` θ_h columns ×
-/// `height` θ_d rows, φ_d = 90°, n = +z, tangent +x.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct SliceGrid {
-    /// θ_h columns.
-    pub width: u32,
-    /// θ_d rows.
-    pub height: u32,
-    /// θ_h = x·π/2 (`true`) or x²·π/2, MERL's spacing (`false`).
-    pub linear: bool,
-}
-
-impl SliceGrid {
-    /// Texels in the grid.
-    pub fn texels(&self) -> u64 {
-        u64::from(self.width) * u64::from(self.height)
-    }
-}
-
-/// One `(μ, α)` point of an importance-sampled table integral ([`crate::table::albedo`]
-/// states the method): its sampling constants, computed in f64 on the host and rounded
-/// once.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ImportancePoint {
-    /// The view direction `v` (unit, n = +z).
-    pub v: [f32; 3],
-    /// `G1(v)` (GGX's visible-normal density).
-    pub g1: f32,
-    /// GGX: the stretched view's hemisphere frame `t1`, `t2`, `v_h` and `s = (1 + v_h.z)/2`.
-    pub frame: [[f32; 3]; 3],
-    /// See `frame`.
-    pub s: f32,
-    /// The roughness α.
-    pub alpha: f32,
-    /// Index into the job's material table.
-    pub material: u32,
-}
-
-/// An importance-sampled table integral for [`Backend::importance_sums`].
-#[derive(Debug, Clone, Copy)]
-pub struct ImportanceJob<'a> {
-    /// GGX by its visible normals (`true`) or Beckmann by `D cos_h`.
-    pub ggx: bool,
-    /// The points.
-    pub points: &'a [ImportancePoint],
-    /// The materials the points index (F = 1 Cook–Torrance).
-    pub materials: &'a [Material],
-    /// Hammersley points per `(μ, α)` point.
-    pub samples: u32,
-}
-
 impl Output {
     /// All-zero outputs for `n` tuples (terms too when `terms`), `counts.tuples = n`: what a
     /// backend fills in.
@@ -146,31 +96,36 @@ pub trait Backend {
     /// default ignores it (an engine that never checks still finishes correctly).
     fn set_cancel(&mut self, _cancel: crate::cancel::Cancel) {}
 
+    /// The engine's own direction generators, if it has them ([`GeneratedDirections`]):
+    /// the tables then send a material and a grid or sampling plan instead of tuples. The
+    /// default is none, and the tables build the tuples on the host.
+    fn generated_directions(&mut self) -> Option<&mut dyn GeneratedDirections> {
+        None
+    }
+}
+
+/// Tables whose directions an engine makes itself (the Vulkan kernel does, on the device):
+/// where the directions come from is its own concept beside [`Backend::evaluate`]'s batch
+/// of tuples ([`crate::directions`] holds the grids and sampling plans).
+pub trait GeneratedDirections {
     /// The half/difference slice `grid` of `material` (row-major texels, θ_h fastest)
-    /// with the directions made by the backend itself, or `None` when it has no such path
-    /// (or none for this grid): the caller then builds the tuples
-    /// ([`crate::table::slice::compute`] does). The Vulkan backend makes them on the device
-    /// for grids up to 2²⁴ texels.
+    /// with the directions made by the engine, or `None` when it has no such path for this
+    /// grid: the caller then builds the tuples ([`crate::table::slice::compute`] does).
     fn half_diff_slice(
         &mut self,
-        _material: &Material,
-        _grid: SliceGrid,
-        _request: &Request,
-    ) -> Option<Result<Output>> {
-        None
-    }
+        material: &Material,
+        grid: SliceGrid,
+        request: &Request,
+    ) -> Option<Result<Output>>;
 
     /// For each point of `job`, `(1/N) Σ x` and `(1/N) Σ x (1 − c)⁵` over its N samples,
-    /// `x = f cos_i / pdf(l)`, with the sample directions made by the backend itself; or
-    /// `None` when it has no such path (the caller then sends the samples as tuples, as
-    /// [`crate::table::albedo::integrate`] does). The Vulkan backend makes them on the
-    /// device.
-    /// `progress` is called with the number of samples done since its last call.
+    /// `x = f cos_i / pdf(l)`, with the sample directions made by the engine; or `None`
+    /// when it has no such path for this job (the caller then sends the samples as tuples,
+    /// as [`crate::table::albedo::integrate`] does). `progress` is called with the number
+    /// of samples done since its last call.
     fn importance_sums(
         &mut self,
-        _job: &ImportanceJob,
-        _progress: &mut dyn FnMut(u64),
-    ) -> Option<Result<Vec<[f64; 2]>>> {
-        None
-    }
+        job: &ImportanceJob,
+        progress: &mut dyn FnMut(u64),
+    ) -> Option<Result<Vec<[f64; 2]>>>;
 }

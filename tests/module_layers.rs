@@ -10,7 +10,7 @@ use std::path::Path;
 const LAYERS: &[&[&str]] = &[
     &["error", "cancel", "stats", "vector"],
     &["atomic", "material"],
-    &["batch"],
+    &["batch", "directions"],
     &["backend", "precision", "sample"],
     &["reference", "features"],
     &["gpu"],

@@ -121,12 +121,12 @@ pub fn memcpy_ceiling(tuples: usize, columns: usize, repeats: usize) -> f64 {
 }
 
 /// Max relative error (floor [`ERROR_FLOOR`]) of a half/difference slice's `brdf` (as
-/// [`crate::backend::Backend::half_diff_slice`] returns it) against the reference at the
+/// [`crate::backend::GeneratedDirections::half_diff_slice`] returns it) against the reference at the
 /// host's directions ([`crate::table::slice::from_half_diff`]), on at most `sample`
 /// evenly spaced texels.
 pub fn slice_max_rel_err(
     material: &Material,
-    grid: crate::backend::SliceGrid,
+    grid: crate::directions::SliceGrid,
     brdf: &[f32],
     sample: usize,
 ) -> f64 {

@@ -845,10 +845,17 @@ impl Backend for VulkanBackend {
         self.run(batch, materials, features)
     }
 
+    fn generated_directions(&mut self) -> Option<&mut dyn crate::backend::GeneratedDirections> {
+        Some(self)
+    }
+}
+
+/// The kernel makes slice and importance-sample directions on the device.
+impl crate::backend::GeneratedDirections for VulkanBackend {
     fn half_diff_slice(
         &mut self,
         material: &Material,
-        grid: crate::backend::SliceGrid,
+        grid: crate::directions::SliceGrid,
         request: &Request,
     ) -> Option<Result<Output>> {
         // Larger grids go through tuples (the caller builds them).
@@ -858,7 +865,7 @@ impl Backend for VulkanBackend {
 
     fn importance_sums(
         &mut self,
-        job: &crate::backend::ImportanceJob,
+        job: &crate::directions::ImportanceJob,
         progress: &mut dyn FnMut(u64),
     ) -> Option<Result<Vec<[f64; 2]>>> {
         // Beyond the kernel's 2^24 blocks the caller sends the samples as tuples.

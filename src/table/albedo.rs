@@ -15,8 +15,8 @@
 
 use super::exr_out::{self, Channel, Layer, Provenance};
 use super::{as_f32, push_row, texel_centre, Grid, Runner, NORMAL};
-use crate::backend::{ImportanceJob, ImportancePoint};
 use crate::batch::COLUMNS_PLAIN;
+use crate::directions::{ImportanceJob, ImportancePoint};
 use crate::error::{Error, Result};
 use crate::material::{Geometry, Material};
 use crate::reference::distribution::{beckmann_d, ggx_d};

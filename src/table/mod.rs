@@ -310,17 +310,19 @@ impl<'a> Runner<'a> {
         self.progress.inc(tuples);
     }
 
-    /// The half/difference slice made by the backend itself ([`Backend::half_diff_slice`]),
+    /// The half/difference slice made by the backend itself ([`GeneratedDirections::half_diff_slice`](crate::backend::GeneratedDirections::half_diff_slice)),
     /// or `None` when the backend has no such path. Checked like [`Runner::evaluate`].
     pub fn half_diff_slice(
         &mut self,
         material: &Material,
-        grid: crate::backend::SliceGrid,
+        grid: crate::directions::SliceGrid,
         terms: bool,
     ) -> Option<Result<Output>> {
-        let out = self
-            .backend
-            .half_diff_slice(material, grid, &Request { terms })?;
+        let out = self.backend.generated_directions()?.half_diff_slice(
+            material,
+            grid,
+            &Request { terms },
+        )?;
         Some(out.and_then(|out| {
             if out.counts.invalid > 0 {
                 return Err(Error::Table(format!(
@@ -334,17 +336,20 @@ impl<'a> Runner<'a> {
         }))
     }
 
-    /// The backend's own importance-sampled sums ([`Backend::importance_sums`]), shown on
+    /// The backend's own importance-sampled sums ([`GeneratedDirections::importance_sums`](crate::backend::GeneratedDirections::importance_sums)), shown on
     /// the progress bar as `what`, or `None` when the backend has no such path.
     pub fn importance_sums(
         &mut self,
         what: &str,
-        job: &crate::backend::ImportanceJob,
+        job: &crate::directions::ImportanceJob,
     ) -> Option<Result<Vec<[f64; 2]>>> {
         let total = job.points.len() as u64 * u64::from(job.samples);
         self.start(what, total);
         let bar = &self.progress;
-        let sums = self.backend.importance_sums(job, &mut |n| bar.inc(n))?;
+        let sums = self
+            .backend
+            .generated_directions()?
+            .importance_sums(job, &mut |n| bar.inc(n))?;
         let sums = sums.and_then(|s| self.cancel.check().map(|()| s));
         bar.set_position(total); // the last block of each point may be partial
         self.finish();

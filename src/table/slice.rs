@@ -8,7 +8,8 @@
 
 use super::exr_out::{self, Channel, Layer, Provenance};
 use super::{needs_tangents, push_row, texel_centre, Grid, Runner, NORMAL};
-use crate::backend::{SliceGrid, TERM_COLUMNS};
+use crate::backend::TERM_COLUMNS;
+use crate::directions::SliceGrid;
 use crate::error::Result;
 use crate::material::Material;
 use std::f64::consts::FRAC_PI_2;

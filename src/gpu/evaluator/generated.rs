@@ -5,7 +5,7 @@
 //! 40 bytes per texel.
 
 use super::*;
-use crate::backend::{ImportanceJob, SliceGrid};
+use crate::directions::{ImportanceJob, SliceGrid};
 use crate::precision::Precision;
 use std::time::Instant;
 
@@ -157,7 +157,7 @@ impl VulkanBackend {
 pub const SAMPLES_PER_BLOCK: u32 = 256;
 
 impl VulkanBackend {
-    /// [`Backend::importance_sums`] on the device: one invocation per block of
+    /// [`GeneratedDirections::importance_sums`](crate::backend::GeneratedDirections::importance_sums) on the device: one invocation per block of
     /// `SAMPLES_PER_BLOCK` (256) samples of one point, which makes its directions, evaluates f
     /// and sums in f32; the blocks are added here in f64.
     /// `progress` is called with the samples of each chunk as it finishes.
