@@ -221,6 +221,7 @@ uint make_frame(Row r, GpuMaterial m, out Frame f) {
     f.c_exact = 0.0;
     f.cos_i_exact = 0.0;
     f.cos_o_exact = 0.0;
+    f.cos_h_exact = 0.0;
     if (!(ok_l && ok_v && ok_n)) {
         return STATUS_INVALID;
     }
@@ -279,7 +280,8 @@ uint make_frame(Row r, GpuMaterial m, out Frame f) {
     dvec3 h = lv / len;
     f.h = vec3(h);
     // cos_h = (cos_i + cos_o)/|l + v| and c = |l + v|/2: see the f32 branch.
-    f.cos_h = float((cos_i + cos_o) / len);
+    f.cos_h_exact = (cos_i + cos_o) / len;
+    f.cos_h = float(f.cos_h_exact);
     f.c = float(0.5 * len);
     f.c_exact = 0.5 * len;
     dvec3 nxh = cross(dn, h);
@@ -329,6 +331,7 @@ uint make_frame(Row r, GpuMaterial m, out Frame f) {
     // rounding of l and v, h points anywhere, and dot(n, h) can come out <= 0; log(cos_h)
     // in D then turns into garbage and D into +inf (seen in the 10M-tuple stress corpus).
     f.cos_h = (f.cos_i + f.cos_o) / len;
+    f.cos_h_exact = f.cos_h;
     // c = v.h = |l + v| / 2 for unit l, v. Not dot(v, h): at grazing mirror geometry v is
     // nearly perpendicular to h, and the dot product turns h's direction error (which grows
     // as 1/|l + v|) into a relative error of ~u/(2c^2) in c (1e-3 at c = 0.005), where

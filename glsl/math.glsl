@@ -127,6 +127,24 @@ float log_acc(float x) {
     return fe * LN2_HI + (log1p_small(f - 1.0) + fe * LN2_LO);
 }
 
+#if defined(HAS_FLOAT64)
+// ln x for a double x > 0 that may lie below float32's range: x = 2^e f, f in [1/2, 1),
+// ln x = e ln 2 + ln f, the sum in f64 (absolute error ~2e-8, from ln f in f32).
+double log_f64(double x) {
+    int e;
+    double f = frexp(x, e);
+    return double(e) * 0.69314718055994530942LF + double(log_acc(float(f)));
+}
+
+// e^x for a double x whose result may lie beyond float32's range: x = k ln 2 + r with
+// |r| <= ln 2 / 2, e^x = 2^k e^r (relative error ~2 ulp of float32).
+double exp_f64(double x) {
+    double k = floor(x * 1.44269504088896340736LF + 0.5LF);
+    double r = x - k * 0.69314718055994530942LF;
+    return ldexp(double(exp_acc(float(r))), int(clamp(k, -1100.0LF, 1100.0LF)));
+}
+#endif
+
 // ln(1 + y) for y > -1.
 float log1p_acc(float y) {
     return abs(y) <= 0.42 ? log1p_small(y) : log_acc(1.0 + y);

@@ -144,6 +144,17 @@ Eval model_blinn_phong(Frame f, GpuMaterial m) {
 #if defined(HAS_FLOAT64)
     // 1/cos_i overflows float32 (or cos_i rounded to 0, and 0/0 = NaN) below TINY_COS.
     if (f.cos_i_exact < TINY_COS) {
+        // The f32 lobe p = cos_h^e can underflow here while p / cos_i is O(1) or large:
+        // cos_h itself below float32's smallest normal (l ⟂ v at cosines 1e-45 and 1e-38:
+        // cos_h = 7e-39, f = 1.6e6 at e = 1), or cos_h^e below it (e = 100, cos_h = 0.36).
+        // The quotient is then formed in the log domain, ln cos_h from the f64 cosine where
+        // the f32 one is not a normal number.
+        if (p < 1.1754944e-38 && m.lobe.x > 0.0) {
+            double ln_cos_h = f.cos_h >= 1.1754944e-38 ? double(log_cos(f.cos_h, f.sin2_h))
+                                                       : log_f64(f.cos_h_exact);
+            double ln_q = double(m.lobe.x) * ln_cos_h - log_f64(f.cos_i_exact);
+            return eval_lobe_f64(m, double(m.scale.x) * exp_f64(ln_q));
+        }
         return eval_lobe_f64(m, double(m.scale.x * p) / f.cos_i_exact);
     }
 #endif

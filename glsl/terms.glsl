@@ -30,6 +30,8 @@ struct Frame {
     double_or_float c_exact; // c before rounding to f32 (f64 where the device has it)
     double_or_float cos_i_exact, cos_o_exact; // cos_i, cos_o before rounding (FORMULAS.md §1,
                        // "Overflow": below TINY_COS the models evaluate from these, in f64)
+    double_or_float cos_h_exact; // cos_h before rounding (below float32's smallest normal
+                       // number the f32 value flushes to 0)
     vec2 l_tb, v_tb;   // (l.t, l.b), (v.t, v.b) (anisotropic materials only)
 };
 

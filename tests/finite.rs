@@ -279,3 +279,48 @@ fn tiny_cosine_corpus_is_finite_with_equal_counts() {
     }
     assert!(reports.windows(2).all(|w| w[0] == w[1]), "{reports:?}");
 }
+
+/// Blinn–Phong (the seed's `cos_h^e / (π cos_i)`) with l ⟂ v at cosines 1e-45 and 1e-38:
+/// cos_h = (cos_i + cos_o)/|l + v| ≈ 7e-39 lies below float32's smallest normal number, so
+/// an f32 lobe flushes to 0, yet the value is large. By hand, with |L| = |V| and l·v ≈ 0
+/// (|l + v| = √2 to within 1e-83): f = (cos_i + cos_o)/(√2 π cos_i) = (1 + εv/εl)/(√2 π),
+/// ε the z components (N = +z).
+#[test]
+fn blinn_phong_with_cos_h_below_the_smallest_normal_float_is_exact() {
+    let m = materials(
+        r#"
+        [[material]]
+        name = "bp"
+        model = "blinn-phong"
+        exponent = 1
+        "#,
+    );
+    let (el, ev) = (1e-45f32, 1e-38f32);
+    let rows = [[0.6, 0.8, el, -0.8, 0.6, ev, 0., 0., 1., 0.]];
+    let len = |x: f32, y: f32, z: f32| {
+        let (x, y, z) = (f64::from(x), f64::from(y), f64::from(z));
+        (x * x + y * y + z * z).sqrt()
+    };
+    let cos_i = f64::from(el) / len(0.6, 0.8, el);
+    let cos_o = f64::from(ev) / len(-0.8, 0.6, ev);
+    let want = (cos_i + cos_o) / (2f64.sqrt() * PI * cos_i);
+    assert!(want > 1e6, "the case is the large one: {want}");
+    let b = batch(&rows, 1);
+    for mut backend in common::backends() {
+        let name = backend.name();
+        let out = backend
+            .evaluate(&b, &m, &Request { terms: true })
+            .expect("evaluates");
+        all_finite(&out, &name);
+        for ch in 0..3 {
+            assert_close(out.brdf[ch], want, 1e-5, &format!("{name}: f channel {ch}"));
+        }
+        assert_close(
+            out.terms.as_ref().unwrap()[0],
+            want,
+            1e-5,
+            &format!("{name}: D"),
+        );
+        assert_eq!(out.counts.saturated, 0, "{name}");
+    }
+}
