@@ -2,9 +2,10 @@
 //! normalisations that the reference, the tables, the check, the stress corpus and the tests
 //! use. It sits at the bottom layer and imports nothing from the crate.
 //!
-//! Plain arrays rather than a vector type: the batch rows, the reference and the kernel's
-//! host side all hold `[f64; 3]`, and every function here fixes its operation order, so
-//! a caller's results are bit-for-bit the same wherever it runs.
+//! Plain arrays at the interface: the batch rows, the reference and the kernel's host side
+//! all hold `[f64; 3]`. The dot and cross products are glam's (`DVec3`, scalar f64, a fixed
+//! operation order), and every function here fixes its operation order, so a caller's
+//! results are bit-for-bit the same wherever it runs.
 //!
 //! Three normalisations, each kept because callers depend on its exact rounding:
 //! [`normalize`] (guarded and rescaled: for inputs, where a vector may be zero, non-finite,
@@ -12,18 +13,19 @@
 //! (`a · (1/|a|)`), the last two for vectors the caller knows to be finite, nonzero and of
 //! moderate length.
 
+use glam::DVec3;
+
 /// `a · b`, summed left to right.
 pub fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+    // glam's DVec3::dot: (x·x′ + y·y′) + z·z′, the products and sums in this order.
+    DVec3::from_array(a).dot(DVec3::from_array(b))
 }
 
 /// `a × b`.
 pub fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
+    // glam's DVec3::cross: (a₁b₂ − a₂b₁, a₂b₀ − a₀b₂, a₀b₁ − a₁b₀), each a plain difference
+    // of products (cross_accurate is the cancellation-free one).
+    DVec3::from_array(a).cross(DVec3::from_array(b)).to_array()
 }
 
 /// `|a|²`.
