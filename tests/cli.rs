@@ -1,8 +1,11 @@
 //! The command line through real files: generate → eval → read back, compared with the
 //! reference; exit codes; atomic output; `--strict`.
 
+mod common;
+use common::vkbrdf;
+
 use std::path::Path;
-use std::process::{Command, Output};
+use std::process::Output;
 use vkbrdf::batch::{read_npy_f32, write_npy_f32, Batch};
 
 const MATERIALS: &str = r#"
@@ -51,13 +54,6 @@ geometry = "cook-torrance"
 fresnel = "dielectric"
 ior = 1.5
 "#;
-
-fn vkbrdf(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_vkbrdf"))
-        .args(args)
-        .output()
-        .expect("run vkbrdf")
-}
 
 fn text(o: &Output) -> String {
     format!(

@@ -3,15 +3,11 @@
 //! panic) — a refusal names the option and its range, and a negative value reaches the
 //! range check instead of being read as an unknown flag.
 
-use std::path::Path;
-use std::process::{Command, Output};
+mod common;
+use common::vkbrdf;
 
-fn vkbrdf(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_vkbrdf"))
-        .args(args)
-        .output()
-        .expect("run vkbrdf")
-}
+use std::path::Path;
+use std::process::Command;
 
 /// One numeric option: the command line around it, the option, and the value just past
 /// its maximum.

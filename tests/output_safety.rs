@@ -4,6 +4,9 @@
 //! leaves the previous file intact and no temporary file; `eval --terms` writes both files
 //! or neither. The CLI runs on the CPU reference so the tests need no device.
 
+mod common;
+use common::{stderr, vkbrdf};
+
 use std::fs;
 use std::os::unix::fs::{symlink, FileTypeExt};
 use std::path::{Path, PathBuf};
@@ -15,17 +18,6 @@ const MATERIALS: &str = r#"
 name = "gold"
 preset = "gold"
 "#;
-
-fn vkbrdf(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_vkbrdf"))
-        .args(args)
-        .output()
-        .expect("run vkbrdf")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
 
 /// A directory with `m.toml` and a 1000-tuple batch `t.npy`.
 fn setup() -> (tempfile::TempDir, PathBuf, PathBuf) {

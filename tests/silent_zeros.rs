@@ -2,9 +2,11 @@
 //! MERL export of an anisotropic material, float16 overflow in `table --half`, a MERL
 //! `file` that cannot be read.
 
+mod common;
+use common::{stderr, vkbrdf};
+
 use exr::prelude::FlatSamples;
 use std::path::Path;
-use std::process::{Command, Output};
 use vkbrdf::batch::{check_tangent_rows, read_npy_f32, write_npy_f32, Batch};
 use vkbrdf::material::{parse_materials, Material};
 use vkbrdf::reference::CpuReference;
@@ -62,17 +64,6 @@ fn rows(n: usize, material: impl Fn(usize) -> usize) -> Vec<f32> {
             ]
         })
         .collect()
-}
-
-fn vkbrdf(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_vkbrdf"))
-        .args(args)
-        .output()
-        .expect("run vkbrdf")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
 }
 
 // ---------------------------------------------------------------------------------------

@@ -4,6 +4,7 @@
 pub mod quadrature;
 pub mod strategies;
 
+use std::process::{Command, Output};
 use vkbrdf::backend::Backend;
 use vkbrdf::gpu::{DeviceSelector, VulkanBackend, VulkanOptions};
 use vkbrdf::reference::CpuReference;
@@ -35,4 +36,17 @@ pub fn backends() -> Vec<Box<dyn Backend>> {
         v.push(Box::new(b));
     }
     v
+}
+
+/// Runs the `vkbrdf` binary of this build with `args`, capturing its output.
+pub fn vkbrdf(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_vkbrdf"))
+        .args(args)
+        .output()
+        .expect("run vkbrdf")
+}
+
+/// A command's standard error as text.
+pub fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
 }
