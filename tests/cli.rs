@@ -2,7 +2,7 @@
 //! reference; exit codes; atomic output; `--strict`.
 
 mod common;
-use common::vkbrdf;
+use common::{eval, path, vkbrdf};
 
 use std::path::Path;
 use std::process::Output;
@@ -312,15 +312,7 @@ fn merl_export_then_eval_as_a_measured_material_returns_the_analytic_values() {
     let t = dir.path().join("t.npy");
     write_npy_f32(&t, &rows, 10).unwrap();
     let out = dir.path().join("f.npy");
-    let o = vkbrdf(&[
-        "eval",
-        "-m",
-        m.to_str().unwrap(),
-        "-i",
-        t.to_str().unwrap(),
-        "-o",
-        out.to_str().unwrap(),
-    ]);
+    let o = eval(&m, &t, &["-o", path(&out)]);
     assert!(o.status.success(), "{}", text(&o));
     let (f, _) = read_npy_f32(&out).unwrap();
     let gold = vkbrdf::material::presets::preset("gold").unwrap().unwrap();

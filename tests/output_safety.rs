@@ -5,7 +5,7 @@
 //! or neither. The CLI runs on the CPU reference so the tests need no device.
 
 mod common;
-use common::{stderr, vkbrdf};
+use common::{generate, stderr, vkbrdf};
 
 use std::fs;
 use std::os::unix::fs::{symlink, FileTypeExt};
@@ -25,31 +25,16 @@ fn setup() -> (tempfile::TempDir, PathBuf, PathBuf) {
     let m = dir.path().join("m.toml");
     fs::write(&m, MATERIALS).unwrap();
     let t = dir.path().join("t.npy");
-    let o = vkbrdf(&[
-        "generate",
-        "-m",
-        m.to_str().unwrap(),
-        "-n",
-        "1000",
-        "-o",
-        t.to_str().unwrap(),
-    ]);
+    let o = generate(&m, 1000, &t);
     assert!(o.status.success(), "{}", stderr(&o));
     (dir, m, t)
 }
 
+/// `vkbrdf eval` on the CPU reference (no device needed).
 fn eval(m: &Path, t: &Path, extra: &[&str]) -> Output {
-    let mut args = vec![
-        "eval",
-        "--backend",
-        "cpu",
-        "-m",
-        m.to_str().unwrap(),
-        "-i",
-        t.to_str().unwrap(),
-    ];
+    let mut args = vec!["--backend", "cpu"];
     args.extend_from_slice(extra);
-    vkbrdf(&args)
+    common::eval(m, t, &args)
 }
 
 /// Names of the temporary files vkbrdf leaves in `dir` (there must be none).
@@ -345,15 +330,7 @@ fn a_set_of_files_appears_whole_or_not_at_all() {
 fn sigint_during_a_run_keeps_the_previous_output() {
     let (dir, m, _) = setup();
     let big = dir.path().join("big.npy");
-    let o = vkbrdf(&[
-        "generate",
-        "-m",
-        m.to_str().unwrap(),
-        "-n",
-        "2000000",
-        "-o",
-        big.to_str().unwrap(),
-    ]);
+    let o = generate(&m, 2_000_000, &big);
     assert!(o.status.success(), "{}", stderr(&o));
     let out = dir.path().join("out.npy");
     fs::write(&out, b"previous").unwrap();

@@ -3,7 +3,7 @@
 //! `file` that cannot be read.
 
 mod common;
-use common::{stderr, vkbrdf};
+use common::{eval, generate, path, stderr, vkbrdf};
 
 use exr::prelude::FlatSamples;
 use std::path::Path;
@@ -127,17 +127,7 @@ fn cli_eval_refuses_an_anisotropic_batch_without_tangents_and_writes_nothing() {
     let t = dir.path().join("plain.npy");
     write_npy_f32(&t, &rows(100, |i| i % 3), 10).unwrap();
     let out = dir.path().join("f.npy");
-    let o = vkbrdf(&[
-        "eval",
-        "--backend",
-        "cpu",
-        "-m",
-        m.to_str().unwrap(),
-        "-i",
-        t.to_str().unwrap(),
-        "-o",
-        out.to_str().unwrap(),
-    ]);
+    let o = eval(&m, &t, &["--backend", "cpu", "-o", path(&out)]);
     let msg = stderr(&o);
     assert_eq!(o.status.code(), Some(2), "{msg}");
     assert!(
@@ -147,17 +137,7 @@ fn cli_eval_refuses_an_anisotropic_batch_without_tangents_and_writes_nothing() {
     assert!(!out.exists());
     // The same table, rows that do not use `brushed`: evaluated, nothing invalid.
     write_npy_f32(&t, &rows(100, |i| [0, 2][i % 2]), 10).unwrap();
-    let o = vkbrdf(&[
-        "eval",
-        "--backend",
-        "cpu",
-        "-m",
-        m.to_str().unwrap(),
-        "-i",
-        t.to_str().unwrap(),
-        "-o",
-        out.to_str().unwrap(),
-    ]);
+    let o = eval(&m, &t, &["--backend", "cpu", "-o", path(&out)]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(stderr(&o).contains(" 0 invalid"), "{}", stderr(&o));
 }
@@ -169,15 +149,7 @@ fn generate_adds_tangents_when_a_material_needs_them() {
         let m = dir.path().join("m.toml");
         std::fs::write(&m, toml).unwrap();
         let t = dir.path().join("t.npy");
-        let o = vkbrdf(&[
-            "generate",
-            "-m",
-            m.to_str().unwrap(),
-            "-n",
-            "300",
-            "-o",
-            t.to_str().unwrap(),
-        ]);
+        let o = generate(&m, 300, &t);
         assert!(o.status.success(), "{}", stderr(&o));
         let (_, shape) = read_npy_f32(&t).unwrap();
         assert_eq!(shape, vec![300, columns], "{}", stderr(&o));
@@ -190,17 +162,7 @@ fn generate_adds_tangents_when_a_material_needs_them() {
         }
         // The generated batch evaluates with no invalid tuple.
         let out = dir.path().join("f.npy");
-        let o = vkbrdf(&[
-            "eval",
-            "--backend",
-            "cpu",
-            "-m",
-            m.to_str().unwrap(),
-            "-i",
-            t.to_str().unwrap(),
-            "-o",
-            out.to_str().unwrap(),
-        ]);
+        let o = eval(&m, &t, &["--backend", "cpu", "-o", path(&out)]);
         assert!(o.status.success(), "{}", stderr(&o));
         assert!(stderr(&o).contains(" 0 invalid"), "{}", stderr(&o));
     }

@@ -50,3 +50,21 @@ pub fn vkbrdf(args: &[&str]) -> Output {
 pub fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
 }
+
+/// `vkbrdf generate -m M -n N -o OUT` (N tuples for the materials file M).
+pub fn generate(m: &std::path::Path, n: usize, out: &std::path::Path) -> Output {
+    let n = n.to_string();
+    vkbrdf(&["generate", "-m", path(m), "-n", &n, "-o", path(out)])
+}
+
+/// `vkbrdf eval -m M -i T EXTRA…` (outputs and options in `extra`).
+pub fn eval(m: &std::path::Path, t: &std::path::Path, extra: &[&str]) -> Output {
+    let mut args = vec!["eval", "-m", path(m), "-i", path(t)];
+    args.extend_from_slice(extra);
+    vkbrdf(&args)
+}
+
+/// A path as a command-line argument (test paths are UTF-8).
+pub fn path(p: &std::path::Path) -> &str {
+    p.to_str().expect("UTF-8 test path")
+}
