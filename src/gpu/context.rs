@@ -312,9 +312,12 @@ pub(crate) struct PhysicalInfo {
     pub subgroup_size: Option<u32>,
     /// Whether compute shaders can use subgroup arithmetic (subgroupAdd, subgroupMin).
     pub subgroup_arithmetic: bool,
-    /// Whether shaders can use f64 (`shaderFloat64`): the kernel then computes the
-    /// cosines in f64 (see `cosine64` in eval.comp).
+    /// Whether the kernel uses f64 (`shaderFloat64`, unless `VKBRDF_DISABLE_FLOAT64=1`): it
+    /// then computes the frame in f64 (see `frame_from` in eval.comp), else in f32.
     pub shader_float64: bool,
+    /// Whether the device has `shaderFloat64` (even where `VKBRDF_DISABLE_FLOAT64` turns
+    /// its use off).
+    pub device_float64: bool,
     /// Driver name and info (Vulkan 1.2+).
     pub driver: Option<(String, String)>,
 }
@@ -341,7 +344,21 @@ impl PhysicalInfo {
 }
 
 /// Every physical device of `instance`, with the properties vkbrdf uses.
+/// `VKBRDF_DISABLE_FLOAT64`: `1` makes the kernel run its f32 frame as on a device without
+/// `shaderFloat64` (the reference and other engines are not affected); unset, empty or `0`
+/// leaves f64 on where the device has it.
+pub fn float64_disabled() -> Result<bool> {
+    match std::env::var("VKBRDF_DISABLE_FLOAT64").as_deref() {
+        Err(_) | Ok("") | Ok("0") => Ok(false),
+        Ok("1") => Ok(true),
+        Ok(other) => Err(Error::Unsupported(format!(
+            "VKBRDF_DISABLE_FLOAT64={other:?}: expected 1 (use the f32 frame) or 0"
+        ))),
+    }
+}
+
 pub(crate) fn enumerate(instance: &Instance) -> Result<Vec<PhysicalInfo>> {
+    let disable_float64 = float64_disabled()?;
     // SAFETY: `instance` is borrowed, so its `Drop` (which destroys the VkInstance) cannot
     // run during the call; ash sizes the output vector from the count query.
     let devices = unsafe { instance.raw.enumerate_physical_devices() }
@@ -370,12 +387,14 @@ pub(crate) fn enumerate(instance: &Instance) -> Result<Vec<PhysicalInfo>> {
             compute_family,
             subgroup_size: None,
             subgroup_arithmetic: false,
+            shader_float64: false,
             // SAFETY: `raw` was just enumerated from this instance.
-            shader_float64: unsafe { instance.raw.get_physical_device_features(raw) }
+            device_float64: unsafe { instance.raw.get_physical_device_features(raw) }
                 .shader_float64
                 == vk::TRUE,
             driver: None,
         };
+        info.shader_float64 = info.device_float64 && !disable_float64;
         let version = properties.api_version.min(instance.api_version);
         if version >= vk::API_VERSION_1_1 {
             let mut subgroup = vk::PhysicalDeviceSubgroupProperties::default();

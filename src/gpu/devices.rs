@@ -35,6 +35,9 @@ pub struct DeviceInfo {
     pub subgroup_size: Option<u32>,
     /// Largest storage-buffer range one descriptor may cover, in bytes.
     pub max_storage_buffer_range: u32,
+    /// The frame the kernel computes on this device: `float64` (the device has
+    /// `shaderFloat64`), or `f32` (it has not, or `VKBRDF_DISABLE_FLOAT64=1`).
+    pub frame: String,
     /// Whether the device has a compute queue (vkbrdf can use it).
     pub compute: bool,
     /// Whether vkbrdf picks this device when no `--device` / `VKBRDF_DEVICE` is given.
@@ -75,6 +78,13 @@ fn info(p: &PhysicalInfo, default_choice: bool) -> DeviceInfo {
         heaps,
         subgroup_size: p.subgroup_size,
         max_storage_buffer_range: p.properties.limits.max_storage_buffer_range,
+        frame: match (p.shader_float64, p.device_float64) {
+            (true, _) => "float64 (shaderFloat64)".to_string(),
+            (false, true) => {
+                "f32 (shaderFloat64 turned off by VKBRDF_DISABLE_FLOAT64=1)".to_string()
+            }
+            (false, false) => "f32 (the device has no shaderFloat64)".to_string(),
+        },
         compute: p.compute_family.is_some(),
         default_choice,
     }
@@ -116,6 +126,7 @@ impl fmt::Display for DeviceInfo {
         if let Some(s) = self.subgroup_size {
             writeln!(f, "   subgroup size:   {s}")?;
         }
+        writeln!(f, "   kernel frame:    {}", self.frame)?;
         writeln!(
             f,
             "   max storage buffer range: {}",
