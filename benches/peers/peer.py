@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Throughput peers for `vkbrdf bench`.
 
-    python peer.py --peer mitsuba|numpy|memcpy --scenario beckmann|ggx \
+    python peer.py --peer mitsuba|numpy|memcpy|torch|torch-compile|torch-copy \
+        --scenario beckmann|ggx \
         --input T.npy --repeats R --out RESULT.json [--check BRDF_OUT.npy]
 
 Input: float32 .npy of shape (n, 10), rows `Lx Ly Lz Vx Vy Vz Nx Ny Nz material`
@@ -19,11 +20,14 @@ JSON is then a "skipped" that also carries "error": true.
 
 If this script is not run by benches/peers/.venv/bin/python and that venv exists, it
 re-executes itself with it (so `python3 peer.py ...` works); without the venv the
-mitsuba and numpy peers report "skipped".
+mitsuba and numpy peers report "skipped". The torch peers never re-execute: they use the
+python3 that runs them (a GPU machine's own PyTorch) and report "skipped" where it has no
+torch or no CUDA device (VKBRDF_PEER_TORCH_CPU=1 runs them on the CPU, for testing).
 """
 import argparse
 import glob
 import json
+import math
 import os
 import sys
 import time
@@ -70,6 +74,8 @@ def maybe_reexec_in_venv():
     """Run under benches/peers/.venv when it exists and we are not already in it."""
     if os.environ.get("VKBRDF_PEER_NO_REEXEC"):
         return
+    if any(a.startswith("torch") for a in sys.argv[1:]):
+        return  # the torch peers use this python3's own torch
     if not os.path.exists(VENV_PY):
         return
     if os.path.realpath(sys.prefix) == os.path.realpath(os.path.join(HERE, ".venv")):
@@ -332,7 +338,164 @@ def run_memcpy(args, np, t):
     return med, ts, None, extras
 
 
-PEERS = {"mitsuba": run_mitsuba, "numpy": run_numpy, "memcpy": run_memcpy}
+# ---------------------------------------------------------------------------
+# PyTorch peers: the same Cook-Torrance on the GPU, float32, device-resident tensors in the
+# row layout of the input; eager (one CUDA kernel per operation) and torch.compile (the
+# operations fused into generated Triton kernels). Beckmann uses Walter's rational G1 (=
+# vkbrdf's mitsuba-beckmann scenario and Mitsuba's roughconductor), GGX the exact G1.
+# ---------------------------------------------------------------------------
+def import_torch():
+    try:
+        import torch
+    except Exception as e:  # noqa: BLE001
+        raise Skip(f"torch import failed: {e}")
+    if torch.cuda.is_available():
+        return torch, torch.device("cuda")
+    if os.environ.get("VKBRDF_PEER_TORCH_CPU") == "1":
+        return torch, torch.device("cpu")
+    raise Skip("torch has no CUDA device (VKBRDF_PEER_TORCH_CPU=1 runs it on the CPU)")
+
+
+def make_torch_brdf(torch, scenario, device):
+    m = ALPHA
+    m2 = ALPHA * ALPHA
+    eta = torch.tensor(ETA, dtype=torch.float32, device=device)
+    k = torch.tensor(K, dtype=torch.float32, device=device)
+    eta2, k2 = eta * eta, k * k
+
+    def dot(a, b):
+        return (a * b).sum(dim=1)
+
+    def unit(a):
+        return a * torch.rsqrt(dot(a, a))[:, None]
+
+    def tan2(cos):
+        c2 = cos * cos
+        return torch.clamp(1.0 - c2, min=0.0) / c2
+
+    def g1(t2):
+        if scenario == "beckmann":
+            a = 1.0 / (m * torch.sqrt(t2))
+            g = (3.535 * a + 2.181 * a * a) / (1.0 + 2.276 * a + 2.577 * a * a)
+            return torch.where(a < 1.6, g, torch.ones_like(g))
+        return 2.0 / (1.0 + torch.sqrt(1.0 + m2 * t2))
+
+    def fresnel(c):
+        # Exact conductor Fresnel in real arithmetic (complex eta = n + ik, outside medium
+        # of index 1): the same function as the complex form the NumPy peer uses.
+        c = c[:, None]
+        c2 = c * c
+        s2 = 1.0 - c2
+        t0 = eta2 - k2 - s2
+        a2b2 = torch.sqrt(t0 * t0 + 4.0 * eta2 * k2)
+        a = torch.sqrt(torch.clamp(0.5 * (a2b2 + t0), min=0.0))
+        t1 = a2b2 + c2
+        t2 = 2.0 * a * c
+        rs = (t1 - t2) / (t1 + t2)
+        t3 = c2 * a2b2 + s2 * s2
+        t4 = t2 * s2
+        rp = rs * (t3 - t4) / (t3 + t4)
+        return 0.5 * (rp + rs)
+
+    def brdf(t):
+        l = unit(t[:, 0:3])
+        v = unit(t[:, 3:6])
+        n = unit(t[:, 6:9])
+        cos_i = dot(n, l)
+        cos_o = dot(n, v)
+        h = unit(l + v)
+        cos_h = dot(n, h)
+        c = dot(v, h)
+        c2h = cos_h * cos_h
+        t2h = tan2(cos_h)
+        if scenario == "beckmann":
+            d = torch.exp(-t2h / m2) / (math.pi * m2 * c2h * c2h)
+        else:
+            s = m2 + t2h
+            d = m2 / (math.pi * c2h * c2h * s * s)
+        g = g1(tan2(cos_i)) * g1(tan2(cos_o))
+        kk = d * g / (4.0 * cos_i * cos_o)
+        f = fresnel(c) * kk[:, None]
+        ok = (cos_i > 0) & (cos_o > 0) & torch.isfinite(kk)
+        return torch.where(ok[:, None], f, torch.zeros_like(f))
+
+    return brdf
+
+
+def time_torch(torch, device, fn, repeats, warmups=3):
+    """Median seconds of fn() on the device: CUDA events around each call (after warm-ups,
+    which also compile), or wall time on the CPU."""
+    out = None
+    for _ in range(warmups):
+        out = fn()
+    if device.type == "cuda":
+        torch.cuda.synchronize()
+    ts = []
+    for _ in range(repeats):
+        if device.type == "cuda":
+            start = torch.cuda.Event(enable_timing=True)
+            end = torch.cuda.Event(enable_timing=True)
+            start.record()
+            out = fn()
+            end.record()
+            end.synchronize()
+            ts.append(start.elapsed_time(end) * 1e-3)
+        else:
+            t0 = time.perf_counter()
+            out = fn()
+            ts.append(time.perf_counter() - t0)
+    st = sorted(ts)
+    m = len(st)
+    med = st[m // 2] if m % 2 else 0.5 * (st[m // 2 - 1] + st[m // 2])
+    return med, ts, out
+
+
+def run_torch(args, np, t, compiled=False):
+    torch, device = import_torch()
+    td = torch.from_numpy(t).to(device)  # device-resident, same row layout
+    brdf = make_torch_brdf(torch, args.scenario, device)
+    fn = brdf
+    extras = {"torch": torch.__version__, "dtype": "float32",
+              "device": torch.cuda.get_device_name(device) if device.type == "cuda" else "cpu",
+              "G": ("smith-fast (separable, Walter rational G1)" if args.scenario == "beckmann"
+                    else "smith (separable, exact GGX G1)"),
+              "F": "exact conductor (real form)"}
+    if compiled:
+        t0 = time.perf_counter()
+        try:
+            fn = torch.compile(brdf, fullgraph=True, dynamic=False)
+            fn(td)
+        except Exception as e:  # noqa: BLE001
+            raise Skip(f"torch.compile failed: {type(e).__name__}: {e}")
+        extras["compile_seconds"] = time.perf_counter() - t0
+    with torch.no_grad():
+        med, ts, f = time_torch(torch, device, lambda: fn(td), args.repeats)
+    fnp = f.float().cpu().numpy() if args.check else None
+    return med, ts, fnp, extras
+
+
+def run_torch_compile(args, np, t):
+    return run_torch(args, np, t, compiled=True)
+
+
+def run_torch_copy(args, np, t):
+    """The device's copy ceiling for the bytes a tuple moves: a device-to-device copy of
+    26 bytes per tuple reads 26 and writes 26, the 52 bytes (40 in, 12 out) of a tuple."""
+    torch, device = import_torch()
+    n = t.shape[0]
+    src = torch.ones(n * 13 // 2, dtype=torch.float32, device=device)
+    dst = torch.empty_like(src)
+    med, ts, _ = time_torch(torch, device, lambda: dst.copy_(src), args.repeats)
+    moved = 2 * src.numel() * 4
+    extras = {"torch": torch.__version__, "bytes_per_tuple": 52,
+              "copy_bytes_per_s": moved / med,
+              "device": torch.cuda.get_device_name(device) if device.type == "cuda" else "cpu",
+              "note": "torch Tensor.copy_ of n*26 bytes on the device (reads and writes 52 B per tuple)"}
+    return med, ts, None, extras
+
+
+PEERS = {"mitsuba": run_mitsuba, "numpy": run_numpy, "memcpy": run_memcpy,
+         "torch": run_torch, "torch-compile": run_torch_compile, "torch-copy": run_torch_copy}
 
 
 def main(argv=None):
@@ -350,7 +513,9 @@ def main(argv=None):
                     help="numpy peer only: evaluate in blocks of this many rows (default 0: the "
                          "whole array at once, as written plainly)")
     args = ap.parse_args(argv)
-    name = {"mitsuba": "mitsuba3-llvm", "numpy": "numpy-float32", "memcpy": "memcpy"}[args.peer]
+    name = {"mitsuba": "mitsuba3-llvm", "numpy": "numpy-float32", "memcpy": "memcpy",
+            "torch": "torch-eager", "torch-compile": "torch-compile",
+            "torch-copy": "torch-copy"}[args.peer]
     base = {"name": name, "scenario": args.scenario}
 
     # A placeholder first, so that even a hard crash (e.g. in the LLVM code generator)

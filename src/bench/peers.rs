@@ -1,7 +1,7 @@
 //! The external peers (benches/peers/peer.py: Mitsuba 3's LLVM backend and a vectorised
 //! NumPy Cook–Torrance), run as subprocesses on the same directions in the same run.
 
-use crate::batch::{write_npy_f32, Batch};
+use crate::batch::{read_npy_f32, write_npy_f32, Batch};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -20,6 +20,13 @@ pub struct PeerRow {
     /// Why it did not run.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub skipped: Option<String>,
+    /// The peer's BRDF (`tuples × 3`, from its last timed call), when it computes one:
+    /// the bench judges it against the f64 reference, so a ratio is between equal BRDFs.
+    #[serde(skip)]
+    pub brdf: Option<Vec<f32>>,
+    /// Max relative error of `brdf` against the f64 reference (set by the bench).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub max_rel_err: Option<f64>,
 }
 
 /// The default location of `peer.py`: `benches/peers/` of the source tree this binary was
@@ -42,6 +49,8 @@ pub fn run(script: &Path, peer: &str, scenario: &str, batch: &Batch, repeats: us
         tuples: batch.len(),
         evals_per_s: None,
         skipped: None,
+        brdf: None,
+        max_rel_err: None,
     };
     let skip = |mut row: PeerRow, why: String| {
         row.skipped = Some(why);
@@ -56,6 +65,7 @@ pub fn run(script: &Path, peer: &str, scenario: &str, batch: &Batch, repeats: us
     };
     let input = dir.path().join("tuples.npy");
     let out = dir.path().join("result.json");
+    let check = dir.path().join("brdf.npy");
     if let Err(e) = write_npy_f32(&input, batch.as_slice(), batch.columns()) {
         return skip(row, format!("cannot write the peer's input: {e}"));
     }
@@ -73,6 +83,8 @@ pub fn run(script: &Path, peer: &str, scenario: &str, batch: &Batch, repeats: us
         .arg(&input)
         .arg("--out")
         .arg(&out)
+        .arg("--check")
+        .arg(&check)
         .output();
     let output = match status {
         Ok(o) => o,
@@ -99,6 +111,10 @@ pub fn run(script: &Path, peer: &str, scenario: &str, batch: &Batch, repeats: us
     match json.get("evals_per_s").and_then(|v| v.as_f64()) {
         Some(v) => {
             row.evals_per_s = Some(v);
+            row.brdf = read_npy_f32(&check)
+                .ok()
+                .filter(|(data, shape)| shape == &[batch.len() as u64, 3] && !data.is_empty())
+                .map(|(data, _)| data);
             row
         }
         None => skip(row, format!("peer.py returned no evals_per_s: {json}")),

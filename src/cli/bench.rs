@@ -17,9 +17,15 @@ use vkbrdf::reference::CpuReference;
 #[command(after_help = "\
 Measures, in one run: every scenario on Vulkan (end to end and kernel-only) and on the CPU
 reference at batch sizes 1e3 … 1e7; max relative error against the f64 reference; the
-specialised kernel against the all-features one; and the peers on the same directions —
-Mitsuba 3's LLVM backend and NumPy (benches/peers/peer.py; run benches/peers/install.sh
-once, else they are reported as skipped) and the memory-copy ceiling.
+specialised kernel against the all-features one; the sustained kernel rate on 1e8 tuples
+(1e7 on a CPU device) against a device copy kernel moving the same bytes; the DFG table
+at 128 × 128 × 1024 samples; and the peers on the same directions — Mitsuba 3's LLVM
+backend and NumPy (benches/peers/peer.py; run benches/peers/install.sh once, else they are
+reported as skipped), PyTorch eager and torch.compile on the GPU where python3 has torch
+with CUDA, and the memory-copy ceiling.
+
+Kernel-only times have the tuples resident in device-local memory and are read from device
+timestamps around the dispatches (docs/THROUGHPUT.md says why).
 
 Examples:
   vkbrdf bench --quick                                  # under a minute
@@ -38,12 +44,21 @@ pub struct Args {
     #[arg(long, allow_negative_numbers = true,
           value_parser = super::ranges::integer::<usize>(1, 1000))]
     pub repeats: Option<usize>,
+    /// Tuples per sustained-kernel and device-copy timing (repeated dispatches over
+    /// resident rows), 1e3 to 1e11; default 1e8 on a GPU, 1e7 on a CPU device (--quick: a
+    /// tenth).
+    #[arg(long, value_name = "N", allow_negative_numbers = true,
+          value_parser = super::ranges::integer::<usize>(1_000, 100_000_000_000))]
+    pub sustained_tuples: Option<usize>,
     /// Only these scenarios (repeatable); default all.
     #[arg(long)]
     pub scenario: Vec<String>,
     /// Skip the external peers.
     #[arg(long)]
     pub no_peers: bool,
+    /// Skip the CPU reference rows (the device check on a GPU machine: its time is short).
+    #[arg(long)]
+    pub no_cpu: bool,
     /// Path of benches/peers/peer.py.
     #[arg(long, value_name = "PATH")]
     pub peers_script: Option<PathBuf>,
@@ -55,7 +70,23 @@ pub struct Args {
 struct Report {
     device: String,
     results: Vec<ResultRow>,
+    bandwidth: Vec<BandwidthRow>,
     peers: Vec<peers::PeerRow>,
+}
+
+/// The sustained kernel of one scenario beside the device copy kernel moving the same bytes.
+#[derive(serde::Serialize)]
+struct BandwidthRow {
+    scenario: String,
+    tuples: usize,
+    resident_tuples: usize,
+    bytes_per_tuple: usize,
+    clock: vkbrdf::gpu::KernelClock,
+    kernel_evals_per_s: f64,
+    kernel_bytes_per_s: f64,
+    copy_bytes_per_s: f64,
+    /// Kernel bytes/s over copy bytes/s.
+    fraction_of_copy: f64,
 }
 
 /// Runs `vkbrdf bench`.
@@ -118,7 +149,7 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
                     v.kernel_seconds(&batch, &sc.materials, &Request::default(), repeats)?;
                 results.push(row("vulkan", sc.name, "kernel", "exact", n, ksecs, err));
             }
-            if n <= cpu_max {
+            if n <= cpu_max && !args.no_cpu {
                 let (secs, out) =
                     bench::time_end_to_end(&mut cpu, &batch, &sc.materials, repeats.min(3))?;
                 let err = bench::max_rel_err(&batch, &sc.materials, &out.brdf, sample);
@@ -141,36 +172,22 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         bar.inc(1);
     }
     bar.finish_and_clear();
-    // The DFG table integrated on the device (importance-sampled directions made by the
-    // kernel): evaluations per second of a 32×32 table, GGX + smith-correlated, F = 1.
+    let mut bandwidth = Vec::new();
     if let Some(v) = vulkan.as_mut() {
-        use vkbrdf::table::albedo::{backend_sums, grid_points, Lobe, Microfacet};
-        let spec = Microfacet {
-            lobe: Lobe::Ggx,
-            geometry: vkbrdf::material::Geometry::SmithCorrelated,
-        };
-        let points = grid_points(vkbrdf::table::Grid::new(32, 32)?);
-        let samples = if args.quick { 1 << 12 } else { 1 << 16 };
-        let mut runner = vkbrdf::table::Runner::new(v);
-        let mut secs = Vec::new();
-        for _ in 0..=repeats.min(3) {
-            let t = std::time::Instant::now();
-            backend_sums(&mut runner, &spec, &points, samples, "dfg")
-                .expect("the Vulkan backend integrates on the device")?;
-            secs.push(t.elapsed().as_secs_f64());
-        }
-        secs.remove(0); // compiles the kernel
-        let evals = points.len() * samples as usize;
-        let row = row(
-            "vulkan",
-            "dfg-table-ggx",
-            "table-e2e",
-            "exact",
-            evals,
-            bench::median(secs),
-            f64::NAN,
-        );
-        results.push(row);
+        let sustained = args.sustained_tuples.unwrap_or_else(|| {
+            let base = if v.is_cpu_device() {
+                10_000_000
+            } else {
+                100_000_000
+            };
+            if args.quick {
+                base / 10
+            } else {
+                base
+            }
+        });
+        bandwidth = sustained_rows(v, &list, *sizes.last().expect("sizes"), sustained, repeats)?;
+        results.push(dfg_row(v, repeats)?);
     }
     let mut peer_rows = Vec::new();
     let script = args
@@ -180,7 +197,7 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
     for sc in list.iter().filter(|s| s.peer.is_some()) {
         let batch = scenarios::batch(sc, peer_n, 42);
         let ps = sc.peer.expect("filtered");
-        for peer in ["mitsuba", "numpy"] {
+        for peer in ["mitsuba", "numpy", "torch", "torch-compile"] {
             if args.no_peers {
                 peer_rows.push(peers::PeerRow {
                     name: peer.into(),
@@ -188,10 +205,16 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
                     tuples: peer_n,
                     evals_per_s: None,
                     skipped: Some("--no-peers".into()),
+                    brdf: None,
+                    max_rel_err: None,
                 });
             } else {
                 eprintln!("peer {peer} {ps} on {peer_n} tuples …");
-                peer_rows.push(peers::run(&script, peer, ps, &batch, repeats));
+                let mut r = peers::run(&script, peer, ps, &batch, repeats);
+                if let Some(f) = r.brdf.take() {
+                    r.max_rel_err = Some(bench::max_rel_err(&batch, &sc.materials, &f, 20_000));
+                }
+                peer_rows.push(r);
             }
         }
     }
@@ -201,11 +224,23 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         tuples: peer_n,
         evals_per_s: Some(bench::memcpy_ceiling(peer_n, 10, repeats)),
         skipped: None,
+        brdf: None,
+        max_rel_err: None,
     });
+    if !args.no_peers {
+        // The GPU's own copy ceiling as PyTorch sees it (skipped without torch + CUDA).
+        let batch = scenarios::batch(&list[0], peer_n, 42);
+        eprintln!("peer torch-copy on {peer_n} tuples …");
+        let mut r = peers::run(&script, "torch-copy", "beckmann", &batch, repeats);
+        r.scenario = "52 B/tuple copied".into(); // not a BRDF: no ratio row
+        peer_rows.push(r);
+    }
     print_report(&results, &peer_rows, &list);
+    print_bandwidth(&bandwidth, &peer_rows);
     let report = Report {
         device,
         results,
+        bandwidth,
         peers: peer_rows,
     };
     if let Some(path) = &args.json {
@@ -378,6 +413,134 @@ fn compare_kernels(
     Ok(())
 }
 
+/// The sustained kernel of each scenario on `total` tuples (resident rows: the batch of
+/// `resident` tuples, as far as the device's limits allow), and the copy kernel for the same
+/// row width, timed alternately so that drift hits both alike.
+fn sustained_rows(
+    v: &mut VulkanBackend,
+    list: &[scenarios::Scenario],
+    resident: usize,
+    total: usize,
+    repeats: usize,
+) -> anyhow::Result<Vec<BandwidthRow>> {
+    let bar = ProgressBar::new(list.len() as u64).with_style(
+        ProgressStyle::with_template("sustained [{bar:30}] {pos}/{len} {msg} ({elapsed})")
+            .expect("valid template"),
+    );
+    let repeats = repeats.min(5);
+    let mut rows = Vec::new();
+    for sc in list {
+        bar.set_message(format!("{} × {total}", sc.name));
+        let batch = scenarios::batch(sc, resident.min(total).min(v.resident_capacity(13)), 42);
+        let k = v.kernel_timing(
+            &batch,
+            &sc.materials,
+            &Request::default(),
+            total,
+            repeats,
+            FeatureSet::EMPTY,
+        )?;
+        let c = v.copy_timing(batch.columns(), k.resident_tuples, total, repeats)?;
+        let kernel_bytes = total as f64 * k.bytes_per_tuple as f64 / k.seconds;
+        let copy_bytes = total as f64 * c.bytes_per_tuple as f64 / c.seconds;
+        rows.push(BandwidthRow {
+            scenario: sc.name.into(),
+            tuples: total,
+            resident_tuples: k.resident_tuples,
+            bytes_per_tuple: k.bytes_per_tuple,
+            clock: k.clock,
+            kernel_evals_per_s: total as f64 / k.seconds,
+            kernel_bytes_per_s: kernel_bytes,
+            copy_bytes_per_s: copy_bytes,
+            fraction_of_copy: kernel_bytes / copy_bytes,
+        });
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    Ok(rows)
+}
+
+/// The DFG table integrated on the device (importance-sampled directions made by the
+/// kernel): 128 × 128 points × 1024 samples, GGX + smith-correlated, F = 1, end to end.
+fn dfg_row(v: &mut VulkanBackend, repeats: usize) -> anyhow::Result<ResultRow> {
+    use vkbrdf::table::albedo::{backend_sums, grid_points, Lobe, Microfacet};
+    let spec = Microfacet {
+        lobe: Lobe::Ggx,
+        geometry: vkbrdf::material::Geometry::SmithCorrelated,
+    };
+    let points = grid_points(vkbrdf::table::Grid::new(128, 128)?);
+    let samples = 1024;
+    let mut runner = vkbrdf::table::Runner::new(v);
+    let mut secs = Vec::new();
+    for _ in 0..=repeats.min(3) {
+        let t = std::time::Instant::now();
+        backend_sums(&mut runner, &spec, &points, samples, "dfg")
+            .expect("the Vulkan backend integrates on the device")?;
+        secs.push(t.elapsed().as_secs_f64());
+    }
+    secs.remove(0); // compiles the kernel
+    let evals = points.len() * samples as usize;
+    Ok(row(
+        "vulkan",
+        "dfg-128x128x1024",
+        "table-e2e",
+        "exact",
+        evals,
+        bench::median(secs),
+        f64::NAN,
+    ))
+}
+
+fn print_bandwidth(rows: &[BandwidthRow], peers: &[peers::PeerRow]) {
+    let Some(first) = rows.first() else { return };
+    outln!(
+        "\nsustained kernel vs device copy kernel ({} tuples, {} resident, clock: {:?}):",
+        first.tuples,
+        first.resident_tuples,
+        first.clock
+    );
+    outln!(
+        "  {:<26} {:>9} {:>12} {:>10} {:>10} {:>8}",
+        "scenario",
+        "B/tuple",
+        "M evals/s",
+        "GB/s",
+        "copy GB/s",
+        "of copy"
+    );
+    for r in rows {
+        outln!(
+            "  {:<26} {:>9} {:>12.1} {:>10.1} {:>10.1} {:>7.0} %",
+            r.scenario,
+            r.bytes_per_tuple,
+            r.kernel_evals_per_s / 1e6,
+            r.kernel_bytes_per_s / 1e9,
+            r.copy_bytes_per_s / 1e9,
+            100.0 * r.fraction_of_copy
+        );
+    }
+    // PyTorch's device-to-device copy (52 bytes moved per tuple) as a second ceiling.
+    if let Some(torch_copy) = peers
+        .iter()
+        .find(|p| p.name == "torch-copy")
+        .and_then(|p| p.evals_per_s)
+    {
+        let ceiling = torch_copy * 52.0;
+        outln!(
+            "  torch-copy ceiling: {:.1} GB/s; as a fraction of it:",
+            ceiling / 1e9
+        );
+        for r in rows {
+            outln!(
+                "    {:<26} kernel {:>4.0} %   copy kernel {:>4.0} %",
+                r.scenario,
+                100.0 * r.kernel_bytes_per_s / ceiling,
+                100.0 * r.copy_bytes_per_s / ceiling
+            );
+        }
+    }
+}
+
 fn row(
     backend: &str,
     scenario: &str,
@@ -426,13 +589,15 @@ fn print_report(results: &[ResultRow], peers: &[peers::PeerRow], list: &[scenari
     for p in peers {
         match (p.evals_per_s, &p.skipped) {
             (Some(v), _) => outln!(
-                "  {:<8} {:<20} {:>9} tuples {:>10.2} M evals/s",
+                "  {:<13} {:<20} {:>9} tuples {:>10.2} M evals/s{}",
                 p.name,
                 p.scenario,
                 p.tuples,
-                v / 1e6
+                v / 1e6,
+                p.max_rel_err
+                    .map_or(String::new(), |e| format!("   max rel err {e:.2e}"))
             ),
-            (None, Some(why)) => outln!("  {:<8} {:<20} skipped: {why}", p.name, p.scenario),
+            (None, Some(why)) => outln!("  {:<13} {:<20} skipped: {why}", p.name, p.scenario),
             _ => {}
         }
     }
@@ -452,7 +617,7 @@ fn print_report(results: &[ResultRow], peers: &[peers::PeerRow], list: &[scenari
                         && r.tuples == p.tuples
                 }) {
                     outln!(
-                        "  {:<18} vs {:<8} {:<11} {:.2}×",
+                        "  {:<18} vs {:<13} {:<11} {:.2}×",
                         sc.name,
                         p.name,
                         mode,

@@ -308,6 +308,9 @@ pub(crate) struct PhysicalInfo {
     pub memory: vk::PhysicalDeviceMemoryProperties,
     /// A queue family with compute support, if any.
     pub compute_family: Option<u32>,
+    /// Valid bits of that family's timestamps (0: it has none; kernel timing then uses
+    /// fences around a whole submission).
+    pub timestamp_bits: u32,
     /// Subgroup size (Vulkan 1.1+).
     pub subgroup_size: Option<u32>,
     /// Whether compute shaders can use subgroup arithmetic (subgroupAdd, subgroupMin).
@@ -379,9 +382,12 @@ pub(crate) fn enumerate(instance: &Instance) -> Result<Vec<PhysicalInfo>> {
             .iter()
             .position(|f| f.queue_flags.contains(vk::QueueFlags::COMPUTE))
             .map(|i| i as u32);
+        let timestamp_bits =
+            compute_family.map_or(0, |i| families[i as usize].timestamp_valid_bits);
         let mut info = PhysicalInfo {
             raw,
             index,
+            timestamp_bits,
             properties,
             memory,
             compute_family,

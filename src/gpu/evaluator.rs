@@ -8,6 +8,7 @@
 mod generated;
 mod grouping;
 mod timing;
+pub use timing::{KernelClock, KernelTiming};
 
 use super::context::{Device, DeviceSelector, ValidationCounter};
 use super::kernel::{Kernels, WORKGROUP_SIZE};
@@ -278,6 +279,17 @@ impl VulkanBackend {
     /// The device's name (e.g. `llvmpipe (LLVM 15.0.6, 256 bits)`).
     pub fn device_name(&self) -> String {
         self.device.physical.name()
+    }
+
+    /// Whether the device is a CPU implementation (lavapipe, SwiftShader).
+    pub fn is_cpu_device(&self) -> bool {
+        self.device.physical.properties.device_type == vk::PhysicalDeviceType::CPU
+    }
+
+    /// Whether the kernel computes its frame in f64 on this device (see
+    /// `VKBRDF_DISABLE_FLOAT64`).
+    pub fn float64_frame(&self) -> bool {
+        self.device.physical.shader_float64
     }
 
     /// Whether the validation layer is active (asked for and installed).
@@ -664,36 +676,9 @@ impl VulkanBackend {
         ];
         let ids = wanted.map(Buffer::id);
         if ids != slot.bound {
-            let infos: Vec<[vk::DescriptorBufferInfo; 1]> = wanted
-                .iter()
-                .map(|b| {
-                    [vk::DescriptorBufferInfo {
-                        buffer: b.raw(),
-                        offset: 0,
-                        range: vk::WHOLE_SIZE,
-                    }]
-                })
-                .collect();
-            let views = [slot.input_view.as_ref().expect("created above").raw()];
-            let writes: Vec<vk::WriteDescriptorSet> = infos
-                .iter()
-                .enumerate()
-                .map(|(binding, info)| {
-                    let binding = binding as u32;
-                    let write = vk::WriteDescriptorSet::default()
-                        .dst_set(slot.set)
-                        .dst_binding(binding)
-                        .descriptor_type(descriptor_type(binding));
-                    if binding == BINDING_TUPLE_TEXELS {
-                        write.texel_buffer_view(&views)
-                    } else {
-                        write.buffer_info(info)
-                    }
-                })
-                .collect();
-            // SAFETY: the set is not used by pending work (precondition) and every buffer
-            // in `wanted` is live.
-            unsafe { self.device.raw.update_descriptor_sets(&writes, &[]) };
+            let view = slot.input_view.as_ref().expect("created above");
+            // Precondition of this function: the set is not used by pending work.
+            write_set(&self.device, slot.set, &wanted, view);
             slot.bound = ids;
         }
         Ok(())
@@ -809,6 +794,46 @@ impl VulkanBackend {
             };
         }
     }
+}
+
+/// Points descriptor set `set` at `wanted` (one buffer per binding; the tuple-texel binding
+/// takes `view`, a view of the input buffer). Precondition: no pending work uses the set.
+fn write_set(
+    device: &Device,
+    set: vk::DescriptorSet,
+    wanted: &[&Buffer; BINDING_COUNT as usize],
+    view: &TexelView,
+) {
+    let infos: Vec<[vk::DescriptorBufferInfo; 1]> = wanted
+        .iter()
+        .map(|b| {
+            [vk::DescriptorBufferInfo {
+                buffer: b.raw(),
+                offset: 0,
+                range: vk::WHOLE_SIZE,
+            }]
+        })
+        .collect();
+    let views = [view.raw()];
+    let writes: Vec<vk::WriteDescriptorSet> = infos
+        .iter()
+        .enumerate()
+        .map(|(binding, info)| {
+            let binding = binding as u32;
+            let write = vk::WriteDescriptorSet::default()
+                .dst_set(set)
+                .dst_binding(binding)
+                .descriptor_type(descriptor_type(binding));
+            if binding == BINDING_TUPLE_TEXELS {
+                write.texel_buffer_view(&views)
+            } else {
+                write.buffer_info(info)
+            }
+        })
+        .collect();
+    // SAFETY: the set is not used by pending work (precondition) and every buffer and the
+    // view are live.
+    unsafe { device.raw.update_descriptor_sets(&writes, &[]) };
 }
 
 /// Makes `buffer` at least `bytes` large (replacing a smaller one; the old one is freed

@@ -1,10 +1,13 @@
-//! Storage buffers in host-visible, host-coherent memory, persistently mapped, with RAII.
+//! Storage buffers with RAII: host-visible ones persistently mapped, device-local ones not.
 //!
-//! Two memory preferences: [`MemoryUse::Upload`] (tuples, materials) prefers memory that is
-//! also `DEVICE_LOCAL` (resizable BAR / unified memory), [`MemoryUse::Readback`] (results,
-//! counters) prefers `HOST_CACHED`, so host reads of results are cached reads. Both require
-//! `HOST_VISIBLE | HOST_COHERENT`, which the spec guarantees to exist, so no flush or
-//! invalidate calls are needed. On lavapipe every type is ordinary RAM.
+//! Two host-visible preferences: [`MemoryUse::Upload`] (tuples, materials) prefers memory
+//! that is also `DEVICE_LOCAL` (resizable BAR / unified memory), [`MemoryUse::Readback`]
+//! (results, counters) prefers `HOST_CACHED`, so host reads of results are cached reads. Both
+//! require `HOST_VISIBLE | HOST_COHERENT`, which the spec guarantees to exist, so no flush or
+//! invalidate calls are needed. [`MemoryUse::Resident`] is `DEVICE_LOCAL` only (VRAM on a
+//! discrete GPU), filled and read by transfer commands: the bench's kernel-only timing keeps
+//! its tuples there, as an application whose data already lives on the GPU would. On
+//! lavapipe every type is ordinary RAM.
 
 use super::context::Device;
 use super::vk_error;
@@ -21,6 +24,8 @@ pub(crate) enum MemoryUse {
     Upload,
     /// Written by the device, read by the host.
     Readback,
+    /// Device-local, not mapped: reached by the host only through transfer commands.
+    Resident,
 }
 
 /// Source of [`Buffer::id`]s.
@@ -65,8 +70,17 @@ impl Buffer {
                 MemoryUse::Upload => {
                     vk::BufferUsageFlags::STORAGE_BUFFER
                         | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER
+                        | vk::BufferUsageFlags::TRANSFER_SRC
                 }
-                MemoryUse::Readback => vk::BufferUsageFlags::STORAGE_BUFFER,
+                MemoryUse::Readback => {
+                    vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST
+                }
+                MemoryUse::Resident => {
+                    vk::BufferUsageFlags::STORAGE_BUFFER
+                        | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER
+                        | vk::BufferUsageFlags::TRANSFER_SRC
+                        | vk::BufferUsageFlags::TRANSFER_DST
+                }
             })
             .sharing_mode(vk::SharingMode::EXCLUSIVE);
         let d = &device.raw;
@@ -88,11 +102,14 @@ impl Buffer {
         let mut guard = Guard(d, raw, vk::DeviceMemory::null());
         // SAFETY: `raw` is a live buffer of this device.
         let req = unsafe { d.get_buffer_memory_requirements(raw) };
-        let required =
-            vk::MemoryPropertyFlags::HOST_VISIBLE | vk::MemoryPropertyFlags::HOST_COHERENT;
-        let preferred = match usage {
-            MemoryUse::Upload => vk::MemoryPropertyFlags::DEVICE_LOCAL,
-            MemoryUse::Readback => vk::MemoryPropertyFlags::HOST_CACHED,
+        let host = vk::MemoryPropertyFlags::HOST_VISIBLE | vk::MemoryPropertyFlags::HOST_COHERENT;
+        let (required, preferred) = match usage {
+            MemoryUse::Upload => (host, vk::MemoryPropertyFlags::DEVICE_LOCAL),
+            MemoryUse::Readback => (host, vk::MemoryPropertyFlags::HOST_CACHED),
+            MemoryUse::Resident => (
+                vk::MemoryPropertyFlags::DEVICE_LOCAL,
+                vk::MemoryPropertyFlags::empty(),
+            ),
         };
         let type_index = memory_type(
             &device.physical.memory,
@@ -101,10 +118,9 @@ impl Buffer {
             preferred,
         )
         .ok_or_else(|| {
-            Error::Unsupported(
-                "the device has no host-visible, host-coherent memory type for storage buffers"
-                    .into(),
-            )
+            Error::Unsupported(format!(
+                "the device has no {required:?} memory type for storage buffers"
+            ))
         })?;
         let alloc = vk::MemoryAllocateInfo::default()
             .allocation_size(req.size)
@@ -116,10 +132,14 @@ impl Buffer {
         guard.2 = memory;
         // SAFETY: fresh buffer and memory of a compatible type and sufficient size, offset 0.
         unsafe { d.bind_buffer_memory(raw, memory, 0) }.map_err(vk_error("vkBindBufferMemory"))?;
-        // SAFETY: the memory is host visible and not mapped yet; the whole range is mapped.
-        let mapped =
+        let mapped = if usage == MemoryUse::Resident {
+            std::ptr::null_mut()
+        } else {
+            // SAFETY: the memory is host visible (required above) and not mapped yet; the
+            // whole range is mapped.
             unsafe { d.map_memory(memory, 0, vk::WHOLE_SIZE, vk::MemoryMapFlags::empty()) }
-                .map_err(vk_error("vkMapMemory"))?;
+                .map_err(vk_error("vkMapMemory"))?
+        };
         std::mem::forget(guard);
         Ok(Buffer {
             id: NEXT_ID.fetch_add(1, Ordering::Relaxed),
@@ -151,13 +171,15 @@ impl Buffer {
     /// Copies `data` into the buffer at byte `offset`.
     ///
     /// # Panics
-    /// If the data does not fit (a caller bug: buffers are sized before use).
+    /// If the data does not fit, or the buffer is [`MemoryUse::Resident`] (caller bugs:
+    /// buffers are sized before use, and resident ones are filled by transfers).
     ///
     /// # Safety
     /// No submitted, unfinished GPU work may read or write this buffer (the caller has
     /// waited on the fence of the last submission that used it).
     pub unsafe fn write<T: Pod>(&mut self, offset: u64, data: &[T]) {
         let bytes: &[u8] = bytemuck::cast_slice(data);
+        assert!(!self.mapped.is_null(), "a resident buffer is not mapped");
         assert!(
             offset + bytes.len() as u64 <= self.size,
             "buffer write out of range"
@@ -176,13 +198,14 @@ impl Buffer {
     /// Copies `out.len()` elements from byte `offset` of the buffer into `out`.
     ///
     /// # Panics
-    /// If the range is outside the buffer.
+    /// If the range is outside the buffer, or the buffer is [`MemoryUse::Resident`].
     ///
     /// # Safety
     /// As for [`Buffer::write`]: the device must have finished writing the buffer (fence
     /// waited, and the command buffer's barrier made the writes host-visible).
     pub unsafe fn read<T: Pod>(&self, offset: u64, out: &mut [T]) {
         let bytes: &mut [u8] = bytemuck::cast_slice_mut(out);
+        assert!(!self.mapped.is_null(), "a resident buffer is not mapped");
         assert!(
             offset + bytes.len() as u64 <= self.size,
             "buffer read out of range"
@@ -213,7 +236,8 @@ impl Drop for Buffer {
 // owned by this buffer; moving the owner to another thread moves that ownership with it.
 unsafe impl Send for Buffer {}
 
-/// An RGBA32F view of a whole [`Buffer`] (created with [`MemoryUse::Upload`], whose size is a
+/// An RGBA32F view of a whole [`Buffer`] (created with [`MemoryUse::Upload`] or
+/// [`MemoryUse::Resident`], whose size is a
 /// multiple of 16 bytes), for binding it as a uniform texel buffer. Destroyed on drop; the
 /// owner drops it before the buffer it views.
 pub(crate) struct TexelView {

@@ -162,3 +162,56 @@ impl Drop for DescriptorPool {
         unsafe { self.device.raw.destroy_descriptor_pool(self.raw, None) };
     }
 }
+
+/// A pool of `count` timestamp queries (destroyed on drop).
+pub(crate) struct TimestampPool {
+    raw: vk::QueryPool,
+    count: u32,
+    device: Arc<Device>,
+}
+
+impl TimestampPool {
+    pub fn new(device: &Arc<Device>, count: u32) -> Result<TimestampPool> {
+        let info = vk::QueryPoolCreateInfo::default()
+            .query_type(vk::QueryType::TIMESTAMP)
+            .query_count(count);
+        // SAFETY: the device is live (`Arc<Device>`, also kept by the pool); `info` has no
+        // extension chain.
+        let raw = unsafe { device.raw.create_query_pool(&info, None) }
+            .map_err(vk_error("vkCreateQueryPool"))?;
+        Ok(TimestampPool {
+            raw,
+            count,
+            device: Arc::clone(device),
+        })
+    }
+
+    pub fn raw(&self) -> vk::QueryPool {
+        self.raw
+    }
+
+    /// The pool's `count` raw timestamps, waiting until every one is available.
+    /// Precondition: a submission that wrote all of them has completed (fence waited).
+    pub fn results(&self) -> Result<Vec<u64>> {
+        let mut data = vec![0u64; self.count as usize];
+        // SAFETY: the pool belongs to this device; `data` holds `count` u64s, the layout the
+        // TYPE_64 flag asks for; WAIT returns once the (completed) writes are available.
+        unsafe {
+            self.device.raw.get_query_pool_results(
+                self.raw,
+                0,
+                &mut data,
+                vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
+            )
+        }
+        .map_err(vk_error("vkGetQueryPoolResults"))?;
+        Ok(data)
+    }
+}
+
+impl Drop for TimestampPool {
+    fn drop(&mut self) {
+        // SAFETY: owners drop the pool only after waiting for the submissions using it.
+        unsafe { self.device.raw.destroy_query_pool(self.raw, None) };
+    }
+}
