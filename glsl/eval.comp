@@ -26,7 +26,8 @@ layout(local_size_x_id = 0) in;
 // so 3 fetches instead of 10 loads per row (measured: src/gpu/mod.rs, "Input").
 // textureBuffer, not samplerBuffer: a sampled image of Dim Buffer draws a SPIR-V warning
 // from the validation layer, and texelFetch needs no sampler.
-layout(set = 0, binding = BINDING_TUPLE_TEXELS) uniform textureBuffer tuple_texels;
+// Read as RGBA32UI, the bits themselves: see input_vector.
+layout(set = 0, binding = BINDING_TUPLE_TEXELS) uniform utextureBuffer tuple_texels;
 layout(std430, set = 0, binding = BINDING_MATERIALS) readonly buffer Materials {
     GpuMaterial materials[];
 };
@@ -86,14 +87,42 @@ struct Row {
     vec3 n;
     float material;
     vec3 t; // 0 without HAS_TANGENTS
+    // The f32 bits of L, V, N, T as given: the f64 frame takes their exact values from them.
+    uvec3 l_bits, v_bits, n_bits, t_bits;
 };
 
-// The 4 floats at float offset `off` (0..3) of the 8 floats a, b.
-vec4 window4(vec4 a, vec4 b, uint off) {
+// The 4 words at offset `off` (0..3) of the 8 words a, b.
+uvec4 window4(uvec4 a, uvec4 b, uint off) {
     return off == 0u ? a
-        : off == 1u ? vec4(a.yzw, b.x)
-        : off == 2u ? vec4(a.zw, b.xy)
-        : vec4(a.w, b.xyz);
+        : off == 1u ? uvec4(a.yzw, b.x)
+        : off == 2u ? uvec4(a.zw, b.xy)
+        : uvec4(a.w, b.xyz);
+}
+
+// An input vector from its f32 bits, for the f32 arithmetic. GPUs flush f32 subnormals to
+// zero in arithmetic (NVIDIA's compute shaders do; lavapipe does not): without this, a
+// vector scaled into the subnormal range reads as zero, an invalid tuple, where the
+// reference sees a valid direction (FORMULAS.md §1: any length > 0; the stress corpus's
+// "denormal" vectors: 0.67 M of 10 M tuples misjudged on an H200). A vector whose largest
+// component is below 2^-63 is scaled by 2^64, exactly, since only its direction counts:
+// normal components through their exponent field, subnormal ones as float(mantissa) 2^-85,
+// both normal. Other vectors are used as read: a subnormal component is then below 2^-63
+// of the largest, beneath f32 resolution of the direction (the f64 frame, which reads the
+// bits through exact64, keeps even those).
+vec3 input_vector(uvec3 b) {
+    uvec3 mag = b & 0x7fffffffu;
+    uint top = max(mag.x, max(mag.y, mag.z));
+    if (top >= (64u << 23)) {
+        return uintBitsToFloat(b); // also NaN and Inf, for the invalid test
+    }
+    vec3 r;
+    for (int i = 0; i < 3; i++) {
+        float x = (mag[i] >> 23) == 0u
+            ? float(mag[i]) * uintBitsToFloat((127u - 85u) << 23)
+            : uintBitsToFloat(mag[i] + (64u << 23));
+        r[i] = (b[i] & 0x80000000u) != 0u ? -x : x;
+    }
+    return r;
 }
 
 // Row `row` from the texels that hold it. It starts at float row * COLUMNS, i.e. at float
@@ -104,31 +133,43 @@ Row load_row(uint row) {
     uint start = row * COLUMNS;
     int first = int(start >> 2u);
     uint off = start & 3u;
-    vec4 a = texelFetch(tuple_texels, first);
-    vec4 b = texelFetch(tuple_texels, first + 1);
-    vec4 c = texelFetch(tuple_texels, first + 2);
+    uvec4 a = texelFetch(tuple_texels, first);
+    uvec4 b = texelFetch(tuple_texels, first + 1);
+    uvec4 c = texelFetch(tuple_texels, first + 2);
 #if defined(HAS_TANGENTS)
-    vec4 d = texelFetch(tuple_texels, first + 3);
+    uvec4 d = texelFetch(tuple_texels, first + 3);
 #else
-    vec4 d = vec4(0.0); // 10 columns end within c (off is 0 or 2)
+    uvec4 d = uvec4(0u); // 10 columns end within c (off is 0 or 2)
 #endif
-    vec4 w0 = window4(a, b, off); // Lx Ly Lz Vx
-    vec4 w1 = window4(b, c, off); // Vy Vz Nx Ny
-    vec4 w2 = window4(c, d, off); // Nz material Tx Ty
+    uvec4 w0 = window4(a, b, off); // Lx Ly Lz Vx
+    uvec4 w1 = window4(b, c, off); // Vy Vz Nx Ny
+    uvec4 w2 = window4(c, d, off); // Nz material Tx Ty
     Row r;
-    r.l = w0.xyz;
-    r.v = vec3(w0.w, w1.xy);
-    r.n = vec3(w1.zw, w2.x);
-    r.material = w2.y;
+    r.l_bits = w0.xyz;
+    r.v_bits = uvec3(w0.w, w1.xy);
+    r.n_bits = uvec3(w1.zw, w2.x);
+    r.material = uintBitsToFloat(w2.y);
 #if defined(HAS_TANGENTS)
-    r.t = vec3(w2.zw, window4(d, d, off).x); // Tz = d[off]
+    r.t_bits = uvec3(w2.zw, window4(d, d, off).x); // Tz = d[off]
 #else
-    r.t = vec3(0.0);
+    r.t_bits = uvec3(0u);
 #endif
+    r.l = input_vector(r.l_bits);
+    r.v = input_vector(r.v_bits);
+    r.n = input_vector(r.n_bits);
+    r.t = input_vector(r.t_bits);
     return r;
 }
 
 #if defined(GENERATE_HALF_DIFF) || defined(GENERATE_IMPORTANCE)
+// The bits of a row made on the device (normal values: no subnormal to keep).
+void set_bits(inout Row r) {
+    r.l_bits = floatBitsToUint(r.l);
+    r.v_bits = floatBitsToUint(r.v);
+    r.n_bits = floatBitsToUint(r.n);
+    r.t_bits = floatBitsToUint(r.t);
+}
+
 // Texel `g` of the half/difference slice (src/table/slice.rs, Rusinkiewicz 1998), made on
 // the device instead of read: column i -> x = (i + 1/2)/W, theta_h = x^2 pi/2 (or x pi/2);
 // row j -> theta_d = (j + 1/2)/H pi/2; phi_d = 90 degrees, phi_h = 0, n = +z, material 0,
@@ -189,6 +230,7 @@ Row half_diff_row(uint g) {
     r.n = vec3(0.0, 0.0, 1.0);
     r.material = 0.0;
     r.t = vec3(1.0, 0.0, 0.0);
+    set_bits(r);
     return r;
 }
 #endif
@@ -196,9 +238,34 @@ Row half_diff_row(uint g) {
 
 // Builds the frame of FORMULAS.md §1 and classifies the tuple. The invalid test comes first.
 #if defined(HAS_FLOAT64)
-// a/|a| in f64 from an f32 vector (finite and non-zero: checked before).
-dvec3 unit64(vec3 a) {
-    dvec3 d = dvec3(a);
+// The exact value of the f32 with bits `b`, subnormals included: through the integer
+// mantissa, since a device that flushes f32 subnormals may flush them in a float-to-double
+// conversion too (the stress corpus's cosines of 1e-45 are subnormal components).
+double exact64(uint b) {
+    uint mag = b & 0x7fffffffu;
+    double x = (mag >> 23) == 0u ? ldexp(double(mag), -149) : double(uintBitsToFloat(mag));
+    return (b & 0x80000000u) != 0u ? -x : x;
+}
+
+// An f64 value of the frame rounded to f32 as a GPU rounds it: below FLT_MIN, 0. GPUs
+// flush f32 subnormals (NVIDIA does, in conversions and arithmetic; lavapipe does not), so
+// the f32 copies of the frame's quantities are flushed on every device: the code that
+// reads them (and falls back to the f64 ones where they vanish) then behaves on lavapipe
+// as on a GPU, and the stress corpus tests it here (its cosines of 1e-45 made 0.1 M
+// non-finite outputs on an H200 before).
+float f32_of(double x) {
+    return abs(x) < double(FLT_MIN) ? 0.0 : float(x);
+}
+vec2 f32_of(dvec2 x) {
+    return vec2(f32_of(x.x), f32_of(x.y));
+}
+vec3 f32_of(dvec3 x) {
+    return vec3(f32_of(x.x), f32_of(x.y), f32_of(x.z));
+}
+
+// a/|a| in f64 from an input vector's f32 bits (finite and non-zero: checked before).
+dvec3 unit64(uvec3 b) {
+    dvec3 d = dvec3(exact64(b.x), exact64(b.y), exact64(b.z));
     return d / sqrt(dot(d, d));
 }
 #endif
@@ -231,10 +298,20 @@ uint make_frame(Row r, GpuMaterial m, out Frame f) {
         bool ok_t;
         vec3 t = safe_normalize(r.t, ok_t);
         // |T - n(n.T)| = |n x t| |T|: the tuple is invalid when |n x t| <= 1e-12 (FORMULAS.md
-        // §1), tested squared.
-        vec3 nxt = cross(f.n, t);
-        float s2 = dot(nxt, nxt);
-        if (!ok_t || s2 <= 1e-24) {
+        // §1), tested squared. `precise`: a compiler that contracts a*b - c*d into an FMA
+        // (NVIDIA's does) leaves n x n at ~1e-8 instead of 0, and every tangent parallel
+        // to the normal passed as valid (the stress corpus on an H200: 0.24 M of 10 M
+        // tuples). Where the device has f64 the test is made there, from the exact inputs,
+        // as the reference makes it.
+        precise vec3 nxt = cross(f.n, t);
+        precise float s2 = dot(nxt, nxt);
+#if defined(HAS_FLOAT64)
+        dvec3 nxt64 = cross(unit64(r.n_bits), unit64(r.t_bits));
+        bool parallel = dot(nxt64, nxt64) <= 1e-24LF;
+#else
+        bool parallel = s2 <= 1e-24;
+#endif
+        if (!ok_t || parallel) {
             return STATUS_INVALID;
         }
         // b = n x t / |n x t| and t = b x n: the same frame as t = normalize(T - n(n.T)),
@@ -262,10 +339,10 @@ uint make_frame(Row r, GpuMaterial m, out Frame f) {
     //   cos_h^2 + slope2 rather than a logarithm, was 1e-4 off at |l + v| = 2e-3 even at
     //   m = 1, where D is constant (found by tests/vulkan_properties.rs).
     // Cost on lavapipe: 1.05-1.4x the f32 frame's time (examples/kernel_time.rs).
-    dvec3 dn = unit64(r.n), dl = unit64(r.l), dv = unit64(r.v);
+    dvec3 dn = unit64(r.n_bits), dl = unit64(r.l_bits), dv = unit64(r.v_bits);
     double cos_i = dot(dn, dl), cos_o = dot(dn, dv);
-    f.cos_i = float(cos_i);
-    f.cos_o = float(cos_o);
+    f.cos_i = f32_of(cos_i);
+    f.cos_o = f32_of(cos_o);
     f.cos_i_exact = cos_i;
     f.cos_o_exact = cos_o;
     // The horizon test on the f64 cosines, as the reference decides it: a cosine below
@@ -278,39 +355,39 @@ uint make_frame(Row r, GpuMaterial m, out Frame f) {
     dvec3 lv = dl + dv;
     double len = sqrt(dot(lv, lv));
     dvec3 h = lv / len;
-    f.h = vec3(h);
+    f.h = f32_of(h);
     // cos_h = (cos_i + cos_o)/|l + v| and c = |l + v|/2: see the f32 branch.
     f.cos_h_exact = (cos_i + cos_o) / len;
-    f.cos_h = float(f.cos_h_exact);
-    f.c = float(0.5 * len);
+    f.cos_h = f32_of(f.cos_h_exact);
+    f.c = f32_of(0.5 * len);
     f.c_exact = 0.5 * len;
     dvec3 nxh = cross(dn, h);
-    f.sin2_h = float(dot(nxh, nxh));
+    f.sin2_h = f32_of(dot(nxh, nxh));
 #if defined(HAS_ANISOTROPIC) && defined(HAS_TANGENTS)
     if (is_anisotropic(m)) {
         // h in the tangent frame, built in f64 as in the f32 branch: with roughness ratios
         // up to 1e4, (h.b/m_y)^2 turns an f32 error of ~1e-7 in h.b into 3e-2 in D (Ward
         // and Beckmann near the peak, stress corpus).
-        dvec3 nxt = cross(dn, unit64(r.t));
+        dvec3 nxt = cross(dn, unit64(r.t_bits));
         dvec3 b = nxt / sqrt(dot(nxt, nxt));
         dvec3 t = cross(b, dn);
-        f.hx = float(dot(h, t));
-        f.hy = float(dot(h, b));
-        f.l_tb = vec2(dot(dl, t), dot(dl, b));
-        f.v_tb = vec2(dot(dv, t), dot(dv, b));
+        f.hx = f32_of(dot(h, t));
+        f.hy = f32_of(dot(h, b));
+        f.l_tb = f32_of(dvec2(dot(dl, t), dot(dl, b)));
+        f.v_tb = f32_of(dvec2(dot(dv, t), dot(dv, b)));
     }
 #endif
 #if defined(HAS_G_SMITH) || defined(HAS_G_SMITH_CORRELATED) || defined(HAS_G_SMITH_FAST)
     dvec3 nxl = cross(dn, dl), nxv = cross(dn, dv); // only Smith's tan^2 reads them
-    f.sin2_i = float(dot(nxl, nxl));
-    f.sin2_o = float(dot(nxv, nxv));
+    f.sin2_i = f32_of(dot(nxl, nxl));
+    f.sin2_o = f32_of(dot(nxv, nxv));
 #endif
 #if defined(HAS_PHONG)
     if (m.kind.x == MODEL_PHONG) {
         dvec3 rr = 2.0 * cos_i * dn - dl;
         dvec3 rxv = cross(rr, dv);
-        f.rv = float(dot(rr, dv));
-        f.sin2_rv = float(dot(rxv, rxv));
+        f.rv = f32_of(dot(rr, dv));
+        f.sin2_rv = f32_of(dot(rxv, rxv));
     }
 #endif
 #else
@@ -409,10 +486,10 @@ void importance_block(uint g) {
     uint n = params.grid_height;
     uint p = quotient(g, blocks);
     uint b = g - p * blocks;
-    vec4 t0 = texelFetch(tuple_texels, int(4u * p));
-    vec4 t1 = texelFetch(tuple_texels, int(4u * p + 1u));
-    vec4 t2 = texelFetch(tuple_texels, int(4u * p + 2u));
-    vec4 t3 = texelFetch(tuple_texels, int(4u * p + 3u));
+    vec4 t0 = uintBitsToFloat(texelFetch(tuple_texels, int(4u * p)));
+    vec4 t1 = uintBitsToFloat(texelFetch(tuple_texels, int(4u * p + 1u)));
+    vec4 t2 = uintBitsToFloat(texelFetch(tuple_texels, int(4u * p + 2u)));
+    vec4 t3 = uintBitsToFloat(texelFetch(tuple_texels, int(4u * p + 3u)));
     vec3 v = t0.xyz;
     float g1 = t0.w, s = t1.w, alpha = t2.w;
     uint mi = min(uint(t3.w), params.material_count - 1u);
@@ -452,6 +529,7 @@ void importance_block(uint g) {
         r.n = vec3(0.0, 0.0, 1.0);
         r.material = 0.0;
         r.t = vec3(0.0);
+        set_bits(r);
         Frame f;
         if (make_frame(r, m, f) != STATUS_VALID) {
             continue;

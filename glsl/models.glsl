@@ -68,6 +68,18 @@ bool is_anisotropic(GpuMaterial m) {
     return (m.kind.w & FLAG_ANISOTROPIC) != 0u;
 }
 
+// ln cos_h for the lobes cos_h^e. Where the f32 cos_h is not a normal number (cosines of
+// 1e-45 make it ~1e-45, and GPUs flush that to 0: make_frame's f32_of), from the f64
+// cos_h: ln of 0 would give cos_h^1 = 1 instead of 1e-45 (RTR at e = 1, stress corpus).
+float ln_cos_h(Frame f) {
+#if defined(HAS_FLOAT64)
+    if (f.cos_h < FLT_MIN) {
+        return float(log_f64(f.cos_h_exact));
+    }
+#endif
+    return log_cos(f.cos_h, f.sin2_h);
+}
+
 // (hx/mx)^2 + (hy/my)^2, i.e. tan2_h / m^2 times cos_h^2 (isotropic: sin2_h / m^2).
 float slope2_h(Frame f, GpuMaterial m) {
 #if defined(HAS_ANISOTROPIC)
@@ -140,7 +152,7 @@ Eval model_phong(Frame f, GpuMaterial m) {
 // Blinn 1977 as written in the seed lecture: c_diff/pi + c_spec cos_h^e / (pi cos_i)
 // (not reciprocal; the 1/pi is in m.scale.x).
 Eval model_blinn_phong(Frame f, GpuMaterial m) {
-    float p = exp_acc(m.lobe.x * log_cos(f.cos_h, f.sin2_h));
+    float p = exp_acc(m.lobe.x * ln_cos_h(f));
 #if defined(HAS_FLOAT64)
     // 1/cos_i overflows float32 (or cos_i rounded to 0, and 0/0 = NaN) below TINY_COS.
     if (f.cos_i_exact < TINY_COS) {
@@ -150,9 +162,9 @@ Eval model_blinn_phong(Frame f, GpuMaterial m) {
         // The quotient is then formed in the log domain, ln cos_h from the f64 cosine where
         // the f32 one is not a normal number.
         if (p < 1.1754944e-38 && m.lobe.x > 0.0) {
-            double ln_cos_h = f.cos_h >= 1.1754944e-38 ? double(log_cos(f.cos_h, f.sin2_h))
-                                                       : log_f64(f.cos_h_exact);
-            double ln_q = double(m.lobe.x) * ln_cos_h - log_f64(f.cos_i_exact);
+            double ln_cos = f.cos_h >= FLT_MIN ? double(log_cos(f.cos_h, f.sin2_h))
+                                               : log_f64(f.cos_h_exact);
+            double ln_q = double(m.lobe.x) * ln_cos - log_f64(f.cos_i_exact);
             return eval_lobe_f64(m, double(m.scale.x) * exp_f64(ln_q));
         }
         return eval_lobe_f64(m, double(m.scale.x * p) / f.cos_i_exact);
@@ -166,7 +178,7 @@ Eval model_blinn_phong(Frame f, GpuMaterial m) {
 // Akenine-Möller, Haines & Hoffman 2008, "Real-Time Rendering", 3rd ed., §5.5 (the seed's
 // shading equation): c_diff/pi + c_spec (e+8)/(8 pi) cos_h^e, the (e+8)/(8 pi) in m.scale.x.
 Eval model_rtr(Frame f, GpuMaterial m) {
-    return eval_lobe(m, m.scale.x * exp_acc(m.lobe.x * log_cos(f.cos_h, f.sin2_h)));
+    return eval_lobe(m, m.scale.x * exp_acc(m.lobe.x * ln_cos_h(f)));
 }
 #endif
 
@@ -232,6 +244,35 @@ double smith_fast_g1_f64(GpuMaterial m, vec2 w_tb, float sin2_w, double cos_w) {
 #endif
 }
 
+// D in f64 (log domain) for a tuple with min(cos_i, cos_o) < TINY_COS whose f32 D is not
+// a normal number: K is then as large as 1e90, and D = 1e-38 (a sharp lobe, a Beckmann tail)
+// still makes an O(1e6) BRDF. GPUs flush such a D to 0 (NVIDIA does; lavapipe keeps a
+// subnormal D with fewer bits), which lost the specular term altogether (stress corpus on
+// an H200). The slope and angle come from the f32 frame; only the range is f64's.
+double d_f64(Frame f, GpuMaterial m) {
+    double ln_cos = f.cos_h >= FLT_MIN ? double(log_cos(f.cos_h, f.sin2_h)) : log_f64(f.cos_h_exact);
+    switch (m.kind.y) {
+#if defined(HAS_D_GAUSSIAN)
+    case DIST_GAUSSIAN: {
+        double delta = double(atan2_positive(sqrt(f.sin2_h), f.cos_h));
+        return exp_f64(-delta * delta * double(m.lobe.x));
+    }
+#endif
+#if defined(HAS_D_BECKMANN)
+    case DIST_BECKMANN: {
+        double c2 = f.cos_h_exact * f.cos_h_exact;
+        return exp_f64(log_f64(double(m.scale.x)) - double(slope2_h(f, m)) / c2 - 4.0 * ln_cos);
+    }
+#endif
+#if defined(HAS_D_BLINN)
+    case DIST_BLINN:
+        return exp_f64(log_f64(double(m.scale.x)) + double(m.lobe.x) * ln_cos);
+#endif
+    default: // GGX: D >= 1/(pi m^2 (1/m^2)^2) > 1e-15 for roughness in [1e-7, 1e4]
+        return 0.0;
+    }
+}
+
 // G and K in f64 for a tuple with min(cos_i, cos_o) < TINY_COS, where float32 overflows K
 // and underflows G although their product stays finite (FORMULAS.md §1, "Overflow").
 void cook_torrance_gk_f64(Frame f, GpuMaterial m, uint convention, out double g, out double k) {
@@ -239,7 +280,7 @@ void cook_torrance_gk_f64(Frame f, GpuMaterial m, uint convention, out double g,
     g = 1.0;
     switch (m.kind.z) {
     case GEOM_COOK_TORRANCE: {
-        double t = 2.0 * double(f.cos_h) / f.c_exact;
+        double t = 2.0 * f.cos_h_exact / f.c_exact; // the f32 cos_h may be flushed to 0
         g = min(1.0, min(t * co, t * ci));
         break;
     }
@@ -365,14 +406,17 @@ Eval model_cook_torrance(Frame f, GpuMaterial m) {
     // +inf only if the exact value exceeds FLT_MAX (saturated by the caller).
     bool tiny = min(f.cos_i_exact, f.cos_o_exact) < TINY_COS;
     if (tiny || any_non_finite(e.brdf)) {
-        double g64 = double(e.g), k64 = double(e.k);
+        double d64 = double(e.d), g64 = double(e.g), k64 = double(e.k);
         if (tiny) {
             cook_torrance_gk_f64(f, m, convention, g64, k64);
             e.g = float(g64);
             e.k = float_or_inf(k64);
+            if (e.d < FLT_MIN && m.kind.y != DIST_GGX) {
+                d64 = d_f64(f, m);
+            }
         }
         dvec3 b = dvec3(m.diffuse.rgb)
-            + dvec3(m.specular.rgb) * ((double(e.d) * g64 * k64) * dvec3(e.f));
+            + dvec3(m.specular.rgb) * ((d64 * g64 * k64) * dvec3(e.f));
         e.brdf = vec3(float_or_inf(b.x), float_or_inf(b.y), float_or_inf(b.z));
     }
 #endif

@@ -172,7 +172,7 @@ struct Pending {
 
 /// One frame in flight: its buffers, descriptor set, command buffer and fence.
 struct Slot {
-    /// The RGBA32F view of `input` (declared first: dropped before the buffer it views).
+    /// The RGBA32UI view of `input` (declared first: dropped before the buffer it views).
     input_view: Option<TexelView>,
     input: Option<Buffer>,
     /// The chunk's evaluation order (`BUCKETED` kernels only).
@@ -355,7 +355,7 @@ impl VulkanBackend {
         let per_chunk_tuple = FRAMES_IN_FLIGHT as u64 * WORST_CASE_BYTES_PER_TUPLE;
         let by_memory = self.options.max_gpu_memory.saturating_sub(fixed) / per_chunk_tuple;
         let by_range = u64::from(limits.max_storage_buffer_range) / (4 * COLUMNS_TANGENT as u64);
-        // The input is also viewed as RGBA32F texels (4 floats each, one spare at the end).
+        // The input is also viewed as RGBA32UI texels (4 words each, one spare at the end).
         let by_texels = (u64::from(limits.max_texel_buffer_elements).saturating_sub(1) * 4)
             / COLUMNS_TANGENT as u64;
         let by_dispatch =
@@ -622,7 +622,7 @@ impl VulkanBackend {
     ) -> Result<()> {
         let slot = &mut self.slots[s];
         debug_assert!(slot.pending.is_none());
-        // Whole RGBA32F texels, so the texel view covers every input float.
+        // Whole RGBA32UI texels, so the texel view covers every input float.
         let input_bytes = (4 * input_floats as u64).div_ceil(16) * 16;
         if slot.input.as_ref().map_or(true, |b| b.size() < input_bytes) {
             slot.input_view = None; // the view goes before the buffer it views

@@ -79,7 +79,7 @@ pub const BINDING_BRDF: u32 = 2;
 pub const BINDING_TERMS: u32 = 3;
 /// Descriptor binding of the [`GpuCounts`] of a chunk.
 pub const BINDING_COUNTS: u32 = 4;
-/// Descriptor binding of the tuple input again, as a uniform texel buffer of RGBA32F texels
+/// Descriptor binding of the tuple input again, as a uniform texel buffer of RGBA32UI texels (the bits, read exactly)
 /// over the same bytes as [`BINDING_TUPLES`] (the kernel reads its rows through it: on
 /// lavapipe `texelFetch` of a vec4 is far cheaper than four scalar storage-buffer loads).
 pub const BINDING_TUPLE_TEXELS: u32 = 5;

@@ -236,7 +236,7 @@ impl Drop for Buffer {
 // owned by this buffer; moving the owner to another thread moves that ownership with it.
 unsafe impl Send for Buffer {}
 
-/// An RGBA32F view of a whole [`Buffer`] (created with [`MemoryUse::Upload`] or
+/// An RGBA32UI view of a whole [`Buffer`] (created with [`MemoryUse::Upload`] or
 /// [`MemoryUse::Resident`], whose size is a
 /// multiple of 16 bytes), for binding it as a uniform texel buffer. Destroyed on drop; the
 /// owner drops it before the buffer it views.
@@ -248,12 +248,13 @@ pub(crate) struct TexelView {
 }
 
 impl TexelView {
-    /// A view of all of `buffer` as RGBA32F texels.
+    /// A view of all of `buffer` as RGBA32UI texels: the kernel reads the inputs' bits
+    /// (a float format's texel fetch could flush subnormals; eval.comp, `input_vector`).
     pub fn new(device: &Arc<Device>, buffer: &Buffer) -> Result<TexelView> {
         debug_assert_eq!(buffer.size() % 16, 0, "a texel view covers whole texels");
         let info = vk::BufferViewCreateInfo::default()
             .buffer(buffer.raw())
-            .format(vk::Format::R32G32B32A32_SFLOAT)
+            .format(vk::Format::R32G32B32A32_UINT)
             .offset(0)
             .range(buffer.size() / 16 * 16);
         // SAFETY: the buffer is live, was created with UNIFORM_TEXEL_BUFFER usage, and the

@@ -1,0 +1,79 @@
+//! What the first run on a real GPU (an NVIDIA H200, docs/gpu-report-h200.md) found, pinned
+//! here on lavapipe. GPUs flush f32 subnormals to zero; the kernel's f64 frame now rounds
+//! its f32 copies the same way on every device (eval.comp, `f32_of`), so these rows — each
+//! wrong on the H200 before the fix — exercise on lavapipe the paths a GPU takes.
+
+mod common;
+
+use vkbrdf::backend::{Backend, Request};
+use vkbrdf::batch::Batch;
+use vkbrdf::reference::CpuReference;
+use vkbrdf::stress::corpus::corpus_rows;
+
+fn rel(a: f32, b: f32) -> f64 {
+    (f64::from(a) - f64::from(b)).abs() / f64::from(b).abs().max(1e-6)
+}
+
+/// Stress-corpus rows (seed 7) whose cosines or cos_h are below FLT_MIN: a blinn-phong
+/// lobe read as FLT_MAX, a Cook–Torrance D of 1e-38 times K of 1e45 read as 0, a
+/// Cook–Torrance G from a flushed cos_h, an RTR lobe of 1e-45 read as 0.0036.
+#[test]
+fn tiny_cosine_rows_match_the_reference_as_on_a_gpu() {
+    let Some(mut gpu) = common::vulkan() else {
+        return;
+    };
+    let mut cpu = CpuReference::new();
+    for row in [5_213_515, 31_120, 49_096, 3_007_474, 80_168] {
+        let (materials, batch, _) = corpus_rows(row..row + 1, 7);
+        let request = Request { terms: false };
+        let got = gpu.evaluate(&batch, &materials, &request).expect("vulkan");
+        let want = cpu
+            .evaluate(&batch, &materials, &request)
+            .expect("reference");
+        for (g, w) in got.brdf.iter().zip(&want.brdf) {
+            assert!(
+                rel(*g, *w) < 1e-5,
+                "corpus row {row}: kernel {g}, reference {w}"
+            );
+        }
+    }
+}
+
+/// A direction scaled into the f32 subnormal range is the same direction: the kernel reads
+/// the input bits and rescales them exactly (a GPU flushes subnormal arithmetic operands,
+/// which made 0.67 M of 10 M stress tuples invalid on the H200).
+#[test]
+fn subnormal_scaled_vectors_give_the_unscaled_result() {
+    let Some(mut gpu) = common::vulkan() else {
+        return;
+    };
+    let materials = vec![vkbrdf::material::presets::preset("gold")
+        .expect("preset")
+        .expect("valid")];
+    let l = [0.3f32, -0.2, 0.9];
+    let v = [-0.4f32, 0.1, 0.8];
+    let n = [0.05f32, 0.02, 1.0];
+    let mut rows = Vec::new();
+    for scale in [1.0f32, 1e-40, 3e-45] {
+        let s = |w: [f32; 3]| w.map(|x| x * scale);
+        rows.extend(s(l));
+        rows.extend(s(v));
+        rows.extend(s(n));
+        rows.push(0.0);
+    }
+    assert!(
+        rows[10] != 0.0 && rows[10].abs() < f32::MIN_POSITIVE,
+        "scaled into subnormals"
+    );
+    let batch = Batch::new(rows, 10, materials.len(), std::path::Path::new("test")).expect("batch");
+    let out = gpu
+        .evaluate(&batch, &materials, &Request::default())
+        .expect("vulkan");
+    let want = CpuReference::new()
+        .evaluate(&batch, &materials, &Request::default())
+        .expect("reference");
+    assert_eq!(out.counts.invalid, 0);
+    for (i, (g, w)) in out.brdf.iter().zip(&want.brdf).enumerate() {
+        assert!(rel(*g, *w) < 1e-5, "value {i}: kernel {g}, reference {w}");
+    }
+}
