@@ -203,6 +203,40 @@ dvec3 unit64(vec3 a) {
 }
 #endif
 
+#if !defined(HAS_FLOAT64)
+// a 2^k with max |a_i| in [1, 2) (a finite and non-zero: checked before). A power of two:
+// exact, so the frame's pairs see the inputs themselves; without it the squares of
+// components near 1e-30 or 1e30 leave float32's range.
+vec3 scale_pow2(vec3 a) {
+    float m = max(max(abs(a.x), abs(a.y)), abs(a.z));
+    if (m < 1.1754944e-38) {
+        // A subnormal largest component has no exponent field to read: bring it into
+        // the normal range first (exact, a power of two).
+        a *= 18446744073709551616.0; // 2^64
+        m *= 18446744073709551616.0;
+    }
+    int e = int((floatBitsToUint(m) >> 23) & 0xffu) - 127;
+    return ldexp(a, ivec3(-e));
+}
+
+// 1 + l.v for unit l, v, from the scaled inputs L, V and their lengths (the reference's
+// construction, src/reference/frame.rs): p = L.V exact to a pair, q = |L||V|; for p >= 0
+// it is 1 + p/q, but for p < 0 that sum cancels near l = -v (grazing mirror geometry),
+// and Lagrange's identity |L|^2|V|^2 - (L.V)^2 = |L x V|^2 turns it into
+// |L x V|^2/(q (q - p)), a quotient of positives.
+vec2 one_plus_lv(vec3 ls, vec3 vs, vec2 nl, vec2 nv) {
+    vec2 p = dot_ff(ls, vs);
+    vec2 q = ff_mul(nl, nv);
+    if (p.x >= 0.0) {
+        return ff_add(vec2(1.0, 0.0), ff_div(p, q));
+    }
+    vec3 x_hi, x_lo;
+    cross_ff(ls, vs, x_hi, x_lo);
+    vec2 lxv = ff_sqrt(length2_ff3(x_hi, x_lo));
+    return ff_mul(ff_div(lxv, q), ff_div(lxv, ff_add(q, -p)));
+}
+#endif
+
 uint make_frame(Row r, GpuMaterial m, out Frame f) {
     bool ok_l, ok_v, ok_n;
     f.l = safe_normalize(r.l, ok_l);
@@ -218,10 +252,10 @@ uint make_frame(Row r, GpuMaterial m, out Frame f) {
     f.sin2_o = 0.0;
     f.l_tb = vec2(0.0);
     f.v_tb = vec2(0.0);
-    f.c_exact = 0.0;
-    f.cos_i_exact = 0.0;
-    f.cos_o_exact = 0.0;
-    f.cos_h_exact = 0.0;
+    f.c_exact = double_or_float(0.0);
+    f.cos_i_exact = double_or_float(0.0);
+    f.cos_o_exact = double_or_float(0.0);
+    f.cos_h_exact = double_or_float(0.0);
     if (!(ok_l && ok_v && ok_n)) {
         return STATUS_INVALID;
     }
@@ -314,46 +348,81 @@ uint make_frame(Row r, GpuMaterial m, out Frame f) {
     }
 #endif
 #else
-    f.cos_i = dot(f.n, f.l);
-    f.cos_o = dot(f.n, f.v);
-    f.cos_i_exact = f.cos_i;
-    f.cos_o_exact = f.cos_o;
-    if (f.cos_i <= 0.0 || f.cos_o <= 0.0) {
+    // No f64: the same scalars from the raw inputs with float-float pairs (ff.glsl), which
+    // carry ~48 bits where the f64 branch carries 53 (each reason as there):
+    // - cos_i, cos_o = N.L/(|N||L|), the dot product exact before its one rounding (the
+    //   products of f32 inputs are exact pairs), as the reference forms them;
+    // - |l + v| from 1 + l.v, by Lagrange's identity where l.v < 0 (see one_plus_lv);
+    // - l, v, n, h and the tangent frame as pair vectors, so that h's direction, |n x h|^2,
+    //   h.t, h.b and r.v keep their relative precision near l = -v, near the peak and at
+    //   roughness ratios up to 1e4.
+    vec3 ls = scale_pow2(r.l), vs = scale_pow2(r.v), ns = scale_pow2(r.n);
+    vec2 nl = ff_sqrt(dot_ff(ls, ls)), nv = ff_sqrt(dot_ff(vs, vs));
+    vec2 nn = ff_sqrt(dot_ff(ns, ns));
+    vec2 cos_i = ff_div(dot_ff(ns, ls), ff_mul(nn, nl));
+    vec2 cos_o = ff_div(dot_ff(ns, vs), ff_mul(nn, nv));
+    f.cos_i = ff_round(cos_i);
+    f.cos_o = ff_round(cos_o);
+    f.cos_i_exact = cos_i;
+    f.cos_o_exact = cos_o;
+    // The horizon test on the pairs' signs (hi is 0 only for an exact 0), as the reference
+    // decides it: a cosine below 7e-46 rounds to 0 in f32.
+    if (cos_i.x <= 0.0 || cos_o.x <= 0.0) {
         return STATUS_BELOW_HORIZON;
     }
-    // |l + v| >= cos_i + cos_o > 0 here, so h is well defined; its components are at most 2,
-    // so the plain length neither under- nor overflows.
-    vec3 lv = f.l + f.v;
-    float len = sqrt(dot(lv, lv));
-    f.h = lv / len;
-    // cos_h = n.h = (cos_i + cos_o) / |l + v|: positive by construction, as it is exactly.
-    // dot(n, h) is not: where l ~ -v (grazing, nearly opposite), l + v is dominated by the
-    // rounding of l and v, h points anywhere, and dot(n, h) can come out <= 0; log(cos_h)
-    // in D then turns into garbage and D into +inf (seen in the 10M-tuple stress corpus).
-    f.cos_h = (f.cos_i + f.cos_o) / len;
-    f.cos_h_exact = f.cos_h;
-    // c = v.h = |l + v| / 2 for unit l, v. Not dot(v, h): at grazing mirror geometry v is
-    // nearly perpendicular to h, and the dot product turns h's direction error (which grows
-    // as 1/|l + v|) into a relative error of ~u/(2c^2) in c (1e-3 at c = 0.005), where
-    // |l + v|/2 is off by ~u/c.
-    f.c = 0.5 * len;
-    f.c_exact = f.c;
-    f.sin2_h = cross_length2(f.n, f.h);
-    // Only what the kernel's models read (the same guards as the f64 branch).
-#if defined(HAS_ANISOTROPIC)
-    f.hx = dot(f.h, f.t); // 0 for isotropic materials (t = b = 0)
-    f.hy = dot(f.h, f.b);
-    f.l_tb = vec2(dot(f.l, f.t), dot(f.l, f.b));
-    f.v_tb = vec2(dot(f.v, f.t), dot(f.v, f.b));
+    vec2 lv_len = ff_sqrt(ff_mul_f(one_plus_lv(ls, vs, nl, nv), 2.0)); // |l + v| > 0 here
+    // cos_h = (cos_i + cos_o)/|l + v| and c = |l + v|/2, as in the f64 branch: dot(n, h)
+    // and dot(v, h) would inherit h's direction error, which grows as 1/|l + v|.
+    f.cos_h_exact = ff_div(ff_add(cos_i, cos_o), lv_len);
+    f.cos_h = ff_round(f.cos_h_exact);
+    f.c_exact = 0.5 * lv_len;
+    f.c = ff_round(f.c_exact);
+    vec3 l_hi = ls, l_lo = vec3(0.0), v_hi = vs, v_lo = vec3(0.0), n_hi = ns, n_lo = vec3(0.0);
+    div_ff3(l_hi, l_lo, nl);
+    div_ff3(v_hi, v_lo, nv);
+    div_ff3(n_hi, n_lo, nn);
+    vec3 h_hi, h_lo;
+    add_ff3(l_hi, l_lo, v_hi, v_lo, h_hi, h_lo);
+    div_ff3(h_hi, h_lo, lv_len);
+    f.h = h_hi + h_lo;
+    vec3 x_hi, x_lo;
+    cross_ff3(n_hi, n_lo, h_hi, h_lo, x_hi, x_lo);
+    f.sin2_h = ff_round(length2_ff3(x_hi, x_lo));
+#if defined(HAS_ANISOTROPIC) && defined(HAS_TANGENTS)
+    if (is_anisotropic(m)) {
+        // b = N x T/|N x T| and t = b x n as pair vectors (the f64 branch's construction).
+        vec3 b_hi, b_lo, t_hi, t_lo;
+        cross_ff(ns, scale_pow2(r.t), b_hi, b_lo);
+        div_ff3(b_hi, b_lo, ff_sqrt(length2_ff3(b_hi, b_lo)));
+        cross_ff3(b_hi, b_lo, n_hi, n_lo, t_hi, t_lo);
+        f.hx = ff_round(dot_ff3(h_hi, h_lo, t_hi, t_lo));
+        f.hy = ff_round(dot_ff3(h_hi, h_lo, b_hi, b_lo));
+        f.l_tb = vec2(ff_round(dot_ff3(l_hi, l_lo, t_hi, t_lo)),
+                      ff_round(dot_ff3(l_hi, l_lo, b_hi, b_lo)));
+        f.v_tb = vec2(ff_round(dot_ff3(v_hi, v_lo, t_hi, t_lo)),
+                      ff_round(dot_ff3(v_hi, v_lo, b_hi, b_lo)));
+    }
 #endif
 #if defined(HAS_G_SMITH) || defined(HAS_G_SMITH_CORRELATED) || defined(HAS_G_SMITH_FAST)
-    f.sin2_i = cross_length2(f.n, f.l);
-    f.sin2_o = cross_length2(f.n, f.v);
+    cross_ff3(n_hi, n_lo, l_hi, l_lo, x_hi, x_lo);
+    f.sin2_i = ff_round(length2_ff3(x_hi, x_lo));
+    cross_ff3(n_hi, n_lo, v_hi, v_lo, x_hi, x_lo);
+    f.sin2_o = ff_round(length2_ff3(x_hi, x_lo));
 #endif
 #if defined(HAS_PHONG)
-    vec3 rr = 2.0 * f.cos_i * f.n - f.l;
-    f.rv = dot(rr, f.v);
-    f.sin2_rv = cross_length2(rr, f.v);
+    if (m.kind.x == MODEL_PHONG) {
+        // r = 2 cos_i n - l as a pair vector.
+        vec3 r_hi, r_lo;
+        vec2 ci2 = ff_mul_f(cos_i, 2.0);
+        for (int k = 0; k < 3; k++) {
+            vec2 rk = ff_add(ff_mul(ci2, vec2(n_hi[k], n_lo[k])), -vec2(l_hi[k], l_lo[k]));
+            r_hi[k] = rk.x;
+            r_lo[k] = rk.y;
+        }
+        f.rv = ff_round(dot_ff3(r_hi, r_lo, v_hi, v_lo));
+        cross_ff3(r_hi, r_lo, v_hi, v_lo, x_hi, x_lo);
+        f.sin2_rv = ff_round(length2_ff3(x_hi, x_lo));
+    }
 #endif
 #endif
     return STATUS_VALID;

@@ -8,12 +8,14 @@
 #define VKBRDF_TERMS_GLSL
 
 #include "math.glsl"
+#include "ff.glsl"
 
 // The derived quantities of FORMULAS.md §1 for one valid, above-horizon tuple.
+// The *_exact fields: f64 where the device has it, else a float-float pair (hi, lo).
 #if defined(HAS_FLOAT64)
 #define double_or_float double
 #else
-#define double_or_float float
+#define double_or_float vec2
 #endif
 
 struct Frame {
@@ -27,7 +29,7 @@ struct Frame {
     float hx, hy;      // h.t, h.b: h in the tangent frame (anisotropic materials only)
     float rv, sin2_rv; // r.v and |r x v|^2, r = 2 cos_i n - l (Phong only)
     float sin2_i, sin2_o; // |n x l|^2, |n x v|^2 (Smith's tan^2 numerators)
-    double_or_float c_exact; // c before rounding to f32 (f64 where the device has it)
+    double_or_float c_exact; // c before rounding to f32 (f64, or a float-float pair)
     double_or_float cos_i_exact, cos_o_exact; // cos_i, cos_o before rounding (FORMULAS.md §1,
                        // "Overflow": below TINY_COS the models evaluate from these, in f64)
     double_or_float cos_h_exact; // cos_h before rounding (below float32's smallest normal
@@ -163,8 +165,14 @@ vec3 F_Dielectric(float c, vec3 mu2m1, vec3 mu2m1_lo, double_or_float c_exact) {
     vec3 g2 = vec3(g2d);
     vec3 g = vec3(sqrt(max(g2d, 0.0)));
 #else
-    vec3 g2 = mu2m1 + c * c;
-    vec3 g = sqrt(max(g2, 0.0));
+    // The same sum as a float-float pair per channel (c_exact = c to ~48 bits): without it
+    // g^2 near the critical angle is a difference of O(1) floats (see above).
+    vec3 g2, g;
+    for (int ch = 0; ch < 3; ch++) {
+        vec2 g2p = ff_add(vec2(mu2m1[ch], mu2m1_lo[ch]), ff_mul(c_exact, c_exact));
+        g2[ch] = ff_round(g2p);
+        g[ch] = g2p.x > 0.0 ? ff_round(ff_sqrt(g2p)) : 0.0;
+    }
 #endif
     vec3 gpc = g + c;                 // >= c > 0
     vec3 gmc = mu2m1 / gpc;           // = g - c
