@@ -219,21 +219,46 @@ vec3 scale_pow2(vec3 a) {
     return ldexp(a, ivec3(-e));
 }
 
-// 1 + l.v for unit l, v, from the scaled inputs L, V and their lengths (the reference's
-// construction, src/reference/frame.rs): p = L.V exact to a pair, q = |L||V|; for p >= 0
-// it is 1 + p/q, but for p < 0 that sum cancels near l = -v (grazing mirror geometry),
-// and Lagrange's identity |L|^2|V|^2 - (L.V)^2 = |L x V|^2 turns it into
-// |L x V|^2/(q (q - p)), a quotient of positives.
-vec2 one_plus_lv(vec3 ls, vec3 vs, vec2 nl, vec2 nv) {
+// |l + v| for unit l, v, from the scaled inputs L, V, their lengths and lv = l + v as a
+// pair vector (the reference's construction, src/reference/frame.rs): |l + v|^2 =
+// 2 (1 + l.v) with p = L.V exact to a pair, q = |L||V|. For p >= 0, 1 + l.v = 1 + p/q;
+// for p < 0 that sum cancels near l = -v (grazing mirror geometry), and Lagrange's
+// identity |L|^2|V|^2 - (L.V)^2 = |L x V|^2 turns it into |L x V|^2/(q (q - p)), a
+// quotient of positives. Where |L x V|^2 leaves float32's normal range (|l + v| below
+// ~1e-18: mirrored directions with components of 1e-38 or 1e-45) it would flush to 0 and
+// h to NaN; |l + v| then comes from lv itself, scaled by 2^k (exact) into range: lv is
+// returned scaled and k set, |l + v| = result 2^-k.
+vec2 lv_length(vec3 ls, vec3 vs, vec2 nl, vec2 nv, inout vec3 lv_hi, inout vec3 lv_lo,
+               out float k) {
+    k = 0.0;
     vec2 p = dot_ff(ls, vs);
     vec2 q = ff_mul(nl, nv);
     if (p.x >= 0.0) {
-        return ff_add(vec2(1.0, 0.0), ff_div(p, q));
+        return ff_sqrt(ff_mul_f(ff_add(vec2(1.0, 0.0), ff_div(p, q)), 2.0));
     }
     vec3 x_hi, x_lo;
     cross_ff(ls, vs, x_hi, x_lo);
-    vec2 lxv = ff_sqrt(length2_ff3(x_hi, x_lo));
-    return ff_mul(ff_div(lxv, q), ff_div(lxv, ff_add(q, -p)));
+    vec2 lxv2 = length2_ff3(x_hi, x_lo);
+    if (lxv2.x >= 7.5e-37) {
+        vec2 lxv = ff_sqrt(lxv2);
+        return ff_sqrt(ff_mul_f(ff_mul(ff_div(lxv, q), ff_div(lxv, ff_add(q, -p))), 2.0));
+    }
+    vec3 s = scale_pow2(lv_hi);
+    float m = max(max(abs(lv_hi.x), abs(lv_hi.y)), abs(lv_hi.z));
+    if (m == 0.0) {
+        return vec2(0.0); // l = -v exactly: below the horizon, and never read
+    }
+    k = xf(max(max(abs(s.x), abs(s.y)), abs(s.z))).y - xf(m).y;
+    lv_lo = ldexp(lv_lo, ivec3(int(k)));
+    lv_hi = s;
+    return ff_sqrt(length2_ff3(lv_hi, lv_lo));
+}
+
+// A cosine N.X/(|N||X|) in m 2^e form (ff.glsl) from the hi part of the exact dot product:
+// below float32's normal range the quotient of the pairs is a subnormal with few bits (a
+// cosine of 1e-45 came out 1.4e-45 or 2.8e-45), the quotient of m 2^e forms is not.
+vec2 cosine_xf(float dot_hi, vec2 lengths, float cosine) {
+    return cosine >= 1e-30 ? xf(cosine) : xf_div(xf(dot_hi), xf(ff_round(lengths)));
 }
 #endif
 
@@ -253,9 +278,16 @@ uint make_frame(Row r, GpuMaterial m, out Frame f) {
     f.l_tb = vec2(0.0);
     f.v_tb = vec2(0.0);
     f.c_exact = double_or_float(0.0);
-    f.cos_i_exact = double_or_float(0.0);
-    f.cos_o_exact = double_or_float(0.0);
-    f.cos_h_exact = double_or_float(0.0);
+#if defined(HAS_FLOAT64)
+    f.cos_i_exact = 0.0;
+    f.cos_o_exact = 0.0;
+    f.cos_h_exact = 0.0;
+#else
+    f.cos_i_xf = vec2(0.0);
+    f.cos_o_xf = vec2(0.0);
+    f.cos_h_xf = vec2(0.0);
+    f.c_xf = vec2(0.0);
+#endif
     if (!(ok_l && ok_v && ok_n)) {
         return STATUS_INVALID;
     }
@@ -363,26 +395,41 @@ uint make_frame(Row r, GpuMaterial m, out Frame f) {
     vec2 cos_o = ff_div(dot_ff(ns, vs), ff_mul(nn, nv));
     f.cos_i = ff_round(cos_i);
     f.cos_o = ff_round(cos_o);
-    f.cos_i_exact = cos_i;
-    f.cos_o_exact = cos_o;
     // The horizon test on the pairs' signs (hi is 0 only for an exact 0), as the reference
     // decides it: a cosine below 7e-46 rounds to 0 in f32.
     if (cos_i.x <= 0.0 || cos_o.x <= 0.0) {
         return STATUS_BELOW_HORIZON;
     }
-    vec2 lv_len = ff_sqrt(ff_mul_f(one_plus_lv(ls, vs, nl, nv), 2.0)); // |l + v| > 0 here
-    // cos_h = (cos_i + cos_o)/|l + v| and c = |l + v|/2, as in the f64 branch: dot(n, h)
-    // and dot(v, h) would inherit h's direction error, which grows as 1/|l + v|.
-    f.cos_h_exact = ff_div(ff_add(cos_i, cos_o), lv_len);
-    f.cos_h = ff_round(f.cos_h_exact);
-    f.c_exact = 0.5 * lv_len;
-    f.c = ff_round(f.c_exact);
+    f.cos_i_xf = cosine_xf(dot_ff(ns, ls).x, ff_mul(nn, nl), f.cos_i);
+    f.cos_o_xf = cosine_xf(dot_ff(ns, vs).x, ff_mul(nn, nv), f.cos_o);
     vec3 l_hi = ls, l_lo = vec3(0.0), v_hi = vs, v_lo = vec3(0.0), n_hi = ns, n_lo = vec3(0.0);
     div_ff3(l_hi, l_lo, nl);
     div_ff3(v_hi, v_lo, nv);
     div_ff3(n_hi, n_lo, nn);
     vec3 h_hi, h_lo;
-    add_ff3(l_hi, l_lo, v_hi, v_lo, h_hi, h_lo);
+    add_ff3(l_hi, l_lo, v_hi, v_lo, h_hi, h_lo); // l + v, made unit below
+    // |l + v| = lv_len 2^-k: k = 0 but where |l + v| < ~1e-15 (see lv_length).
+    float k;
+    vec2 lv_len = lv_length(ls, vs, nl, nv, h_hi, h_lo, k);
+    // cos_h = (cos_i + cos_o)/|l + v| and c = |l + v|/2, as in the f64 branch: dot(n, h)
+    // and dot(v, h) would inherit h's direction error, which grows as 1/|l + v|.
+    vec2 lv_xf = xf(ff_round(lv_len)) - vec2(0.0, k);
+    f.c_xf = lv_xf - vec2(0.0, 1.0);
+    if (k == 0.0 && min(f.cos_i, f.cos_o) >= 1e-30) {
+        f.cos_h = ff_round(ff_div(ff_add(cos_i, cos_o), lv_len));
+        f.cos_h_xf = xf(f.cos_h);
+        f.c_exact = 0.5 * lv_len;
+        f.c = ff_round(f.c_exact);
+    } else {
+        // Cosines or |l + v| near or below float32's normal range (grazing tuples with
+        // components of 1e-38 or 1e-45): their squares and quotients leave float32, so
+        // cos_h and c come from the m 2^e forms (float32 precision, which is all that
+        // is left of a subnormal cosine).
+        f.cos_h_xf = xf_div(xf_add(f.cos_i_xf, f.cos_o_xf), lv_xf);
+        f.cos_h = xf_float(f.cos_h_xf);
+        f.c = xf_float(f.c_xf);
+        f.c_exact = vec2(f.c, 0.0);
+    }
     div_ff3(h_hi, h_lo, lv_len);
     f.h = h_hi + h_lo;
     vec3 x_hi, x_lo;

@@ -15,6 +15,8 @@
 #ifndef VKBRDF_FF_GLSL
 #define VKBRDF_FF_GLSL
 
+#include "math.glsl"
+
 // a + b exactly, as (rounded sum, its error): Knuth's branch-free two-sum.
 vec2 two_sum(float a, float b) {
     precise float s = a + b;
@@ -179,6 +181,90 @@ void div_ff3(inout vec3 hi, inout vec3 lo, vec2 d) {
     vec2 z = ff_div(vec2(hi.z, lo.z), d);
     hi = vec3(x.x, y.x, z.x);
     lo = vec3(x.y, y.y, z.y);
+}
+
+// ------------------------------------------------- extended range: m 2^e (the f32 frame)
+// Where the f64 frame leans on f64's exponent range (FORMULAS.md §1, "Overflow": cosines
+// below 1e-15, whose K = 1/(4 cos_i cos_o) leaves float32 and whose G underflows while
+// G K stays finite), the f32 frame carries a value as vec2(m, e) = m 2^e, m in [1/2, 1)
+// or 0, e an integer held as a float. Every operation rounds m once: float32's relative
+// precision, f64's range.
+
+// x >= 0 (subnormal included) as m 2^e.
+vec2 xf(float x) {
+    if (x == 0.0) {
+        return vec2(0.0);
+    }
+    float shift = 0.0;
+    if (x < 1.1754944e-38) {
+        // frexp of a subnormal is undefined in GLSL: bring it into the normal range first
+        // (exact, a power of two).
+        x *= 18446744073709551616.0; // 2^64
+        shift = -64.0;
+    }
+    int e;
+    float m = frexp(x, e);
+    return vec2(m, float(e) + shift);
+}
+
+// m 2^e renormalised (m finite, >= 0, and normal: products and quotients of two m's are).
+vec2 xf_norm(float m, float e) {
+    if (m == 0.0) {
+        return vec2(0.0);
+    }
+    int k;
+    float f = frexp(m, k);
+    return vec2(f, e + float(k));
+}
+
+vec2 xf_mul(vec2 a, vec2 b) {
+    return xf_norm(a.x * b.x, a.y + b.y);
+}
+
+vec2 xf_div(vec2 a, vec2 b) {
+    return xf_norm(a.x / b.x, a.y - b.y);
+}
+
+vec2 xf_sqrt(vec2 a) {
+    // An odd exponent moves one factor 2 into m, so that e/2 is an integer.
+    bool odd = mod(a.y, 2.0) != 0.0;
+    return xf_norm(sqrt(odd ? 2.0 * a.x : a.x), (odd ? a.y - 1.0 : a.y) * 0.5);
+}
+
+// a + b for a, b >= 0: the smaller aligned to the larger (below 2^-30 of it, it does not
+// change the float32 result and is dropped, which keeps ldexp's argument in range).
+vec2 xf_add(vec2 a, vec2 b) {
+    if (a.x == 0.0 || b.y > a.y) {
+        vec2 t = a;
+        a = b;
+        b = t;
+    }
+    float d = b.y - a.y;
+    if (b.x == 0.0 || d < -30.0) {
+        return a;
+    }
+    return xf_norm(a.x + ldexp(b.x, int(d)), a.y);
+}
+
+// ln(m 2^e) for m > 0: e ln 2 + ln m, e ln2_hi exact for |e| < 256 (math.glsl's split).
+float xf_log(vec2 a) {
+    return a.y * LN2_HI + (log_acc(a.x) + a.y * LN2_LO);
+}
+
+// m 2^e rounded to float32: +inf beyond FLT_MAX (the caller saturates and counts it), 0
+// below the smallest subnormal. ldexp is applied in two steps below the normal range
+// (a subnormal ldexp result is undefined in GLSL; a product by 2^-64 is not).
+float xf_float(vec2 a) {
+    if (a.x == 0.0 || a.y < -160.0) {
+        return 0.0;
+    }
+    if (a.y > 128.0) {
+        return uintBitsToFloat(0x7f800000u);
+    }
+    if (a.y < -125.0) {
+        return ldexp(a.x, int(a.y) + 64) * 5.42101086242752217e-20; // 2^-64
+    }
+    return ldexp(a.x, int(a.y));
 }
 
 #endif

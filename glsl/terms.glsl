@@ -30,10 +30,15 @@ struct Frame {
     float rv, sin2_rv; // r.v and |r x v|^2, r = 2 cos_i n - l (Phong only)
     float sin2_i, sin2_o; // |n x l|^2, |n x v|^2 (Smith's tan^2 numerators)
     double_or_float c_exact; // c before rounding to f32 (f64, or a float-float pair)
-    double_or_float cos_i_exact, cos_o_exact; // cos_i, cos_o before rounding (FORMULAS.md §1,
+#if defined(HAS_FLOAT64)
+    double cos_i_exact, cos_o_exact; // cos_i, cos_o before rounding (FORMULAS.md §1,
                        // "Overflow": below TINY_COS the models evaluate from these, in f64)
-    double_or_float cos_h_exact; // cos_h before rounding (below float32's smallest normal
+    double cos_h_exact; // cos_h before rounding (below float32's smallest normal
                        // number the f32 value flushes to 0)
+#else
+    // The same four in f64's range without f64: m 2^e (ff.glsl, xf), float32 precision.
+    vec2 cos_i_xf, cos_o_xf, cos_h_xf, c_xf;
+#endif
     vec2 l_tb, v_tb;   // (l.t, l.b), (v.t, v.b) (anisotropic materials only)
 };
 
