@@ -246,6 +246,15 @@ vec2 xf_add(vec2 a, vec2 b) {
     return xf_norm(a.x + ldexp(b.x, int(d)), a.y);
 }
 
+// a < b for m 2^e forms (>= 0).
+bool xf_less(vec2 a, vec2 b) {
+    return b.x != 0.0 && (a.x == 0.0 || a.y < b.y || (a.y == b.y && a.x < b.x));
+}
+
+vec2 xf_min(vec2 a, vec2 b) {
+    return xf_less(b, a) ? b : a;
+}
+
 // ln(m 2^e) for m > 0: e ln 2 + ln m, e ln2_hi exact for |e| < 256 (math.glsl's split).
 float xf_log(vec2 a) {
     return a.y * LN2_HI + (log_acc(a.x) + a.y * LN2_LO);

@@ -64,6 +64,34 @@ Eval eval_lobe_f64(GpuMaterial m, double lobe) {
 }
 #endif
 
+#if !defined(HAS_FLOAT64)
+// The f32 frame's TINY_COS (the same rule as above): below it the cosine-dependent factors
+// are formed as m 2^e (ff.glsl, xf) from the frame's cos_*_xf, f64's range at float32's
+// precision.
+const float TINY_COS = 1e-15;
+
+// e^x as m 2^e, for x beyond float32's exp range: x = k ln 2 + r, |r| <= ln 2 / 2.
+vec2 xf_exp(float x) {
+    float k = floor(x * LOG2E + 0.5);
+    float r = (x - k * LN2_HI) - k * LN2_LO;
+    return xf_norm(exp_acc(r), k);
+}
+
+// eval_lobe_f64 without f64: c_diff/pi + c_spec * lobe with lobe = m 2^e, each output
+// rounded once (+inf beyond FLT_MAX, saturated by the caller).
+Eval eval_lobe_xf(GpuMaterial m, vec2 lobe) {
+    Eval e;
+    for (int ch = 0; ch < 3; ch++) {
+        e.brdf[ch] = m.diffuse[ch] + xf_float(xf_mul(xf(m.specular[ch]), lobe));
+    }
+    e.d = xf_float(lobe);
+    e.g = 1.0;
+    e.f = vec3(1.0);
+    e.k = 1.0;
+    return e;
+}
+#endif
+
 bool is_anisotropic(GpuMaterial m) {
     return (m.kind.w & FLAG_ANISOTROPIC) != 0u;
 }
@@ -157,6 +185,17 @@ Eval model_blinn_phong(Frame f, GpuMaterial m) {
         }
         return eval_lobe_f64(m, double(m.scale.x * p) / f.cos_i_exact);
     }
+#else
+    // The same two cases in m 2^e form (the f32 frame).
+    if (f.cos_i < TINY_COS) {
+        if (p < 1.1754944e-38 && m.lobe.x > 0.0) {
+            float ln_cos_h = f.cos_h >= 1.1754944e-38 ? log_cos(f.cos_h, f.sin2_h)
+                                                      : xf_log(f.cos_h_xf);
+            float ln_q = m.lobe.x * ln_cos_h - xf_log(f.cos_i_xf);
+            return eval_lobe_xf(m, xf_mul(xf(m.scale.x), xf_exp(ln_q)));
+        }
+        return eval_lobe_xf(m, xf_div(xf(m.scale.x * p), f.cos_i_xf));
+    }
 #endif
     return eval_lobe(m, m.scale.x * p / f.cos_i);
 }
@@ -182,7 +221,12 @@ Eval model_ward(Frame f, GpuMaterial m) {
     if (min(f.cos_i_exact, f.cos_o_exact) < TINY_COS) {
         return eval_lobe_f64(m, double(m.scale.x * x) / sqrt(f.cos_i_exact * f.cos_o_exact));
     }
-#endif    // Where exp underflows to 0 the lobe is 0; the guard keeps 0 * inf (cos_i, cos_o both
+#else
+    if (min(f.cos_i, f.cos_o) < TINY_COS) {
+        return eval_lobe_xf(m, xf_div(xf(m.scale.x * x), xf_sqrt(xf_mul(f.cos_i_xf, f.cos_o_xf))));
+    }
+#endif
+    // Where exp underflows to 0 the lobe is 0; the guard keeps 0 * inf (cos_i, cos_o both
     // ~1e-38) from becoming NaN. One inversesqrt per cosine: their product cannot overflow.
     float lobe = x == 0.0 ? 0.0 : m.scale.x * x * inversesqrt(f.cos_i) * inversesqrt(f.cos_o);
     return eval_lobe(m, lobe);
@@ -266,6 +310,87 @@ void cook_torrance_gk_f64(Frame f, GpuMaterial m, uint convention, out double g,
 }
 #endif
 
+#if defined(HAS_COOK_TORRANCE) && !defined(HAS_FLOAT64)
+// The TINY_COS helpers of the f64 branch above, in m 2^e form (the f32 frame), each the
+// same formula: 1 + Lambda (Smith) for direction w with n.w = cos_w < TINY_COS, where
+// q2 = m^2 tan^2 leaves float32 (Lambda ~ sqrt(q2)/(2 sqrt(pi)) Beckmann, sqrt(q2)/2 GGX;
+// the dropped terms are below 1e-8 relative, as sqrt(q2) > 1e8 here).
+vec2 smith_one_plus_lambda_xf(GpuMaterial m, vec2 w_tb, float sin2_w, vec2 cos_w) {
+#if defined(HAS_G_SMITH) || defined(HAS_G_SMITH_CORRELATED) || defined(HAS_G_SMITH_FAST)
+    vec2 sq = xf_div(xf(sqrt(smith_q2(m, w_tb, sin2_w, 1.0))), cos_w); // sqrt(q2)
+#else
+    vec2 sq = vec2(0.0);
+#endif
+#if defined(HAS_LAMBDA_BECKMANN)
+    if (m.kind.y == DIST_BECKMANN) {
+        return xf_add(xf_mul(sq, xf(0.5 * INV_SQRT_PI)), xf(0.5));
+    }
+#endif
+    return xf_add(xf_mul(sq, xf(0.5)), xf(0.5));
+}
+
+// 1 + Lambda for either cosine: float32's above TINY_COS.
+vec2 smith_one_plus_lambda(GpuMaterial m, vec2 w_tb, float sin2_w, float cos_w, vec2 cos_w_xf) {
+    if (cos_w >= TINY_COS) {
+#if defined(HAS_G_SMITH) || defined(HAS_G_SMITH_CORRELATED)
+        return xf(1.0 + smith_lambda(m, smith_q2(m, w_tb, sin2_w, cos_w)));
+#else
+        return xf(1.0);
+#endif
+    }
+    return smith_one_plus_lambda_xf(m, w_tb, sin2_w, cos_w_xf);
+}
+
+// Walter et al.'s G1 fit for either cosine: below TINY_COS a = cos_w/sqrt(m^2 sin^2) <
+// 1e-8 and G1 = 3.535 a to 1e-8 relative.
+vec2 smith_fast_g1_xf(GpuMaterial m, vec2 w_tb, float sin2_w, float cos_w, vec2 cos_w_xf) {
+#if defined(HAS_G_SMITH_FAST)
+    if (cos_w >= TINY_COS) {
+        return xf(G1_SmithFast(smith_q2(m, w_tb, sin2_w, cos_w)));
+    }
+    return xf_mul(xf(3.535), xf_div(cos_w_xf, xf(sqrt(smith_q2(m, w_tb, sin2_w, 1.0)))));
+#else
+    return xf(1.0);
+#endif
+}
+
+// cook_torrance_gk_f64 in m 2^e form.
+void cook_torrance_gk_xf(Frame f, GpuMaterial m, uint convention, out vec2 g, out vec2 k) {
+    vec2 ci = f.cos_i_xf, co = f.cos_o_xf;
+    g = xf(1.0);
+    switch (m.kind.z) {
+    case GEOM_COOK_TORRANCE: {
+        vec2 t = xf_div(xf(2.0 * f.cos_h), f.c_xf);
+        g = xf_min(xf(1.0), xf_min(xf_mul(t, co), xf_mul(t, ci)));
+        break;
+    }
+    case GEOM_SMITH:
+        g = xf_div(xf(1.0), xf_mul(smith_one_plus_lambda(m, f.v_tb, f.sin2_o, f.cos_o, co),
+                                   smith_one_plus_lambda(m, f.l_tb, f.sin2_i, f.cos_i, ci)));
+        break;
+    case GEOM_SMITH_CORRELATED:
+        // 1 + Lambda_o + Lambda_i = (1 + Lambda_o) + (1 + Lambda_i) - 1, where the larger
+        // is above 1e8 (one cosine is below TINY_COS), so the -1 is below its precision
+        // unless both are O(1), which they are not here.
+        g = xf_div(xf(1.0), xf_add(smith_one_plus_lambda(m, f.v_tb, f.sin2_o, f.cos_o, co),
+                                   smith_one_plus_lambda(m, f.l_tb, f.sin2_i, f.cos_i, ci)));
+        break;
+    case GEOM_SMITH_FAST:
+        g = xf_mul(smith_fast_g1_xf(m, f.v_tb, f.sin2_o, f.cos_o, co),
+                   smith_fast_g1_xf(m, f.l_tb, f.sin2_i, f.cos_i, ci));
+        break;
+    default: break;
+    }
+    k = xf(1.0);
+    switch (convention) {
+    case CONV_SEED: k = xf_div(xf(1.0), co); break;
+    case CONV_CT1982: k = xf_div(xf(INV_PI), xf_mul(ci, co)); break;
+    case CONV_MODERN: k = xf_div(xf(0.25), xf_mul(ci, co)); break;
+    default: break;
+    }
+}
+#endif
+
 #if defined(HAS_COOK_TORRANCE)
 // Cook & Torrance 1982, "A Reflectance Model for Computer Graphics":
 // d c_diff/pi + s c_spec (x) D G F K (d c_diff/pi is m.diffuse, s c_spec is m.specular).
@@ -328,6 +453,11 @@ Eval model_cook_torrance(Frame f, GpuMaterial m) {
             e.f = F_Conductor_f64(f.c_exact, m.fresnel0.rgb, m.fresnel1.rgb, m.scale.yzw);
             break;
         }
+#else
+        if (xf_less(f.c_xf, xf(1e-12))) {
+            e.f = F_Conductor_tiny(f.c_xf, m.fresnel0.rgb, m.fresnel1.rgb, m.scale.yzw);
+            break;
+        }
 #endif
         e.f = F_Conductor(f.c, m.fresnel0.rgb, m.fresnel1.rgb, m.scale.yzw);
         break;
@@ -374,6 +504,21 @@ Eval model_cook_torrance(Frame f, GpuMaterial m) {
         dvec3 b = dvec3(m.diffuse.rgb)
             + dvec3(m.specular.rgb) * ((double(e.d) * g64 * k64) * dvec3(e.f));
         e.brdf = vec3(float_or_inf(b.x), float_or_inf(b.y), float_or_inf(b.z));
+    }
+#else
+    // The same in m 2^e form (the f32 frame).
+    bool tiny = min(f.cos_i, f.cos_o) < TINY_COS;
+    if (tiny || any_non_finite(e.brdf)) {
+        vec2 gx = xf(e.g), kx = xf(e.k);
+        if (tiny) {
+            cook_torrance_gk_xf(f, m, convention, gx, kx);
+            e.g = xf_float(gx);
+            e.k = xf_float(kx);
+        }
+        vec2 dgk = xf_mul(xf_mul(xf(e.d), gx), kx);
+        for (int ch = 0; ch < 3; ch++) {
+            e.brdf[ch] = m.diffuse[ch] + xf_float(xf_mul(xf(m.specular[ch]), xf_mul(dgk, xf(e.f[ch]))));
+        }
     }
 #endif
     return e;

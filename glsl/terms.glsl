@@ -249,6 +249,54 @@ vec3 F_Conductor(float c, vec3 n, vec3 k, vec3 e2rm1) {
 }
 #endif
 
+#if defined(HAS_F_CONDUCTOR) && !defined(HAS_FLOAT64)
+// |p|^2 / |q|^2 for complex p, q per channel, both scaled by their largest component
+// first: at c below 1e-12 the squares underflow (0/0 = NaN for an index-matched conductor).
+vec3 abs2_ratio(vec3 pr, vec3 pi_, vec3 qr, vec3 qi) {
+    vec3 m = max(max(abs(pr), abs(pi_)), max(max(abs(qr), abs(qi)), vec3(1e-37)));
+    pr /= m; pi_ /= m; qr /= m; qi /= m;
+    return (pr * pr + pi_ * pi_) / (qr * qr + qi * qi);
+}
+
+// F_Conductor for c below 1e-12 without f64 (the f64 frame takes F_Conductor_f64 there),
+// given c = m 2^e (ff.glsl, xf). Where eta^2 - 1 is within 1e30 c^2 of 0 (index-matched:
+// cos_t is then of the order of c, and in float32 c^2 and (eta c)^2 underflow) the
+// formula is taken in units of c: u = cos_t/c, u^2 = (e2rm1/c^2 + 1 + i e2i/c^2)/eta^2,
+// r_par = |eta - u|^2/|eta + u|^2, r_perp = |1 - eta u|^2/|1 + eta u|^2 (c cancels).
+// Elsewhere cos_t is far above c and the float32 formula holds, with its quotients scaled.
+vec3 F_Conductor_tiny(vec2 c_xf, vec3 n, vec3 k, vec3 e2rm1) {
+    float c = xf_float(c_xf);
+    vec2 c2 = xf_mul(c_xf, c_xf);
+    vec3 e2r = n * n - k * k, e2i = 2.0 * n * k, q = n * n + k * k;
+    vec3 a = e2r / q, b = e2i / q;
+    vec3 A, B;
+    bvec3 matched;
+    for (int ch = 0; ch < 3; ch++) {
+        float ra = xf_float(xf_div(xf(abs(e2rm1[ch])), c2));
+        float rb = xf_float(xf_div(xf(abs(e2i[ch])), c2));
+        matched[ch] = max(ra, rb) < 1e30;
+        A[ch] = (e2rm1[ch] < 0.0 ? -ra : ra) + 1.0;
+        B[ch] = e2i[ch] < 0.0 ? -rb : rb;
+    }
+    // Index-matched channels, in units of c.
+    vec3 ur, ui;
+    csqrt((A * a + B * b) / q, (B * a - A * b) / q, ur, ui);
+    vec3 par_u = abs2_ratio(n - ur, k - ui, n + ur, k + ui);
+    vec3 eur = cmul_re(n, k, ur, ui), eui = cmul_im(n, k, ur, ui); // eta u
+    vec3 perp_u = abs2_ratio(1.0 - eur, -eui, 1.0 + eur, eui);
+    // The others: F_Conductor's lines with c^2 dropped (below 1e-30 of eta^2 - 1).
+    vec3 zr = (e2rm1 * a + e2i * b) / q;
+    vec3 zi = (1.0 - c) * (1.0 + c) * b / q;
+    vec3 ctr, cti;
+    csqrt(zr, zi, ctr, cti);
+    vec3 ecr = n * c, eci = k * c;
+    vec3 par = abs2_ratio(ecr - ctr, eci - cti, ecr + ctr, eci + cti);
+    vec3 ecr2 = cmul_re(n, k, ctr, cti), eci2 = cmul_im(n, k, ctr, cti);
+    vec3 perp = abs2_ratio(c - ecr2, eci2, c + ecr2, eci2);
+    return 0.5 * mix(par + perp, par_u + perp_u, matched);
+}
+#endif
+
 #if defined(HAS_F_CONDUCTOR) && defined(HAS_FLOAT64)
 // F_Conductor in f64, for c below 1e-12 (the kernel takes it there): in float32, c^2 and
 // (eta c)^2 underflow, and an index-matched conductor (eta = 1, F = 0 exactly) gave
