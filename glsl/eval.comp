@@ -262,6 +262,95 @@ vec2 cosine_xf(float dot_hi, vec2 lengths, float cosine) {
 }
 #endif
 
+// 1/|A| for a scaled input A (|A|^2 = s, |A| = len as pairs) in three words (w0, w1, w2):
+// the pair r0 = 1/len and one Newton step r0 (1 + rho/2), rho = 1 - |A|^2 r0^2 summed
+// from its exact terms (the r0.lo^2 term, below 2^-96, dropped).
+vec3 inverse_length3(vec3 a, vec2 len) {
+    vec2 r0 = ff_div(vec2(1.0, 0.0), len);
+    float sq[6];
+    dot_terms(a, a, sq);
+    vec2 h2 = two_prod(r0.x, r0.x), hl = two_prod(2.0 * r0.x, r0.y);
+    float r2[4] = float[4](h2.x, h2.y, hl.x, hl.y);
+    Acc3 acc = Acc3(-1.0, 0.0, 0.0);
+    for (int i = 0; i < 6; i++) {
+        for (int j = 0; j < 4; j++) {
+            acc_add_prod(acc, sq[i], r2[j]);
+        }
+    }
+    float rho = -acc_pair(acc).x;
+    return vec3(r0, r0.x * rho * 0.5);
+}
+
+#if defined(HAS_BLINN_PHONG) || defined(HAS_RTR) || defined(HAS_D_BLINN)
+// |n x h|^2 for a lobe cos_h^e so sharp that the pair frame's |n x h| (error ~2^-48
+// absolute) is not enough: with e = 1e18 the lobe lives at |n x h| ~ 1e-9, where e |n x h|^2
+// then came out 1e-5 off relative (stress corpus, near-peak). n x (l + v) = (N x L)/|L| +
+// (N x V)/|V|, the cross products exact (four terms each) and 1/|L|, 1/|V| in three words
+// (inverse_length3), summed in three words: O(1) terms that cancel, to ~2^-70.
+float sin2_h_sharp(vec3 ns, vec3 ls, vec3 vs, vec2 nn, vec2 nl, vec2 nv, vec2 lv_len) {
+    vec3 rl = inverse_length3(ls, nl), rv = inverse_length3(vs, nv);
+    vec3 x_hi, x_lo;
+    for (int i = 0; i < 3; i++) {
+        float a[4], b[4];
+        cross_terms(ns, ls, i, a);
+        cross_terms(ns, vs, i, b);
+        Acc3 acc = Acc3(0.0, 0.0, 0.0);
+        for (int j = 0; j < 4; j++) {
+            for (int w = 0; w < 3; w++) {
+                acc_add_prod(acc, a[j], rl[w]);
+                acc_add_prod(acc, b[j], rv[w]);
+            }
+        }
+        vec2 xi = acc_pair(acc);
+        x_hi[i] = xi.x;
+        x_lo[i] = xi.y;
+    }
+    // n x h = that / (|N| |l + v|), in pairs to the one final rounding (each float rounding
+    // on the way costs e |n x h|^2 u, up to 1e-6 at the lobe's edge).
+    vec2 d = ff_mul(nn, lv_len);
+    return ff_round(ff_div(length2_ff3(x_hi, x_lo), ff_mul(d, d)));
+}
+
+// Whether the tuple's material is a lobe cos_h^e sharp enough for sin2_h_sharp: its
+// relative error e |n x h| 2^-47 would exceed ~1e-8.
+bool sharp_h_lobe(GpuMaterial m, float sin2_h) {
+    bool lobe = m.kind.x == MODEL_BLINN_PHONG || m.kind.x == MODEL_RTR
+        || (m.kind.x == MODEL_COOK_TORRANCE && m.kind.y == DIST_BLINN);
+    return lobe && m.lobe.x * sqrt(sin2_h) > 1e6;
+}
+#endif
+
+#if defined(HAS_PHONG)
+// |r x v|^2, r = 2 cos_i n - l, for a Phong lobe as sharp as above (the same failure, at
+// r ~ v). r x v = (2 (N.L)(N x V) - |N|^2 (L x V)) / (|N|^2 |L| |V|): the bracket W is a
+// polynomial in the inputs, summed from its exact terms in three words, and |r x v|^2 =
+// |W|^2 / (|N|^4 |L|^2 |V|^2).
+float sin2_rv_sharp(vec3 ns, vec3 ls, vec3 vs) {
+    float nl[6], nn[6];
+    dot_terms(ns, ls, nl);
+    dot_terms(ns, ns, nn);
+    vec3 w_hi, w_lo;
+    for (int i = 0; i < 3; i++) {
+        float nxv[4], lxv[4];
+        cross_terms(ns, vs, i, nxv);
+        cross_terms(ls, vs, i, lxv);
+        Acc3 acc = Acc3(0.0, 0.0, 0.0);
+        for (int a = 0; a < 6; a++) {
+            for (int b = 0; b < 4; b++) {
+                acc_add_prod(acc, 2.0 * nl[a], nxv[b]);
+                acc_add_prod(acc, -nn[a], lxv[b]);
+            }
+        }
+        vec2 wi = acc_pair(acc);
+        w_hi[i] = wi.x;
+        w_lo[i] = wi.y;
+    }
+    vec2 n2 = dot_ff(ns, ns);
+    vec2 d = ff_mul(ff_mul(n2, n2), ff_mul(dot_ff(ls, ls), dot_ff(vs, vs)));
+    return ff_round(ff_div(length2_ff3(w_hi, w_lo), d));
+}
+#endif
+
 uint make_frame(Row r, GpuMaterial m, out Frame f) {
     bool ok_l, ok_v, ok_n;
     f.l = safe_normalize(r.l, ok_l);
@@ -415,18 +504,21 @@ uint make_frame(Row r, GpuMaterial m, out Frame f) {
     // and dot(v, h) would inherit h's direction error, which grows as 1/|l + v|.
     vec2 lv_xf = xf(ff_round(lv_len)) - vec2(0.0, k);
     f.c_xf = lv_xf - vec2(0.0, 1.0);
+    // Cosines or |l + v| near or below float32's normal range (grazing tuples with
+    // components of 1e-38 or 1e-45): their squares and quotients leave float32, and cos_h
+    // and c come from the m 2^e forms instead (float32 precision, which is all that is
+    // left of a subnormal cosine).
     if (k == 0.0 && min(f.cos_i, f.cos_o) >= 1e-30) {
         f.cos_h = ff_round(ff_div(ff_add(cos_i, cos_o), lv_len));
         f.cos_h_xf = xf(f.cos_h);
+    } else {
+        f.cos_h_xf = xf_div(xf_add(f.cos_i_xf, f.cos_o_xf), lv_xf);
+        f.cos_h = xf_float(f.cos_h_xf);
+    }
+    if (k == 0.0) {
         f.c_exact = 0.5 * lv_len;
         f.c = ff_round(f.c_exact);
     } else {
-        // Cosines or |l + v| near or below float32's normal range (grazing tuples with
-        // components of 1e-38 or 1e-45): their squares and quotients leave float32, so
-        // cos_h and c come from the m 2^e forms (float32 precision, which is all that
-        // is left of a subnormal cosine).
-        f.cos_h_xf = xf_div(xf_add(f.cos_i_xf, f.cos_o_xf), lv_xf);
-        f.cos_h = xf_float(f.cos_h_xf);
         f.c = xf_float(f.c_xf);
         f.c_exact = vec2(f.c, 0.0);
     }
@@ -435,6 +527,11 @@ uint make_frame(Row r, GpuMaterial m, out Frame f) {
     vec3 x_hi, x_lo;
     cross_ff3(n_hi, n_lo, h_hi, h_lo, x_hi, x_lo);
     f.sin2_h = ff_round(length2_ff3(x_hi, x_lo));
+#if defined(HAS_BLINN_PHONG) || defined(HAS_RTR) || defined(HAS_D_BLINN)
+    if (k == 0.0 && sharp_h_lobe(m, f.sin2_h)) {
+        f.sin2_h = sin2_h_sharp(ns, ls, vs, nn, nl, nv, lv_len);
+    }
+#endif
 #if defined(HAS_ANISOTROPIC) && defined(HAS_TANGENTS)
     if (is_anisotropic(m)) {
         // b = N x T/|N x T| and t = b x n as pair vectors (the f64 branch's construction).
@@ -469,6 +566,10 @@ uint make_frame(Row r, GpuMaterial m, out Frame f) {
         f.rv = ff_round(dot_ff3(r_hi, r_lo, v_hi, v_lo));
         cross_ff3(r_hi, r_lo, v_hi, v_lo, x_hi, x_lo);
         f.sin2_rv = ff_round(length2_ff3(x_hi, x_lo));
+        // As sharp_h_lobe, for r.v (Phong).
+        if (m.lobe.x * sqrt(f.sin2_rv) > 1e6) {
+            f.sin2_rv = sin2_rv_sharp(ns, ls, vs);
+        }
     }
 #endif
 #endif

@@ -183,6 +183,57 @@ void div_ff3(inout vec3 hi, inout vec3 lo, vec2 d) {
     lo = vec3(x.y, y.y, z.y);
 }
 
+// ----------------------------------------------- three-word sums (sharp lobes, f32 frame)
+// A running sum of floats in three words, each addition a cascade of two-sums: its error
+// is ~n u^3 of the largest partial sum (u = 2^-24), so O(1) terms that cancel to 1e-9 keep
+// ~45 bits, where a pair (u^2) keeps ~22.
+struct Acc3 {
+    float s0, s1, s2;
+};
+
+void acc_add(inout Acc3 a, float x) {
+    vec2 t = two_sum(a.s0, x);
+    vec2 u = two_sum(a.s1, t.y);
+    precise float s2 = a.s2 + u.y;
+    a.s0 = t.x;
+    a.s1 = u.x;
+    a.s2 = s2;
+}
+
+// Adds x y exactly (both halves of its two-product).
+void acc_add_prod(inout Acc3 a, float x, float y) {
+    vec2 p = two_prod(x, y);
+    acc_add(a, p.x);
+    acc_add(a, p.y);
+}
+
+// The sum as a pair.
+vec2 acc_pair(Acc3 a) {
+    vec2 t = two_sum(a.s1, a.s2);
+    vec2 r = two_sum(a.s0, t.x);
+    precise float lo = r.y + t.y;
+    return fast_two_sum(r.x, lo);
+}
+
+// a . b of float vectors as its six exact terms (three two-products).
+void dot_terms(vec3 a, vec3 b, out float t[6]) {
+    for (int k = 0; k < 3; k++) {
+        vec2 p = two_prod(a[k], b[k]);
+        t[2 * k] = p.x;
+        t[2 * k + 1] = p.y;
+    }
+}
+
+// Component i of a x b as its four exact terms: a_j b_k - a_k b_j, (i, j, k) cyclic.
+void cross_terms(vec3 a, vec3 b, int i, out float t[4]) {
+    int j = (i + 1) % 3, k = (i + 2) % 3;
+    vec2 p = two_prod(a[j], b[k]), q = two_prod(a[k], b[j]);
+    t[0] = p.x;
+    t[1] = p.y;
+    t[2] = -q.x;
+    t[3] = -q.y;
+}
+
 // ------------------------------------------------- extended range: m 2^e (the f32 frame)
 // Where the f64 frame leans on f64's exponent range (FORMULAS.md §1, "Overflow": cosines
 // below 1e-15, whose K = 1/(4 cos_i cos_o) leaves float32 and whose G underflows while
