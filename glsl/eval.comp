@@ -264,16 +264,16 @@ vec2 cosine_xf(float dot_hi, vec2 lengths, float cosine) {
 
 // 1/|A| for a scaled input A (|A|^2 = s, |A| = len as pairs) in three words (w0, w1, w2):
 // the pair r0 = 1/len and one Newton step r0 (1 + rho/2), rho = 1 - |A|^2 r0^2 summed
-// from its exact terms (the r0.lo^2 term, below 2^-96, dropped).
+// from its exact terms (r0.lo^2 included: it is of the order of rho itself).
 vec3 inverse_length3(vec3 a, vec2 len) {
     vec2 r0 = ff_div(vec2(1.0, 0.0), len);
     float sq[6];
     dot_terms(a, a, sq);
-    vec2 h2 = two_prod(r0.x, r0.x), hl = two_prod(2.0 * r0.x, r0.y);
-    float r2[4] = float[4](h2.x, h2.y, hl.x, hl.y);
+    vec2 h2 = two_prod(r0.x, r0.x), hl = two_prod(2.0 * r0.x, r0.y), l2 = two_prod(r0.y, r0.y);
+    float r2[6] = float[6](h2.x, h2.y, hl.x, hl.y, l2.x, l2.y);
     Acc3 acc = Acc3(-1.0, 0.0, 0.0);
     for (int i = 0; i < 6; i++) {
-        for (int j = 0; j < 4; j++) {
+        for (int j = 0; j < 6; j++) {
             acc_add_prod(acc, sq[i], r2[j]);
         }
     }

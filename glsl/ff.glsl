@@ -306,9 +306,10 @@ vec2 xf_min(vec2 a, vec2 b) {
     return xf_less(b, a) ? b : a;
 }
 
-// ln(m 2^e) for m > 0: e ln 2 + ln m, e ln2_hi exact for |e| < 256 (math.glsl's split).
-float xf_log(vec2 a) {
-    return a.y * LN2_HI + (log_acc(a.x) + a.y * LN2_LO);
+// ln(m 2^e) for m > 0 as a pair: e ln2_hi is exact for |e| < 256 (math.glsl's split), and
+// two-sum keeps the rest (a float ln of a subnormal cosine, ~-100, is 4e-6 off).
+vec2 xf_log_pair(vec2 a) {
+    return two_sum(a.y * LN2_HI, log_acc(a.x) + a.y * LN2_LO);
 }
 
 // m 2^e rounded to float32: +inf beyond FLT_MAX (the caller saturates and counts it), 0

@@ -70,10 +70,12 @@ Eval eval_lobe_f64(GpuMaterial m, double lobe) {
 // precision.
 const float TINY_COS = 1e-15;
 
-// e^x as m 2^e, for x beyond float32's exp range: x = k ln 2 + r, |r| <= ln 2 / 2.
-vec2 xf_exp(float x) {
-    float k = floor(x * LOG2E + 0.5);
-    float r = (x - k * LN2_HI) - k * LN2_LO;
+// e^x as m 2^e for x = x.hi + x.lo beyond float32's exp range: x = k ln 2 + r, |r| <=
+// ln 2 / 2. A pair, because x is ~100 at subnormal cosines and a float x would carry an
+// absolute error of 4e-6, the result as much relatively.
+vec2 xf_exp(vec2 x) {
+    float k = floor(x.x * LOG2E + 0.5);
+    float r = (x.x - k * LN2_HI) + (x.y - k * LN2_LO);
     return xf_norm(exp_acc(r), k);
 }
 
@@ -189,9 +191,9 @@ Eval model_blinn_phong(Frame f, GpuMaterial m) {
     // The same two cases in m 2^e form (the f32 frame).
     if (f.cos_i < TINY_COS) {
         if (p < 1.1754944e-38 && m.lobe.x > 0.0) {
-            float ln_cos_h = f.cos_h >= 1.1754944e-38 ? log_cos(f.cos_h, f.sin2_h)
-                                                      : xf_log(f.cos_h_xf);
-            float ln_q = m.lobe.x * ln_cos_h - xf_log(f.cos_i_xf);
+            vec2 ln_cos_h = f.cos_h >= 1.1754944e-38 ? vec2(log_cos(f.cos_h, f.sin2_h), 0.0)
+                                                     : xf_log_pair(f.cos_h_xf);
+            vec2 ln_q = ff_add(ff_mul_f(ln_cos_h, m.lobe.x), -xf_log_pair(f.cos_i_xf));
             return eval_lobe_xf(m, xf_mul(xf(m.scale.x), xf_exp(ln_q)));
         }
         return eval_lobe_xf(m, xf_div(xf(m.scale.x * p), f.cos_i_xf));
