@@ -473,15 +473,19 @@ uint make_frame(Row r, GpuMaterial m, out Frame f) {
     // carry ~48 bits where the f64 branch carries 53 (each reason as there):
     // - cos_i, cos_o = N.L/(|N||L|), the dot product exact before its one rounding (the
     //   products of f32 inputs are exact pairs), as the reference forms them;
-    // - |l + v| from 1 + l.v, by Lagrange's identity where l.v < 0 (see one_plus_lv);
+    // - |l + v| from 1 + l.v, by Lagrange's identity where l.v < 0 (see lv_length);
     // - l, v, n, h and the tangent frame as pair vectors, so that h's direction, |n x h|^2,
     //   h.t, h.b and r.v keep their relative precision near l = -v, near the peak and at
-    //   roughness ratios up to 1e4.
+    //   roughness ratios up to 1e4 (three words where a lobe is sharper: sin2_h_sharp);
+    // - the cosines, cos_h and c also as m 2^e (xf) for the models' TINY_COS branches,
+    //   which need f64's exponent range, not its precision.
     vec3 ls = scale_pow2(r.l), vs = scale_pow2(r.v), ns = scale_pow2(r.n);
     vec2 nl = ff_sqrt(dot_ff(ls, ls)), nv = ff_sqrt(dot_ff(vs, vs));
     vec2 nn = ff_sqrt(dot_ff(ns, ns));
-    vec2 cos_i = ff_div(dot_ff(ns, ls), ff_mul(nn, nl));
-    vec2 cos_o = ff_div(dot_ff(ns, vs), ff_mul(nn, nv));
+    vec2 n_dot_l = dot_ff(ns, ls), n_dot_v = dot_ff(ns, vs);
+    vec2 nn_nl = ff_mul(nn, nl), nn_nv = ff_mul(nn, nv);
+    vec2 cos_i = ff_div(n_dot_l, nn_nl);
+    vec2 cos_o = ff_div(n_dot_v, nn_nv);
     f.cos_i = ff_round(cos_i);
     f.cos_o = ff_round(cos_o);
     // The horizon test on the pairs' signs (hi is 0 only for an exact 0), as the reference
@@ -489,8 +493,8 @@ uint make_frame(Row r, GpuMaterial m, out Frame f) {
     if (cos_i.x <= 0.0 || cos_o.x <= 0.0) {
         return STATUS_BELOW_HORIZON;
     }
-    f.cos_i_xf = cosine_xf(dot_ff(ns, ls).x, ff_mul(nn, nl), f.cos_i);
-    f.cos_o_xf = cosine_xf(dot_ff(ns, vs).x, ff_mul(nn, nv), f.cos_o);
+    f.cos_i_xf = cosine_xf(n_dot_l.x, nn_nl, f.cos_i);
+    f.cos_o_xf = cosine_xf(n_dot_v.x, nn_nv, f.cos_o);
     vec3 l_hi = ls, l_lo = vec3(0.0), v_hi = vs, v_lo = vec3(0.0), n_hi = ns, n_lo = vec3(0.0);
     div_ff3(l_hi, l_lo, nl);
     div_ff3(v_hi, v_lo, nv);
@@ -558,10 +562,10 @@ uint make_frame(Row r, GpuMaterial m, out Frame f) {
         // r = 2 cos_i n - l as a pair vector.
         vec3 r_hi, r_lo;
         vec2 ci2 = ff_mul_f(cos_i, 2.0);
-        for (int k = 0; k < 3; k++) {
-            vec2 rk = ff_add(ff_mul(ci2, vec2(n_hi[k], n_lo[k])), -vec2(l_hi[k], l_lo[k]));
-            r_hi[k] = rk.x;
-            r_lo[k] = rk.y;
+        for (int i = 0; i < 3; i++) {
+            vec2 ri = ff_add(ff_mul(ci2, vec2(n_hi[i], n_lo[i])), -vec2(l_hi[i], l_lo[i]));
+            r_hi[i] = ri.x;
+            r_lo[i] = ri.y;
         }
         f.rv = ff_round(dot_ff3(r_hi, r_lo, v_hi, v_lo));
         cross_ff3(r_hi, r_lo, v_hi, v_lo, x_hi, x_lo);

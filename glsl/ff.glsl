@@ -43,9 +43,9 @@ vec2 split(float a) {
 
 // a * b exactly, as (rounded product, its error), by Dekker's product of the halves: each
 // partial product of two 12-bit halves is exact. Not fma(a, b, -a*b): lavapipe compiles
-// GLSL fma() to a multiply and an add (the error term came out 0: tests/f32_frame.rs),
-// and the Vulkan spec does not require fma() to round once; products and sums it does
-// require to be correctly rounded.
+// GLSL fma() to a multiply and an add (the error term came out 0 in the probe of
+// tests/f32_frame.rs), and the Vulkan spec does not require fma() to round once; products
+// and sums it does require to be correctly rounded.
 vec2 two_prod(float a, float b) {
     precise float p = a * b;
     vec2 x = split(a), y = split(b);
