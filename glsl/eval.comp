@@ -270,6 +270,154 @@ dvec3 unit64(uvec3 b) {
 }
 #endif
 
+#if !defined(HAS_FLOAT64)
+// a 2^k with max |a_i| in [1, 2) (a finite and non-zero: checked before). A power of two:
+// exact, so the frame's pairs see the inputs themselves; without it the squares of
+// components near 1e-30 or 1e30 leave float32's range.
+vec3 scale_pow2(vec3 a) {
+    float m = max(max(abs(a.x), abs(a.y)), abs(a.z));
+    if (m < 1.1754944e-38) {
+        // A subnormal largest component has no exponent field to read: bring it into
+        // the normal range first (exact, a power of two).
+        a *= 18446744073709551616.0; // 2^64
+        m *= 18446744073709551616.0;
+    }
+    int e = int((floatBitsToUint(m) >> 23) & 0xffu) - 127;
+    return ldexp(a, ivec3(-e));
+}
+
+// |l + v| for unit l, v, from the scaled inputs L, V, their lengths and lv = l + v as a
+// pair vector (the reference's construction, src/reference/frame.rs): |l + v|^2 =
+// 2 (1 + l.v) with p = L.V exact to a pair, q = |L||V|. For p >= 0, 1 + l.v = 1 + p/q;
+// for p < 0 that sum cancels near l = -v (grazing mirror geometry), and Lagrange's
+// identity |L|^2|V|^2 - (L.V)^2 = |L x V|^2 turns it into |L x V|^2/(q (q - p)), a
+// quotient of positives. Where |L x V|^2 leaves float32's normal range (|l + v| below
+// ~1e-18: mirrored directions with components of 1e-38 or 1e-45) it would flush to 0 and
+// h to NaN; |l + v| then comes from lv itself, scaled by 2^k (exact) into range: lv is
+// returned scaled and k set, |l + v| = result 2^-k.
+vec2 lv_length(vec3 ls, vec3 vs, vec2 nl, vec2 nv, inout vec3 lv_hi, inout vec3 lv_lo,
+               out float k) {
+    k = 0.0;
+    vec2 p = dot_ff(ls, vs);
+    vec2 q = ff_mul(nl, nv);
+    if (p.x >= 0.0) {
+        return ff_sqrt(ff_mul_f(ff_add(vec2(1.0, 0.0), ff_div(p, q)), 2.0));
+    }
+    vec3 x_hi, x_lo;
+    cross_ff(ls, vs, x_hi, x_lo);
+    vec2 lxv2 = length2_ff3(x_hi, x_lo);
+    if (lxv2.x >= 7.5e-37) {
+        vec2 lxv = ff_sqrt(lxv2);
+        return ff_sqrt(ff_mul_f(ff_mul(ff_div(lxv, q), ff_div(lxv, ff_add(q, -p))), 2.0));
+    }
+    vec3 s = scale_pow2(lv_hi);
+    float m = max(max(abs(lv_hi.x), abs(lv_hi.y)), abs(lv_hi.z));
+    if (m == 0.0) {
+        return vec2(0.0); // l = -v exactly: below the horizon, and never read
+    }
+    k = xf(max(max(abs(s.x), abs(s.y)), abs(s.z))).y - xf(m).y;
+    lv_lo = ldexp(lv_lo, ivec3(int(k)));
+    lv_hi = s;
+    return ff_sqrt(length2_ff3(lv_hi, lv_lo));
+}
+
+// A cosine N.X/(|N||X|) in m 2^e form (ff.glsl) from the hi part of the exact dot product:
+// below float32's normal range the quotient of the pairs is a subnormal with few bits (a
+// cosine of 1e-45 came out 1.4e-45 or 2.8e-45), the quotient of m 2^e forms is not.
+vec2 cosine_xf(float dot_hi, vec2 lengths, float cosine) {
+    return cosine >= 1e-30 ? xf(cosine) : xf_div(xf(dot_hi), xf(ff_round(lengths)));
+}
+#endif
+
+// 1/|A| for a scaled input A (|A|^2 = s, |A| = len as pairs) in three words (w0, w1, w2):
+// the pair r0 = 1/len and one Newton step r0 (1 + rho/2), rho = 1 - |A|^2 r0^2 summed
+// from its exact terms (r0.lo^2 included: it is of the order of rho itself).
+vec3 inverse_length3(vec3 a, vec2 len) {
+    vec2 r0 = ff_div(vec2(1.0, 0.0), len);
+    float sq[6];
+    dot_terms(a, a, sq);
+    vec2 h2 = two_prod(r0.x, r0.x), hl = two_prod(2.0 * r0.x, r0.y), l2 = two_prod(r0.y, r0.y);
+    float r2[6] = float[6](h2.x, h2.y, hl.x, hl.y, l2.x, l2.y);
+    Acc3 acc = Acc3(-1.0, 0.0, 0.0);
+    for (int i = 0; i < 6; i++) {
+        for (int j = 0; j < 6; j++) {
+            acc_add_prod(acc, sq[i], r2[j]);
+        }
+    }
+    float rho = -acc_pair(acc).x;
+    return vec3(r0, r0.x * rho * 0.5);
+}
+
+#if defined(HAS_BLINN_PHONG) || defined(HAS_RTR) || defined(HAS_D_BLINN)
+// |n x h|^2 for a lobe cos_h^e so sharp that the pair frame's |n x h| (error ~2^-48
+// absolute) is not enough: with e = 1e18 the lobe lives at |n x h| ~ 1e-9, where e |n x h|^2
+// then came out 1e-5 off relative (stress corpus, near-peak). n x (l + v) = (N x L)/|L| +
+// (N x V)/|V|, the cross products exact (four terms each) and 1/|L|, 1/|V| in three words
+// (inverse_length3), summed in three words: O(1) terms that cancel, to ~2^-70.
+float sin2_h_sharp(vec3 ns, vec3 ls, vec3 vs, vec2 nn, vec2 nl, vec2 nv, vec2 lv_len) {
+    vec3 rl = inverse_length3(ls, nl), rv = inverse_length3(vs, nv);
+    vec3 x_hi, x_lo;
+    for (int i = 0; i < 3; i++) {
+        float a[4], b[4];
+        cross_terms(ns, ls, i, a);
+        cross_terms(ns, vs, i, b);
+        Acc3 acc = Acc3(0.0, 0.0, 0.0);
+        for (int j = 0; j < 4; j++) {
+            for (int w = 0; w < 3; w++) {
+                acc_add_prod(acc, a[j], rl[w]);
+                acc_add_prod(acc, b[j], rv[w]);
+            }
+        }
+        vec2 xi = acc_pair(acc);
+        x_hi[i] = xi.x;
+        x_lo[i] = xi.y;
+    }
+    // n x h = that / (|N| |l + v|), in pairs to the one final rounding (each float rounding
+    // on the way costs e |n x h|^2 u, up to 1e-6 at the lobe's edge).
+    vec2 d = ff_mul(nn, lv_len);
+    return ff_round(ff_div(length2_ff3(x_hi, x_lo), ff_mul(d, d)));
+}
+
+// Whether the tuple's material is a lobe cos_h^e sharp enough for sin2_h_sharp: its
+// relative error e |n x h| 2^-47 would exceed ~1e-8.
+bool sharp_h_lobe(GpuMaterial m, float sin2_h) {
+    bool lobe = m.kind.x == MODEL_BLINN_PHONG || m.kind.x == MODEL_RTR
+        || (m.kind.x == MODEL_COOK_TORRANCE && m.kind.y == DIST_BLINN);
+    return lobe && m.lobe.x * sqrt(sin2_h) > 1e6;
+}
+#endif
+
+#if defined(HAS_PHONG)
+// |r x v|^2, r = 2 cos_i n - l, for a Phong lobe as sharp as above (the same failure, at
+// r ~ v). r x v = (2 (N.L)(N x V) - |N|^2 (L x V)) / (|N|^2 |L| |V|): the bracket W is a
+// polynomial in the inputs, summed from its exact terms in three words, and |r x v|^2 =
+// |W|^2 / (|N|^4 |L|^2 |V|^2).
+float sin2_rv_sharp(vec3 ns, vec3 ls, vec3 vs) {
+    float nl[6], nn[6];
+    dot_terms(ns, ls, nl);
+    dot_terms(ns, ns, nn);
+    vec3 w_hi, w_lo;
+    for (int i = 0; i < 3; i++) {
+        float nxv[4], lxv[4];
+        cross_terms(ns, vs, i, nxv);
+        cross_terms(ls, vs, i, lxv);
+        Acc3 acc = Acc3(0.0, 0.0, 0.0);
+        for (int a = 0; a < 6; a++) {
+            for (int b = 0; b < 4; b++) {
+                acc_add_prod(acc, 2.0 * nl[a], nxv[b]);
+                acc_add_prod(acc, -nn[a], lxv[b]);
+            }
+        }
+        vec2 wi = acc_pair(acc);
+        w_hi[i] = wi.x;
+        w_lo[i] = wi.y;
+    }
+    vec2 n2 = dot_ff(ns, ns);
+    vec2 d = ff_mul(ff_mul(n2, n2), ff_mul(dot_ff(ls, ls), dot_ff(vs, vs)));
+    return ff_round(ff_div(length2_ff3(w_hi, w_lo), d));
+}
+#endif
+
 uint make_frame(Row r, GpuMaterial m, out Frame f) {
     bool ok_l, ok_v, ok_n;
     f.l = safe_normalize(r.l, ok_l);
@@ -285,10 +433,17 @@ uint make_frame(Row r, GpuMaterial m, out Frame f) {
     f.sin2_o = 0.0;
     f.l_tb = vec2(0.0);
     f.v_tb = vec2(0.0);
-    f.c_exact = 0.0;
+    f.c_exact = double_or_float(0.0);
+#if defined(HAS_FLOAT64)
     f.cos_i_exact = 0.0;
     f.cos_o_exact = 0.0;
     f.cos_h_exact = 0.0;
+#else
+    f.cos_i_xf = vec2(0.0);
+    f.cos_o_xf = vec2(0.0);
+    f.cos_h_xf = vec2(0.0);
+    f.c_xf = vec2(0.0);
+#endif
     if (!(ok_l && ok_v && ok_n)) {
         return STATUS_INVALID;
     }
@@ -391,46 +546,112 @@ uint make_frame(Row r, GpuMaterial m, out Frame f) {
     }
 #endif
 #else
-    f.cos_i = dot(f.n, f.l);
-    f.cos_o = dot(f.n, f.v);
-    f.cos_i_exact = f.cos_i;
-    f.cos_o_exact = f.cos_o;
-    if (f.cos_i <= 0.0 || f.cos_o <= 0.0) {
+    // No f64: the same scalars from the raw inputs with float-float pairs (ff.glsl), which
+    // carry ~48 bits where the f64 branch carries 53 (each reason as there):
+    // - cos_i, cos_o = N.L/(|N||L|), the dot product exact before its one rounding (the
+    //   products of f32 inputs are exact pairs), as the reference forms them;
+    // - |l + v| from 1 + l.v, by Lagrange's identity where l.v < 0 (see lv_length);
+    // - l, v, n, h and the tangent frame as pair vectors, so that h's direction, |n x h|^2,
+    //   h.t, h.b and r.v keep their relative precision near l = -v, near the peak and at
+    //   roughness ratios up to 1e4 (three words where a lobe is sharper: sin2_h_sharp);
+    // - the cosines, cos_h and c also as m 2^e (xf) for the models' TINY_COS branches,
+    //   which need f64's exponent range, not its precision.
+    vec3 ls = scale_pow2(r.l), vs = scale_pow2(r.v), ns = scale_pow2(r.n);
+    vec2 nl = ff_sqrt(dot_ff(ls, ls)), nv = ff_sqrt(dot_ff(vs, vs));
+    vec2 nn = ff_sqrt(dot_ff(ns, ns));
+    vec2 n_dot_l = dot_ff(ns, ls), n_dot_v = dot_ff(ns, vs);
+    vec2 nn_nl = ff_mul(nn, nl), nn_nv = ff_mul(nn, nv);
+    vec2 cos_i = ff_div(n_dot_l, nn_nl);
+    vec2 cos_o = ff_div(n_dot_v, nn_nv);
+    f.cos_i = ff_round(cos_i);
+    f.cos_o = ff_round(cos_o);
+    // The horizon test on the pairs' signs (hi is 0 only for an exact 0), as the reference
+    // decides it: a cosine below 7e-46 rounds to 0 in f32.
+    if (cos_i.x <= 0.0 || cos_o.x <= 0.0) {
         return STATUS_BELOW_HORIZON;
     }
-    // |l + v| >= cos_i + cos_o > 0 here, so h is well defined; its components are at most 2,
-    // so the plain length neither under- nor overflows.
-    vec3 lv = f.l + f.v;
-    float len = sqrt(dot(lv, lv));
-    f.h = lv / len;
-    // cos_h = n.h = (cos_i + cos_o) / |l + v|: positive by construction, as it is exactly.
-    // dot(n, h) is not: where l ~ -v (grazing, nearly opposite), l + v is dominated by the
-    // rounding of l and v, h points anywhere, and dot(n, h) can come out <= 0; log(cos_h)
-    // in D then turns into garbage and D into +inf (seen in the 10M-tuple stress corpus).
-    f.cos_h = (f.cos_i + f.cos_o) / len;
-    f.cos_h_exact = f.cos_h;
-    // c = v.h = |l + v| / 2 for unit l, v. Not dot(v, h): at grazing mirror geometry v is
-    // nearly perpendicular to h, and the dot product turns h's direction error (which grows
-    // as 1/|l + v|) into a relative error of ~u/(2c^2) in c (1e-3 at c = 0.005), where
-    // |l + v|/2 is off by ~u/c.
-    f.c = 0.5 * len;
-    f.c_exact = f.c;
-    f.sin2_h = cross_length2(f.n, f.h);
-    // Only what the kernel's models read (the same guards as the f64 branch).
-#if defined(HAS_ANISOTROPIC)
-    f.hx = dot(f.h, f.t); // 0 for isotropic materials (t = b = 0)
-    f.hy = dot(f.h, f.b);
-    f.l_tb = vec2(dot(f.l, f.t), dot(f.l, f.b));
-    f.v_tb = vec2(dot(f.v, f.t), dot(f.v, f.b));
+    f.cos_i_xf = cosine_xf(n_dot_l.x, nn_nl, f.cos_i);
+    f.cos_o_xf = cosine_xf(n_dot_v.x, nn_nv, f.cos_o);
+    vec3 l_hi = ls, l_lo = vec3(0.0), v_hi = vs, v_lo = vec3(0.0), n_hi = ns, n_lo = vec3(0.0);
+    div_ff3(l_hi, l_lo, nl);
+    div_ff3(v_hi, v_lo, nv);
+    div_ff3(n_hi, n_lo, nn);
+    vec3 h_hi, h_lo;
+    add_ff3(l_hi, l_lo, v_hi, v_lo, h_hi, h_lo); // l + v, made unit below
+    // |l + v| = lv_len 2^-k: k = 0 but where |l + v| < ~1e-15 (see lv_length).
+    float k;
+    vec2 lv_len = lv_length(ls, vs, nl, nv, h_hi, h_lo, k);
+    // cos_h = (cos_i + cos_o)/|l + v| and c = |l + v|/2, as in the f64 branch: dot(n, h)
+    // and dot(v, h) would inherit h's direction error, which grows as 1/|l + v|.
+    vec2 lv_xf = xf(ff_round(lv_len)) - vec2(0.0, k);
+    f.c_xf = lv_xf - vec2(0.0, 1.0);
+    // Cosines or |l + v| near or below float32's normal range (grazing tuples with
+    // components of 1e-38 or 1e-45): their squares and quotients leave float32, and cos_h
+    // and c come from the m 2^e forms instead (float32 precision, which is all that is
+    // left of a subnormal cosine).
+    if (k == 0.0 && min(f.cos_i, f.cos_o) >= 1e-30) {
+        f.cos_h = ff_round(ff_div(ff_add(cos_i, cos_o), lv_len));
+        f.cos_h_xf = xf(f.cos_h);
+    } else {
+        f.cos_h_xf = xf_div(xf_add(f.cos_i_xf, f.cos_o_xf), lv_xf);
+        f.cos_h = xf_float(f.cos_h_xf);
+    }
+    if (k == 0.0) {
+        f.c_exact = 0.5 * lv_len;
+        f.c = ff_round(f.c_exact);
+    } else {
+        f.c = xf_float(f.c_xf);
+        f.c_exact = vec2(f.c, 0.0);
+    }
+    div_ff3(h_hi, h_lo, lv_len);
+    f.h = h_hi + h_lo;
+    vec3 x_hi, x_lo;
+    cross_ff3(n_hi, n_lo, h_hi, h_lo, x_hi, x_lo);
+    f.sin2_h = ff_round(length2_ff3(x_hi, x_lo));
+#if defined(HAS_BLINN_PHONG) || defined(HAS_RTR) || defined(HAS_D_BLINN)
+    if (k == 0.0 && sharp_h_lobe(m, f.sin2_h)) {
+        f.sin2_h = sin2_h_sharp(ns, ls, vs, nn, nl, nv, lv_len);
+    }
+#endif
+#if defined(HAS_ANISOTROPIC) && defined(HAS_TANGENTS)
+    if (is_anisotropic(m)) {
+        // b = N x T/|N x T| and t = b x n as pair vectors (the f64 branch's construction).
+        vec3 b_hi, b_lo, t_hi, t_lo;
+        cross_ff(ns, scale_pow2(r.t), b_hi, b_lo);
+        div_ff3(b_hi, b_lo, ff_sqrt(length2_ff3(b_hi, b_lo)));
+        cross_ff3(b_hi, b_lo, n_hi, n_lo, t_hi, t_lo);
+        f.hx = ff_round(dot_ff3(h_hi, h_lo, t_hi, t_lo));
+        f.hy = ff_round(dot_ff3(h_hi, h_lo, b_hi, b_lo));
+        f.l_tb = vec2(ff_round(dot_ff3(l_hi, l_lo, t_hi, t_lo)),
+                      ff_round(dot_ff3(l_hi, l_lo, b_hi, b_lo)));
+        f.v_tb = vec2(ff_round(dot_ff3(v_hi, v_lo, t_hi, t_lo)),
+                      ff_round(dot_ff3(v_hi, v_lo, b_hi, b_lo)));
+    }
 #endif
 #if defined(HAS_G_SMITH) || defined(HAS_G_SMITH_CORRELATED) || defined(HAS_G_SMITH_FAST)
-    f.sin2_i = cross_length2(f.n, f.l);
-    f.sin2_o = cross_length2(f.n, f.v);
+    cross_ff3(n_hi, n_lo, l_hi, l_lo, x_hi, x_lo);
+    f.sin2_i = ff_round(length2_ff3(x_hi, x_lo));
+    cross_ff3(n_hi, n_lo, v_hi, v_lo, x_hi, x_lo);
+    f.sin2_o = ff_round(length2_ff3(x_hi, x_lo));
 #endif
 #if defined(HAS_PHONG)
-    vec3 rr = 2.0 * f.cos_i * f.n - f.l;
-    f.rv = dot(rr, f.v);
-    f.sin2_rv = cross_length2(rr, f.v);
+    if (m.kind.x == MODEL_PHONG) {
+        // r = 2 cos_i n - l as a pair vector.
+        vec3 r_hi, r_lo;
+        vec2 ci2 = ff_mul_f(cos_i, 2.0);
+        for (int i = 0; i < 3; i++) {
+            vec2 ri = ff_add(ff_mul(ci2, vec2(n_hi[i], n_lo[i])), -vec2(l_hi[i], l_lo[i]));
+            r_hi[i] = ri.x;
+            r_lo[i] = ri.y;
+        }
+        f.rv = ff_round(dot_ff3(r_hi, r_lo, v_hi, v_lo));
+        cross_ff3(r_hi, r_lo, v_hi, v_lo, x_hi, x_lo);
+        f.sin2_rv = ff_round(length2_ff3(x_hi, x_lo));
+        // As sharp_h_lobe, for r.v (Phong).
+        if (m.lobe.x * sqrt(f.sin2_rv) > 1e6) {
+            f.sin2_rv = sin2_rv_sharp(ns, ls, vs);
+        }
+    }
 #endif
 #endif
     return STATUS_VALID;

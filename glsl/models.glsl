@@ -64,6 +64,36 @@ Eval eval_lobe_f64(GpuMaterial m, double lobe) {
 }
 #endif
 
+#if !defined(HAS_FLOAT64)
+// The f32 frame's TINY_COS (the same rule as above): below it the cosine-dependent factors
+// are formed as m 2^e (ff.glsl, xf) from the frame's cos_*_xf, f64's range at float32's
+// precision.
+const float TINY_COS = 1e-15;
+
+// e^x as m 2^e for x = x.hi + x.lo beyond float32's exp range: x = k ln 2 + r, |r| <=
+// ln 2 / 2. A pair, because x is ~100 at subnormal cosines and a float x would carry an
+// absolute error of 4e-6, the result as much relatively.
+vec2 xf_exp(vec2 x) {
+    float k = floor(x.x * LOG2E + 0.5);
+    float r = (x.x - k * LN2_HI) + (x.y - k * LN2_LO);
+    return xf_norm(exp_acc(r), k);
+}
+
+// eval_lobe_f64 without f64: c_diff/pi + c_spec * lobe with lobe = m 2^e, each output
+// rounded once (+inf beyond FLT_MAX, saturated by the caller).
+Eval eval_lobe_xf(GpuMaterial m, vec2 lobe) {
+    Eval e;
+    for (int ch = 0; ch < 3; ch++) {
+        e.brdf[ch] = m.diffuse[ch] + xf_float(xf_mul(xf(m.specular[ch]), lobe));
+    }
+    e.d = xf_float(lobe);
+    e.g = 1.0;
+    e.f = vec3(1.0);
+    e.k = 1.0;
+    return e;
+}
+#endif
+
 bool is_anisotropic(GpuMaterial m) {
     return (m.kind.w & FLAG_ANISOTROPIC) != 0u;
 }
@@ -169,6 +199,17 @@ Eval model_blinn_phong(Frame f, GpuMaterial m) {
         }
         return eval_lobe_f64(m, double(m.scale.x * p) / f.cos_i_exact);
     }
+#else
+    // The same two cases in m 2^e form (the f32 frame).
+    if (f.cos_i < TINY_COS) {
+        if (p < 1.1754944e-38 && m.lobe.x > 0.0) {
+            vec2 ln_cos_h = f.cos_h >= 1.1754944e-38 ? vec2(log_cos(f.cos_h, f.sin2_h), 0.0)
+                                                     : xf_log_pair(f.cos_h_xf);
+            vec2 ln_q = ff_add(ff_mul_f(ln_cos_h, m.lobe.x), -xf_log_pair(f.cos_i_xf));
+            return eval_lobe_xf(m, xf_mul(xf(m.scale.x), xf_exp(ln_q)));
+        }
+        return eval_lobe_xf(m, xf_div(xf(m.scale.x * p), f.cos_i_xf));
+    }
 #endif
     return eval_lobe(m, m.scale.x * p / f.cos_i);
 }
@@ -194,7 +235,12 @@ Eval model_ward(Frame f, GpuMaterial m) {
     if (min(f.cos_i_exact, f.cos_o_exact) < TINY_COS) {
         return eval_lobe_f64(m, double(m.scale.x * x) / sqrt(f.cos_i_exact * f.cos_o_exact));
     }
-#endif    // Where exp underflows to 0 the lobe is 0; the guard keeps 0 * inf (cos_i, cos_o both
+#else
+    if (min(f.cos_i, f.cos_o) < TINY_COS) {
+        return eval_lobe_xf(m, xf_div(xf(m.scale.x * x), xf_sqrt(xf_mul(f.cos_i_xf, f.cos_o_xf))));
+    }
+#endif
+    // Where exp underflows to 0 the lobe is 0; the guard keeps 0 * inf (cos_i, cos_o both
     // ~1e-38) from becoming NaN. One inversesqrt per cosine: their product cannot overflow.
     float lobe = x == 0.0 ? 0.0 : m.scale.x * x * inversesqrt(f.cos_i) * inversesqrt(f.cos_o);
     return eval_lobe(m, lobe);
@@ -307,6 +353,122 @@ void cook_torrance_gk_f64(Frame f, GpuMaterial m, uint convention, out double g,
 }
 #endif
 
+#if defined(HAS_COOK_TORRANCE) && !defined(HAS_FLOAT64)
+// The TINY_COS helpers of the f64 branch above, in m 2^e form (the f32 frame), each the
+// same formula: 1 + Lambda (Smith) for direction w with n.w = cos_w < TINY_COS, where
+// q2 = m^2 tan^2 leaves float32 (Lambda ~ sqrt(q2)/(2 sqrt(pi)) Beckmann, sqrt(q2)/2 GGX;
+// the dropped terms are below 1e-8 relative, as sqrt(q2) > 1e8 here).
+vec2 smith_one_plus_lambda_xf(GpuMaterial m, vec2 w_tb, float sin2_w, vec2 cos_w) {
+#if defined(HAS_G_SMITH) || defined(HAS_G_SMITH_CORRELATED) || defined(HAS_G_SMITH_FAST)
+    vec2 sq = xf_div(xf(sqrt(smith_q2(m, w_tb, sin2_w, 1.0))), cos_w); // sqrt(q2)
+#else
+    vec2 sq = vec2(0.0);
+#endif
+#if defined(HAS_LAMBDA_BECKMANN)
+    if (m.kind.y == DIST_BECKMANN) {
+        return xf_add(xf_mul(sq, xf(0.5 * INV_SQRT_PI)), xf(0.5));
+    }
+#endif
+    return xf_add(xf_mul(sq, xf(0.5)), xf(0.5));
+}
+
+// 1 + Lambda for either cosine: float32's above TINY_COS.
+vec2 smith_one_plus_lambda(GpuMaterial m, vec2 w_tb, float sin2_w, float cos_w, vec2 cos_w_xf) {
+    if (cos_w >= TINY_COS) {
+#if defined(HAS_G_SMITH) || defined(HAS_G_SMITH_CORRELATED)
+        return xf(1.0 + smith_lambda(m, smith_q2(m, w_tb, sin2_w, cos_w)));
+#else
+        return xf(1.0);
+#endif
+    }
+    return smith_one_plus_lambda_xf(m, w_tb, sin2_w, cos_w_xf);
+}
+
+// Walter et al.'s G1 fit for either cosine: below TINY_COS a = cos_w/sqrt(m^2 sin^2) <
+// 1e-8 and G1 = 3.535 a to 1e-8 relative.
+vec2 smith_fast_g1_xf(GpuMaterial m, vec2 w_tb, float sin2_w, float cos_w, vec2 cos_w_xf) {
+#if defined(HAS_G_SMITH_FAST)
+    if (cos_w >= TINY_COS) {
+        return xf(G1_SmithFast(smith_q2(m, w_tb, sin2_w, cos_w)));
+    }
+    return xf_mul(xf(3.535), xf_div(cos_w_xf, xf(sqrt(smith_q2(m, w_tb, sin2_w, 1.0)))));
+#else
+    return xf(1.0);
+#endif
+}
+
+// d_f64 in m 2^e form (the f32 frame): D where its float32 value is not a normal number
+// and K is beyond float32 (a D of 1e-38 times a K of 1e45 is the BRDF).
+vec2 d_xf(Frame f, GpuMaterial m) {
+    vec2 ln_cos = f.cos_h >= FLT_MIN ? vec2(log_cos(f.cos_h, f.sin2_h), 0.0)
+                                     : xf_log_pair(f.cos_h_xf);
+    vec2 ln_d = vec2(-1e30, 0.0);
+    switch (m.kind.y) {
+#if defined(HAS_D_GAUSSIAN)
+    case DIST_GAUSSIAN: {
+        float delta = atan2_positive(sqrt(f.sin2_h), f.cos_h);
+        ln_d = vec2(-delta * delta * m.lobe.x, 0.0);
+        break;
+    }
+#endif
+#if defined(HAS_D_BECKMANN)
+    case DIST_BECKMANN: {
+        float x = xf_float(xf_div(xf(slope2_h(f, m)), xf_mul(f.cos_h_xf, f.cos_h_xf)));
+        ln_d = ff_add(vec2(log_acc(m.scale.x) - min(x, 1e30), 0.0), ff_mul_f(ln_cos, -4.0));
+        break;
+    }
+#endif
+#if defined(HAS_D_BLINN)
+    case DIST_BLINN:
+        ln_d = ff_add(vec2(log_acc(m.scale.x), 0.0), ff_mul_f(ln_cos, m.lobe.x));
+        break;
+#endif
+    default: // GGX: D > 1e-15 for roughness in [1e-7, 1e4] (see d_f64)
+        break;
+    }
+    // Beyond e^-200 the product with any K (<= 1e90) is 0 in float32; xf_exp's range
+    // reduction needs a finite argument.
+    return ln_d.x < -200.0 ? vec2(0.0) : xf_exp(ln_d);
+}
+
+// cook_torrance_gk_f64 in m 2^e form.
+void cook_torrance_gk_xf(Frame f, GpuMaterial m, uint convention, out vec2 g, out vec2 k) {
+    vec2 ci = f.cos_i_xf, co = f.cos_o_xf;
+    g = xf(1.0);
+    switch (m.kind.z) {
+    case GEOM_COOK_TORRANCE: {
+        // cos_h from its m 2^e form: the float one is subnormal (few bits) or flushed here.
+        vec2 t = xf_div(xf_mul(xf(2.0), f.cos_h_xf), f.c_xf);
+        g = xf_min(xf(1.0), xf_min(xf_mul(t, co), xf_mul(t, ci)));
+        break;
+    }
+    case GEOM_SMITH:
+        g = xf_div(xf(1.0), xf_mul(smith_one_plus_lambda(m, f.v_tb, f.sin2_o, f.cos_o, co),
+                                   smith_one_plus_lambda(m, f.l_tb, f.sin2_i, f.cos_i, ci)));
+        break;
+    case GEOM_SMITH_CORRELATED:
+        // 1 + Lambda_o + Lambda_i = (1 + Lambda_o) + (1 + Lambda_i) - 1, where the larger
+        // is above 1e8 (one cosine is below TINY_COS), so the -1 is below its precision
+        // unless both are O(1), which they are not here.
+        g = xf_div(xf(1.0), xf_add(smith_one_plus_lambda(m, f.v_tb, f.sin2_o, f.cos_o, co),
+                                   smith_one_plus_lambda(m, f.l_tb, f.sin2_i, f.cos_i, ci)));
+        break;
+    case GEOM_SMITH_FAST:
+        g = xf_mul(smith_fast_g1_xf(m, f.v_tb, f.sin2_o, f.cos_o, co),
+                   smith_fast_g1_xf(m, f.l_tb, f.sin2_i, f.cos_i, ci));
+        break;
+    default: break;
+    }
+    k = xf(1.0);
+    switch (convention) {
+    case CONV_SEED: k = xf_div(xf(1.0), co); break;
+    case CONV_CT1982: k = xf_div(xf(INV_PI), xf_mul(ci, co)); break;
+    case CONV_MODERN: k = xf_div(xf(0.25), xf_mul(ci, co)); break;
+    default: break;
+    }
+}
+#endif
+
 #if defined(HAS_COOK_TORRANCE)
 // Cook & Torrance 1982, "A Reflectance Model for Computer Graphics":
 // d c_diff/pi + s c_spec (x) D G F K (d c_diff/pi is m.diffuse, s c_spec is m.specular).
@@ -369,6 +531,11 @@ Eval model_cook_torrance(Frame f, GpuMaterial m) {
             e.f = F_Conductor_f64(f.c_exact, m.fresnel0.rgb, m.fresnel1.rgb, m.scale.yzw);
             break;
         }
+#else
+        if (xf_less(f.c_xf, xf(1e-12))) {
+            e.f = F_Conductor_tiny(f.c_xf, m.fresnel0.rgb, m.fresnel1.rgb, m.scale.yzw);
+            break;
+        }
 #endif
         e.f = F_Conductor(f.c, m.fresnel0.rgb, m.fresnel1.rgb, m.scale.yzw);
         break;
@@ -418,6 +585,22 @@ Eval model_cook_torrance(Frame f, GpuMaterial m) {
         dvec3 b = dvec3(m.diffuse.rgb)
             + dvec3(m.specular.rgb) * ((d64 * g64 * k64) * dvec3(e.f));
         e.brdf = vec3(float_or_inf(b.x), float_or_inf(b.y), float_or_inf(b.z));
+    }
+#else
+    // The same in m 2^e form (the f32 frame).
+    bool tiny = min(f.cos_i, f.cos_o) < TINY_COS;
+    if (tiny || any_non_finite(e.brdf)) {
+        vec2 gx = xf(e.g), kx = xf(e.k);
+        if (tiny) {
+            cook_torrance_gk_xf(f, m, convention, gx, kx);
+            e.g = xf_float(gx);
+            e.k = xf_float(kx);
+        }
+        vec2 dx = tiny && e.d < FLT_MIN && m.kind.y != DIST_GGX ? d_xf(f, m) : xf(e.d);
+        vec2 dgk = xf_mul(xf_mul(dx, gx), kx);
+        for (int ch = 0; ch < 3; ch++) {
+            e.brdf[ch] = m.diffuse[ch] + xf_float(xf_mul(xf(m.specular[ch]), xf_mul(dgk, xf(e.f[ch]))));
+        }
     }
 #endif
     return e;

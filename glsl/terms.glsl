@@ -8,12 +8,14 @@
 #define VKBRDF_TERMS_GLSL
 
 #include "math.glsl"
+#include "ff.glsl"
 
 // The derived quantities of FORMULAS.md §1 for one valid, above-horizon tuple.
+// The *_exact fields: f64 where the device has it, else a float-float pair (hi, lo).
 #if defined(HAS_FLOAT64)
 #define double_or_float double
 #else
-#define double_or_float float
+#define double_or_float vec2
 #endif
 
 struct Frame {
@@ -27,11 +29,16 @@ struct Frame {
     float hx, hy;      // h.t, h.b: h in the tangent frame (anisotropic materials only)
     float rv, sin2_rv; // r.v and |r x v|^2, r = 2 cos_i n - l (Phong only)
     float sin2_i, sin2_o; // |n x l|^2, |n x v|^2 (Smith's tan^2 numerators)
-    double_or_float c_exact; // c before rounding to f32 (f64 where the device has it)
-    double_or_float cos_i_exact, cos_o_exact; // cos_i, cos_o before rounding (FORMULAS.md §1,
+    double_or_float c_exact; // c before rounding to f32 (f64, or a float-float pair)
+#if defined(HAS_FLOAT64)
+    double cos_i_exact, cos_o_exact; // cos_i, cos_o before rounding (FORMULAS.md §1,
                        // "Overflow": below TINY_COS the models evaluate from these, in f64)
-    double_or_float cos_h_exact; // cos_h before rounding (below float32's smallest normal
+    double cos_h_exact; // cos_h before rounding (below float32's smallest normal
                        // number the f32 value flushes to 0)
+#else
+    // The same four in f64's range without f64: m 2^e (ff.glsl, xf), float32 precision.
+    vec2 cos_i_xf, cos_o_xf, cos_h_xf, c_xf;
+#endif
     vec2 l_tb, v_tb;   // (l.t, l.b), (v.t, v.b) (anisotropic materials only)
 };
 
@@ -163,8 +170,14 @@ vec3 F_Dielectric(float c, vec3 mu2m1, vec3 mu2m1_lo, double_or_float c_exact) {
     vec3 g2 = vec3(g2d);
     vec3 g = vec3(sqrt(max(g2d, 0.0)));
 #else
-    vec3 g2 = mu2m1 + c * c;
-    vec3 g = sqrt(max(g2, 0.0));
+    // The same sum as a float-float pair per channel (c_exact = c to ~48 bits): without it
+    // g^2 near the critical angle is a difference of O(1) floats (see above).
+    vec3 g2, g;
+    for (int ch = 0; ch < 3; ch++) {
+        vec2 g2p = ff_add(vec2(mu2m1[ch], mu2m1_lo[ch]), ff_mul(c_exact, c_exact));
+        g2[ch] = ff_round(g2p);
+        g[ch] = g2p.x > 0.0 ? ff_round(ff_sqrt(g2p)) : 0.0;
+    }
 #endif
     vec3 gpc = g + c;                 // >= c > 0
     vec3 gmc = mu2m1 / gpc;           // = g - c
@@ -233,6 +246,54 @@ vec3 F_Conductor(float c, vec3 n, vec3 k, vec3 e2rm1) {
     vec3 ur = c - ecr2, wr = c + ecr2;
     vec3 r_perp = (ur * ur + eci2 * eci2) / (wr * wr + eci2 * eci2);
     return 0.5 * (r_par + r_perp);
+}
+#endif
+
+#if defined(HAS_F_CONDUCTOR) && !defined(HAS_FLOAT64)
+// |p|^2 / |q|^2 for complex p, q per channel, both scaled by their largest component
+// first: at c below 1e-12 the squares underflow (0/0 = NaN for an index-matched conductor).
+vec3 abs2_ratio(vec3 pr, vec3 pi_, vec3 qr, vec3 qi) {
+    vec3 m = max(max(abs(pr), abs(pi_)), max(max(abs(qr), abs(qi)), vec3(1e-37)));
+    pr /= m; pi_ /= m; qr /= m; qi /= m;
+    return (pr * pr + pi_ * pi_) / (qr * qr + qi * qi);
+}
+
+// F_Conductor for c below 1e-12 without f64 (the f64 frame takes F_Conductor_f64 there),
+// given c = m 2^e (ff.glsl, xf). Where eta^2 - 1 is within 1e30 c^2 of 0 (index-matched:
+// cos_t is then of the order of c, and in float32 c^2 and (eta c)^2 underflow) the
+// formula is taken in units of c: u = cos_t/c, u^2 = (e2rm1/c^2 + 1 + i e2i/c^2)/eta^2,
+// r_par = |eta - u|^2/|eta + u|^2, r_perp = |1 - eta u|^2/|1 + eta u|^2 (c cancels).
+// Elsewhere cos_t is far above c and the float32 formula holds, with its quotients scaled.
+vec3 F_Conductor_tiny(vec2 c_xf, vec3 n, vec3 k, vec3 e2rm1) {
+    float c = xf_float(c_xf);
+    vec2 c2 = xf_mul(c_xf, c_xf);
+    vec3 e2r = n * n - k * k, e2i = 2.0 * n * k, q = n * n + k * k;
+    vec3 a = e2r / q, b = e2i / q;
+    vec3 A, B;
+    bvec3 matched;
+    for (int ch = 0; ch < 3; ch++) {
+        float ra = xf_float(xf_div(xf(abs(e2rm1[ch])), c2));
+        float rb = xf_float(xf_div(xf(abs(e2i[ch])), c2));
+        matched[ch] = max(ra, rb) < 1e30;
+        A[ch] = (e2rm1[ch] < 0.0 ? -ra : ra) + 1.0;
+        B[ch] = e2i[ch] < 0.0 ? -rb : rb;
+    }
+    // Index-matched channels, in units of c.
+    vec3 ur, ui;
+    csqrt((A * a + B * b) / q, (B * a - A * b) / q, ur, ui);
+    vec3 par_u = abs2_ratio(n - ur, k - ui, n + ur, k + ui);
+    vec3 eur = cmul_re(n, k, ur, ui), eui = cmul_im(n, k, ur, ui); // eta u
+    vec3 perp_u = abs2_ratio(1.0 - eur, -eui, 1.0 + eur, eui);
+    // The others: F_Conductor's lines with c^2 dropped (below 1e-30 of eta^2 - 1).
+    vec3 zr = (e2rm1 * a + e2i * b) / q;
+    vec3 zi = (1.0 - c) * (1.0 + c) * b / q;
+    vec3 ctr, cti;
+    csqrt(zr, zi, ctr, cti);
+    vec3 ecr = n * c, eci = k * c;
+    vec3 par = abs2_ratio(ecr - ctr, eci - cti, ecr + ctr, eci + cti);
+    vec3 ecr2 = cmul_re(n, k, ctr, cti), eci2 = cmul_im(n, k, ctr, cti);
+    vec3 perp = abs2_ratio(c - ecr2, eci2, c + ecr2, eci2);
+    return 0.5 * mix(par + perp, par_u + perp_u, matched);
 }
 #endif
 

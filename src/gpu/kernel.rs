@@ -25,6 +25,7 @@ pub const SOURCES: &[(&str, &str)] = &[
     ("eval.comp", include_str!("../../glsl/eval.comp")),
     ("layout.glsl", include_str!("../../glsl/layout.glsl")),
     ("math.glsl", include_str!("../../glsl/math.glsl")),
+    ("ff.glsl", include_str!("../../glsl/ff.glsl")),
     ("terms.glsl", include_str!("../../glsl/terms.glsl")),
     ("models.glsl", include_str!("../../glsl/models.glsl")),
 ];

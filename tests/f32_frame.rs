@@ -1,0 +1,210 @@
+//! The kernel's f32 frame (devices without shaderFloat64, or `VKBRDF_DISABLE_FLOAT64=1`;
+//! issue 14): its float-float helpers are error-free on the device, and with the frame
+//! forced on, conformance and the stress corpus hold within 2x of the float64 frame.
+
+mod common;
+
+use std::process::{Command, Output};
+
+/// `vkbrdf ARGS` with the kernel's f32 frame forced (`VKBRDF_DISABLE_FLOAT64=1`).
+fn vkbrdf_f32(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_vkbrdf"))
+        .args(args)
+        .env("VKBRDF_DISABLE_FLOAT64", "1")
+        .output()
+        .expect("run vkbrdf")
+}
+
+/// The float64 frame's maximum relative error per (quantity, regime) over the 10M-tuple
+/// stress corpus, copied from docs/stress-10m-float64.md (written by `vkbrdf stress
+/// --tuples 10000000 --backend vulkan` on lavapipe with shaderFloat64). The corpus is
+/// chunkable (tests/stress.rs), so its first 200,000 rows are rows of that run.
+const FLOAT64_MAX: [(&str, &str, f64); 44] = [
+    ("D", "well-conditioned", 5.03e-6),
+    ("D", "grazing", 1.31e-5),
+    ("D", "near-peak", 2.81e-7),
+    ("D", "extreme roughness", 8.26e-6),
+    ("D", "extreme IOR", 4.60e-6),
+    ("F", "well-conditioned", 5.38e-7),
+    ("F", "grazing", 5.46e-7),
+    ("F", "near-peak", 5.89e-7),
+    ("F", "extreme roughness", 7.51e-7),
+    ("F", "extreme IOR", 7.76e-7),
+    ("G", "well-conditioned", 2.47e-7),
+    ("G", "grazing", 3.96e-7),
+    ("G", "near-peak", 2.29e-7),
+    ("G", "extreme roughness", 1.11e-6),
+    ("G", "extreme IOR", 4.74e-7),
+    ("K", "well-conditioned", 2.23e-7),
+    ("K", "grazing", 7.39e-6),
+    ("K", "near-peak", 2.22e-7),
+    ("K", "extreme roughness", 2.19e-4),
+    ("K", "extreme IOR", 3.12e-6),
+    ("f: blinn-phong", "well-conditioned", 2.66e-6),
+    ("f: blinn-phong", "grazing", 1.31e-5),
+    ("f: blinn-phong", "near-peak", 1.82e-7),
+    ("f: blinn-phong", "extreme roughness", 1.12e-6),
+    ("f: cook-torrance", "well-conditioned", 1.34e-6),
+    ("f: cook-torrance", "grazing", 1.00e0),
+    ("f: cook-torrance", "near-peak", 7.11e-7),
+    ("f: cook-torrance", "extreme roughness", 2.93e-1),
+    ("f: cook-torrance", "extreme IOR", 1.00e0),
+    ("f: lambert", "well-conditioned", 4.03e-8),
+    ("f: lambert", "grazing", 4.03e-8),
+    ("f: lambert", "near-peak", 4.03e-8),
+    ("f: phong", "well-conditioned", 6.27e-7),
+    ("f: phong", "grazing", 5.45e-7),
+    ("f: phong", "near-peak", 1.60e-7),
+    ("f: phong", "extreme roughness", 3.92e-6),
+    ("f: rtr", "well-conditioned", 3.28e-6),
+    ("f: rtr", "grazing", 2.70e-6),
+    ("f: rtr", "near-peak", 8.99e-8),
+    ("f: rtr", "extreme roughness", 3.70e-6),
+    ("f: ward", "well-conditioned", 3.46e-6),
+    ("f: ward", "grazing", 1.16e-5),
+    ("f: ward", "near-peak", 2.81e-7),
+    ("f: ward", "extreme roughness", 8.26e-6),
+];
+
+const FF_PROBE: &str = r#"#version 450
+#include "ff.glsl"
+layout(local_size_x_id = 0) in;
+layout(std430, set = 0, binding = BINDING_TUPLES) readonly buffer In { float inp[]; };
+layout(std430, set = 0, binding = BINDING_BRDF) writeonly buffer Out { float outp[]; };
+layout(push_constant) uniform P { uint count; uint material_count; } p;
+void main() {
+    uint i = gl_GlobalInvocationID.x;
+    if (i * 8u >= p.count) { return; }
+    vec3 a = vec3(inp[i * 6u], inp[i * 6u + 1u], inp[i * 6u + 2u]);
+    vec3 b = vec3(inp[i * 6u + 3u], inp[i * 6u + 4u], inp[i * 6u + 5u]);
+    vec2 pr = two_prod(a.x, b.x);
+    vec2 s = two_sum(a.x, b.x);
+    vec2 d = dot_ff(a, b);
+    vec2 q = ff_div(vec2(a.x, a.y * 1e-8), vec2(b.x, b.y * 1e-8));
+    outp[i * 8u] = pr.x;
+    outp[i * 8u + 1u] = pr.y;
+    outp[i * 8u + 2u] = s.x;
+    outp[i * 8u + 3u] = s.y;
+    outp[i * 8u + 4u] = d.x;
+    outp[i * 8u + 5u] = d.y;
+    outp[i * 8u + 6u] = q.x;
+    outp[i * 8u + 7u] = q.y;
+}
+"#;
+
+#[test]
+fn float_float_helpers_are_error_free_on_the_device() {
+    let Some(mut gpu) = common::vulkan() else {
+        return;
+    };
+    let n = 4096;
+    let mut input = Vec::with_capacity(n * 6);
+    let mut x = 0x2545_f491_u32;
+    let mut next = || {
+        x ^= x << 13;
+        x ^= x >> 17;
+        x ^= x << 5;
+        (f64::from(x) / f64::from(u32::MAX) * 2.0 - 1.0) as f32
+    };
+    for _ in 0..n {
+        // b nearly parallel to a, so that the dot products cancel.
+        let a = [next(), next(), next()];
+        let b = [a[0] * (1.0 + next() * 1e-3), a[1] * 0.5 + next(), a[2]];
+        let b = [b[0], b[1], -(a[0] * b[0] + a[1] * b[1]) / a[2]];
+        input.extend(a);
+        input.extend(b);
+    }
+    let out = gpu
+        .run_probe(FF_PROBE, &[], &input, n * 8)
+        .expect("ff probe");
+    let mut worst_dot = 0f64;
+    for i in 0..n {
+        let v: Vec<f64> = input[i * 6..i * 6 + 6]
+            .iter()
+            .map(|&x| f64::from(x))
+            .collect();
+        let o: Vec<f64> = out[i * 8..i * 8 + 8]
+            .iter()
+            .map(|&x| f64::from(x))
+            .collect();
+        // A product of two floats is exact in f64, so hi + lo must equal it exactly.
+        assert_eq!(o[0] + o[1], v[0] * v[3], "two_prod({}, {})", v[0], v[3]);
+        assert_eq!(o[0], f64::from(input[i * 6] * input[i * 6 + 3]));
+        // Likewise a sum of two floats (their exponents here differ by far less than 29).
+        assert_eq!(o[2] + o[3], v[0] + v[3], "two_sum({}, {})", v[0], v[3]);
+        // The dot product: its 3 products are exact in f64, their sum to ~1e-16 absolute.
+        let exact = v[0] * v[3] + v[1] * v[4] + v[2] * v[5];
+        let scale = (v[0] * v[3]).abs() + (v[1] * v[4]).abs() + (v[2] * v[5]).abs();
+        worst_dot = worst_dot.max(((o[4] + o[5]) - exact).abs() / scale);
+    }
+    eprintln!("dot_ff: worst error {worst_dot:e} of the sum of |products|");
+    assert!(worst_dot < 1e-15, "dot_ff error {worst_dot:e}");
+}
+
+#[test]
+fn conformance_passes_with_the_f32_frame() {
+    if common::vulkan().is_none() {
+        return;
+    }
+    let out = vkbrdf_f32(&["check"]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "vkbrdf check fails with the f32 frame:\n{text}\n{}",
+        common::stderr(&out)
+    );
+    assert!(text.contains("198 pass, 0 fail"), "{text}");
+}
+
+#[test]
+fn stress_stays_within_twice_the_float64_frame() {
+    if common::vulkan().is_none() {
+        return;
+    }
+    let dir = tempfile::tempdir().expect("tempdir");
+    let report = dir.path().join("stress.md");
+    // The devices listing names the frame the kernel gets: the override really is in force.
+    let devices = vkbrdf_f32(&["devices"]);
+    let listing = String::from_utf8_lossy(&devices.stdout);
+    assert!(listing.contains("VKBRDF_DISABLE_FLOAT64=1"), "{listing}");
+    let out = vkbrdf_f32(&[
+        "stress",
+        "--tuples",
+        "200000",
+        "--backend",
+        "vulkan",
+        "--report",
+        common::path(&report),
+    ]);
+    let text = std::fs::read_to_string(&report).expect("stress report");
+    // Exit 0: the policy holds (finite outputs, invalid and saturated counts equal to the
+    // reference's, no non-zero output for a rejected tuple).
+    assert!(out.status.success(), "{}\n{text}", common::stderr(&out));
+    assert!(text.contains("non-finite outputs: **0**"), "{text}");
+    let mut rows = 0;
+    for line in text.lines() {
+        let cells: Vec<&str> = line.split('|').map(str::trim).collect();
+        // | quantity | regime | values | max rel err | p99 rel err | <= 1e-5 |
+        if cells.len() != 8 || cells[3].parse::<u64>().is_err() {
+            continue;
+        }
+        let max: f64 = cells[4].parse().expect("max rel err");
+        let &(_, _, float64) = FLOAT64_MAX
+            .iter()
+            .find(|(q, r, _)| *q == cells[1] && *r == cells[2])
+            .unwrap_or_else(|| {
+                panic!(
+                    "row {} / {} not in the float64 baseline",
+                    cells[1], cells[2]
+                )
+            });
+        assert!(
+            max <= 2.0 * float64,
+            "{} / {}: max rel err {max:e} with the f32 frame, float64 frame {float64:e}\n{text}",
+            cells[1],
+            cells[2]
+        );
+        rows += 1;
+    }
+    assert!(rows >= 40, "only {rows} error rows in the report:\n{text}");
+}
