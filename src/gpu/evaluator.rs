@@ -232,7 +232,7 @@ impl VulkanBackend {
         if options.inject_fault.is_none() {
             options.inject_fault = InjectedFault::from_env()?;
         }
-        let device = Device::new(selector.as_ref(), options.validation)?;
+        let device = flush_to_zero_scope(|| Device::new(selector.as_ref(), options.validation))?;
         let kernels = Kernels::new(&device, options.extra_defines.clone())?;
         let commands = CommandPool::new(&device, FRAMES_IN_FLIGHT as u32)?;
         let descriptors = DescriptorPool::new(
@@ -794,6 +794,38 @@ impl VulkanBackend {
             };
         }
     }
+}
+
+/// Runs `f` — the device's creation, during which a CPU driver (lavapipe) starts the
+/// threads that run the kernel — with the x86-64 flush-to-zero and denormals-are-zero
+/// modes set when `VKBRDF_EMULATE_FTZ=1`: new threads inherit the floating-point
+/// environment, so the kernel then runs on lavapipe with f32 subnormals flushed, as GPUs
+/// run it. A testing aid (the stress corpus's subnormal rows behaved differently on an H200
+/// than on lavapipe); the calling thread's mode is restored before `f`'s result returns.
+fn flush_to_zero_scope<T>(f: impl FnOnce() -> T) -> T {
+    #[cfg(target_arch = "x86_64")]
+    if std::env::var("VKBRDF_EMULATE_FTZ").as_deref() == Ok("1") {
+        #[allow(deprecated)]
+        use std::arch::x86_64::{_mm_getcsr, _mm_setcsr};
+        const FTZ_DAZ: u32 = 0x8040; // MXCSR bits 15 (flush to zero) and 6 (denormals are zero)
+        // SAFETY: reading and writing MXCSR changes only this thread's SSE rounding and
+        // denormal modes; the previous value is restored below, before any host code of
+        // vkbrdf computes with subnormals on this thread.
+        #[allow(deprecated)]
+        let old = unsafe { _mm_getcsr() };
+        #[allow(deprecated)]
+        unsafe {
+            _mm_setcsr(old | FTZ_DAZ)
+        };
+        let out = f();
+        // SAFETY: as above; restores the value read before.
+        #[allow(deprecated)]
+        unsafe {
+            _mm_setcsr(old)
+        };
+        return out;
+    }
+    f()
 }
 
 /// Points descriptor set `set` at `wanted` (one buffer per binding; the tuple-texel binding
