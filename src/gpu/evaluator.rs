@@ -808,11 +808,12 @@ fn flush_to_zero_scope<T>(f: impl FnOnce() -> T) -> T {
         #[allow(deprecated)]
         use std::arch::x86_64::{_mm_getcsr, _mm_setcsr};
         const FTZ_DAZ: u32 = 0x8040; // MXCSR bits 15 (flush to zero) and 6 (denormals are zero)
-        // SAFETY: reading and writing MXCSR changes only this thread's SSE rounding and
-        // denormal modes; the previous value is restored below, before any host code of
-        // vkbrdf computes with subnormals on this thread.
+                                     // SAFETY: reading MXCSR has no effect.
         #[allow(deprecated)]
         let old = unsafe { _mm_getcsr() };
+        // SAFETY: writing MXCSR changes only this thread's SSE rounding and denormal modes;
+        // the value read above is restored below, before any host code of vkbrdf computes
+        // with subnormals on this thread.
         #[allow(deprecated)]
         unsafe {
             _mm_setcsr(old | FTZ_DAZ)
