@@ -197,7 +197,8 @@ Eval model_blinn_phong(Frame f, GpuMaterial m) {
             double ln_q = double(m.lobe.x) * ln_cos - log_f64(f.cos_i_exact);
             return eval_lobe_f64(m, double(m.scale.x) * exp_f64(ln_q));
         }
-        return eval_lobe_f64(m, double(m.scale.x * p) / f.cos_i_exact);
+        // The product in f64: scale p in f32 is subnormal, flushed on GPUs, for p ~ 1e-38.
+        return eval_lobe_f64(m, double(m.scale.x) * double(p) / f.cos_i_exact);
     }
 #else
     // The same two cases in m 2^e form (the f32 frame).
@@ -233,7 +234,7 @@ Eval model_ward(Frame f, GpuMaterial m) {
     // 1/sqrt(cos_i cos_o) overflows float32 below TINY_COS, or a cosine rounded to 0 gives
     // inversesqrt(0) = inf; in f64 the product of two cosines >= 1.4e-45 is normal.
     if (min(f.cos_i_exact, f.cos_o_exact) < TINY_COS) {
-        return eval_lobe_f64(m, double(m.scale.x * x) / sqrt(f.cos_i_exact * f.cos_o_exact));
+        return eval_lobe_f64(m, double(m.scale.x) * double(x) / sqrt(f.cos_i_exact * f.cos_o_exact));
     }
 #else
     if (min(f.cos_i, f.cos_o) < TINY_COS) {

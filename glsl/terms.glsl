@@ -167,6 +167,19 @@ vec3 F_Dielectric(float c, vec3 mu2m1, vec3 mu2m1_lo, double_or_float c_exact) {
     // of O(1) terms, and in f32 the rounding of c alone (6e-8) moved it by O(1) relative
     // there, F by up to 5e-4 (stress corpus, IOR 0.5).
     dvec3 g2d = dvec3(mu2m1) + dvec3(mu2m1_lo) + c_exact * c_exact;
+    if (c_exact < 1e-18) {
+        // Below c ~ 1e-18, c^2 and c (g + c) leave float32's normal range, and where c is
+        // not a normal float (mirrored grazing tuples, cosines of 1e-45) a GPU flushes it
+        // and g to 0: g + c = 0 made 0/0 for an index-matched channel. The same expression
+        // in f64 (stress corpus under VKBRDF_EMULATE_FTZ, and on an H200).
+        dvec3 gd = sqrt(max(g2d, 0.0));
+        dvec3 gpcd = gd + c_exact;
+        dvec3 gmcd = (dvec3(mu2m1) + dvec3(mu2m1_lo)) / gpcd;
+        dvec3 ad = gmcd / gpcd;
+        dvec3 bd = (c_exact * gpcd - 1.0) / (c_exact * gmcd + 1.0);
+        vec3 fd = vec3(0.5 * ad * ad * (1.0 + bd * bd));
+        return mix(fd, vec3(1.0), lessThan(g2d, dvec3(0.0)));
+    }
     vec3 g2 = vec3(g2d);
     vec3 g = vec3(sqrt(max(g2d, 0.0)));
 #else
