@@ -64,6 +64,11 @@ void main() {
 }
 "#;
 
+/// Untimed warm-up before a kernel timing: this long (see `time_resident`) …
+const WARM_UP_SECONDS: f64 = 0.1;
+/// … but no more runs than this (a slow device reaches the time in a few).
+const MAX_WARM_UPS: usize = 50;
+
 impl VulkanBackend {
     /// The kernel features for `batch` and `request`, widened by `forced` (the tangent
     /// layout and the terms output always follow the batch and the request).
@@ -287,7 +292,20 @@ impl VulkanBackend {
             let push = PushConstants::rows(n as u32, run.material_count as u32, 0);
             let mut secs = Vec::with_capacity(repeats + 1);
             let mut clock = KernelClock::Fence;
-            for _ in 0..=repeats.max(1) {
+            // Warm-up runs until WARM_UP_SECONDS have passed (at least one; at most
+            // MAX_WARM_UPS): a GPU idles at a fraction of its clock and ramps up under load
+            // (an H200 reads 345 MHz idle, 1980 MHz busy), and a few milliseconds of
+            // timed work alone measured the ramp (copy-kernel rates of 1.2 to 3.9 TB/s for
+            // the same kernel in one run).
+            let warm_up = Instant::now();
+            let mut runs = 0;
+            loop {
+                runs += 1;
+                let warm = runs > MAX_WARM_UPS
+                    || (runs > 1 && warm_up.elapsed().as_secs_f64() >= WARM_UP_SECONDS);
+                if warm && secs.len() >= repeats.max(1) {
+                    break;
+                }
                 // SAFETY: slot 0 is idle (the previous `one_shot` waited); the device does
                 // not touch `counts` now.
                 unsafe { self.slots[0].counts.write(0, &[GpuCounts::INITIAL]) };
@@ -333,9 +351,10 @@ impl VulkanBackend {
                         wall
                     }
                 };
-                secs.push(s * total.max(1) as f64 / (dispatches * n) as f64);
+                if warm {
+                    secs.push(s * total.max(1) as f64 / (dispatches * n) as f64);
+                }
             }
-            secs.remove(0); // the warm-up
             let mut out = Vec::new();
             if read_back {
                 let grouped = self.read_resident(&brdf, 3 * n)?;
