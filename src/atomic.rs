@@ -240,6 +240,121 @@ pub fn stage(
     })
 }
 
+/// An output written piece by piece — a stream whose parts are computed one after another
+/// (`vkbrdf eval` writes each chunk as it is evaluated) — made visible by [`commit`] like a
+/// [`stage`]d one: a regular file goes to a temporary file beside its target, anything else
+/// is held in memory. Dropped without [`StagedWriter::finish`], it leaves nothing behind.
+pub struct StagedWriter {
+    path: PathBuf,
+    inner: WriterInner,
+    cancel: Cancel,
+}
+
+enum WriterInner {
+    Temp {
+        file: tempfile::NamedTempFile,
+        out: BufWriter<File>,
+        target: PathBuf,
+    },
+    Memory {
+        cursor: Cursor<Vec<u8>>,
+        stdout: bool,
+    },
+}
+
+/// Starts a [`StagedWriter`] for `path`; every write checks `cancel`.
+pub fn stage_writer(path: &Path, cancel: &Cancel) -> Result<StagedWriter> {
+    cancel.check()?;
+    let inner = match destination(path)? {
+        Destination::Regular { target } => {
+            let file = tempfile::Builder::new()
+                .prefix(".vkbrdf-")
+                .suffix(".partial")
+                .tempfile_in(parent_dir(&target))
+                .map_err(|e| io_error(path, e))?;
+            let out = file.as_file().try_clone().map_err(|e| io_error(path, e))?;
+            WriterInner::Temp {
+                file,
+                out: BufWriter::with_capacity(1 << 20, out),
+                target,
+            }
+        }
+        dest => WriterInner::Memory {
+            cursor: Cursor::new(Vec::new()),
+            stdout: dest == Destination::Stdout,
+        },
+    };
+    Ok(StagedWriter {
+        path: path.to_owned(),
+        inner,
+        cancel: cancel.clone(),
+    })
+}
+
+impl Write for StagedWriter {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        if self.cancel.is_cancelled() {
+            return Err(std::io::Error::other("cancelled"));
+        }
+        match &mut self.inner {
+            WriterInner::Temp { out, .. } => out.write(buf),
+            WriterInner::Memory { cursor, .. } => cursor.write(buf),
+        }
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        match &mut self.inner {
+            WriterInner::Temp { out, .. } => out.flush(),
+            WriterInner::Memory { .. } => Ok(()),
+        }
+    }
+}
+
+impl StagedWriter {
+    /// The error for a failed write to this output (or [`Error::Cancelled`]).
+    pub fn error(&self, source: std::io::Error) -> Error {
+        if self.cancel.is_cancelled() {
+            Error::Cancelled
+        } else {
+            io_error(&self.path, source)
+        }
+    }
+
+    /// Flushes and syncs the output: it is then ready for [`commit`].
+    pub fn finish(self) -> Result<Staged> {
+        let StagedWriter {
+            path,
+            inner,
+            cancel,
+        } = self;
+        let failed = |source: std::io::Error| {
+            if cancel.is_cancelled() {
+                Error::Cancelled
+            } else {
+                io_error(&path, source)
+            }
+        };
+        let bytes = match inner {
+            WriterInner::Temp {
+                file,
+                mut out,
+                target,
+            } => {
+                out.flush().map_err(failed)?;
+                drop(out);
+                file.as_file().sync_all().map_err(failed)?;
+                set_final_mode(file.as_file(), &target).map_err(failed)?;
+                Held::Temp { file, target }
+            }
+            WriterInner::Memory { cursor, stdout } => Held::Memory {
+                data: cursor.into_inner(),
+                stdout,
+            },
+        };
+        Ok(Staged { path, bytes })
+    }
+}
+
 /// Makes every staged output appear: FIFOs, devices and standard output are written first
 /// (a failure there leaves every regular file untouched), then each regular file is
 /// renamed over its target; when a rename fails, those already made are rolled back (the

@@ -2,6 +2,9 @@
 //! `Lx Ly Lz Vx Vy Vz Nx Ny Nz material [Tx Ty Tz]` (FORMULAS.md §1), read from and written
 //! to `.npy` with the `npyz` crate.
 
+mod rows;
+pub use rows::NpyRows;
+
 use crate::cancel::Cancel;
 use crate::error::{Error, Result};
 use crate::material::Material;
@@ -49,6 +52,18 @@ impl Batch {
         material_count: usize,
         source: &Path,
     ) -> Result<Batch> {
+        Batch::new_at(data, columns, material_count, source, 0)
+    }
+
+    /// [`Batch::new`] for rows `first_row..` of a larger batch (a streamed chunk): errors
+    /// name rows counted from the batch's start.
+    pub fn new_at(
+        data: Vec<f32>,
+        columns: usize,
+        material_count: usize,
+        source: &Path,
+        first_row: u64,
+    ) -> Result<Batch> {
         let err = |message: String| Error::Batch {
             path: source.to_owned(),
             message,
@@ -66,6 +81,7 @@ impl Batch {
         }
         let batch = Batch { data, columns };
         if let Some((row, value)) = batch.first_bad_material(material_count) {
+            let row = first_row + row as u64;
             return Err(err(format!(
                 "row {row}: material value {value} is not an integer index in 0..{material_count} (the materials file defines {material_count})"
             )));
@@ -203,7 +219,7 @@ pub fn check_tangent_rows(
 }
 
 /// Opens `path` for reading, with its size when it is a regular file (a pipe's is unknown).
-fn open_sized(path: &Path) -> Result<(BufReader<File>, Option<u64>)> {
+pub(crate) fn open_sized(path: &Path) -> Result<(BufReader<File>, Option<u64>)> {
     let file = File::open(path).map_err(|source| Error::Io {
         path: path.to_owned(),
         source,
@@ -273,7 +289,7 @@ pub fn read_npy_f32_from(
 /// unchecked: a shape of `(2^63 + 2, 10)` would wrap to 20 values and read as 2 rows.
 /// What is not understood here (no magic, an unknown version, a header that does not
 /// parse) is left to npyz to report.
-fn npy_head(reader: &mut impl Read, len: Option<u64>, source: &Path) -> Result<Vec<u8>> {
+pub(crate) fn npy_head(reader: &mut impl Read, len: Option<u64>, source: &Path) -> Result<Vec<u8>> {
     let err = |message: String| Error::Batch {
         path: source.to_owned(),
         message,

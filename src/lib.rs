@@ -43,6 +43,7 @@ pub mod precision;
 pub mod reference;
 pub mod sample;
 pub mod stats;
+pub mod stream;
 pub mod stress;
 pub mod table;
 pub mod vector;

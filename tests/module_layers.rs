@@ -14,7 +14,7 @@ const LAYERS: &[&[&str]] = &[
     &["backend", "precision", "sample"],
     &["reference", "features"],
     &["gpu"],
-    &["table", "check", "stress", "bench"],
+    &["table", "check", "stress", "bench", "stream"],
 ];
 
 fn layer_of(module: &str) -> usize {

@@ -2,12 +2,12 @@
 
 use super::backend_choice::{self, BackendArgs};
 use anyhow::Context;
+use indicatif::{ProgressBar, ProgressStyle};
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
-use vkbrdf::backend::{Request, TERM_COLUMNS};
-use vkbrdf::batch::{self, Batch};
 use vkbrdf::precision::{self, Precision};
+use vkbrdf::stream;
 
 /// Arguments of `vkbrdf eval`.
 #[derive(clap::Args, Debug)]
@@ -20,6 +20,10 @@ columns are needed only by anisotropic materials).
 Output: BRDF.npy, float32 (n, 3): RGB f in 1/sr (no cosine); TERMS.npy, float32 (n, 6):
 D, G, F_r, F_g, F_b, K. Invalid tuples (zero or non-finite vectors, a bad tangent) and
 tuples below the horizon give 0; both are counted.
+
+Streaming: the input is read, evaluated and written in chunks, so host memory stays
+within --max-memory (default 512MiB) plus the engine's own buffers whatever the batch's
+size; the outputs need 12 bytes per tuple on disk (36 with --terms) beside the input.
 
 Outputs never destroy data: an output that is an input (after links) or named twice is
 refused before any work, as is a missing or read-only directory. Regular files are
@@ -47,6 +51,10 @@ pub struct Args {
     /// Fail (exit 1, no output written) if any tuple is invalid.
     #[arg(long)]
     pub strict: bool,
+    /// Host memory for the chunks being read, evaluated and written: bytes, or with a
+    /// suffix KiB, MiB, GiB (1 MiB to 1 TiB).
+    #[arg(long, value_name = "BYTES", default_value = "512MiB", value_parser = parse_bytes)]
+    pub max_memory: u64,
     /// `exact` (FORMULAS.md as written) or `fast` (Schlick for exact Fresnel, smith-fast
     /// for Smith–Beckmann; error measured by `vkbrdf bench`).
     #[arg(long, value_enum, default_value = "exact")]
@@ -92,10 +100,6 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         .chain(args.terms.as_deref())
         .collect();
     vkbrdf::atomic::check_outputs(&outputs, &inputs)?;
-    let t0 = Instant::now();
-    let batch = Batch::read_npy(&args.input, materials.len())?;
-    batch.check_tangents(&materials, &args.input)?;
-    let read_s = t0.elapsed().as_secs_f64();
     let measured = materials
         .iter()
         .any(|m| matches!(m.model, vkbrdf::material::Model::Measured(_)));
@@ -107,26 +111,44 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
     } else {
         backend_choice::open(&args.backend)?
     };
-    let request = Request {
-        terms: args.terms.is_some(),
+    let job = stream::StreamJob {
+        input: &args.input,
+        materials: &materials,
+        output: &args.output,
+        terms: args.terms.as_deref(),
+        max_memory: args.max_memory,
+        strict: args.strict,
     };
-    let t1 = Instant::now();
-    let out = backend.evaluate(&batch, &materials, &request)?;
-    let eval_s = t1.elapsed().as_secs_f64();
-    let c = out.counts;
+    let bar = ProgressBar::new(0).with_style(
+        ProgressStyle::with_template("eval [{bar:30}] {pos}/{len} tuples ({elapsed}, {eta} left)")
+            .expect("valid template"),
+    );
+    let t0 = Instant::now();
+    let summary = stream::evaluate(&job, backend.as_mut(), &cancel, |done, total| {
+        bar.set_length(total);
+        bar.set_position(done);
+    })
+    .with_context(|| format!("evaluating {}", args.input.display()))?;
+    bar.finish_and_clear();
+    let total_s = t0.elapsed().as_secs_f64();
+    let c = summary.counts;
     eprintln!(
-        "{} tuples on {}: {} evaluated, {} invalid, {} below the horizon, {} saturated ({:.3} s read, {:.3} s evaluate, {:.1} M tuples/s)",
+        "{} tuples on {}: {} evaluated, {} invalid, {} below the horizon, {} saturated; {} chunk(s) of {} rows, {:.3} s read, {:.3} s evaluate, {:.3} s write, {:.1} M tuples/s end to end{}",
         c.tuples,
         backend.name(),
         c.tuples - c.invalid - c.below_horizon,
         c.invalid,
         c.below_horizon,
         c.saturated,
-        read_s,
-        eval_s,
-        c.tuples as f64 / eval_s.max(1e-9) / 1e6
+        summary.chunks,
+        summary.chunk_rows,
+        summary.read_s,
+        summary.eval_s,
+        summary.write_s,
+        c.tuples as f64 / total_s.max(1e-9) / 1e6,
+        peak_memory().map_or(String::new(), |m| format!(", peak memory {m} MiB"))
     );
-    if args.strict && c.invalid > 0 {
+    if !summary.written {
         let e = vkbrdf::Error::InvalidTuples {
             invalid: c.invalid,
             total: c.tuples,
@@ -135,15 +157,36 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         eprintln!("error: {e} (--strict: nothing written)");
         return Ok(ExitCode::from(1));
     }
-    // Both files are staged, then appear together: both or neither.
-    let mut staged = vec![batch::stage_npy_f32(&args.output, &out.brdf, 3, &cancel)
-        .with_context(|| "writing the BRDF values")?];
-    if let (Some(path), Some(terms)) = (&args.terms, &out.terms) {
-        staged.push(
-            batch::stage_npy_f32(path, terms, TERM_COLUMNS, &cancel)
-                .with_context(|| "writing the terms")?,
-        );
-    }
-    vkbrdf::atomic::commit(staged).with_context(|| "writing the outputs")?;
     Ok(ExitCode::SUCCESS)
+}
+
+/// Peak resident memory of this process in MiB (Linux: VmHWM), for the summary line.
+fn peak_memory() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib / 1024)
+}
+
+/// `--max-memory`: bytes, or a number with KiB, MiB or GiB (also K, M, G), 1 MiB to 1 TiB.
+fn parse_bytes(s: &str) -> Result<u64, String> {
+    let t = s.trim();
+    let split = t.find(|c: char| c.is_ascii_alphabetic()).unwrap_or(t.len());
+    let (num, unit) = t.split_at(split);
+    let scale: u64 = match unit.trim() {
+        "" | "B" => 1,
+        "K" | "KiB" | "k" => 1 << 10,
+        "M" | "MiB" => 1 << 20,
+        "G" | "GiB" => 1 << 30,
+        other => return Err(format!("unknown unit {other:?}; use KiB, MiB or GiB")),
+    };
+    let value: f64 = num
+        .trim()
+        .parse()
+        .map_err(|_| format!("{s:?} is not a size such as 512MiB"))?;
+    let bytes = value * scale as f64;
+    if !(bytes >= (1u64 << 20) as f64 && bytes <= (1u64 << 40) as f64) {
+        return Err(format!("{s} is outside 1MiB ..= 1TiB"));
+    }
+    Ok(bytes as u64)
 }

@@ -1,0 +1,130 @@
+//! A `.npy` batch read in chunks of rows, so that a batch larger than memory streams
+//! through (`vkbrdf eval`): the header is read and checked once, then each chunk is read
+//! straight into a float buffer (float64 files rounded to float32, as [`Batch::read_npy`]
+//! does).
+
+use super::{npy_head, open_sized, Batch, COLUMNS_PLAIN, COLUMNS_TANGENT};
+use crate::error::{Error, Result};
+use std::fs::File;
+use std::io::{BufReader, Read};
+use std::path::{Path, PathBuf};
+
+/// The element type of a streamed `.npy` file.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Dtype {
+    F4,
+    F8,
+}
+
+/// A `.npy` batch of shape `(n, 10)` or `(n, 13)`, read chunk by chunk.
+pub struct NpyRows {
+    reader: BufReader<File>,
+    rows: u64,
+    columns: usize,
+    dtype: Dtype,
+    next_row: u64,
+    material_count: usize,
+    source: PathBuf,
+    bytes: Vec<u8>,
+}
+
+impl NpyRows {
+    /// Opens `path` and checks its header: 2-D, C order, float32 or float64, 10 or 13
+    /// columns, and (for a regular file) as much data as the shape says.
+    pub fn open(path: &Path, material_count: usize) -> Result<NpyRows> {
+        let err = |message: String| Error::Batch {
+            path: path.to_owned(),
+            message,
+        };
+        let (mut reader, len) = open_sized(path)?;
+        let head = npy_head(&mut reader, len, path)?;
+        let npy = npyz::NpyFile::new(std::io::Cursor::new(head))
+            .map_err(|e| err(format!("not a valid .npy file: {e}")))?;
+        if npy.order() != npyz::Order::C {
+            return Err(err(
+                "Fortran-order array; save it in C order (numpy.ascontiguousarray)".into(),
+            ));
+        }
+        let dtype = match npy.dtype().descr().trim_matches(|c| c == '\'' || c == '"') {
+            "<f4" => Dtype::F4,
+            "<f8" => Dtype::F8,
+            other => {
+                return Err(err(format!(
+                    "dtype {other} is not supported; use float32 ('<f4') or float64 ('<f8')"
+                )))
+            }
+        };
+        let shape = npy.shape().to_vec();
+        if shape.len() != 2 {
+            return Err(err(format!(
+                "expected a 2-D array of shape (n, 10) or (n, 13), found shape {shape:?}"
+            )));
+        }
+        let columns = shape[1] as usize;
+        if columns != COLUMNS_PLAIN && columns != COLUMNS_TANGENT {
+            return Err(err(format!(
+                "expected 10 columns (Lx Ly Lz Vx Vy Vz Nx Ny Nz material) or 13 (plus Tx Ty Tz), found {columns}"
+            )));
+        }
+        Ok(NpyRows {
+            reader,
+            rows: shape[0],
+            columns,
+            dtype,
+            next_row: 0,
+            material_count,
+            source: path.to_owned(),
+            bytes: Vec::new(),
+        })
+    }
+
+    /// Rows in the file.
+    pub fn rows(&self) -> u64 {
+        self.rows
+    }
+
+    /// 10, or 13 with tangents.
+    pub fn columns(&self) -> usize {
+        self.columns
+    }
+
+    /// Bytes one row takes in the file.
+    pub fn row_bytes(&self) -> usize {
+        self.columns * if self.dtype == Dtype::F8 { 8 } else { 4 }
+    }
+
+    /// The next at most `max_rows` rows as a [`Batch`] (materials checked, row numbers in
+    /// errors counted from the file's start) with the index of its first row; `None` at the
+    /// end. The byte buffer is reused between calls.
+    pub fn next_chunk(&mut self, max_rows: usize) -> Result<Option<(u64, Batch)>> {
+        let left = self.rows - self.next_row;
+        if left == 0 {
+            return Ok(None);
+        }
+        let n = left.min(max_rows.max(1) as u64) as usize;
+        self.bytes.resize(n * self.row_bytes(), 0);
+        self.reader.read_exact(&mut self.bytes).map_err(|e| Error::Batch {
+            path: self.source.clone(),
+            message: format!(
+                "the data is shorter than the header's shape says (truncated file?), at row {}: {e}",
+                self.next_row
+            ),
+        })?;
+        let data: Vec<f32> = match self.dtype {
+            Dtype::F4 => self
+                .bytes
+                .chunks_exact(4)
+                .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+                .collect(),
+            Dtype::F8 => self
+                .bytes
+                .chunks_exact(8)
+                .map(|b| f64::from_le_bytes(b.try_into().expect("8 bytes")) as f32)
+                .collect(),
+        };
+        let first = self.next_row;
+        self.next_row += n as u64;
+        let batch = Batch::new_at(data, self.columns, self.material_count, &self.source, first)?;
+        Ok(Some((first, batch)))
+    }
+}

@@ -1,0 +1,199 @@
+//! Streaming evaluation: a `.npy` batch read, evaluated and written chunk by chunk, so that
+//! host memory stays within a budget whatever the batch's size, and a batch larger than the
+//! machine's memory evaluates instead of being killed.
+//!
+//! Each output is a [`StagedWriter`]: its `.npy` header (the
+//! shape is known from the input's) and then each chunk's rows go to a temporary file beside
+//! the target, renamed at the end with the others ([`crate::atomic::commit`]): a failure, a
+//! cancellation or `strict` with an invalid tuple leaves the previous files and no temporary
+//! one. Results do not depend on the chunk size: every engine evaluates tuple by tuple.
+
+use crate::atomic::{self, StagedWriter};
+use crate::backend::{Backend, Counts, Request, TERM_COLUMNS};
+use crate::batch::{check_tangent_rows, NpyRows};
+use crate::cancel::Cancel;
+use crate::error::{Error, Result};
+use crate::material::Material;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+/// The default host-memory budget of a streamed evaluation: 512 MiB.
+pub const DEFAULT_MAX_MEMORY: u64 = 512 << 20;
+
+/// What to evaluate and where the results go.
+pub struct StreamJob<'a> {
+    /// The tuples (`.npy`, `(n, 10)` or `(n, 13)`, float32 or float64).
+    pub input: &'a Path,
+    /// The materials the rows index.
+    pub materials: &'a [Material],
+    /// Where the BRDF goes (`.npy`, float32 `(n, 3)`).
+    pub output: &'a Path,
+    /// Where the terms go (`.npy`, float32 `(n, 6)`), if wanted.
+    pub terms: Option<&'a Path>,
+    /// Host memory for the chunk buffers, in bytes (see [`chunk_rows`]).
+    pub max_memory: u64,
+    /// Write nothing when any tuple is invalid (the counts are still returned).
+    pub strict: bool,
+}
+
+/// What a streamed evaluation did.
+#[derive(Debug, Clone, Default)]
+pub struct StreamSummary {
+    /// The whole batch's counts (the first invalid row counted from the batch's start).
+    pub counts: Counts,
+    /// Rows per chunk.
+    pub chunk_rows: usize,
+    /// Chunks evaluated.
+    pub chunks: usize,
+    /// Seconds spent reading, evaluating and writing.
+    pub read_s: f64,
+    /// See `read_s`.
+    pub eval_s: f64,
+    /// See `read_s`.
+    pub write_s: f64,
+    /// Whether the outputs were written (false under `strict` with an invalid tuple).
+    pub written: bool,
+}
+
+/// Rows per chunk for a budget of `max_memory` bytes: each row holds its input as read
+/// (`row_bytes`) and as f32, and the outputs (3 floats, 6 more with the terms) both in the
+/// engine's result and in the writer's buffer; half the budget is left to the engine's own
+/// working memory and the buffered writers. At least one row.
+pub fn chunk_rows(max_memory: u64, row_bytes: usize, columns: usize, terms: bool) -> usize {
+    let outputs = 4 * (3 + if terms { TERM_COLUMNS } else { 0 });
+    let per_row = (row_bytes + 4 * columns + 2 * outputs) as u64;
+    ((max_memory / 2) / per_row).clamp(1, u64::from(u32::MAX)) as usize
+}
+
+/// Evaluates `job` on `backend`, chunk by chunk; `progress` is told the rows done so far.
+pub fn evaluate(
+    job: &StreamJob,
+    backend: &mut dyn Backend,
+    cancel: &Cancel,
+    mut progress: impl FnMut(u64, u64),
+) -> Result<StreamSummary> {
+    let mut rows = NpyRows::open(job.input, job.materials.len())?;
+    let n = rows.rows();
+    let request = Request {
+        terms: job.terms.is_some(),
+    };
+    let chunk = chunk_rows(
+        job.max_memory,
+        rows.row_bytes(),
+        rows.columns(),
+        request.terms,
+    );
+    let mut brdf = NpyOut::start(job.output, n, 3, cancel)?;
+    let mut terms = match job.terms {
+        Some(path) => Some(NpyOut::start(path, n, TERM_COLUMNS, cancel)?),
+        None => None,
+    };
+    let mut summary = StreamSummary {
+        chunk_rows: chunk,
+        ..StreamSummary::default()
+    };
+    summary.counts.tuples = n;
+    loop {
+        cancel.check()?;
+        let t = std::time::Instant::now();
+        let Some((first, batch)) = rows.next_chunk(chunk)? else {
+            break;
+        };
+        check_tangent_rows(
+            batch.as_slice(),
+            batch.columns(),
+            first,
+            job.materials,
+            job.input,
+        )?;
+        summary.read_s += t.elapsed().as_secs_f64();
+        let t = std::time::Instant::now();
+        let out = backend.evaluate(&batch, job.materials, &request)?;
+        summary.eval_s += t.elapsed().as_secs_f64();
+        let mut part = out.counts;
+        part.first_invalid = part.first_invalid.map(|r| r + first);
+        summary.counts.absorb(&part);
+        let t = std::time::Instant::now();
+        brdf.rows(&out.brdf)?;
+        if let (Some(w), Some(values)) = (terms.as_mut(), out.terms.as_ref()) {
+            w.rows(values)?;
+        }
+        summary.write_s += t.elapsed().as_secs_f64();
+        summary.chunks += 1;
+        progress(first + batch.len() as u64, n);
+    }
+    if job.strict && summary.counts.invalid > 0 {
+        return Ok(summary); // the writers drop: their temporary files go
+    }
+    let mut staged = vec![brdf.finish()?];
+    if let Some(w) = terms {
+        staged.push(w.finish()?);
+    }
+    atomic::commit(staged)?;
+    summary.written = true;
+    Ok(summary)
+}
+
+/// A float32 `.npy` of known shape written row block by row block.
+struct NpyOut {
+    writer: StagedWriter,
+    path: PathBuf,
+    expected: u64,
+    written: u64,
+}
+
+impl NpyOut {
+    fn start(path: &Path, rows: u64, columns: usize, cancel: &Cancel) -> Result<NpyOut> {
+        let mut writer = atomic::stage_writer(path, cancel)?;
+        writer
+            .write_all(&npy_header_f32(rows, columns))
+            .map_err(|e| writer.error(e))?;
+        Ok(NpyOut {
+            writer,
+            path: path.to_owned(),
+            expected: rows * columns as u64,
+            written: 0,
+        })
+    }
+
+    fn rows(&mut self, values: &[f32]) -> Result<()> {
+        let mut bytes = Vec::with_capacity(4 * values.len());
+        for v in values {
+            bytes.extend_from_slice(&v.to_le_bytes());
+        }
+        self.writer
+            .write_all(&bytes)
+            .map_err(|e| self.writer.error(e))?;
+        self.written += values.len() as u64;
+        Ok(())
+    }
+
+    fn finish(self) -> Result<atomic::Staged> {
+        if self.written != self.expected {
+            return Err(Error::Batch {
+                path: self.path.clone(),
+                message: format!(
+                    "wrote {} values where the header promises {} (the input changed while it was read?)",
+                    self.written, self.expected
+                ),
+            });
+        }
+        self.writer.finish()
+    }
+}
+
+/// The header of a C-order float32 `.npy` of shape `(rows, columns)`, version 1.0, padded
+/// so that the data starts at a multiple of 64 bytes (as NumPy writes it).
+pub fn npy_header_f32(rows: u64, columns: usize) -> Vec<u8> {
+    let dict =
+        format!("{{'descr': '<f4', 'fortran_order': False, 'shape': ({rows}, {columns}), }}");
+    let unpadded = 10 + dict.len() + 1; // magic, version, length; the dict; '\n'
+    let total = unpadded.div_ceil(64) * 64;
+    let mut h = Vec::with_capacity(total);
+    h.extend_from_slice(b"\x93NUMPY\x01\x00");
+    h.extend_from_slice(&((total - 10) as u16).to_le_bytes());
+    h.extend_from_slice(dict.as_bytes());
+    h.resize(total - 1, b' ');
+    h.push(b'\n');
+    h
+}
