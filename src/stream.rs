@@ -8,6 +8,8 @@
 //! cancellation or `strict` with an invalid tuple leaves the previous files and no temporary
 //! one. Results do not depend on the chunk size: every engine evaluates tuple by tuple.
 
+pub mod shard;
+
 use crate::atomic::{self, StagedWriter};
 use crate::backend::{Backend, Counts, Request, TERM_COLUMNS};
 use crate::batch::{check_tangent_rows, NpyRows};
@@ -34,6 +36,10 @@ pub struct StreamJob<'a> {
     pub max_memory: u64,
     /// Write nothing when any tuple is invalid (the counts are still returned).
     pub strict: bool,
+    /// Evaluate only this part of the batch, and write its sidecar beside the output.
+    pub shard: Option<shard::Shard>,
+    /// The materials file (fingerprinted into a shard's sidecar).
+    pub materials_file: &'a Path,
 }
 
 /// What a streamed evaluation did.
@@ -73,7 +79,10 @@ pub fn evaluate(
     mut progress: impl FnMut(u64, u64),
 ) -> Result<StreamSummary> {
     let mut rows = NpyRows::open(job.input, job.materials.len())?;
-    let n = rows.rows();
+    let total = rows.rows();
+    let part = job.shard.map_or(0..total, |s| s.rows(total));
+    rows.restrict(part.clone())?;
+    let n = part.end - part.start;
     let request = Request {
         terms: job.terms.is_some(),
     };
@@ -110,9 +119,9 @@ pub fn evaluate(
         let t = std::time::Instant::now();
         let out = backend.evaluate(&batch, job.materials, &request)?;
         summary.eval_s += t.elapsed().as_secs_f64();
-        let mut part = out.counts;
-        part.first_invalid = part.first_invalid.map(|r| r + first);
-        summary.counts.absorb(&part);
+        let mut counted = out.counts;
+        counted.first_invalid = counted.first_invalid.map(|r| r + first);
+        summary.counts.absorb(&counted);
         let t = std::time::Instant::now();
         brdf.rows(&out.brdf)?;
         if let (Some(w), Some(values)) = (terms.as_mut(), out.terms.as_ref()) {
@@ -120,7 +129,7 @@ pub fn evaluate(
         }
         summary.write_s += t.elapsed().as_secs_f64();
         summary.chunks += 1;
-        progress(first + batch.len() as u64, n);
+        progress(first + batch.len() as u64 - part.start, n);
     }
     if job.strict && summary.counts.invalid > 0 {
         return Ok(summary); // the writers drop: their temporary files go
@@ -128,6 +137,31 @@ pub fn evaluate(
     let mut staged = vec![brdf.finish()?];
     if let Some(w) = terms {
         staged.push(w.finish()?);
+    }
+    if let Some(s) = job.shard {
+        let c = summary.counts;
+        let car = shard::Sidecar {
+            schema: shard::SIDECAR_SCHEMA,
+            shard: s,
+            rows: [part.start, part.end],
+            total_rows: total,
+            input: shard::fingerprint(job.input)?,
+            materials: shard::fingerprint(job.materials_file)?,
+            engine: backend.name(),
+            version: env!("CARGO_PKG_VERSION").to_string(),
+            // Relative to the part's own directory when it lies there, as merge reads it.
+            terms: job.terms.map(|t| relative_to_dir_of(t, job.output)),
+            invalid: c.invalid,
+            below_horizon: c.below_horizon,
+            saturated: c.saturated,
+            first_invalid: c.first_invalid,
+        };
+        let json = car.to_json();
+        staged.push(atomic::stage(
+            &shard::sidecar_path(job.output),
+            cancel,
+            |w| w.write_all(json.as_bytes()),
+        )?);
     }
     atomic::commit(staged)?;
     summary.written = true;
@@ -196,4 +230,12 @@ pub fn npy_header_f32(rows: u64, columns: usize) -> Vec<u8> {
     h.resize(total - 1, b' ');
     h.push(b'\n');
     h
+}
+
+/// `path` relative to `base`'s directory when it lies in it (its file name), else as given.
+fn relative_to_dir_of(path: &Path, base: &Path) -> PathBuf {
+    match (path.parent(), base.parent(), path.file_name()) {
+        (Some(a), Some(b), Some(name)) if a == b => PathBuf::from(name),
+        _ => path.to_owned(),
+    }
 }

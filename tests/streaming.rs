@@ -195,3 +195,131 @@ fn max_memory_is_checked() {
         assert!(stderr(&r).contains("--max-memory"), "{}", stderr(&r));
     }
 }
+
+/// `eval --shard K/N` parts joined by `merge` equal one run, byte for byte, BRDF and terms,
+/// for N = 1, 3 and 7 and for N larger than the batch (empty parts).
+#[test]
+fn merged_shards_equal_the_unsharded_run() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let m = materials(dir.path());
+    for (rows, n) in [(1000usize, 1u64), (1000, 3), (1000, 7), (5, 7)] {
+        let t = dir.path().join(format!("t{rows}.npy"));
+        assert!(generate(&m, rows, &t).status.success());
+        let (a, at) = (dir.path().join("a.npy"), dir.path().join("at.npy"));
+        let whole = eval(
+            &m,
+            &t,
+            &["-o", path(&a), "--terms", path(&at), "--backend", "cpu"],
+        );
+        assert!(whole.status.success(), "{}", stderr(&whole));
+        let mut parts = Vec::new();
+        for k in 1..=n {
+            let p = dir.path().join(format!("p{k}.npy"));
+            let pt = dir.path().join(format!("pt{k}.npy"));
+            let shard = format!("{k}/{n}");
+            let r = eval(
+                &m,
+                &t,
+                &[
+                    "-o",
+                    path(&p),
+                    "--terms",
+                    path(&pt),
+                    "--backend",
+                    "cpu",
+                    "--shard",
+                    &shard,
+                ],
+            );
+            assert!(r.status.success(), "shard {shard}: {}", stderr(&r));
+            assert!(vkbrdf::stream::shard::sidecar_path(&p).exists());
+            parts.push(p);
+        }
+        let (b, bt) = (dir.path().join("b.npy"), dir.path().join("bt.npy"));
+        let mut args = vec!["merge", "-o", path(&b), "--terms", path(&bt)];
+        args.extend(parts.iter().rev().map(|p| path(p))); // order does not matter
+        let r = common::vkbrdf(&args);
+        assert!(r.status.success(), "merge {n}: {}", stderr(&r));
+        assert!(
+            stderr(&r).contains(&format!("{rows} tuples")),
+            "{}",
+            stderr(&r)
+        );
+        assert_eq!(
+            std::fs::read(&a).unwrap(),
+            std::fs::read(&b).unwrap(),
+            "N = {n}"
+        );
+        assert_eq!(
+            std::fs::read(&at).unwrap(),
+            std::fs::read(&bt).unwrap(),
+            "N = {n}"
+        );
+        for k in 1..=n {
+            for f in [
+                format!("p{k}.npy"),
+                format!("pt{k}.npy"),
+                format!("p{k}.npy.shard.json"),
+            ] {
+                std::fs::remove_file(dir.path().join(f)).unwrap();
+            }
+        }
+    }
+}
+
+/// Parts that do not belong together are refused, naming the part and the reason; nothing
+/// is written.
+#[test]
+fn merge_refuses_parts_that_do_not_belong_together() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let m = materials(dir.path());
+    let t = dir.path().join("t.npy");
+    let u = dir.path().join("u.npy");
+    assert!(generate(&m, 300, &t).status.success());
+    assert!(vkbrdf::batch::write_npy_f32(
+        &u,
+        &[0.3, 0.2, 0.9, -0.2, 0.1, 0.8, 0.0, 0.0, 1.0, 0.0],
+        10
+    )
+    .is_ok());
+    let part = |input: &Path, name: &str, shard: &str| {
+        let p = dir.path().join(name);
+        let r = eval(
+            &m,
+            input,
+            &["-o", path(&p), "--backend", "cpu", "--shard", shard],
+        );
+        assert!(r.status.success(), "{}", stderr(&r));
+        p
+    };
+    let p1 = part(&t, "p1.npy", "1/3");
+    let p2 = part(&t, "p2.npy", "2/3");
+    let p3 = part(&t, "p3.npy", "3/3");
+    let q2 = part(&t, "q2.npy", "2/2");
+    let other = part(&u, "o3.npy", "3/3");
+    let out = dir.path().join("out.npy");
+    let cases: Vec<(Vec<&Path>, &str)> = vec![
+        (vec![&p1, &p2], "missing"),
+        (vec![&p1, &p2, &p2, &p3], "twice"),
+        (vec![&p1, &p2, &q2], "number of shards"),
+        (vec![&p1, &p2, &other], "input"),
+    ];
+    for (parts, why) in cases {
+        let mut args = vec!["merge", "-o", path(&out)];
+        args.extend(parts.iter().map(|p| path(p)));
+        let r = common::vkbrdf(&args);
+        assert_eq!(r.status.code(), Some(2), "{why}: {}", stderr(&r));
+        assert!(stderr(&r).contains(why), "{why}: {}", stderr(&r));
+        assert!(!out.exists(), "{why}: an output was written");
+    }
+    // A part without its sidecar names the sidecar it looked for.
+    std::fs::remove_file(vkbrdf::stream::shard::sidecar_path(&p3)).unwrap();
+    let r = common::vkbrdf(&["merge", "-o", path(&out), path(&p1), path(&p2), path(&p3)]);
+    assert_eq!(r.status.code(), Some(2), "{}", stderr(&r));
+    assert!(stderr(&r).contains("p3.npy.shard.json"), "{}", stderr(&r));
+    // --shard values are checked.
+    for bad in ["0/3", "4/3", "3", "a/b", "1/0"] {
+        let r = eval(&m, &t, &["-o", path(&out), "--shard", bad]);
+        assert_eq!(r.status.code(), Some(2), "--shard {bad}: {}", stderr(&r));
+    }
+}

@@ -6,7 +6,7 @@
 use super::{npy_head, open_sized, Batch, COLUMNS_PLAIN, COLUMNS_TANGENT};
 use crate::error::{Error, Result};
 use std::fs::File;
-use std::io::{BufReader, Read};
+use std::io::{BufReader, Read, Seek, SeekFrom};
 use std::path::{Path, PathBuf};
 
 /// The element type of a streamed `.npy` file.
@@ -23,6 +23,8 @@ pub struct NpyRows {
     columns: usize,
     dtype: Dtype,
     next_row: u64,
+    end_row: u64,
+    data_start: u64,
     material_count: usize,
     source: PathBuf,
     bytes: Vec<u8>,
@@ -38,6 +40,7 @@ impl NpyRows {
         };
         let (mut reader, len) = open_sized(path)?;
         let head = npy_head(&mut reader, len, path)?;
+        let data_start = head.len() as u64;
         let npy = npyz::NpyFile::new(std::io::Cursor::new(head))
             .map_err(|e| err(format!("not a valid .npy file: {e}")))?;
         if npy.order() != npyz::Order::C {
@@ -72,6 +75,8 @@ impl NpyRows {
             columns,
             dtype,
             next_row: 0,
+            end_row: shape[0],
+            data_start,
             material_count,
             source: path.to_owned(),
             bytes: Vec::new(),
@@ -88,6 +93,21 @@ impl NpyRows {
         self.columns
     }
 
+    /// Reads only rows `range` (within the file's) from now on: the part of a shard.
+    pub fn restrict(&mut self, range: std::ops::Range<u64>) -> Result<()> {
+        let range = range.start.min(self.rows)..range.end.min(self.rows);
+        let at = self.data_start + range.start * self.row_bytes() as u64;
+        self.reader
+            .seek(SeekFrom::Start(at))
+            .map_err(|source| Error::Io {
+                path: self.source.clone(),
+                source,
+            })?;
+        self.next_row = range.start;
+        self.end_row = range.end.max(range.start);
+        Ok(())
+    }
+
     /// Bytes one row takes in the file.
     pub fn row_bytes(&self) -> usize {
         self.columns * if self.dtype == Dtype::F8 { 8 } else { 4 }
@@ -97,7 +117,7 @@ impl NpyRows {
     /// errors counted from the file's start) with the index of its first row; `None` at the
     /// end. The byte buffer is reused between calls.
     pub fn next_chunk(&mut self, max_rows: usize) -> Result<Option<(u64, Batch)>> {
-        let left = self.rows - self.next_row;
+        let left = self.end_row - self.next_row;
         if left == 0 {
             return Ok(None);
         }

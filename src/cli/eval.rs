@@ -32,9 +32,16 @@ kept): a failure, a full disk or Ctrl-C leaves the previous files intact, and BR
 TERMS appear both or neither. A FIFO, a device or `-` (standard output) is written
 directly once the evaluation has succeeded (atomicity is a promise for regular files).
 
-Example:
+Shards: --shard K/N evaluates rows [(K-1)n/N, Kn/N) only and writes them as a part with a
+sidecar (OUTPUT.shard.json: the range, the input's size and sampled hash, the engine, the
+counts); `vkbrdf merge` joins the parts, bit-identical to one run. Run the N parts with
+anything that runs N commands (docs/STREAMING.md: xargs, Slurm, Kubernetes).
+
+Examples:
   vkbrdf generate --materials m.toml --tuples 1000000 --output t.npy
-  vkbrdf eval --materials m.toml --input t.npy --output brdf.npy --terms terms.npy")]
+  vkbrdf eval --materials m.toml --input t.npy --output brdf.npy --terms terms.npy
+  seq 1 4 | xargs -P 4 -I K vkbrdf eval -m m.toml -i t.npy -o part-K.npy --shard K/4
+  vkbrdf merge -o brdf.npy part-1.npy part-2.npy part-3.npy part-4.npy")]
 pub struct Args {
     /// Materials file (TOML, [[material]] tables; see `vkbrdf materials --help`).
     #[arg(long, short = 'm', value_name = "M.toml")]
@@ -51,6 +58,11 @@ pub struct Args {
     /// Fail (exit 1, no output written) if any tuple is invalid.
     #[arg(long)]
     pub strict: bool,
+    /// Evaluate only part K of N of the batch (1-based, e.g. 2/8: rows [(K−1)n/N, Kn/N)),
+    /// writing that part and its sidecar OUTPUT.shard.json; join the parts with
+    /// `vkbrdf merge`.
+    #[arg(long, value_name = "K/N")]
+    pub shard: Option<vkbrdf::stream::shard::Shard>,
     /// Host memory for the chunks being read, evaluated and written: bytes, or with a
     /// suffix KiB, MiB, GiB (1 MiB to 1 TiB).
     #[arg(long, value_name = "BYTES", default_value = "512MiB", value_parser = parse_bytes)]
@@ -96,8 +108,12 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
             inputs.push(d.path.as_path());
         }
     }
+    let sidecar = args
+        .shard
+        .map(|_| vkbrdf::stream::shard::sidecar_path(&args.output));
     let outputs: Vec<&std::path::Path> = std::iter::once(args.output.as_path())
         .chain(args.terms.as_deref())
+        .chain(sidecar.as_deref())
         .collect();
     vkbrdf::atomic::check_outputs(&outputs, &inputs)?;
     let measured = materials
@@ -118,6 +134,8 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         terms: args.terms.as_deref(),
         max_memory: args.max_memory,
         strict: args.strict,
+        shard: args.shard,
+        materials_file: &args.materials,
     };
     let bar = ProgressBar::new(0).with_style(
         ProgressStyle::with_template("eval [{bar:30}] {pos}/{len} tuples ({elapsed}, {eta} left)")

@@ -29,6 +29,7 @@ mod devices;
 mod eval;
 mod generate;
 mod materials;
+mod merge;
 mod ranges;
 mod stress;
 mod table;
@@ -62,6 +63,8 @@ pub struct Cli {
 enum Command {
     /// Evaluate a batch of tuples from a .npy file and write BRDF (and term) arrays.
     Eval(eval::Args),
+    /// Join the parts of a sharded `eval --shard K/N` into one output.
+    Merge(merge::Args),
     /// List the built-in material presets, or validate and list a materials file.
     Materials(materials::Args),
     /// Write a seeded sample batch of tuples (.npy) for a materials file.
@@ -107,6 +110,7 @@ pub fn run(cli: Cli, cancel: Cancel) -> anyhow::Result<ExitCode> {
     let _ = CANCEL.set(cancel);
     match cli.command {
         Command::Eval(a) => eval::run(&a),
+        Command::Merge(a) => merge::run(&a),
         Command::Materials(a) => materials::run(&a),
         Command::Generate(a) => generate::run(&a),
         Command::Demo(a) => demo::run(&a),
