@@ -12,7 +12,7 @@ pub mod shard;
 
 use crate::atomic::{self, StagedWriter};
 use crate::backend::{Backend, Counts, Request, TERM_COLUMNS};
-use crate::batch::{check_tangent_rows, NpyRows};
+use crate::batch::{check_tangent_rows, Batch, NpyRows};
 use crate::cancel::Cancel;
 use crate::error::{Error, Result};
 use crate::material::Material;
@@ -63,12 +63,13 @@ pub struct StreamSummary {
 
 /// Rows per chunk for a budget of `max_memory` bytes: each row holds its input as read
 /// (`row_bytes`) and as f32, and the outputs (3 floats, 6 more with the terms) both in the
-/// engine's result and in the writer's buffer; half the budget is left to the engine's own
-/// working memory and the buffered writers. At least one row.
+/// engine's result and in the writer's buffer; with the three stages overlapping about five
+/// chunks are alive at once, and a sixth of the budget is left to the engine's own working
+/// memory and the buffered writers. At least one row.
 pub fn chunk_rows(max_memory: u64, row_bytes: usize, columns: usize, terms: bool) -> usize {
     let outputs = 4 * (3 + if terms { TERM_COLUMNS } else { 0 });
     let per_row = (row_bytes + 4 * columns + 2 * outputs) as u64;
-    ((max_memory / 2) / per_row).clamp(1, u64::from(u32::MAX)) as usize
+    ((max_memory / 6) / per_row).clamp(1, u64::from(u32::MAX)) as usize
 }
 
 /// Evaluates `job` on `backend`, chunk by chunk; `progress` is told the rows done so far.
@@ -102,35 +103,75 @@ pub fn evaluate(
         ..StreamSummary::default()
     };
     summary.counts.tuples = n;
-    loop {
-        cancel.check()?;
-        let t = std::time::Instant::now();
-        let Some((first, batch)) = rows.next_chunk(chunk)? else {
-            break;
-        };
-        check_tangent_rows(
-            batch.as_slice(),
-            batch.columns(),
-            first,
-            job.materials,
-            job.input,
-        )?;
-        summary.read_s += t.elapsed().as_secs_f64();
-        let t = std::time::Instant::now();
-        let out = backend.evaluate(&batch, job.materials, &request)?;
-        summary.eval_s += t.elapsed().as_secs_f64();
-        let mut counted = out.counts;
-        counted.first_invalid = counted.first_invalid.map(|r| r + first);
-        summary.counts.absorb(&counted);
-        let t = std::time::Instant::now();
-        brdf.rows(&out.brdf)?;
-        if let (Some(w), Some(values)) = (terms.as_mut(), out.terms.as_ref()) {
-            w.rows(values)?;
-        }
-        summary.write_s += t.elapsed().as_secs_f64();
-        summary.chunks += 1;
-        progress(first + batch.len() as u64 - part.start, n);
-    }
+    // Three stages overlap: a reader thread reads chunk k+1 while the engine evaluates chunk
+    // k on this thread and a writer thread writes chunk k-1. One chunk waits in each
+    // channel, so at most about five are alive at once (`chunk_rows` divides the budget).
+    let (read_tx, read_rx) = std::sync::mpsc::sync_channel::<Result<(u64, Batch, f64)>>(1);
+    let (write_tx, write_rx) = std::sync::mpsc::sync_channel::<(Vec<f32>, Option<Vec<f32>>)>(1);
+    let (written, evaluated) = std::thread::scope(|scope| {
+        let reader = scope.spawn(move || loop {
+            let t = std::time::Instant::now();
+            let next = rows.next_chunk(chunk).and_then(|c| {
+                if let Some((first, batch)) = &c {
+                    check_tangent_rows(
+                        batch.as_slice(),
+                        batch.columns(),
+                        *first,
+                        job.materials,
+                        job.input,
+                    )?;
+                }
+                Ok(c)
+            });
+            let message = match next {
+                Ok(None) => break,
+                Ok(Some((first, batch))) => Ok((first, batch, t.elapsed().as_secs_f64())),
+                Err(e) => Err(e),
+            };
+            let failed = message.is_err();
+            if read_tx.send(message).is_err() || failed {
+                break; // the evaluator stopped, or this was the error it will report
+            }
+        });
+        let writer = scope.spawn(move || -> Result<(NpyOut, Option<NpyOut>, f64)> {
+            let mut write_s = 0.0;
+            for (values, term_values) in write_rx {
+                let t = std::time::Instant::now();
+                brdf.rows(&values)?;
+                if let (Some(w), Some(v)) = (terms.as_mut(), term_values.as_ref()) {
+                    w.rows(v)?;
+                }
+                write_s += t.elapsed().as_secs_f64();
+            }
+            Ok((brdf, terms, write_s))
+        });
+        let evaluated = (|| -> Result<()> {
+            for message in read_rx {
+                cancel.check()?;
+                let (first, batch, read_s) = message?;
+                summary.read_s += read_s;
+                let t = std::time::Instant::now();
+                let out = backend.evaluate(&batch, job.materials, &request)?;
+                summary.eval_s += t.elapsed().as_secs_f64();
+                let mut counted = out.counts;
+                counted.first_invalid = counted.first_invalid.map(|r| r + first);
+                summary.counts.absorb(&counted);
+                summary.chunks += 1;
+                progress(first + batch.len() as u64 - part.start, n);
+                if write_tx.send((out.brdf, out.terms)).is_err() {
+                    break; // the writer failed: its error is reported below
+                }
+            }
+            Ok(())
+        })();
+        drop(write_tx);
+        let written = writer.join().expect("the writer thread does not panic");
+        reader.join().expect("the reader thread does not panic");
+        (written, evaluated)
+    });
+    evaluated?;
+    let (brdf, terms, write_s) = written?;
+    summary.write_s = write_s;
     if job.strict && summary.counts.invalid > 0 {
         return Ok(summary); // the writers drop: their temporary files go
     }
