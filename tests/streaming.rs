@@ -40,7 +40,16 @@ fn a_batch_larger_than_its_budget_streams_to_the_same_output() {
     let whole = eval(
         &m,
         &t,
-        &["-o", path(&a), "--terms", path(&at), "--backend", "cpu"],
+        &[
+            "-o",
+            path(&a),
+            "--terms",
+            path(&at),
+            "--backend",
+            "cpu",
+            "--max-memory",
+            "1GiB",
+        ],
     );
     assert!(whole.status.success(), "{}", stderr(&whole));
     let streamed = eval(
@@ -71,8 +80,8 @@ fn a_batch_larger_than_its_budget_streams_to_the_same_output() {
         std::fs::read(&bt).unwrap(),
         "terms differ"
     );
-    // 24 MB in and 21.6 MB out: held whole, the run peaks above 45 MiB (it does without
-    // the budget); streamed in 1 MiB it stays near the process's own ~10 MiB.
+    // 24 MB in and 21.6 MB out: in one chunk (1 GiB budget) the run peaks above 45 MiB;
+    // streamed in 1 MiB it stays near the process's own ~10 MiB.
     if text.contains("peak memory") {
         let peak = figure(&text, "MiB");
         assert!(peak < 24, "streamed run peaked at {peak} MiB: {text}");
