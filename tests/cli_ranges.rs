@@ -44,6 +44,7 @@ fn cases(dir: &Path) -> Vec<Case> {
     };
     vec![
         case(eval.clone(), "--max-gpu-memory", "1025G"),
+        case(eval.clone(), "--max-memory", "2048GiB"),
         case(
             with(generate.clone(), &["-n", "10"]),
             "--seed",

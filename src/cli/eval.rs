@@ -65,7 +65,8 @@ pub struct Args {
     pub shard: Option<vkbrdf::stream::shard::Shard>,
     /// Host memory for the chunks being read, evaluated and written: bytes, or with a
     /// suffix KiB, MiB, GiB (1 MiB to 1 TiB).
-    #[arg(long, value_name = "BYTES", default_value = "512MiB", value_parser = parse_bytes)]
+    #[arg(long, value_name = "BYTES", default_value = "512MiB", value_parser = parse_bytes,
+          allow_negative_numbers = true)]
     pub max_memory: u64,
     /// `exact` (FORMULAS.md as written) or `fast` (Schlick for exact Fresnel, smith-fast
     /// for Smith–Beckmann; error measured by `vkbrdf bench`).

@@ -21,6 +21,7 @@ macro_rules! out {
     }};
 }
 
+mod at;
 mod backend_choice;
 mod bench;
 mod check;
@@ -65,6 +66,8 @@ enum Command {
     Eval(eval::Args),
     /// Join the parts of a sharded `eval --shard K/N` into one output.
     Merge(merge::Args),
+    /// One material at a few directions given as angles: f and D, G, F, K.
+    At(at::Args),
     /// List the built-in material presets, or validate and list a materials file.
     Materials(materials::Args),
     /// Write a seeded sample batch of tuples (.npy) for a materials file.
@@ -111,6 +114,7 @@ pub fn run(cli: Cli, cancel: Cancel) -> anyhow::Result<ExitCode> {
     match cli.command {
         Command::Eval(a) => eval::run(&a),
         Command::Merge(a) => merge::run(&a),
+        Command::At(a) => at::run(&a),
         Command::Materials(a) => materials::run(&a),
         Command::Generate(a) => generate::run(&a),
         Command::Demo(a) => demo::run(&a),

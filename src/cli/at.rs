@@ -1,0 +1,224 @@
+//! `vkbrdf at`: one material at a few directions given as angles — f and its terms, no
+//! `.npy` to build.
+
+use super::backend_choice::{self, BackendArgs, BackendKind};
+use std::path::PathBuf;
+use std::process::ExitCode;
+use vkbrdf::backend::{Backend, Request, TERM_COLUMNS};
+use vkbrdf::batch::Batch;
+use vkbrdf::material::Material;
+
+/// Arguments of `vkbrdf at`.
+#[derive(clap::Args, Debug)]
+#[command(after_help = "\
+Directions are in the local frame: N = +z, T = +x, azimuths φ measured from +x toward +y,
+all angles in degrees. Each --dir is θ_i,φ_i,θ_o,φ_o (L at (θ_i, φ_i), V at (θ_o, φ_o));
+each --rus is Rusinkiewicz's θ_h,θ_d,φ_d with φ_h = 0. Without either, a small default set
+(normal incidence, 45° mirror, 45° back-scatter, 80° grazing mirror, a half/difference
+pair). Printed per direction: f (RGB, 1/sr, no cosine) and the terms D, G, F (RGB), K;
+--json prints the same as a JSON array.
+
+MATERIAL is a preset (gold, glass, shiny-plastic, … — `vkbrdf materials --presets`) or,
+with --materials FILE, the name of one of its [[material]] tables.
+
+Examples:
+  vkbrdf at gold
+  vkbrdf at gold --dir 30,0,30,180 --dir 60,0,60,180
+  vkbrdf at brushed --materials m.toml --rus 10,45,90 --json")]
+pub struct Args {
+    /// A preset name, or a material name in --materials.
+    #[arg(value_name = "MATERIAL")]
+    pub material: String,
+    /// Materials file to look MATERIAL up in (TOML, [[material]] tables).
+    #[arg(long, short = 'm', value_name = "M.toml")]
+    pub materials: Option<PathBuf>,
+    /// θ_i,φ_i,θ_o,φ_o in degrees (repeatable).
+    #[arg(long = "dir", value_name = "TI,PI,TO,PO", value_parser = angles::<4>,
+          allow_hyphen_values = true)]
+    pub dirs: Vec<[f64; 4]>,
+    /// θ_h,θ_d,φ_d in degrees, φ_h = 0 (repeatable).
+    #[arg(long = "rus", value_name = "TH,TD,PD", value_parser = angles::<3>,
+          allow_hyphen_values = true)]
+    pub rus: Vec<[f64; 3]>,
+    /// Print JSON instead of a table.
+    #[arg(long)]
+    pub json: bool,
+    /// Evaluator: the f64 reference by default here (`cpu`); `vulkan` runs the kernel.
+    #[command(flatten)]
+    pub backend: BackendArgs,
+}
+
+/// `N` comma-separated finite angles in degrees.
+fn angles<const N: usize>(s: &str) -> Result<[f64; N], String> {
+    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
+    if parts.len() != N {
+        return Err(format!(
+            "expected {N} comma-separated angles in degrees, got {s:?}"
+        ));
+    }
+    let mut out = [0.0; N];
+    for (o, p) in out.iter_mut().zip(&parts) {
+        *o = p
+            .parse::<f64>()
+            .ok()
+            .filter(|x| x.is_finite() && x.abs() <= 360.0)
+            .ok_or_else(|| format!("{p:?} is not an angle in degrees within ±360"))?;
+    }
+    Ok(out)
+}
+
+/// The unit vector at polar angle `theta` and azimuth `phi` (degrees) about N = +z.
+fn direction(theta: f64, phi: f64) -> [f64; 3] {
+    let (st, ct) = theta.to_radians().sin_cos();
+    let (sp, cp) = phi.to_radians().sin_cos();
+    [st * cp, st * sp, ct]
+}
+
+/// One requested direction pair: its label and (l, v).
+struct Query {
+    label: String,
+    l: [f64; 3],
+    v: [f64; 3],
+}
+
+fn queries(args: &Args) -> Vec<Query> {
+    let mut dirs = args.dirs.clone();
+    let mut rus = args.rus.clone();
+    if dirs.is_empty() && rus.is_empty() {
+        dirs = vec![
+            [0.0, 0.0, 0.0, 0.0],
+            [45.0, 0.0, 45.0, 180.0],
+            [45.0, 0.0, 45.0, 0.0],
+            [80.0, 0.0, 80.0, 180.0],
+        ];
+        rus = vec![[10.0, 45.0, 90.0]];
+    }
+    let mut out: Vec<Query> = dirs
+        .iter()
+        .map(|&[ti, pi, to, po]| Query {
+            label: format!("θi {ti} φi {pi} θo {to} φo {po}"),
+            l: direction(ti, pi),
+            v: direction(to, po),
+        })
+        .collect();
+    out.extend(rus.iter().map(|&[th, td, pd]| {
+        let (l, v) =
+            vkbrdf::table::slice::from_half_diff(th.to_radians(), td.to_radians(), pd.to_radians());
+        Query {
+            label: format!("θh {th} θd {td} φd {pd}"),
+            l,
+            v,
+        }
+    }));
+    out
+}
+
+fn find_material(args: &Args) -> anyhow::Result<Material> {
+    if let Some(file) = &args.materials {
+        let all = vkbrdf::material::load_materials(file)?;
+        return all
+            .iter()
+            .find(|m| m.name == args.material)
+            .cloned()
+            .ok_or_else(|| {
+                anyhow::anyhow!(
+                    "{} has no material named {:?}; it has: {}",
+                    file.display(),
+                    args.material,
+                    all.iter()
+                        .map(|m| m.name.as_str())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                )
+            });
+    }
+    match vkbrdf::material::presets::preset(&args.material) {
+        Some(m) => Ok(m?),
+        None => anyhow::bail!(
+            "no preset named {:?} (the presets: {}); for your own material pass --materials FILE",
+            args.material,
+            vkbrdf::material::presets::NAMES.join(", ")
+        ),
+    }
+}
+
+/// Runs `vkbrdf at`.
+pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
+    let material = find_material(args)?;
+    let qs = queries(args);
+    let tangent = material.is_anisotropic();
+    let mut rows = Vec::new();
+    for q in &qs {
+        rows.extend(q.l.iter().chain(&q.v).map(|&x| x as f32));
+        rows.extend_from_slice(&[0.0, 0.0, 1.0, 0.0]);
+        if tangent {
+            rows.extend_from_slice(&[1.0, 0.0, 0.0]);
+        }
+    }
+    let columns = if tangent { 13 } else { 10 };
+    let batch = Batch::new(rows, columns, 1, &vkbrdf::batch::memory_source())?;
+    let mut backend: Box<dyn Backend> = match args.backend.backend {
+        None | Some(BackendKind::Cpu) => Box::new(vkbrdf::reference::CpuReference::new()),
+        Some(BackendKind::Vulkan) => backend_choice::open(&args.backend)?,
+    };
+    let out = backend.evaluate(
+        &batch,
+        std::slice::from_ref(&material),
+        &Request { terms: true },
+    )?;
+    let terms = out.terms.unwrap_or_default();
+    if args.json {
+        let items: Vec<serde_json::Value> = qs
+            .iter()
+            .enumerate()
+            .map(|(i, q)| {
+                let t = &terms[i * TERM_COLUMNS..(i + 1) * TERM_COLUMNS];
+                serde_json::json!({
+                    "at": q.label, "l": q.l, "v": q.v,
+                    "f": &out.brdf[3 * i..3 * i + 3],
+                    "D": t[0], "G": t[1], "F": &t[2..5], "K": t[5],
+                })
+            })
+            .collect();
+        let doc = serde_json::json!({
+            "material": material.name, "engine": backend.name(), "results": items
+        });
+        outln!("{}", serde_json::to_string_pretty(&doc)?);
+        return Ok(ExitCode::SUCCESS);
+    }
+    outln!(
+        "{} on {} (N = +z, T = +x; f in 1/sr, no cosine)",
+        material.name,
+        backend.name()
+    );
+    outln!(
+        "{:<30} {:>11} {:>11} {:>11} {:>11} {:>9} {:>9} {:>9} {:>9} {:>11}",
+        "directions (degrees)",
+        "f_r",
+        "f_g",
+        "f_b",
+        "D",
+        "G",
+        "F_r",
+        "F_g",
+        "F_b",
+        "K"
+    );
+    for (i, q) in qs.iter().enumerate() {
+        let f = &out.brdf[3 * i..3 * i + 3];
+        let t = &terms[i * TERM_COLUMNS..(i + 1) * TERM_COLUMNS];
+        outln!(
+            "{:<30} {:>11.5e} {:>11.5e} {:>11.5e} {:>11.5e} {:>9.5} {:>9.5} {:>9.5} {:>9.5} {:>11.5e}",
+            q.label, f[0], f[1], f[2], t[0], t[1], t[2], t[3], t[4], t[5]
+        );
+    }
+    let c = out.counts;
+    if c.below_horizon > 0 || c.invalid > 0 {
+        outln!(
+            "({} below the horizon, {} invalid: their values are 0)",
+            c.below_horizon,
+            c.invalid
+        );
+    }
+    Ok(ExitCode::SUCCESS)
+}
