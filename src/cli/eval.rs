@@ -63,6 +63,9 @@ pub struct Args {
     /// `vkbrdf merge`.
     #[arg(long, value_name = "K/N")]
     pub shard: Option<vkbrdf::stream::shard::Shard>,
+    /// Print the summary (counts, stage times, peak memory) as JSON on standard output.
+    #[arg(long)]
+    pub json: bool,
     /// Host memory for the chunks being read, evaluated and written: bytes, or with a
     /// suffix KiB, MiB, GiB (1 MiB to 1 TiB).
     #[arg(long, value_name = "BYTES", default_value = "512MiB", value_parser = parse_bytes,
@@ -167,6 +170,25 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         c.tuples as f64 / total_s.max(1e-9) / 1e6,
         peak_memory().map_or(String::new(), |m| format!(", peak memory {m} MiB"))
     );
+    if args.json {
+        let doc = serde_json::json!({
+            "tuples": c.tuples,
+            "engine": backend.name(),
+            "evaluated": c.tuples - c.invalid - c.below_horizon,
+            "invalid": c.invalid,
+            "first_invalid_row": c.first_invalid,
+            "below_horizon": c.below_horizon,
+            "saturated": c.saturated,
+            "written": summary.written,
+            "chunks": summary.chunks,
+            "chunk_rows": summary.chunk_rows,
+            "seconds": {"read": summary.read_s, "evaluate": summary.eval_s,
+                        "write": summary.write_s, "total": total_s},
+            "peak_memory_mib": peak_memory(),
+            "shard": args.shard,
+        });
+        outln!("{}", serde_json::to_string_pretty(&doc)?);
+    }
     if !summary.written {
         let e = vkbrdf::Error::InvalidTuples {
             invalid: c.invalid,
