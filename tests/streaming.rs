@@ -149,17 +149,31 @@ fn strict_and_the_first_invalid_row_hold_across_chunks() {
         .filter(|n| n.contains("partial"))
         .collect();
     assert!(left.is_empty(), "temporary files left: {left:?}");
-    // Without --strict the run succeeds and counts the one invalid tuple.
+    // Without --strict the run succeeds and counts the one invalid tuple; --json says so
+    // on standard output for scripts.
     let r = eval(
         &m,
         &t,
-        &["-o", path(&out), "--backend", "cpu", "--max-memory", "1MiB"],
+        &[
+            "-o",
+            path(&out),
+            "--backend",
+            "cpu",
+            "--max-memory",
+            "1MiB",
+            "--json",
+        ],
     );
     assert!(
         r.status.success() && stderr(&r).contains("1 invalid"),
         "{}",
         stderr(&r)
     );
+    let doc: serde_json::Value = serde_json::from_slice(&r.stdout).expect("JSON summary");
+    assert_eq!(doc["invalid"], 1);
+    assert_eq!(doc["first_invalid_row"], 70_000);
+    assert_eq!(doc["tuples"], 100_000);
+    assert_eq!(doc["written"], true);
 }
 
 #[test]
