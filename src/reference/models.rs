@@ -168,6 +168,7 @@ pub fn microfacet_d(fr: &Frame, ct: &CookTorrance) -> f64 {
             my,
         ),
         Distribution::Blinn { exponent } => distribution::blinn_d(fr.cos_h, fr.sin2_h, exponent),
+        Distribution::Charlie { m } => distribution::charlie_d(fr.cos_h, fr.sin2_h, m),
     }
 }
 
@@ -213,6 +214,13 @@ pub fn microfacet_g(fr: &Frame, ct: &CookTorrance) -> f64 {
         Geometry::SmithFast => {
             geometry::smith_fast_g1(x(fr.v, fr.cos_o)) * geometry::smith_fast_g1(x(fr.l, fr.cos_i))
         }
+        Geometry::SchlickSmith => {
+            let m = roughness.expect("schlick-smith needs beckmann/ggx (validated)").xy().0;
+            let k = geometry::schlick_smith_k(matches!(ct.distribution, Distribution::Ggx(_)), m);
+            geometry::schlick_smith_g1(fr.cos_o, 1.0 - fr.cos_o, k)
+                * geometry::schlick_smith_g1(fr.cos_i, 1.0 - fr.cos_i, k)
+        }
+        Geometry::Neubelt => geometry::neubelt_g(fr.cos_i, fr.cos_o),
     }
 }
 
