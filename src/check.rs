@@ -29,7 +29,9 @@
 use crate::backend::{Backend, Request, TERM_COLUMNS};
 use crate::batch::{Batch, Tuple, COLUMNS_PLAIN, COLUMNS_TANGENT};
 use crate::error::Result;
-use crate::material::{legality, parse_materials, Convention, DistributionKind, Geometry, Material};
+use crate::material::{
+    legality, parse_materials, Convention, DistributionKind, Geometry, Material,
+};
 use crate::reference::{self, Status};
 use crate::stats::{relative_error, ErrorStats};
 use crate::vector::{cross, dot, normalize_direct};
@@ -270,7 +272,10 @@ fn body(rng: &mut Pcg64Mcg, shape: &Shape, i: usize) -> String {
         "ward" => k.push(roughness_key(rng, i, shape.anisotropic)),
         "cook-torrance" => {
             k.push(format!("convention = \"{}\"", shape.convention));
-            k.push(format!("distribution = \"{}\"", shape.distribution.toml_name()));
+            k.push(format!(
+                "distribution = \"{}\"",
+                shape.distribution.toml_name()
+            ));
             if shape.distribution.takes_exponent() {
                 k.push(format!("exponent = {:.4}", exponent(rng, i)));
             } else {
@@ -376,8 +381,9 @@ pub fn combinations(seed: u64) -> Result<Vec<Combination>> {
     for shape in shapes() {
         // Seeded by the name, not the position: adding a term leaves every other
         // combination's materials as they were.
-        let mut rng =
-            Pcg64Mcg::seed_from_u64(seed ^ fnv1a(&shape.name()).wrapping_mul(0x9e37_79b9_7f4a_7c15));
+        let mut rng = Pcg64Mcg::seed_from_u64(
+            seed ^ fnv1a(&shape.name()).wrapping_mul(0x9e37_79b9_7f4a_7c15),
+        );
         let mut toml = String::new();
         for i in 0..MATERIALS_PER_COMBINATION {
             toml += &format!(

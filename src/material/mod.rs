@@ -225,6 +225,22 @@ impl DistributionKind {
         self == DistributionKind::Blinn
     }
 
+    /// The distribution of this kind with roughness `r`, when it takes one (not `blinn`) and
+    /// `r` is legal for it (see [`legality`]: gaussian and charlie are isotropic only).
+    pub fn with_roughness(self, r: Roughness) -> Option<Distribution> {
+        match (self, r) {
+            (DistributionKind::Beckmann, r) => Some(Distribution::Beckmann(r)),
+            (DistributionKind::Ggx, r) => Some(Distribution::Ggx(r)),
+            (DistributionKind::Gaussian, Roughness::Isotropic(m)) => {
+                Some(Distribution::Gaussian { m })
+            }
+            (DistributionKind::Charlie, Roughness::Isotropic(m)) => {
+                Some(Distribution::Charlie { m })
+            }
+            _ => None,
+        }
+    }
+
     /// The largest roughness the formula is defined for (FORMULAS.md §2): `charlie`'s m is
     /// the paper's α = r² ≤ 1; the others are bounded only by the parser's general range.
     pub fn max_roughness(self) -> Option<f64> {

@@ -543,18 +543,18 @@ impl Fields<'_, '_> {
                     return Err(self.err("roughness", format!("{} is out of range: distribution `{dist}` needs 0 < m ≤ {max} (m is Estevez & Kulla's α = r², not an rms slope)", shown(m))));
                 }
             }
-            match (kind, r) {
-                (DistributionKind::Beckmann, r) => Distribution::Beckmann(r),
-                (DistributionKind::Ggx, r) => Distribution::Ggx(r),
-                (DistributionKind::Gaussian, Roughness::Isotropic(m)) => Distribution::Gaussian { m },
-                (DistributionKind::Charlie, Roughness::Isotropic(m)) => Distribution::Charlie { m },
-                _ => unreachable!("legality refuses anisotropic {dist}"),
-            }
+            kind.with_roughness(r)
+                .expect("legality refused the roughness this kind does not take")
         };
         let names = Geometry::ALL.map(Geometry::toml_name);
         let geometry = Geometry::from_toml_name(&self.required_string("geometry", &names, why)?)
             .expect("one of the names offered");
-        self.legal(convention, kind, distribution_is_anisotropic(&distribution), geometry)?;
+        self.legal(
+            convention,
+            kind,
+            distribution_is_anisotropic(&distribution),
+            geometry,
+        )?;
         let fresnel = self.fresnel()?;
         let specular_weight = self.scalar("specular_weight", colour_range)?.unwrap_or(1.0);
         let diffuse_weight = self.scalar("diffuse_weight", colour_range)?.unwrap_or(0.0);
@@ -576,7 +576,8 @@ impl Fields<'_, '_> {
         anisotropic: bool,
         geometry: Geometry,
     ) -> Result<(), MaterialError> {
-        super::legality(convention, kind, anisotropic, geometry).map_err(|e| self.err(e.key, e.message))
+        super::legality(convention, kind, anisotropic, geometry)
+            .map_err(|e| self.err(e.key, e.message))
     }
 
     fn fresnel(&mut self) -> Result<Fresnel, MaterialError> {
