@@ -354,7 +354,8 @@ void cook_torrance_gk_f64(Frame f, GpuMaterial m, uint convention, out double g,
         break;
     case GEOM_SCHLICK_SMITH: { // schlick_smith_g1 per direction, in f64
         double k = double(m.lobe.w);
-        g = co / (co + k * (1.0 - co)) * (ci / (ci + k * (1.0 - ci)));
+        double omc_o = double(f.sin2_o) / (1.0 + co), omc_i = double(f.sin2_i) / (1.0 + ci);
+        g = co / (co + k * omc_o) * (ci / (ci + k * omc_i));
         break;
     }
     case GEOM_NEUBELT: // neubelt_g in f64
@@ -486,8 +487,8 @@ void cook_torrance_gk_xf(Frame f, GpuMaterial m, uint convention, out vec2 g, ou
         break;
     case GEOM_SCHLICK_SMITH: { // schlick_smith_g1 per direction, in m 2^e form
         float k = m.lobe.w;
-        g = xf_mul(xf_div(co, xf_add(co, xf(k * (1.0 - f.cos_o)))),
-                   xf_div(ci, xf_add(ci, xf(k * (1.0 - f.cos_i)))));
+        g = xf_mul(xf_div(co, xf_add(co, xf(k * (f.sin2_o / (1.0 + f.cos_o))))),
+                   xf_div(ci, xf_add(ci, xf(k * (f.sin2_i / (1.0 + f.cos_i))))));
         break;
     }
     case GEOM_NEUBELT: // neubelt_g in m 2^e form
@@ -557,14 +558,10 @@ Eval model_cook_torrance(Frame f, GpuMaterial m) {
 #endif
 #if defined(HAS_G_SCHLICK_SMITH)
     case GEOM_SCHLICK_SMITH: {
-        // k = lobe.w (isotropic only, see gpu_material); 1 - cos from the f64 cosine where
-        // the frame has one: 1 - f.cos_i in f32 is off by up to 6e-8 absolute near normal
-        // incidence, an error k (up to 8e3) multiplies.
-#if defined(HAS_FLOAT64)
-        float omc_o = float(1.0 - f.cos_o_exact), omc_i = float(1.0 - f.cos_i_exact);
-#else
-        float omc_o = 1.0 - f.cos_o, omc_i = 1.0 - f.cos_i;
-#endif
+        // k = lobe.w (isotropic only, see gpu_material). 1 - cos = |n x w|^2/(1 + cos), from
+        // make_frame's sin2 (accurate in both frames): 1 - f.cos_i in f32 is off by up to
+        // 6e-8 absolute near normal incidence, an error k (up to 8e3) multiplies.
+        float omc_o = f.sin2_o / (1.0 + f.cos_o), omc_i = f.sin2_i / (1.0 + f.cos_i);
         e.g = schlick_smith_g1(f.cos_o, omc_o, m.lobe.w) * schlick_smith_g1(f.cos_i, omc_i, m.lobe.w);
         break;
     }
