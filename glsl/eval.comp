@@ -532,8 +532,9 @@ uint make_frame(Row r, GpuMaterial m, out Frame f) {
         f.v_tb = f32_of(dvec2(dot(dv, t), dot(dv, b)));
     }
 #endif
-#if defined(HAS_G_SMITH) || defined(HAS_G_SMITH_CORRELATED) || defined(HAS_G_SMITH_FAST)
-    dvec3 nxl = cross(dn, dl), nxv = cross(dn, dv); // only Smith's tan^2 reads them
+#if defined(HAS_G_SMITH) || defined(HAS_G_SMITH_CORRELATED) || defined(HAS_G_SMITH_FAST) \
+    || defined(HAS_G_SCHLICK_SMITH)
+    dvec3 nxl = cross(dn, dl), nxv = cross(dn, dv); // Smith's tan^2, Schlick-Smith's 1 - cos
     f.sin2_i = f32_of(dot(nxl, nxl));
     f.sin2_o = f32_of(dot(nxv, nxv));
 #endif
@@ -628,7 +629,8 @@ uint make_frame(Row r, GpuMaterial m, out Frame f) {
                       ff_round(dot_ff3(v_hi, v_lo, b_hi, b_lo)));
     }
 #endif
-#if defined(HAS_G_SMITH) || defined(HAS_G_SMITH_CORRELATED) || defined(HAS_G_SMITH_FAST)
+#if defined(HAS_G_SMITH) || defined(HAS_G_SMITH_CORRELATED) || defined(HAS_G_SMITH_FAST) \
+    || defined(HAS_G_SCHLICK_SMITH)
     cross_ff3(n_hi, n_lo, l_hi, l_lo, x_hi, x_lo);
     f.sin2_i = ff_round(length2_ff3(x_hi, x_lo));
     cross_ff3(n_hi, n_lo, v_hi, v_lo, x_hi, x_lo);

@@ -315,6 +315,16 @@ double d_f64(Frame f, GpuMaterial m) {
     case DIST_BLINN:
         return exp_f64(log_f64(double(m.scale.x)) + double(m.lobe.x) * ln_cos);
 #endif
+#if defined(HAS_D_CHARLIE)
+    case DIST_CHARLIE: {
+        // ln sin_h as charlie_d takes it; sin_h = 0 is D = 0.
+        if (f.sin2_h == 0.0) {
+            return 0.0;
+        }
+        double ln_sin = double(log_cos(sqrt(f.sin2_h), f.cos_h * f.cos_h));
+        return exp_f64(log_f64(double(m.scale.x)) + double(m.lobe.x) * ln_sin);
+    }
+#endif
     default: // GGX: D >= 1/(pi m^2 (1/m^2)^2) > 1e-15 for roughness in [1e-7, 1e4]
         return 0.0;
     }
@@ -341,6 +351,15 @@ void cook_torrance_gk_f64(Frame f, GpuMaterial m, uint convention, out double g,
         break;
     case GEOM_SMITH_FAST:
         g = smith_fast_g1_f64(m, f.v_tb, f.sin2_o, co) * smith_fast_g1_f64(m, f.l_tb, f.sin2_i, ci);
+        break;
+    case GEOM_SCHLICK_SMITH: { // schlick_smith_g1 per direction, in f64
+        double k = double(m.lobe.w);
+        double omc_o = double(f.sin2_o) / (1.0 + co), omc_i = double(f.sin2_i) / (1.0 + ci);
+        g = co / (co + k * omc_o) * (ci / (ci + k * omc_i));
+        break;
+    }
+    case GEOM_NEUBELT: // neubelt_g in f64
+        g = ci * co / (ci + co * (1.0 - ci));
         break;
     default: break;
     }
@@ -424,6 +443,14 @@ vec2 d_xf(Frame f, GpuMaterial m) {
         ln_d = ff_add(vec2(log_acc(m.scale.x), 0.0), ff_mul_f(ln_cos, m.lobe.x));
         break;
 #endif
+#if defined(HAS_D_CHARLIE)
+    case DIST_CHARLIE:
+        if (f.sin2_h > 0.0) { // sin_h = 0 is D = 0 (ln_d stays -1e30)
+            vec2 ln_sin = vec2(log_cos(sqrt(f.sin2_h), f.cos_h * f.cos_h), 0.0);
+            ln_d = ff_add(vec2(log_acc(m.scale.x), 0.0), ff_mul_f(ln_sin, m.lobe.x));
+        }
+        break;
+#endif
     default: // GGX: D > 1e-15 for roughness in [1e-7, 1e4] (see d_f64)
         break;
     }
@@ -457,6 +484,15 @@ void cook_torrance_gk_xf(Frame f, GpuMaterial m, uint convention, out vec2 g, ou
     case GEOM_SMITH_FAST:
         g = xf_mul(smith_fast_g1_xf(m, f.v_tb, f.sin2_o, f.cos_o, co),
                    smith_fast_g1_xf(m, f.l_tb, f.sin2_i, f.cos_i, ci));
+        break;
+    case GEOM_SCHLICK_SMITH: { // schlick_smith_g1 per direction, in m 2^e form
+        float k = m.lobe.w;
+        g = xf_mul(xf_div(co, xf_add(co, xf(k * (f.sin2_o / (1.0 + f.cos_o))))),
+                   xf_div(ci, xf_add(ci, xf(k * (f.sin2_i / (1.0 + f.cos_i))))));
+        break;
+    }
+    case GEOM_NEUBELT: // neubelt_g in m 2^e form
+        g = xf_div(xf_mul(ci, co), xf_add(ci, xf_mul(co, xf(1.0 - f.cos_i))));
         break;
     default: break;
     }
@@ -492,6 +528,9 @@ Eval model_cook_torrance(Frame f, GpuMaterial m) {
 #if defined(HAS_D_BLINN)
     case DIST_BLINN: e.d = D_Blinn(f.cos_h, f.sin2_h, m.lobe.x, m.scale.x); break;
 #endif
+#if defined(HAS_D_CHARLIE)
+    case DIST_CHARLIE: e.d = charlie_d(f.cos_h, f.sin2_h, m.lobe.x, m.scale.x); break;
+#endif
     default: break;
     }
 
@@ -516,6 +555,19 @@ Eval model_cook_torrance(Frame f, GpuMaterial m) {
     case GEOM_SMITH_FAST:
         e.g = G1_SmithFast(smith_q2(m, f.v_tb, f.sin2_o, f.cos_o)) * G1_SmithFast(smith_q2(m, f.l_tb, f.sin2_i, f.cos_i));
         break;
+#endif
+#if defined(HAS_G_SCHLICK_SMITH)
+    case GEOM_SCHLICK_SMITH: {
+        // k = lobe.w (isotropic only, see gpu_material). 1 - cos = |n x w|^2/(1 + cos), from
+        // make_frame's sin2 (accurate in both frames): 1 - f.cos_i in f32 is off by up to
+        // 6e-8 absolute near normal incidence, an error k (up to 8e3) multiplies.
+        float omc_o = f.sin2_o / (1.0 + f.cos_o), omc_i = f.sin2_i / (1.0 + f.cos_i);
+        e.g = schlick_smith_g1(f.cos_o, omc_o, m.lobe.w) * schlick_smith_g1(f.cos_i, omc_i, m.lobe.w);
+        break;
+    }
+#endif
+#if defined(HAS_G_NEUBELT)
+    case GEOM_NEUBELT: e.g = neubelt_g(f.cos_i, f.cos_o); break;
 #endif
     default: break;
     }

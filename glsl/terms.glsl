@@ -89,6 +89,20 @@ float D_Blinn(float cos_h, float sin2_h, float e, float norm) {
 }
 #endif
 
+#if defined(HAS_D_CHARLIE)
+// Estevez & Kulla 2017, "Production Friendly Microfacet Sheen BRDF" (Charlie sheen):
+// (2 + 1/m)/(2 pi) sin_h^(1/m), 0 < m <= 1; inv_m = 1/m and norm = (2 + 1/m)/(2 pi) from
+// the host. ln sin_h is log_cos of the complementary angle: from cos_h^2 (log1p) where h
+// is near grazing, as sin_h next to 1 keeps only its absolute precision, which the
+// exponent 1/m (up to 1e7) would multiply. 0 at sin_h = 0 (log of 0 is not needed).
+float charlie_d(float cos_h, float sin2_h, float inv_m, float norm) {
+    if (sin2_h == 0.0) {
+        return 0.0;
+    }
+    return norm * exp_acc(inv_m * log_cos(sqrt(sin2_h), cos_h * cos_h));
+}
+#endif
+
 // ===================================================================== G (FORMULAS.md §3)
 
 #if defined(HAS_G_COOK_TORRANCE)
@@ -150,6 +164,25 @@ float G_Smith(float lambda_o, float lambda_i) {
 // eq. 99 (height-correlated Smith): 1 / (1 + Lambda(v) + Lambda(l)).
 float G_SmithCorrelated(float lambda_o, float lambda_i) {
     return 1.0 / (1.0 + lambda_o + lambda_i);
+}
+#endif
+
+#if defined(HAS_G_SCHLICK_SMITH)
+// Schlick 1994, "An Inexpensive BRDF Model for Physically-based Rendering", with the k of
+// Karis 2013, "Real Shading in Unreal Engine 4" (m sqrt(2/pi) Beckmann, m/2 GGX; from the
+// host): G1(w) = cos_w / (cos_w + k (1 - cos_w)), one_minus_cos_w formed where cos_w is
+// known best (k up to 8e3 multiplies its error). Not cos_w (1 - k) + k, which cancels.
+float schlick_smith_g1(float cos_w, float one_minus_cos_w, float k) {
+    return cos_w / (cos_w + k * one_minus_cos_w);
+}
+#endif
+
+#if defined(HAS_G_NEUBELT)
+// Neubelt & Pettineo 2013, "Crafting a Next-Gen Material Pipeline for The Order: 1886"
+// (cloth): cos_i cos_o / (cos_i + cos_o - cos_i cos_o), the denominator written
+// cos_i + cos_o (1 - cos_i) (non-negative terms: no cancellation near 1).
+float neubelt_g(float cos_i, float cos_o) {
+    return cos_i * cos_o / (cos_i + cos_o * (1.0 - cos_i));
 }
 #endif
 

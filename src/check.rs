@@ -4,9 +4,10 @@
 //! and `tests/conformance.rs`.
 //!
 //! **Combinations** ([`combinations`]): lambert, phong, blinn-phong, rtr; ward isotropic and
-//! anisotropic; cook-torrance for every convention × distribution × geometry × fresnel that
-//! FORMULAS.md allows: `smith*` only with beckmann/ggx, `smith-fast` with beckmann only,
-//! anisotropic beckmann/ggx in the modern convention only. 198 in all. Each combination is
+//! anisotropic; cook-torrance for every convention × distribution × anisotropy × geometry ×
+//! fresnel that FORMULAS.md allows ([`crate::material::legality`] decides: `smith*` and
+//! `schlick-smith` only with beckmann/ggx, `smith-fast` with beckmann only, anisotropic
+//! beckmann/ggx in the modern convention only, `schlick-smith` isotropic). 314 in all. Each combination is
 //! one batch over a table of [`MATERIALS_PER_COMBINATION`] materials with seeded random
 //! parameters (one always at the sharpest lobe allowed: roughness 0.01 or exponent 20000).
 //!
@@ -28,7 +29,9 @@
 use crate::backend::{Backend, Request, TERM_COLUMNS};
 use crate::batch::{Batch, Tuple, COLUMNS_PLAIN, COLUMNS_TANGENT};
 use crate::error::Result;
-use crate::material::{parse_materials, Material};
+use crate::material::{
+    legality, parse_materials, Convention, DistributionKind, Geometry, Material,
+};
 use crate::reference::{self, Status};
 use crate::stats::{relative_error, ErrorStats};
 use crate::vector::{cross, dot, normalize_direct};
@@ -269,10 +272,14 @@ fn body(rng: &mut Pcg64Mcg, shape: &Shape, i: usize) -> String {
         "ward" => k.push(roughness_key(rng, i, shape.anisotropic)),
         "cook-torrance" => {
             k.push(format!("convention = \"{}\"", shape.convention));
-            k.push(format!("distribution = \"{}\"", shape.distribution));
-            match shape.distribution {
-                "blinn" => k.push(format!("exponent = {:.4}", exponent(rng, i))),
-                _ => k.push(roughness_key(rng, i, shape.anisotropic)),
+            k.push(format!(
+                "distribution = \"{}\"",
+                shape.distribution.toml_name()
+            ));
+            if shape.distribution.takes_exponent() {
+                k.push(format!("exponent = {:.4}", exponent(rng, i)));
+            } else {
+                k.push(roughness_key(rng, i, shape.anisotropic));
             }
             k.push(format!("geometry = \"{}\"", shape.geometry));
             k.push(format!("fresnel = \"{}\"", shape.fresnel));
@@ -305,7 +312,7 @@ fn body(rng: &mut Pcg64Mcg, shape: &Shape, i: usize) -> String {
 struct Shape {
     model: &'static str,
     convention: &'static str,
-    distribution: &'static str,
+    distribution: DistributionKind,
     geometry: &'static str,
     fresnel: &'static str,
     anisotropic: bool,
@@ -317,7 +324,10 @@ impl Shape {
         match self.model {
             "cook-torrance" => format!(
                 "cook-torrance {} {}{aniso} {} {}",
-                self.convention, self.distribution, self.geometry, self.fresnel
+                self.convention,
+                self.distribution.toml_name(),
+                self.geometry,
+                self.fresnel
             ),
             m => format!("{m}{aniso}"),
         }
@@ -328,7 +338,7 @@ fn shapes() -> Vec<Shape> {
     let plain = |model, anisotropic| Shape {
         model,
         convention: "",
-        distribution: "",
+        distribution: DistributionKind::Ggx,
         geometry: "",
         fresnel: "",
         anisotropic,
@@ -339,31 +349,20 @@ fn shapes() -> Vec<Shape> {
         .collect();
     v.push(plain("ward", false));
     v.push(plain("ward", true));
-    for convention in ["seed", "cook-torrance-1982", "modern"] {
-        for distribution in ["gaussian", "beckmann", "ggx", "blinn"] {
-            let geometries: &[&str] = match distribution {
-                "beckmann" => &[
-                    "none",
-                    "cook-torrance",
-                    "smith",
-                    "smith-correlated",
-                    "smith-fast",
-                ],
-                "ggx" => &["none", "cook-torrance", "smith", "smith-correlated"],
-                _ => &["none", "cook-torrance"],
-            };
-            let anisotropy: &[bool] = match (distribution, convention) {
-                ("beckmann" | "ggx", "modern") => &[false, true],
-                _ => &[false],
-            };
-            for &anisotropic in anisotropy {
-                for &geometry in geometries {
+    // Every combination the contract defines: the legality rules are material::legality's.
+    for convention in Convention::ALL {
+        for distribution in DistributionKind::ALL {
+            for anisotropic in [false, true] {
+                for geometry in Geometry::ALL {
+                    if legality(convention, distribution, anisotropic, geometry).is_err() {
+                        continue;
+                    }
                     for fresnel in ["none", "dielectric", "conductor", "schlick"] {
                         v.push(Shape {
                             model: "cook-torrance",
-                            convention,
+                            convention: convention.toml_name(),
                             distribution,
-                            geometry,
+                            geometry: geometry.toml_name(),
                             fresnel,
                             anisotropic,
                         });
@@ -379,15 +378,18 @@ fn shapes() -> Vec<Shape> {
 /// The materials go through the TOML parser, so "legal" means what validation accepts.
 pub fn combinations(seed: u64) -> Result<Vec<Combination>> {
     let mut out = Vec::new();
-    for (ci, shape) in shapes().iter().enumerate() {
-        let mut rng =
-            Pcg64Mcg::seed_from_u64(seed ^ (ci as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15));
+    for shape in shapes() {
+        // Seeded by the name, not the position: adding a term leaves every other
+        // combination's materials as they were.
+        let mut rng = Pcg64Mcg::seed_from_u64(
+            seed ^ fnv1a(&shape.name()).wrapping_mul(0x9e37_79b9_7f4a_7c15),
+        );
         let mut toml = String::new();
         for i in 0..MATERIALS_PER_COMBINATION {
             toml += &format!(
                 "[[material]]\nname = \"{}#{i}\"\n{}\n\n",
                 shape.name(),
-                body(&mut rng, shape, i)
+                body(&mut rng, &shape, i)
             );
         }
         let materials = parse_materials(&toml, &format!("combination `{}`", shape.name()))?;
@@ -398,6 +400,13 @@ pub fn combinations(seed: u64) -> Result<Vec<Combination>> {
         });
     }
     Ok(out)
+}
+
+/// FNV-1a of `s` (a stable hash: the standard library's may change between releases).
+fn fnv1a(s: &str) -> u64 {
+    s.bytes().fold(0xcbf2_9ce4_8422_2325, |h, b| {
+        (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
+    })
 }
 
 fn unit(rng: &mut Pcg64Mcg) -> [f64; 3] {
@@ -431,6 +440,8 @@ fn lobe_width(m: &Material) -> f64 {
             Distribution::Gaussian { m } => m,
             Distribution::Beckmann(r) | Distribution::Ggx(r) => r.xy().0.max(r.xy().1),
             Distribution::Blinn { exponent } => from_exponent(exponent),
+            // Sheen peaks at grazing h (sin_h = 1): aimed anywhere, i.e. uniformly.
+            Distribution::Charlie { .. } => 1.0,
         },
     }
 }
@@ -733,10 +744,20 @@ mod tests {
     use crate::reference::CpuReference;
 
     #[test]
-    fn there_are_198_legal_combinations_and_all_parse() {
+    fn there_are_314_legal_combinations_and_all_parse() {
+        // Per convention, G per distribution (isotropic): gaussian, blinn and charlie 3
+        // (none, cook-torrance, neubelt); beckmann 7 (those, smith, smith-correlated,
+        // smith-fast, schlick-smith); ggx 6 (no smith-fast). Modern adds anisotropic
+        // beckmann 6 and ggx 5 (no schlick-smith). Times 4 Fresnel terms, plus 6 plain.
         let c = combinations(1).unwrap();
-        assert_eq!(c.len(), 198);
-        assert_eq!(c.iter().filter(|c| c.anisotropic).count(), 1 + 20 + 16);
+        assert_eq!(c.len(), 6 + 4 * (2 * 22 + (22 + 11)));
+        assert_eq!(c.iter().filter(|c| c.anisotropic).count(), 1 + 4 * 11);
+        let has = |name: &str| c.iter().any(|c| c.name == name);
+        assert!(has("cook-torrance seed charlie neubelt none"));
+        assert!(has("cook-torrance modern ggx schlick-smith conductor"));
+        assert!(!has("cook-torrance modern charlie smith none"));
+        assert!(!has("cook-torrance modern ggx-aniso schlick-smith none"));
+        assert!(!c.iter().any(|c| c.name.contains("charlie-aniso")));
     }
 
     #[test]

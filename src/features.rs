@@ -11,7 +11,7 @@ macro_rules! features {
     ($($(#[$doc:meta])* $name:ident = $bit:expr, $define:literal;)*) => {
         /// A set of features, one bit each.
         #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash, PartialOrd, Ord)]
-        pub struct FeatureSet(u32);
+        pub struct FeatureSet(u64);
         impl FeatureSet {
             $($(#[$doc])* pub const $name: FeatureSet = FeatureSet(1 << $bit);)*
             /// Every feature with the preprocessor name the kernel tests (`#if HAS_...`).
@@ -85,6 +85,12 @@ features! {
     BUCKETED = 29, "BUCKETED";
     /// Every material is the fast precision variant: the device's own exp/log/atan2.
     FAST_MATH = 27, "FAST_MATH";
+    /// Charlie (Estevez & Kulla 2017 sheen) D.
+    D_CHARLIE = 30, "HAS_D_CHARLIE";
+    /// Schlick–Smith G (Schlick 1994, Karis 2013's k).
+    G_SCHLICK_SMITH = 31, "HAS_G_SCHLICK_SMITH";
+    /// Neubelt & Pettineo 2013 cloth G.
+    G_NEUBELT = 32, "HAS_G_NEUBELT";
 }
 
 impl FeatureSet {
@@ -119,7 +125,7 @@ impl FeatureSet {
     }
 
     /// The raw bits (stable within one build; used for cache keys and logs).
-    pub fn bits(self) -> u32 {
+    pub fn bits(self) -> u64 {
         self.0
     }
 
@@ -139,6 +145,7 @@ impl FeatureSet {
                     Distribution::Beckmann(_) => FeatureSet::D_BECKMANN,
                     Distribution::Ggx(_) => FeatureSet::D_GGX,
                     Distribution::Blinn { .. } => FeatureSet::D_BLINN,
+                    Distribution::Charlie { .. } => FeatureSet::D_CHARLIE,
                 };
                 f |= match ct.geometry {
                     Geometry::None => FeatureSet::EMPTY,
@@ -146,6 +153,8 @@ impl FeatureSet {
                     Geometry::Smith => FeatureSet::G_SMITH,
                     Geometry::SmithCorrelated => FeatureSet::G_SMITH_CORRELATED,
                     Geometry::SmithFast => FeatureSet::G_SMITH_FAST,
+                    Geometry::SchlickSmith => FeatureSet::G_SCHLICK_SMITH,
+                    Geometry::Neubelt => FeatureSet::G_NEUBELT,
                 };
                 if matches!(ct.geometry, Geometry::Smith | Geometry::SmithCorrelated) {
                     f |= match ct.distribution {

@@ -128,6 +128,66 @@ fn smith_needs_a_lambda() {
 }
 
 #[test]
+fn cloth_and_schlick_smith_rules() {
+    let ct = |d: &str, param: &str, g: &str| {
+        format!("[[material]]\nname = \"a\"\nmodel = \"cook-torrance\"\ndistribution = \"{d}\"\n{param}\ngeometry = \"{g}\"\nfresnel = \"none\"\n")
+    };
+    // No Λ (or k) to guess: every Smith form and schlick-smith with charlie, and
+    // schlick-smith with gaussian and blinn.
+    for g in ["smith", "smith-correlated", "smith-fast", "schlick-smith"] {
+        assert_material_error(
+            &ct("charlie", "roughness = 0.3", g),
+            &[
+                "m.toml:6",
+                "key `geometry`",
+                "`charlie` has none",
+                "neubelt",
+            ],
+        );
+    }
+    for (d, param) in [("gaussian", "roughness = 0.3"), ("blinn", "exponent = 20")] {
+        assert_material_error(
+            &ct(d, param, "schlick-smith"),
+            &["key `geometry`", "schlick-smith", d],
+        );
+    }
+    // Isotropic only: schlick-smith, and charlie itself.
+    for d in ["beckmann", "ggx"] {
+        assert_material_error(
+            &ct(d, "roughness = [0.1, 0.3]", "schlick-smith"),
+            &["key `geometry`", "isotropic roughness only"],
+        );
+    }
+    assert_material_error(
+        &ct("charlie", "roughness = [0.1, 0.3]", "neubelt"),
+        &["key `roughness`", "`charlie` is isotropic only"],
+    );
+    // 0 < m ≤ 1 (the paper's α = r²); the general roughness range still applies below.
+    assert_material_error(
+        &ct("charlie", "roughness = 1.5", "neubelt"),
+        &["m.toml:5", "key `roughness`", "1.5", "0 < m ≤ 1"],
+    );
+    assert_material_error(
+        &ct("charlie", "roughness = 0", "neubelt"),
+        &["key `roughness`", "> 0"],
+    );
+    // And what is legal parses: neubelt with every distribution, schlick-smith with both.
+    for (d, param) in [
+        ("gaussian", "roughness = 0.3"),
+        ("beckmann", "roughness = [0.1, 0.3]"),
+        ("ggx", "roughness = 1e4"),
+        ("blinn", "exponent = 20"),
+        ("charlie", "roughness = 1.0"),
+    ] {
+        parse_materials(&ct(d, param, "neubelt"), "m.toml")
+            .expect("neubelt is legal with every distribution");
+    }
+    for d in ["beckmann", "ggx"] {
+        parse_materials(&ct(d, "roughness = 1e4", "schlick-smith"), "m.toml").expect("legal");
+    }
+}
+
+#[test]
 fn conductor_needs_extinction_and_dielectric_refuses_it() {
     assert_material_error(
         &format!("[[material]]\nname = \"a\"\n{CT}fresnel = \"conductor\"\nior = 0.2\n"),

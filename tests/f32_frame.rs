@@ -153,7 +153,7 @@ fn conformance_passes_with_the_f32_frame() {
         "vkbrdf check fails with the f32 frame:\n{text}\n{}",
         common::stderr(&out)
     );
-    assert!(text.contains("198 pass, 0 fail"), "{text}");
+    assert!(text.contains("314 pass, 0 fail"), "{text}");
 }
 
 #[test]

@@ -532,6 +532,16 @@ fn exact(raw: &[[f64; 4]; 3], t: Option<[f64; 3]>, m: &Material) -> Exact {
                 Distribution::Blinn { exponent } => x(exponent + 2.0)
                     .div(&x(2.0).mul(&pi()))
                     .mul(&fr.cos_h.powf(exponent)),
+                Distribution::Charlie { m } => {
+                    let inv_m = x(1.0).div(&x(m));
+                    // sin_h^(1/m) = exp(ln(sin2_h) / (2m)), the exponent exact.
+                    let p = if fr.sin2_h.is_zero() {
+                        x(0.0)
+                    } else {
+                        fr.sin2_h.ln().mul(&inv_m).div(&x(2.0)).exp()
+                    };
+                    x(2.0).add(&inv_m).div(&x(2.0).mul(&pi())).mul(&p)
+                }
             };
             let rough = match ct.distribution {
                 Distribution::Beckmann(r) | Distribution::Ggx(r) => Some(r),
@@ -558,6 +568,20 @@ fn exact(raw: &[[f64; 4]; 3], t: Option<[f64; 3]>, m: &Material) -> Exact {
                 }
                 Geometry::SmithFast => {
                     smith_fast_g1(&q2(&fr.v, &fr.cos_o)).mul(&smith_fast_g1(&q2(&fr.l, &fr.cos_i)))
+                }
+                Geometry::SchlickSmith => {
+                    // k = m √(2/π) (Beckmann) or m/2 (GGX), exact.
+                    let m = x(rough.expect("validated").xy().0);
+                    let k = match ct.distribution {
+                        Distribution::Ggx(_) => m.div(&x(2.0)),
+                        _ => m.mul(&x(2.0).div(&pi()).sqrt()),
+                    };
+                    let g1 = |c: &X| c.div(&c.add(&k.mul(&x(1.0).sub(c))));
+                    g1(&fr.cos_o).mul(&g1(&fr.cos_i))
+                }
+                Geometry::Neubelt => {
+                    let p = fr.cos_i.mul(&fr.cos_o);
+                    p.div(&fr.cos_i.add(&fr.cos_o).sub(&p))
                 }
             };
             let f: [X; 3] = std::array::from_fn(|ch| fresnel(&fr.c, &ct.fresnel, ch));

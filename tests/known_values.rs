@@ -516,6 +516,58 @@ fn d_blinn() {
 }
 
 #[test]
+fn d_charlie() {
+    // (2 + 1/m)/(2π) sin_h^(1/m) with sin_h = sin 45° = 1/√2 on tilted. m = 1/2:
+    // 4/(2π) · 1/2 = 1/π; m = 1/4: 6/(2π) · 1/4 = 3/(4π); m = 1: 3/(2π) · 1/√2.
+    for (m, d) in [
+        (0.5, 1.0 / PI),
+        (0.25, 3.0 / (4.0 * PI)),
+        (1.0, 3.0 / (2.0 * sqrt(2.0) * PI)),
+    ] {
+        check(
+            &format!("charlie m = {m}"),
+            &format!("{CT_PLAIN}distribution = \"charlie\"\nroughness = {m}"),
+            &tilted(),
+            &microfacet(d, 1.0, [1.0; 3], 1.0),
+        );
+    }
+    // Valid under every convention: seed, K = 1/cos_o = 4/(√6 + √2) = √6 − √2.
+    check(
+        "charlie m = 0.5, seed",
+        &format!("{CT_PLAIN}distribution = \"charlie\"\nroughness = 0.5\nconvention = \"seed\""),
+        &tilted(),
+        &microfacet(1.0 / PI, 1.0, [1.0; 3], sqrt(6.0) - sqrt(2.0)),
+    );
+    // L at 60°, V = N: h at 30°, sin_h = 1/2: m = 1/2 gives 4/(2π) · 1/4 = 1/(2π); K = 1/2.
+    check(
+        "charlie m = 0.5, V = N",
+        &format!("{CT_PLAIN}distribution = \"charlie\"\nroughness = 0.5"),
+        &sixty_normal(),
+        &microfacet(1.0 / (2.0 * PI), 1.0, [1.0; 3], 0.5),
+    );
+    // With neubelt: D G K = (1/π) · 1/(2√6 − 1) (see g_neubelt), i.e. D times the
+    // visibility 1/(4(cos_i + cos_o − cos_i cos_o)) of FORMULAS.md §3.
+    check(
+        "charlie m = 0.5 + neubelt",
+        "model = \"cook-torrance\"\ndistribution = \"charlie\"\nroughness = 0.5\ngeometry = \"neubelt\"\nfresnel = \"none\"",
+        &tilted(),
+        &microfacet(1.0 / PI, 1.0 / (2.0 * sqrt(6.0) - 1.0), [1.0; 3], 1.0),
+    );
+    // h = n (L = V = N): sin_h = 0, so D = 0 (K = 1/4).
+    let s = Setup {
+        name: "L = V = N",
+        l: [0.0, 0.0, 1.0],
+        ..sixty_normal()
+    };
+    check(
+        "charlie at h = n",
+        &format!("{CT_PLAIN}distribution = \"charlie\"\nroughness = 0.5"),
+        &s,
+        &microfacet(0.0, 1.0, [1.0; 3], 0.25),
+    );
+}
+
+#[test]
 fn d_beckmann_anisotropic() {
     // exp(−((hx/mx)² + (hy/my)²)/hz²)/(π mx my hz⁴), [0.5, 1]: e^{−1.75}/(π/2 · 1/4)
     // = 8 e^{−1.75}/π. Swapped [1, 0.5]: 8 e^{−3.25}/π.
@@ -694,6 +746,73 @@ fn g_smith_anisotropic() {
         "model = \"cook-torrance\"\ndistribution = \"beckmann\"\nroughness = [0.5, 1.0]\nfresnel = \"none\"\ngeometry = \"smith\"",
         &tilted().with_t(tangent60()),
         &microfacet(d, g, [1.0; 3], 1.0),
+    );
+}
+
+#[test]
+fn g_schlick_smith() {
+    // G1(w) = cos_w/(cos_w + k(1 − cos_w)). With a = cos_i, b = cos_o on tilted, the product
+    // is ab/((k + (1−k)a)(k + (1−k)b)) = (1/4)/(k² + k(1−k)(a+b) + (1−k)²/4), as
+    // a + b = √6/2 and ab = 1/4.
+    let s6 = sqrt(6.0);
+    let g = |k: f64| 0.25 / (k * k + k * (1.0 - k) * s6 / 2.0 + (1.0 - k) * (1.0 - k) / 4.0);
+    // GGX m = 0.5: k = m/2 = 1/4, G1 = 4c/(3c + 1), G = 16ab/(9ab + 3(a+b) + 1) = 16/(13 + 6√6).
+    assert!((g(0.25) - 16.0 / (13.0 + 6.0 * s6)).abs() < 1e-15);
+    check(
+        "G schlick-smith, ggx",
+        &ggx_half("schlick-smith"),
+        &tilted(),
+        &microfacet(1.0 / (1.5625 * PI), 16.0 / (13.0 + 6.0 * s6), [1.0; 3], 1.0),
+    );
+    // Beckmann m = 0.5: k = m √(2/π) = 1/√(2π).
+    check(
+        "G schlick-smith, beckmann",
+        &beckmann_half("schlick-smith"),
+        &tilted(),
+        &microfacet(
+            16.0 * (-4.0f64).exp() / PI,
+            g(1.0 / sqrt(2.0 * PI)),
+            [1.0; 3],
+            1.0,
+        ),
+    );
+    // GGX m = 4: k = 2 > 1 (where cos(1 − k) + k would cancel): G1 = c/(2 − c), G =
+    // ab/((2 − a)(2 − b)) = (1/4)/(4 − 2(a+b) + ab) = 1/(17 − 4√6).
+    check_g(
+        "G schlick-smith, ggx, k = 2",
+        "model = \"cook-torrance\"\ndistribution = \"ggx\"\nroughness = 4.0\nfresnel = \"none\"\ngeometry = \"schlick-smith\"",
+        &tilted(),
+        1.0 / (17.0 - 4.0 * s6),
+    );
+    // L at 60°, V = N, GGX m = 1 (k = 1/2): G1(v) = 1, G1(l) = (1/2)/(1/2 + 1/4) = 2/3.
+    check_g(
+        "G schlick-smith, ggx, V = N",
+        "model = \"cook-torrance\"\ndistribution = \"ggx\"\nroughness = 1.0\nfresnel = \"none\"\ngeometry = \"schlick-smith\"",
+        &sixty_normal(),
+        2.0 / 3.0,
+    );
+}
+
+#[test]
+fn g_neubelt() {
+    // ab/(a + b − ab) with a + b = √6/2, ab = 1/4 on tilted: (1/4)/((2√6 − 1)/4) = 1/(2√6 − 1).
+    check(
+        "G neubelt, ggx",
+        &ggx_half("neubelt"),
+        &tilted(),
+        &microfacet(
+            1.0 / (1.5625 * PI),
+            1.0 / (2.0 * sqrt(6.0) - 1.0),
+            [1.0; 3],
+            1.0,
+        ),
+    );
+    // L at 60°, V = N: (1/2)/(1/2 + 1 − 1/2) = 1/2.
+    check_g(
+        "G neubelt, gaussian, V = N",
+        "model = \"cook-torrance\"\ndistribution = \"gaussian\"\nroughness = 0.5\nfresnel = \"none\"\ngeometry = \"neubelt\"",
+        &sixty_normal(),
+        0.5,
     );
 }
 

@@ -1,10 +1,12 @@
 //! Physics the CPU reference must obey (FORMULAS.md §2, §6, §7), checked numerically:
 //!
-//! (a) normalisation: `∫ D(h) cos_h dω_h = 1` for the normalised distributions, π/k for
-//!     the seed's and Cook & Torrance's Beckmann;
+//! (a) normalisation: `∫ D(h) cos_h dω_h = 1` for the normalised distributions (charlie
+//!     included), π/k for the seed's and Cook & Torrance's Beckmann;
 //! (b) Helmholtz reciprocity `f(l, v) = f(v, l)` for every reciprocal model, and its
 //!     failure for the two that are not (blinn-phong, the seed convention);
-//! (c) the white furnace: directional albedo `E(v) ≤ 1` for Cook–Torrance with F = 1;
+//! (c) the white furnace: directional albedo `E(v) ≤ 1` for Cook–Torrance with F = 1
+//!     (charlie + neubelt excepted: it exceeds 1 at grazing, as published, and a test pins
+//!     that), and `0 ≤ G ≤ 1` for schlick-smith and neubelt;
 //! (d) property tests (proptest): finite, non-negative outputs for random legal materials
 //!     and random finite directions of any length in 1e-20 … 1e20, and reciprocity.
 //!
@@ -19,7 +21,9 @@ use proptest::prelude::*;
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64;
 use std::f64::consts::PI;
-use vkbrdf::material::{parse_materials, Material};
+use vkbrdf::material::{
+    legality, parse_materials, Convention, DistributionKind, Geometry, Material,
+};
 use vkbrdf::reference::{evaluate, Evaluation, Status};
 use vkbrdf::vector::dot;
 
@@ -98,6 +102,20 @@ fn normalised_distributions_integrate_to_one() {
         let got = projected_d_integral(&material(&body), (w, w), 4);
         worst = worst.max(assert_integral(&format!("blinn, e = {e}"), &body, got, 1.0));
     }
+    // Charlie (sheen): its mass lies toward grazing h (sin_h^(1/m)), where the slopes are
+    // large; in u = ln(slope) the lobe is still one smooth bump, so scale 1 for every m.
+    for m in [0.01f64, 0.05, 0.2, 0.5, 1.0] {
+        let body = format!(
+            "model = \"cook-torrance\"\ndistribution = \"charlie\"\nroughness = {m}\ngeometry = \"none\"\nfresnel = \"none\""
+        );
+        let got = projected_d_integral(&material(&body), (1.0, 1.0), 4);
+        worst = worst.max(assert_integral(
+            &format!("charlie, m = {m}"),
+            &body,
+            got,
+            1.0,
+        ));
+    }
     println!("∫ D cos_h dω, isotropic: worst relative error {worst:.2e}");
 }
 
@@ -165,25 +183,27 @@ fn all_kinds() -> Vec<String> {
         "fresnel = \"schlick\"\nf0 = [0.04, 0.5, 0.95]",
         "fresnel = \"schlick\"\nior = 1.8\nextinction = 0.3",
     ];
-    let distributions = [
-        ("gaussian", "roughness = 0.3", false),
-        ("beckmann", "roughness = 0.35", true),
-        ("ggx", "roughness = 0.25", true),
-        ("blinn", "exponent = 50", false),
-    ];
-    for convention in ["seed", "cook-torrance-1982", "modern"] {
-        for (i, (d, param, has_lambda)) in distributions.iter().enumerate() {
-            let mut geometries = vec!["none", "cook-torrance"];
-            if *has_lambda {
-                geometries.extend(["smith", "smith-correlated"]);
-            }
-            if *d == "beckmann" {
-                geometries.push("smith-fast");
-            }
-            for (j, g) in geometries.iter().enumerate() {
+    let param = |d: DistributionKind| match d {
+        DistributionKind::Gaussian => "roughness = 0.3",
+        DistributionKind::Beckmann => "roughness = 0.35",
+        DistributionKind::Ggx => "roughness = 0.25",
+        DistributionKind::Blinn => "exponent = 50",
+        DistributionKind::Charlie => "roughness = 0.4",
+    };
+    for convention in Convention::ALL {
+        for (i, d) in DistributionKind::ALL.into_iter().enumerate() {
+            // Every geometry the contract allows with d (material::legality).
+            let geometries = Geometry::ALL
+                .into_iter()
+                .filter(|&g| legality(convention, d, false, g).is_ok());
+            for (j, g) in geometries.enumerate() {
                 let f = fresnels[(i + j) % fresnels.len()];
                 v.push(format!(
-                    "model = \"cook-torrance\"\nconvention = \"{convention}\"\ndistribution = \"{d}\"\n{param}\ngeometry = \"{g}\"\n{f}\ndiffuse = 0.3\ndiffuse_weight = 0.5\nspecular_weight = 0.7"
+                    "model = \"cook-torrance\"\nconvention = \"{}\"\ndistribution = \"{}\"\n{}\ngeometry = \"{}\"\n{f}\ndiffuse = 0.3\ndiffuse_weight = 0.5\nspecular_weight = 0.7",
+                    convention.toml_name(),
+                    d.toml_name(),
+                    param(d),
+                    g.toml_name()
                 ));
             }
         }
@@ -355,7 +375,13 @@ fn white_furnace() {
     let mut worst = (f64::MIN, String::new());
     let mut max_diff = 0.0f64;
     for d in ["beckmann", "ggx"] {
-        for g in ["smith", "smith-correlated", "cook-torrance"] {
+        for g in [
+            "smith",
+            "smith-correlated",
+            "cook-torrance",
+            "schlick-smith",
+            "neubelt",
+        ] {
             for m in [0.1f64, 0.3, 0.6, 1.0] {
                 let body = format!(
                     "model = \"cook-torrance\"\ndistribution = \"{d}\"\nroughness = {m}\ngeometry = \"{g}\"\nfresnel = \"none\""
@@ -371,8 +397,11 @@ fn white_furnace() {
                         "quadrature not converged: E = {e:.6} on the grid, {fine:.6} on one twice \
                          as fine; {ctx}"
                     );
+                    // Neubelt's G (made for the cloth D) darkens a sharp lobe at grazing view:
+                    // ≈ cos_o/2 at the mirror direction (E ≈ 0.1 at 80°, m = 0.1).
+                    let floor = if g == "neubelt" { 0.05 } else { 0.2 };
                     assert!(
-                        fine <= 1.0 + FURNACE_TOL && fine > 0.2,
+                        fine <= 1.0 + FURNACE_TOL && fine > floor,
                         "white furnace: E(v) = {fine:.6} (must be ≤ 1 + {FURNACE_TOL}); {ctx}"
                     );
                     if fine > worst.0 {
@@ -385,6 +414,30 @@ fn white_furnace() {
     println!(
         "white furnace: largest E(v) = {:.9} ({}); grid vs twice as fine: max |ΔE| = {max_diff:.2e}",
         worst.0, worst.1
+    );
+}
+
+/// FORMULAS.md §7: `charlie` + `neubelt` does not conserve energy, as published — E goes
+/// above 1 at grazing view for small m, about 1.24 at m = 0.1, cos_o = 0.01 — so
+/// `white_furnace` leaves the pair out; this pins the published excess instead.
+#[test]
+fn charlie_with_neubelt_exceeds_one_at_grazing_as_published() {
+    let body = "model = \"cook-torrance\"\ndistribution = \"charlie\"\nroughness = 0.1\ngeometry = \"neubelt\"\nfresnel = \"none\"";
+    let mat = material(body);
+    let mu: f64 = 0.01;
+    let v = [(1.0 - mu * mu).sqrt(), 0.0, mu];
+    let e = furnace_albedo(&mat, 1.0, v, 4);
+    let coarse = furnace_albedo(&mat, 1.0, v, 2);
+    println!(
+        "charlie + neubelt, m = 0.1, cos_o = 0.01: E = {e:.6} (grid half as fine: {coarse:.6})"
+    );
+    assert!(
+        (e - coarse).abs() <= FURNACE_TOL / 2.0,
+        "quadrature not converged: {coarse:.6} vs {e:.6}"
+    );
+    assert!(
+        (e - 1.24).abs() <= 0.01,
+        "E = {e:.6}, FORMULAS.md §7 says about 1.24\nmaterial:\n{body}"
     );
 }
 
@@ -478,6 +531,33 @@ proptest! {
         prop_assert!(
             a.status == b.status && d <= RECIPROCITY_TOL,
             "rel diff {d:.3e}\nL = {l:?}, V = {v:?}, N = {n:?}, T = {t:?}\nf(l, v) = {a:?}\nf(v, l) = {b:?}\nmaterial:\n{body}"
+        );
+    }
+
+    /// FORMULAS.md §3: `schlick-smith` and `neubelt` are in [0, 1], at every roughness the
+    /// parser accepts (k up to 8e3) and every direction, grazing included.
+    #[test]
+    fn schlick_smith_and_neubelt_are_in_zero_one(
+        ggx in any::<bool>(),
+        neubelt in any::<bool>(),
+        log_m in -7.0..4.0f64,
+        l in direction(),
+        v in direction(),
+        n in direction(),
+    ) {
+        let d = if ggx { "ggx" } else { "beckmann" };
+        let g = if neubelt { "neubelt" } else { "schlick-smith" };
+        let body = format!(
+            "model = \"cook-torrance\"\ndistribution = \"{d}\"\nroughness = {:?}\ngeometry = \"{g}\"\nfresnel = \"none\"",
+            10f64.powf(log_m)
+        );
+        let up = |w: [f64; 3]| if dot(w, n) < 0.0 { w.map(|x| -x) } else { w };
+        let e = evaluate(up(l), up(v), n, None, &material(&body));
+        prop_assume!(e.status == Status::Valid);
+        prop_assert!(
+            (0.0..=1.0).contains(&e.g),
+            "G = {:e} outside [0, 1]\nL = {l:?}, V = {v:?}, N = {n:?}\nmaterial:\n{body}",
+            e.g
         );
     }
 }

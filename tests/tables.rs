@@ -976,3 +976,51 @@ fn device_made_slice_directions_match_the_host() {
         assert!(err <= 3e-5, "{w}x{h}: {err:.1e}");
     }
 }
+
+/// The integrated tables need an importance sampler per distribution; those without one
+/// (charlie, gaussian, blinn) are refused with the reason, exit 2, nothing written. The new
+/// geometry terms need none of their own: a small schlick-smith / neubelt albedo table is
+/// made, and stays in [0, 1] (both conserve energy with GGX, tests/properties.rs).
+#[test]
+fn integrated_tables_refuse_a_distribution_without_a_sampler() {
+    let dir = tmp();
+    let out = dir.path().join("t.exr");
+    for kind in ["albedo", "dfg"] {
+        for d in ["charlie", "gaussian", "blinn"] {
+            let o = common::vkbrdf(&[
+                "table",
+                kind,
+                "--distribution",
+                d,
+                "--output",
+                common::path(&out),
+                "--backend",
+                "cpu",
+            ]);
+            let err = common::stderr(&o);
+            assert_eq!(o.status.code(), Some(2), "{kind} {d}: {err}");
+            assert!(
+                err.contains(&format!("--distribution {d}"))
+                    && err.contains("only ggx and beckmann have a sampler"),
+                "{kind} {d}: {err}"
+            );
+            assert!(!out.exists(), "{kind} {d} wrote its output");
+        }
+    }
+    for g in [Geometry::SchlickSmith, Geometry::Neubelt] {
+        let spec = Microfacet {
+            lobe: Lobe::of(vkbrdf::material::DistributionKind::Ggx).unwrap(),
+            geometry: g,
+        };
+        spec.material(0.5).unwrap();
+        let mut cpu = vkbrdf::reference::CpuReference::new();
+        let points = albedo::grid_points(Grid::new(4, 4).unwrap());
+        let e =
+            albedo::directional_albedo(&mut Runner::new(&mut cpu), &spec, &points, 1024).unwrap();
+        assert!(
+            e.iter().all(|&x| (0.0..=1.0 + 1e-3).contains(&x)),
+            "{}: {e:?}",
+            g.toml_name()
+        );
+    }
+}

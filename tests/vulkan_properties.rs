@@ -817,7 +817,8 @@ struct NormCase {
 }
 
 /// Random distributions: Beckmann / GGX isotropic (m 0.02 … 1.5, every convention),
-/// anisotropic (modern, m 0.05 … 1 per axis), and normalised Blinn (e 0 … 1e4).
+/// anisotropic (modern, m 0.05 … 1 per axis), normalised Blinn (e 0 … 1e4) and Charlie
+/// (m 0.01 … 1).
 fn norm_case() -> impl Strategy<Value = NormCase> {
     let log = |lo: f64, hi: f64| (lo.ln()..hi.ln()).prop_map(f64::exp);
     let isotropic = (
@@ -865,7 +866,21 @@ fn norm_case() -> impl Strategy<Value = NormCase> {
                 1.0,
             )
         });
-    prop_oneof![2 => isotropic, 1 => anisotropic, 1 => blinn].prop_map(
+    // Charlie (sheen), every convention (its normalisation does not depend on one); its
+    // mass lies toward grazing h, which the grid reaches at scale 1.
+    let charlie = (
+        prop::sample::select(vec!["seed", "cook-torrance-1982", "modern"]),
+        log(0.01, 1.0),
+    )
+        .prop_map(|(conv, m)| {
+            (
+                format!("distribution = \"charlie\"\nroughness = {m:?}\nconvention = \"{conv}\""),
+                (1.0, 1.0),
+                false,
+                1.0,
+            )
+        });
+    prop_oneof![2 => isotropic, 1 => anisotropic, 1 => blinn, 1 => charlie].prop_map(
         |(keys, scale, anisotropic, want)| NormCase {
             body: format!(
                 "model = \"cook-torrance\"\n{keys}\ngeometry = \"none\"\nfresnel = \"none\""

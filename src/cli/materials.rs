@@ -14,9 +14,10 @@ use vkbrdf::material::{self, Distribution, Fresnel, Material, Model, Roughness};
   preset = "aluminium"        # optional: start from a preset, then override keys
   model = "cook-torrance"     # lambert | phong | blinn-phong | rtr | ward | cook-torrance | merl
   convention = "modern"       # seed | cook-torrance-1982 | modern (default)
-  distribution = "ggx"        # gaussian | beckmann | ggx | blinn
+  distribution = "ggx"        # gaussian | beckmann | ggx | blinn | charlie (sheen, 0 < m <= 1)
   roughness = [0.1, 0.4]      # m > 0 (rms slope; GGX alpha), or [mx, my] (anisotropic)
   geometry = "smith-correlated" # none | cook-torrance | smith | smith-correlated | smith-fast
+                              # | schlick-smith | neubelt
   fresnel = "conductor"       # none | dielectric | conductor | schlick
   ior = [1.47, 0.958, 0.618]  # number or RGB
   extinction = [7.79, 6.69, 5.47] # RGB k (conductor)
@@ -35,8 +36,9 @@ use vkbrdf::material::{self, Distribution, Fresnel, Material, Model, Roughness};
   file = "gold.binary"        # a MERL binary, relative to this file
 
 Keys a model does not read are errors, as are negative colours or weights, roughness <= 0,
-smith* with gaussian/blinn, smith-fast with anything but beckmann, conductor without
-extinction, and anisotropic roughness outside ward and modern beckmann/ggx.
+smith* or schlick-smith with gaussian/blinn/charlie, smith-fast with anything but beckmann,
+schlick-smith with anisotropic roughness, charlie with m > 1, conductor without extinction,
+and anisotropic roughness outside ward and modern beckmann/ggx.
 
 Examples:
   vkbrdf materials                      # the presets
@@ -91,6 +93,7 @@ pub fn summary(m: &Material) -> String {
                 Distribution::Beckmann(r) => format!("beckmann {}", rough(r)),
                 Distribution::Ggx(r) => format!("ggx {}", rough(r)),
                 Distribution::Blinn { exponent } => format!("blinn e={exponent}"),
+                Distribution::Charlie { m } => format!("charlie m={m}"),
             };
             let f = match ct.fresnel {
                 Fresnel::None => "F=none".to_string(),

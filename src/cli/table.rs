@@ -5,7 +5,7 @@ use super::backend_choice::{self, BackendArgs};
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
-use vkbrdf::material::{Geometry, Material};
+use vkbrdf::material::{DistributionKind, Geometry, Material};
 use vkbrdf::table::albedo::{self, AlbedoJob, Lobe, Microfacet};
 use vkbrdf::table::dfg::{self, DfgJob};
 use vkbrdf::table::preview::{self, PreviewJob};
@@ -98,12 +98,12 @@ pub struct SliceArgs {
 /// The model options of the integrated tables.
 #[derive(clap::Args, Debug)]
 pub struct ModelArgs {
-    /// Microfacet distribution.
-    #[arg(long, value_enum, default_value = "ggx")]
-    distribution: DistributionArg,
+    /// Microfacet distribution (the integrators importance-sample ggx and beckmann only).
+    #[arg(long, default_value = "ggx", value_parser = distribution_parser())]
+    distribution: DistributionKind,
     /// Geometric attenuation (smith-fast needs beckmann).
-    #[arg(long, value_enum, default_value = "smith-correlated")]
-    geometry: GeometryArg,
+    #[arg(long, default_value = "smith-correlated", value_parser = geometry_parser())]
+    geometry: Geometry,
     /// Table size WxH (or N): x = μ = cos_o, y = α, at texel centres.
     #[arg(long, value_name = "WxH", default_value = "32x32", value_parser = parse_grid,
           allow_negative_numbers = true)]
@@ -220,28 +220,19 @@ pub struct PreviewArgs {
     backend: BackendArgs,
 }
 
-/// `--distribution`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-enum DistributionArg {
-    /// GGX / Trowbridge–Reitz.
-    Ggx,
-    /// Beckmann.
-    Beckmann,
+/// `--distribution`: every name a materials file accepts (the integrators then refuse
+/// those they cannot sample, with the reason).
+fn distribution_parser() -> impl clap::builder::TypedValueParser<Value = DistributionKind> {
+    use clap::builder::TypedValueParser;
+    clap::builder::PossibleValuesParser::new(DistributionKind::ALL.map(DistributionKind::toml_name))
+        .map(|s: String| DistributionKind::from_toml_name(&s).expect("one of the possible values"))
 }
 
-/// `--geometry`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-enum GeometryArg {
-    /// G = 1.
-    None,
-    /// Blinn's V-cavity.
-    CookTorrance,
-    /// Separable Smith.
-    Smith,
-    /// Height-correlated Smith.
-    SmithCorrelated,
-    /// Walter et al. 2007 fit (Beckmann only).
-    SmithFast,
+/// `--geometry`: every name a materials file accepts.
+fn geometry_parser() -> impl clap::builder::TypedValueParser<Value = Geometry> {
+    use clap::builder::TypedValueParser;
+    clap::builder::PossibleValuesParser::new(Geometry::ALL.map(Geometry::toml_name))
+        .map(|s: String| Geometry::from_toml_name(&s).expect("one of the possible values"))
 }
 
 fn parse_grid(s: &str) -> Result<Grid, String> {
@@ -249,20 +240,11 @@ fn parse_grid(s: &str) -> Result<Grid, String> {
 }
 
 impl ModelArgs {
-    fn spec(&self) -> Microfacet {
-        Microfacet {
-            lobe: match self.distribution {
-                DistributionArg::Ggx => Lobe::Ggx,
-                DistributionArg::Beckmann => Lobe::Beckmann,
-            },
-            geometry: match self.geometry {
-                GeometryArg::None => Geometry::None,
-                GeometryArg::CookTorrance => Geometry::CookTorrance,
-                GeometryArg::Smith => Geometry::Smith,
-                GeometryArg::SmithCorrelated => Geometry::SmithCorrelated,
-                GeometryArg::SmithFast => Geometry::SmithFast,
-            },
-        }
+    fn spec(&self) -> anyhow::Result<Microfacet> {
+        Ok(Microfacet {
+            lobe: Lobe::of(self.distribution)?,
+            geometry: self.geometry,
+        })
     }
 }
 
@@ -345,7 +327,7 @@ fn prepare(kind: &Kind) -> anyhow::Result<(Job, &BackendArgs, Vec<PathBuf>)> {
         }
         Kind::Albedo(a) => {
             let job = AlbedoJob {
-                spec: a.model.spec(),
+                spec: a.model.spec()?,
                 grid: a.model.size,
                 samples: a.model.samples,
                 half: a.model.half,
@@ -357,7 +339,7 @@ fn prepare(kind: &Kind) -> anyhow::Result<(Job, &BackendArgs, Vec<PathBuf>)> {
         }
         Kind::Dfg(a) => {
             let job = DfgJob {
-                spec: a.model.spec(),
+                spec: a.model.spec()?,
                 grid: a.model.size,
                 samples: a.model.samples,
                 half: a.model.half,

@@ -36,6 +36,8 @@ pub const DIST_BECKMANN: u32 = 2;
 pub const DIST_GGX: u32 = 3;
 /// `kind.y`: Blinn D.
 pub const DIST_BLINN: u32 = 4;
+/// `kind.y`: Charlie (sheen) D.
+pub const DIST_CHARLIE: u32 = 5;
 
 /// `kind.z`: G = 1.
 pub const GEOM_NONE: u32 = 0;
@@ -47,6 +49,10 @@ pub const GEOM_SMITH: u32 = 2;
 pub const GEOM_SMITH_CORRELATED: u32 = 3;
 /// `kind.z`: Walter's rational Smith–Beckmann fit.
 pub const GEOM_SMITH_FAST: u32 = 4;
+/// `kind.z`: Schlick–Smith (k in `lobe.w`).
+pub const GEOM_SCHLICK_SMITH: u32 = 5;
+/// `kind.z`: Neubelt & Pettineo's cloth G.
+pub const GEOM_NEUBELT: u32 = 6;
 
 /// `kind.w & 0xff`: F = 1.
 pub const FRESNEL_NONE: u32 = 0;
@@ -102,11 +108,14 @@ pub const SHADER_CODES: &[(&str, u32)] = &[
     ("DIST_BECKMANN", DIST_BECKMANN),
     ("DIST_GGX", DIST_GGX),
     ("DIST_BLINN", DIST_BLINN),
+    ("DIST_CHARLIE", DIST_CHARLIE),
     ("GEOM_NONE", GEOM_NONE),
     ("GEOM_COOK_TORRANCE", GEOM_COOK_TORRANCE),
     ("GEOM_SMITH", GEOM_SMITH),
     ("GEOM_SMITH_CORRELATED", GEOM_SMITH_CORRELATED),
     ("GEOM_SMITH_FAST", GEOM_SMITH_FAST),
+    ("GEOM_SCHLICK_SMITH", GEOM_SCHLICK_SMITH),
+    ("GEOM_NEUBELT", GEOM_NEUBELT),
     ("FRESNEL_NONE", FRESNEL_NONE),
     ("FRESNEL_DIELECTRIC", FRESNEL_DIELECTRIC),
     ("FRESNEL_CONDUCTOR", FRESNEL_CONDUCTOR),
@@ -320,6 +329,12 @@ pub fn gpu_material(m: &Material) -> GpuMaterial {
                     g.lobe = exponent_lobe(exponent);
                     g.scale = scale((exponent + 2.0) / (2.0 * PI));
                 }
+                Distribution::Charlie { m } => {
+                    // lobe.x: the exponent 1/m; scale.x: (2 + 1/m)/(2π), both in f64.
+                    g.kind[1] = DIST_CHARLIE;
+                    g.lobe = exponent_lobe(1.0 / m);
+                    g.scale = scale((2.0 + 1.0 / m) / (2.0 * PI));
+                }
             }
             g.kind[2] = match ct.geometry {
                 Geometry::None => GEOM_NONE,
@@ -327,6 +342,18 @@ pub fn gpu_material(m: &Material) -> GpuMaterial {
                 Geometry::Smith => GEOM_SMITH,
                 Geometry::SmithCorrelated => GEOM_SMITH_CORRELATED,
                 Geometry::SmithFast => GEOM_SMITH_FAST,
+                Geometry::SchlickSmith => {
+                    // Isotropic only (validated), so lobe.w (my², read by anisotropic
+                    // materials only) is free for k.
+                    let (ggx, r) = match ct.distribution {
+                        Distribution::Ggx(r) => (true, r),
+                        Distribution::Beckmann(r) => (false, r),
+                        _ => unreachable!("schlick-smith needs beckmann/ggx (validated)"),
+                    };
+                    g.lobe[3] = crate::reference::geometry::schlick_smith_k(ggx, r.xy().0) as f32;
+                    GEOM_SCHLICK_SMITH
+                }
+                Geometry::Neubelt => GEOM_NEUBELT,
             };
             let fresnel = match ct.fresnel {
                 Fresnel::None => FRESNEL_NONE,

@@ -135,6 +135,13 @@ pub enum Convention {
 }
 
 impl Convention {
+    /// Every convention.
+    pub const ALL: [Convention; 3] = [
+        Convention::Seed,
+        Convention::CookTorrance1982,
+        Convention::Modern,
+    ];
+
     /// The spelling in a materials file (`convention = "..."`).
     pub fn toml_name(self) -> &'static str {
         match self {
@@ -162,6 +169,162 @@ pub enum Distribution {
         /// Exponent `e ≥ 0`.
         exponent: f64,
     },
+    /// Estevez & Kulla 2017 sheen ("cloth"), `(2 + 1/m)/(2π) sin_h^(1/m)` (isotropic only).
+    Charlie {
+        /// `0 < m ≤ 1`: the paper's α = r², not an rms slope.
+        m: f64,
+    },
+}
+
+/// A distribution's name without its parameter (FORMULAS.md §2): what the legality rules
+/// read, and what the check matrix and the test strategies enumerate.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum DistributionKind {
+    /// `gaussian`.
+    Gaussian,
+    /// `beckmann`.
+    Beckmann,
+    /// `ggx`.
+    Ggx,
+    /// `blinn`.
+    Blinn,
+    /// `charlie`.
+    Charlie,
+}
+
+impl DistributionKind {
+    /// Every distribution, in the order the materials help lists them.
+    pub const ALL: [DistributionKind; 5] = [
+        DistributionKind::Gaussian,
+        DistributionKind::Beckmann,
+        DistributionKind::Ggx,
+        DistributionKind::Blinn,
+        DistributionKind::Charlie,
+    ];
+
+    /// The spelling in a materials file (`distribution = "..."`).
+    pub fn toml_name(self) -> &'static str {
+        match self {
+            DistributionKind::Gaussian => "gaussian",
+            DistributionKind::Beckmann => "beckmann",
+            DistributionKind::Ggx => "ggx",
+            DistributionKind::Blinn => "blinn",
+            DistributionKind::Charlie => "charlie",
+        }
+    }
+
+    /// The distribution a materials file names, if any.
+    pub fn from_toml_name(name: &str) -> Option<DistributionKind> {
+        DistributionKind::ALL
+            .into_iter()
+            .find(|d| d.toml_name() == name)
+    }
+
+    /// Whether its parameter is `exponent` (blinn) rather than `roughness`.
+    pub fn takes_exponent(self) -> bool {
+        self == DistributionKind::Blinn
+    }
+
+    /// The distribution of this kind with roughness `r`, when it takes one (not `blinn`) and
+    /// `r` is legal for it (see [`legality`]: gaussian and charlie are isotropic only).
+    pub fn with_roughness(self, r: Roughness) -> Option<Distribution> {
+        match (self, r) {
+            (DistributionKind::Beckmann, r) => Some(Distribution::Beckmann(r)),
+            (DistributionKind::Ggx, r) => Some(Distribution::Ggx(r)),
+            (DistributionKind::Gaussian, Roughness::Isotropic(m)) => {
+                Some(Distribution::Gaussian { m })
+            }
+            (DistributionKind::Charlie, Roughness::Isotropic(m)) => {
+                Some(Distribution::Charlie { m })
+            }
+            _ => None,
+        }
+    }
+
+    /// The largest roughness the formula is defined for (FORMULAS.md §2): `charlie`'s m is
+    /// the paper's α = r² ≤ 1; the others are bounded only by the parser's general range.
+    pub fn max_roughness(self) -> Option<f64> {
+        (self == DistributionKind::Charlie).then_some(1.0)
+    }
+}
+
+impl Distribution {
+    /// The distribution's name without its parameter.
+    pub fn kind(&self) -> DistributionKind {
+        match self {
+            Distribution::Gaussian { .. } => DistributionKind::Gaussian,
+            Distribution::Beckmann(_) => DistributionKind::Beckmann,
+            Distribution::Ggx(_) => DistributionKind::Ggx,
+            Distribution::Blinn { .. } => DistributionKind::Blinn,
+            Distribution::Charlie { .. } => DistributionKind::Charlie,
+        }
+    }
+}
+
+/// A combination the contract does not define: the key to blame and why.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Illegal {
+    /// The materials-file key the message is about (`roughness` or `geometry`).
+    pub key: &'static str,
+    /// What is wrong and what to use instead.
+    pub message: String,
+}
+
+/// The legality rules of FORMULAS.md §2–§3, written once: whether `distribution` with
+/// `geometry` (and anisotropic roughness, when `anisotropic`) in `convention` is a
+/// material the contract defines. The parser, the check matrix (`check::combinations`) and
+/// the test strategies all ask this function, so a new term adds its rule here only.
+pub fn legality(
+    convention: Convention,
+    distribution: DistributionKind,
+    anisotropic: bool,
+    geometry: Geometry,
+) -> Result<(), Illegal> {
+    use DistributionKind as D;
+    let d = distribution.toml_name();
+    let g = geometry.toml_name();
+    let illegal = |key, message: String| Err(Illegal { key, message });
+    if anisotropic {
+        match distribution {
+            D::Beckmann | D::Ggx if convention != Convention::Modern => {
+                return illegal(
+                    "roughness",
+                    format!("anisotropic `{d}` exists in the `modern` convention only"),
+                )
+            }
+            D::Beckmann | D::Ggx => {}
+            D::Blinn => {
+                return illegal(
+                    "roughness",
+                    "distribution `blinn` takes an `exponent`, not a roughness".into(),
+                )
+            }
+            D::Gaussian | D::Charlie => {
+                return illegal(
+                    "roughness",
+                    format!("distribution `{d}` is isotropic only; give one number"),
+                )
+            }
+        }
+    }
+    let smith = matches!(
+        geometry,
+        Geometry::Smith | Geometry::SmithCorrelated | Geometry::SmithFast
+    );
+    let without_lambda = matches!(distribution, D::Gaussian | D::Blinn | D::Charlie);
+    if smith && without_lambda {
+        return illegal("geometry", format!("Smith G needs a Λ for the distribution, and `{d}` has none; use `cook-torrance`, `neubelt` or `none`, or distribution `beckmann`/`ggx`"));
+    }
+    if geometry == Geometry::SchlickSmith && without_lambda {
+        return illegal("geometry", format!("`schlick-smith` takes its k from a Beckmann or GGX roughness, and `{d}` has none; use `cook-torrance`, `neubelt` or `none`, or distribution `beckmann`/`ggx`"));
+    }
+    if geometry == Geometry::SmithFast && distribution != D::Beckmann {
+        return illegal("geometry", "`smith-fast` is a fit of Smith–Beckmann (Beckmann only); use `smith` or `smith-correlated` with ggx".into());
+    }
+    if geometry == Geometry::SchlickSmith && anisotropic {
+        return illegal("geometry", format!("`{g}` is defined for isotropic roughness only; give one roughness, or use `smith` or `smith-correlated`"));
+    }
+    Ok(())
 }
 
 /// Geometric attenuation G (FORMULAS.md §3).
@@ -177,6 +340,11 @@ pub enum Geometry {
     SmithCorrelated,
     /// Walter et al. 2007 rational fit of Smith–Beckmann (Beckmann only).
     SmithFast,
+    /// Schlick 1994 / Karis 2013: separable `G1 = cos/(cos + k(1 − cos))`, k from the
+    /// Beckmann or GGX roughness (isotropic only).
+    SchlickSmith,
+    /// Neubelt & Pettineo 2013 (cloth): `cos_i cos_o/(cos_i + cos_o − cos_i cos_o)`.
+    Neubelt,
 }
 
 impl Geometry {
@@ -188,7 +356,25 @@ impl Geometry {
             Geometry::Smith => "smith",
             Geometry::SmithCorrelated => "smith-correlated",
             Geometry::SmithFast => "smith-fast",
+            Geometry::SchlickSmith => "schlick-smith",
+            Geometry::Neubelt => "neubelt",
         }
+    }
+
+    /// Every geometry term, in the order the materials help lists them.
+    pub const ALL: [Geometry; 7] = [
+        Geometry::None,
+        Geometry::CookTorrance,
+        Geometry::Smith,
+        Geometry::SmithCorrelated,
+        Geometry::SmithFast,
+        Geometry::SchlickSmith,
+        Geometry::Neubelt,
+    ];
+
+    /// The geometry term a materials file names, if any.
+    pub fn from_toml_name(name: &str) -> Option<Geometry> {
+        Geometry::ALL.into_iter().find(|g| g.toml_name() == name)
     }
 }
 

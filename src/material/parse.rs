@@ -527,71 +527,34 @@ impl Fields<'_, '_> {
             _ => Convention::Modern,
         };
         let why = "a cook-torrance material states its distribution, geometry and fresnel";
-        let dist = self.required_string(
-            "distribution",
-            &["gaussian", "beckmann", "ggx", "blinn"],
-            why,
-        )?;
-        let distribution = match dist.as_str() {
-            "gaussian" => match self.roughness("distribution `gaussian`")? {
-                Roughness::Isotropic(m) => Distribution::Gaussian { m },
-                Roughness::Anisotropic(..) => {
-                    return Err(self.err(
-                        "roughness",
-                        "distribution `gaussian` is isotropic only; give one number".into(),
-                    ))
-                }
-            },
-            "blinn" => Distribution::Blinn {
+        let names = DistributionKind::ALL.map(DistributionKind::toml_name);
+        let dist = self.required_string("distribution", &names, why)?;
+        let kind = DistributionKind::from_toml_name(&dist).expect("one of the names offered");
+        let distribution = if kind.takes_exponent() {
+            Distribution::Blinn {
                 exponent: self.exponent("distribution `blinn`")?,
-            },
-            d => {
-                let r = self.roughness(&format!("distribution `{d}`"))?;
-                if r.is_anisotropic() && convention != Convention::Modern {
-                    return Err(self.err(
-                        "roughness",
-                        format!("anisotropic `{d}` exists in the `modern` convention only"),
-                    ));
-                }
-                if d == "beckmann" {
-                    Distribution::Beckmann(r)
-                } else {
-                    Distribution::Ggx(r)
+            }
+        } else {
+            let r = self.roughness(&format!("distribution `{dist}`"))?;
+            // The distribution's own rules first (FORMULAS.md §2), whatever the geometry.
+            self.legal(convention, kind, r.is_anisotropic(), Geometry::None)?;
+            if let (Some(max), Roughness::Isotropic(m)) = (kind.max_roughness(), r) {
+                if m > max {
+                    return Err(self.err("roughness", format!("{} is out of range: distribution `{dist}` needs 0 < m ≤ {max} (m is Estevez & Kulla's α = r², not an rms slope)", shown(m))));
                 }
             }
+            kind.with_roughness(r)
+                .expect("legality refused the roughness this kind does not take")
         };
-        let geometry = match self
-            .required_string(
-                "geometry",
-                &[
-                    "none",
-                    "cook-torrance",
-                    "smith",
-                    "smith-correlated",
-                    "smith-fast",
-                ],
-                why,
-            )?
-            .as_str()
-        {
-            "none" => Geometry::None,
-            "cook-torrance" => Geometry::CookTorrance,
-            "smith" => Geometry::Smith,
-            "smith-correlated" => Geometry::SmithCorrelated,
-            _ => Geometry::SmithFast,
-        };
-        match (geometry, &distribution) {
-            (
-                Geometry::Smith | Geometry::SmithCorrelated | Geometry::SmithFast,
-                Distribution::Gaussian { .. } | Distribution::Blinn { .. },
-            ) => {
-                return Err(self.err("geometry", format!("Smith G needs a Λ for the distribution, and `{dist}` has none; use `cook-torrance` or `none`, or distribution `beckmann`/`ggx`")));
-            }
-            (Geometry::SmithFast, Distribution::Ggx(_)) => {
-                return Err(self.err("geometry", "`smith-fast` is a fit of Smith–Beckmann (Beckmann only); use `smith` or `smith-correlated` with ggx".into()));
-            }
-            _ => {}
-        }
+        let names = Geometry::ALL.map(Geometry::toml_name);
+        let geometry = Geometry::from_toml_name(&self.required_string("geometry", &names, why)?)
+            .expect("one of the names offered");
+        self.legal(
+            convention,
+            kind,
+            distribution_is_anisotropic(&distribution),
+            geometry,
+        )?;
         let fresnel = self.fresnel()?;
         let specular_weight = self.scalar("specular_weight", colour_range)?.unwrap_or(1.0);
         let diffuse_weight = self.scalar("diffuse_weight", colour_range)?.unwrap_or(0.0);
@@ -603,6 +566,18 @@ impl Fields<'_, '_> {
             specular_weight,
             diffuse_weight,
         })
+    }
+
+    /// [`super::legality`], its message on the key it names.
+    fn legal(
+        &self,
+        convention: Convention,
+        kind: DistributionKind,
+        anisotropic: bool,
+        geometry: Geometry,
+    ) -> Result<(), MaterialError> {
+        super::legality(convention, kind, anisotropic, geometry)
+            .map_err(|e| self.err(e.key, e.message))
     }
 
     fn fresnel(&mut self) -> Result<Fresnel, MaterialError> {
@@ -667,6 +642,10 @@ impl Fields<'_, '_> {
         }
         Ok(())
     }
+}
+
+fn distribution_is_anisotropic(d: &Distribution) -> bool {
+    matches!(d, Distribution::Beckmann(r) | Distribution::Ggx(r) if r.is_anisotropic())
 }
 
 /// A number as an error message shows it: 1e40, not forty-one digits.

@@ -67,6 +67,18 @@ pub fn blinn_d(cos_h: f64, sin2_h: f64, exponent: f64) -> f64 {
     (exponent + 2.0) / (2.0 * PI) * cos_pow(cos_h, sin2_h, exponent)
 }
 
+/// Estevez & Kulla 2017, "Production Friendly Microfacet Sheen BRDF" (the "Charlie"
+/// sheen): `(2 + 1/m)/(2π) sin_h^(1/m)`, `0 < m ≤ 1` (the paper's α = r²). Normalised:
+/// `∫ D cos_h dω = 1`. 0 at `sin_h = 0`.
+///
+/// `sin_h^(1/m)` is [`cos_pow`] of the complementary angle (`sin_h` with `1 − sin_h² =
+/// cos_h²`): where `h` is near grazing, `ln sin_h` comes from `cos_h²` (`ln_1p`), not from
+/// `sin_h` rounded next to 1, whose error the exponent 1/m (up to 1e7) would multiply.
+pub fn charlie_d(cos_h: f64, sin2_h: f64, m: f64) -> f64 {
+    let e = 1.0 / m;
+    (2.0 + e) / (2.0 * PI) * cos_pow(sin2_h.sqrt(), cos_h * cos_h, e)
+}
+
 /// `cos^e` of an angle given both `cos > 0` and `sin² = 1 − cos²` (each accurate), as
 /// `exp(e ln cos)`.
 ///

@@ -63,3 +63,28 @@ pub fn smith_fast_g1(a2_inv: f64) -> f64 {
         1.0
     }
 }
+
+/// Schlick 1994, "An Inexpensive BRDF Model for Physically-based Rendering", with the k of
+/// Karis 2013, "Real Shading in Unreal Engine 4": `G1(w) = cos_w/(cos_w + k (1 − cos_w))`,
+/// given `one_minus_cos_w = 1 − cos_w` formed where `cos_w` is known best (k up to 8e3
+/// multiplies its error). Not `cos_w (1 − k) + k`, which cancels once k > 1.
+pub fn schlick_smith_g1(cos_w: f64, one_minus_cos_w: f64, k: f64) -> f64 {
+    cos_w / (cos_w + k * one_minus_cos_w)
+}
+
+/// The k of [`schlick_smith_g1`] (Karis 2013): `m √(2/π)` with Beckmann, `m/2` with GGX
+/// (the only distributions it is legal with, FORMULAS.md §3).
+pub fn schlick_smith_k(ggx: bool, m: f64) -> f64 {
+    if ggx {
+        m / 2.0
+    } else {
+        m * (2.0 / PI).sqrt()
+    }
+}
+
+/// Neubelt & Pettineo 2013, "Crafting a Next-Gen Material Pipeline for The Order: 1886"
+/// (cloth): `cos_i cos_o/(cos_i + cos_o − cos_i cos_o)`, the denominator written
+/// `cos_i + cos_o (1 − cos_i)` (a sum of non-negative terms: no cancellation near 1).
+pub fn neubelt_g(cos_i: f64, cos_o: f64) -> f64 {
+    cos_i * cos_o / (cos_i + cos_o * (1.0 - cos_i))
+}

@@ -168,6 +168,7 @@ pub fn microfacet_d(fr: &Frame, ct: &CookTorrance) -> f64 {
             my,
         ),
         Distribution::Blinn { exponent } => distribution::blinn_d(fr.cos_h, fr.sin2_h, exponent),
+        Distribution::Charlie { m } => distribution::charlie_d(fr.cos_h, fr.sin2_h, m),
     }
 }
 
@@ -213,6 +214,21 @@ pub fn microfacet_g(fr: &Frame, ct: &CookTorrance) -> f64 {
         Geometry::SmithFast => {
             geometry::smith_fast_g1(x(fr.v, fr.cos_o)) * geometry::smith_fast_g1(x(fr.l, fr.cos_i))
         }
+        Geometry::SchlickSmith => {
+            let m = roughness
+                .expect("schlick-smith needs beckmann/ggx (validated)")
+                .xy()
+                .0;
+            // 1 − cos_w = |n × w|²/(1 + cos_w): the subtraction carries cos_w's absolute
+            // error (~1e-16), which k (up to 8e3) multiplies into G near normal incidence.
+            let one_minus = |w, cos_w: f64| {
+                super::frame::length_squared(super::frame::cross(fr.n, w)) / (1.0 + cos_w)
+            };
+            let k = geometry::schlick_smith_k(matches!(ct.distribution, Distribution::Ggx(_)), m);
+            geometry::schlick_smith_g1(fr.cos_o, one_minus(fr.v, fr.cos_o), k)
+                * geometry::schlick_smith_g1(fr.cos_i, one_minus(fr.l, fr.cos_i), k)
+        }
+        Geometry::Neubelt => geometry::neubelt_g(fr.cos_i, fr.cos_o),
     }
 }
 

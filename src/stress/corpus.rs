@@ -4,7 +4,9 @@
 //! tangents parallel to N.
 
 use crate::batch::{Batch, COLUMNS_TANGENT};
-use crate::material::{parse_materials, Material};
+use crate::material::{
+    legality, parse_materials, Convention, DistributionKind, Geometry, Material,
+};
 use crate::sample::unit_vector;
 use crate::vector::{axpy, dot, normalize_direct};
 use rand::{Rng, SeedableRng};
@@ -144,54 +146,59 @@ pub fn materials() -> Vec<Material> {
             );
         }
     };
-    for r in ["1e-7", "0.0001", "0.01", "0.5", "10", "1e4"] {
-        let p = format!("roughness = {r}");
-        ct(
-            "beckmann",
-            &p,
-            &[
-                "none",
-                "cook-torrance",
-                "smith",
-                "smith-correlated",
-                "smith-fast",
-            ],
-            false,
-        );
-        ct(
-            "ggx",
-            &p,
-            &["none", "cook-torrance", "smith", "smith-correlated"],
-            false,
-        );
-        ct("gaussian", &p, &["none", "cook-torrance"], false);
+    // Every geometry term the contract allows with each distribution (material::legality),
+    // at every roughness bound the distribution accepts.
+    let legal = |d: DistributionKind, aniso: bool| -> Vec<&'static str> {
+        Geometry::ALL
+            .into_iter()
+            .filter(|&g| legality(Convention::Modern, d, aniso, g).is_ok())
+            .map(Geometry::toml_name)
+            .collect()
+    };
+    let rough = DistributionKind::ALL
+        .into_iter()
+        .filter(|d| !d.takes_exponent());
+    for d in rough.clone() {
+        let max = d.max_roughness().unwrap_or(f64::INFINITY);
+        let mut rs: Vec<String> = ["1e-7", "0.0001", "0.01", "0.5", "10", "1e4"]
+            .into_iter()
+            .filter(|r| r.parse::<f64>().is_ok_and(|r| r <= max))
+            .map(String::from)
+            .collect();
+        if max.is_finite() {
+            rs.push(format!("{max:?}"));
+        }
+        for r in rs {
+            ct(
+                d.toml_name(),
+                &format!("roughness = {r}"),
+                &legal(d, false),
+                false,
+            );
+        }
     }
-    for r in [
-        "[0.0001, 1.0]",
-        "[1.0, 0.0001]",
-        "[0.1, 0.4]",
-        "[1e-7, 1e4]",
-        "[1e4, 1e-7]",
-    ] {
-        let p = format!("roughness = {r}");
-        ct(
-            "beckmann",
-            &p,
-            &["cook-torrance", "smith", "smith-correlated", "smith-fast"],
-            true,
-        );
-        ct(
-            "ggx",
-            &p,
-            &["cook-torrance", "smith", "smith-correlated"],
-            true,
-        );
+    for d in rough.filter(|&d| legality(Convention::Modern, d, true, Geometry::None).is_ok()) {
+        for r in [
+            "[0.0001, 1.0]",
+            "[1.0, 0.0001]",
+            "[0.1, 0.4]",
+            "[1e-7, 1e4]",
+            "[1e4, 1e-7]",
+        ] {
+            ct(
+                d.toml_name(),
+                &format!("roughness = {r}"),
+                &legal(d, true),
+                true,
+            );
+        }
     }
     for e in ["0", "50", "10000", "1e18"] {
+        let d = DistributionKind::Blinn;
         ct(
-            "blinn",
+            d.toml_name(),
             &format!("exponent = {e}"),
-            &["none", "cook-torrance"],
+            &legal(d, false),
             false,
         );
     }

@@ -66,7 +66,9 @@ pub fn regime(m: &Material, case: Case) -> Regime {
         }
         Model::Ward { roughness } => extreme_roughness(*roughness),
         Model::CookTorrance(ct) => match ct.distribution {
-            Distribution::Gaussian { m } => extreme_roughness(Roughness::Isotropic(m)),
+            Distribution::Gaussian { m } | Distribution::Charlie { m } => {
+                extreme_roughness(Roughness::Isotropic(m))
+            }
             Distribution::Beckmann(r) | Distribution::Ggx(r) => extreme_roughness(r),
             Distribution::Blinn { exponent } => exponent >= 1000.0,
         },

@@ -18,7 +18,7 @@ use super::{as_f32, push_row, texel_centre, Grid, Runner, NORMAL};
 use crate::batch::COLUMNS_PLAIN;
 use crate::directions::{ImportanceJob, ImportancePoint};
 use crate::error::{Error, Result};
-use crate::material::{Geometry, Material};
+use crate::material::{DistributionKind, Geometry, Material};
 use crate::reference::distribution::{beckmann_d, ggx_d};
 use crate::reference::geometry::ggx_lambda;
 use crate::vector::{cross, dot, normalize_reciprocal};
@@ -61,6 +61,22 @@ pub enum Lobe {
 }
 
 impl Lobe {
+    /// The sampler of distribution `d`, or why the integrators cannot take it: each needs
+    /// an importance sampler of its own, and only GGX and Beckmann have one.
+    pub fn of(d: DistributionKind) -> Result<Lobe> {
+        match d {
+            DistributionKind::Ggx => Ok(Lobe::Ggx),
+            DistributionKind::Beckmann => Ok(Lobe::Beckmann),
+            other => Err(Error::Table(format!(
+                "--distribution {}: the albedo and DFG integrators importance-sample the \
+                 distribution, and only ggx and beckmann have a sampler; use one of those \
+                 (or evaluate `{}` through `vkbrdf eval` / `table slice`)",
+                other.toml_name(),
+                other.toml_name()
+            ))),
+        }
+    }
+
     /// The materials-file name (`ggx`, `beckmann`).
     pub fn name(self) -> &'static str {
         match self {
@@ -72,13 +88,7 @@ impl Lobe {
 
 /// The name of a geometry term as a materials file spells it.
 pub fn geometry_name(g: Geometry) -> &'static str {
-    match g {
-        Geometry::None => "none",
-        Geometry::CookTorrance => "cook-torrance",
-        Geometry::Smith => "smith",
-        Geometry::SmithCorrelated => "smith-correlated",
-        Geometry::SmithFast => "smith-fast",
-    }
+    g.toml_name()
 }
 
 /// The model an integrated table integrates: modern Cook–Torrance, F = 1, white, no diffuse.

@@ -2,15 +2,36 @@
 //! `tests/vulkan_properties.rs` (every backend).
 
 use proptest::prelude::*;
+use vkbrdf::material::{legality, Convention, DistributionKind, Geometry};
+
+/// The first legal one of: the combination as drawn, in the modern convention, isotropic,
+/// with G = cook-torrance (legal with every isotropic distribution).
+fn steer(
+    conv: Convention,
+    kind: DistributionKind,
+    aniso: bool,
+    g: Geometry,
+) -> (Convention, bool, Geometry) {
+    [
+        (conv, aniso, g),
+        (Convention::Modern, aniso, g),
+        (conv, false, g),
+        (conv, false, Geometry::CookTorrance),
+    ]
+    .into_iter()
+    .find(|&(c, a, g)| legality(c, kind, a, g).is_ok())
+    .expect("cook-torrance is legal with every isotropic distribution")
+}
 
 /// Random legal material as TOML: every model, distribution, G, F and convention, with
-/// illegal combinations steered to legal ones (Smith needs Beckmann/GGX, smith-fast needs
-/// Beckmann, anisotropy needs the modern convention).
+/// illegal combinations steered to legal ones by `material::legality` (the one statement
+/// of the rules): first the modern convention, then isotropic roughness, then G =
+/// cook-torrance, until the combination is legal.
 pub fn material_toml() -> impl Strategy<Value = String> {
     let choice = (
         0usize..6,
-        0usize..4,
-        0usize..5,
+        0usize..DistributionKind::ALL.len(),
+        0usize..Geometry::ALL.len(),
         0usize..4,
         0usize..3,
         any::<bool>(),
@@ -40,21 +61,22 @@ pub fn material_toml() -> impl Strategy<Value = String> {
                 3 => format!("model = \"rtr\"\nexponent = {e:?}"),
                 4 => format!("model = \"ward\"\n{r}"),
                 _ => {
-                    let d = ["gaussian", "beckmann", "ggx", "blinn"][dist];
-                    let param = match d {
-                        "gaussian" => format!("roughness = {mx:?}"),
-                        "blinn" => format!("exponent = {e:?}"),
-                        _ => r,
+                    let kind = DistributionKind::ALL[dist];
+                    let (conv, aniso, g) = steer(
+                        Convention::ALL[conv],
+                        kind,
+                        aniso && !kind.takes_exponent(),
+                        Geometry::ALL[geom],
+                    );
+                    let max = kind.max_roughness().unwrap_or(f64::INFINITY);
+                    let param = if kind.takes_exponent() {
+                        format!("exponent = {e:?}")
+                    } else if aniso {
+                        r
+                    } else {
+                        format!("roughness = {:?}", mx.min(max))
                     };
-                    let aniso = param.contains('[');
-                    let conv = if aniso { "modern" } else { ["seed", "cook-torrance-1982", "modern"][conv] };
-                    let mut g = ["none", "cook-torrance", "smith", "smith-correlated", "smith-fast"][geom];
-                    if matches!(d, "gaussian" | "blinn") && g.starts_with("smith") {
-                        g = "cook-torrance";
-                    }
-                    if d == "ggx" && g == "smith-fast" {
-                        g = "smith";
-                    }
+                    let (d, conv, g) = (kind.toml_name(), conv.toml_name(), g.toml_name());
                     let f = match fres {
                         0 => "fresnel = \"none\"".to_string(),
                         1 => format!("fresnel = \"dielectric\"\nior = {ior:?}"),
