@@ -117,6 +117,22 @@ mod tests {
     use super::*;
 
     #[test]
+    fn double_double_is_exact_where_it_must_be() {
+        // (1 + 2^-30)^2 = 1 + 2^-29 + 2^-60: the 2^-60 is below f64's precision at 1.
+        let a = 1.0 + 2f64.powi(-30);
+        let p = Dd::two_prod(a, a);
+        assert_eq!((p.hi, p.lo), (1.0 + 2f64.powi(-29), 2f64.powi(-60)));
+        let s = Dd::two_sum(1.0, 2f64.powi(-80));
+        assert_eq!((s.hi, s.lo), (1.0, 2f64.powi(-80)));
+        // 1/3 · 3 = 1 to double-double precision; √2 · √2 = 2 likewise.
+        let third = Dd::from(1.0).div(Dd::from(3.0));
+        let one = third.mul(Dd::from(3.0)).sub(Dd::from(1.0));
+        assert!(one.value().abs() < 1e-31, "{one:?}");
+        let r = Dd::from(2.0).sqrt();
+        assert!(r.mul(r).sub(Dd::from(2.0)).value().abs() < 1e-31);
+    }
+
+    #[test]
     fn products_of_the_axes() {
         let (x, y, z) = ([1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]);
         assert_eq!(cross(x, y), z);
@@ -158,5 +174,88 @@ mod tests {
         let (u, v) = ([1.0, e * e, -1.0], [1.0, 1.0, 1.0]);
         assert_eq!(dot_accurate(u, v), e * e);
         assert_eq!(dot(u, v), 0.0);
+    }
+}
+
+/// A double-double number `hi + lo` (about 106 bits): the reference's half vector in the
+/// tangent frame needs more than f64 near the peak (see `reference::frame`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Dd {
+    /// The leading part.
+    pub hi: f64,
+    /// The remainder, `|lo| <= ulp(hi)/2`.
+    pub lo: f64,
+}
+
+impl Dd {
+    /// `x` exactly.
+    pub fn from(x: f64) -> Dd {
+        Dd { hi: x, lo: 0.0 }
+    }
+
+    /// The sum, rounded once to f64.
+    pub fn value(self) -> f64 {
+        self.hi + self.lo
+    }
+
+    /// `a + b` exactly as a pair (Knuth's two-sum).
+    pub fn two_sum(a: f64, b: f64) -> Dd {
+        let s = a + b;
+        let bb = s - a;
+        Dd {
+            hi: s,
+            lo: (a - (s - bb)) + (b - bb),
+        }
+    }
+
+    /// `a · b` exactly as a pair (FMA two-product).
+    pub fn two_prod(a: f64, b: f64) -> Dd {
+        let p = a * b;
+        Dd {
+            hi: p,
+            lo: a.mul_add(b, -p),
+        }
+    }
+
+    fn renorm(hi: f64, lo: f64) -> Dd {
+        let s = hi + lo;
+        Dd {
+            hi: s,
+            lo: lo - (s - hi),
+        }
+    }
+
+    /// `self + o`.
+    pub fn add(self, o: Dd) -> Dd {
+        let s = Dd::two_sum(self.hi, o.hi);
+        Dd::renorm(s.hi, s.lo + self.lo + o.lo)
+    }
+
+    /// `self − o`.
+    pub fn sub(self, o: Dd) -> Dd {
+        self.add(Dd {
+            hi: -o.hi,
+            lo: -o.lo,
+        })
+    }
+
+    /// `self · o`.
+    pub fn mul(self, o: Dd) -> Dd {
+        let p = Dd::two_prod(self.hi, o.hi);
+        Dd::renorm(p.hi, p.lo + self.hi * o.lo + self.lo * o.hi)
+    }
+
+    /// `self / o` (one Newton correction of the f64 quotient).
+    pub fn div(self, o: Dd) -> Dd {
+        let q = self.hi / o.hi;
+        let r = self.sub(o.mul(Dd::from(q)));
+        Dd::renorm(q, r.hi / o.hi)
+    }
+
+    /// `√self` for `self > 0` (one Newton correction of the f64 root).
+    pub fn sqrt(self) -> Dd {
+        let s = self.hi.sqrt();
+        let r = self.sub(Dd::two_prod(s, s));
+        Dd::renorm(s, r.hi / (2.0 * s))
     }
 }
