@@ -125,11 +125,11 @@ mod tests {
         let s = Dd::two_sum(1.0, 2f64.powi(-80));
         assert_eq!((s.hi, s.lo), (1.0, 2f64.powi(-80)));
         // 1/3 · 3 = 1 to double-double precision; √2 · √2 = 2 likewise.
-        let third = Dd::from(1.0).div(Dd::from(3.0));
-        let one = third.mul(Dd::from(3.0)).sub(Dd::from(1.0));
+        let third = Dd::from(1.0) / Dd::from(3.0);
+        let one = third * Dd::from(3.0) - Dd::from(1.0);
         assert!(one.value().abs() < 1e-31, "{one:?}");
         let r = Dd::from(2.0).sqrt();
-        assert!(r.mul(r).sub(Dd::from(2.0)).value().abs() < 1e-31);
+        assert!((r * r - Dd::from(2.0)).value().abs() < 1e-31);
     }
 
     #[test]
@@ -225,37 +225,46 @@ impl Dd {
         }
     }
 
-    /// `self + o`.
-    pub fn add(self, o: Dd) -> Dd {
-        let s = Dd::two_sum(self.hi, o.hi);
-        Dd::renorm(s.hi, s.lo + self.lo + o.lo)
-    }
-
-    /// `self − o`.
-    pub fn sub(self, o: Dd) -> Dd {
-        self.add(Dd {
-            hi: -o.hi,
-            lo: -o.lo,
-        })
-    }
-
-    /// `self · o`.
-    pub fn mul(self, o: Dd) -> Dd {
-        let p = Dd::two_prod(self.hi, o.hi);
-        Dd::renorm(p.hi, p.lo + self.hi * o.lo + self.lo * o.hi)
-    }
-
-    /// `self / o` (one Newton correction of the f64 quotient).
-    pub fn div(self, o: Dd) -> Dd {
-        let q = self.hi / o.hi;
-        let r = self.sub(o.mul(Dd::from(q)));
-        Dd::renorm(q, r.hi / o.hi)
-    }
-
     /// `√self` for `self > 0` (one Newton correction of the f64 root).
     pub fn sqrt(self) -> Dd {
         let s = self.hi.sqrt();
-        let r = self.sub(Dd::two_prod(s, s));
+        let r = self - Dd::two_prod(s, s);
         Dd::renorm(s, r.hi / (2.0 * s))
+    }
+}
+
+impl std::ops::Add for Dd {
+    type Output = Dd;
+    fn add(self, o: Dd) -> Dd {
+        let s = Dd::two_sum(self.hi, o.hi);
+        Dd::renorm(s.hi, s.lo + self.lo + o.lo)
+    }
+}
+
+impl std::ops::Sub for Dd {
+    type Output = Dd;
+    fn sub(self, o: Dd) -> Dd {
+        self + Dd {
+            hi: -o.hi,
+            lo: -o.lo,
+        }
+    }
+}
+
+impl std::ops::Mul for Dd {
+    type Output = Dd;
+    fn mul(self, o: Dd) -> Dd {
+        let p = Dd::two_prod(self.hi, o.hi);
+        Dd::renorm(p.hi, p.lo + self.hi * o.lo + self.lo * o.hi)
+    }
+}
+
+impl std::ops::Div for Dd {
+    type Output = Dd;
+    /// One Newton correction of the f64 quotient.
+    fn div(self, o: Dd) -> Dd {
+        let q = self.hi / o.hi;
+        let r = self - o * Dd::from(q);
+        Dd::renorm(q, r.hi / o.hi)
     }
 }

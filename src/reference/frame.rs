@@ -192,12 +192,12 @@ fn n_cross_sum(n: [f64; 3], l: [f64; 3], v: [f64; 3]) -> [f64; 3] {
     let unit = |a: [f64; 3]| {
         let len2 = a
             .iter()
-            .fold(Dd::from(0.0), |acc, &x| acc.add(Dd::two_prod(x, x)));
+            .fold(Dd::from(0.0), |acc, &x| acc + Dd::two_prod(x, x));
         let len = len2.sqrt();
-        a.map(|x| Dd::from(x).div(len))
+        a.map(|x| Dd::from(x) / len)
     };
     let (n, l, v) = (unit(n), unit(l), unit(v));
-    let s: [Dd; 3] = std::array::from_fn(|k| l[k].add(v[k]));
-    let c = |i: usize, j: usize| n[i].mul(s[j]).sub(n[j].mul(s[i])).value();
+    let s: [Dd; 3] = std::array::from_fn(|k| l[k] + v[k]);
+    let c = |i: usize, j: usize| (n[i] * s[j] - n[j] * s[i]).value();
     [c(1, 2), c(2, 0), c(0, 1)]
 }
