@@ -356,13 +356,13 @@ vec2 frame_cosine(vec3 ns, vec3 ws, uvec3 n_bits, uvec3 w_bits, vec2 lengths, ou
 // 2 (1 + l.v) with p = L.V exact to a pair, q = |L||V|. For p >= 0, 1 + l.v = 1 + p/q;
 // for p < 0 that sum cancels near l = -v (grazing mirror geometry), and Lagrange's
 // identity |L|^2|V|^2 - (L.V)^2 = |L x V|^2 turns it into |L x V|^2/(q (q - p)), a
-// quotient of positives. Where |L x V|^2 leaves float32's normal range (|l + v| below
-// ~1e-18: mirrored directions with components of 1e-38 or 1e-45) it would flush to 0 and
-// h to NaN; |l + v| then comes from lv itself, scaled by 2^k (exact) into range: lv is
-// returned scaled and k set, |l + v| = result 2^-k. That lv is formed again from the
-// inputs' bits boosted by 2^60 (scaled_bits): the tiny components that make it up are
-// below 2^-126 of the largest, and the unit vectors of the frame have lost them under
-// flush-to-zero (exactly mirrored directions summed to lv = 0 and h = NaN).
+// quotient of positives. Where |L x V| is small its terms are scaled by 2^k (exact): lv
+// is returned scaled and k set, |l + v| = result 2^-k (k = 0 for |L x V| >= 2^-30). Where
+// |L x V| is below 2^-100 (|l + v| below ~1e-30: mirrored directions with components of
+// 1e-38 or 1e-45) it would be lost to flush-to-zero and h be NaN; |l + v| then comes from
+// lv itself, formed again from the inputs' bits boosted by 2^60 (scaled_bits): the tiny
+// components that make it up are below 2^-126 of the largest, and the unit vectors of
+// the frame have lost them under flush-to-zero (exact mirrors summed to lv = 0).
 vec2 lv_length(vec3 ls, vec3 vs, vec2 nl, vec2 nv, uvec3 l_bits, uvec3 v_bits,
                inout vec3 lv_hi, inout vec3 lv_lo, out float k) {
     k = 0.0;
@@ -373,9 +373,21 @@ vec2 lv_length(vec3 ls, vec3 vs, vec2 nl, vec2 nv, uvec3 l_bits, uvec3 v_bits,
     }
     vec3 x_hi, x_lo;
     cross_ff(ls, vs, x_hi, x_lo);
-    vec2 lxv2 = length2_ff3(x_hi, x_lo);
-    if (lxv2.x >= 7.5e-37) {
-        vec2 lxv = ff_sqrt(lxv2);
+    float xm = max(max(abs(x_hi.x), abs(x_hi.y)), abs(x_hi.z));
+    if (xm >= 7.8886091e-31) { // 2^-100
+        // Below |L x V| = 2^-30 its square and the products below leave the range where a
+        // two-product is exact under flush-to-zero (its partial products below 2^-126 are
+        // flushed: an absolute error of ~2^-124, 1e-4 relative at |l + v| = 5e-19), so
+        // L x V is scaled by 2^k first (exact) and |l + v| 2^k returned, lv scaled alike.
+        if (xm < 9.3132257e-10) { // 2^-30
+            int j = 127 - int((floatBitsToUint(xm) >> 23) & 0xffu);
+            k = float(j);
+            x_hi = ldexp(x_hi, ivec3(j));
+            x_lo = ldexp(x_lo, ivec3(j));
+            lv_hi = ldexp(lv_hi, ivec3(j));
+            lv_lo = ldexp(lv_lo, ivec3(j));
+        }
+        vec2 lxv = ff_sqrt(length2_ff3(x_hi, x_lo));
         return ff_sqrt(ff_mul_f(ff_mul(ff_div(lxv, q), ff_div(lxv, ff_add(q, -p))), 2.0));
     }
     vec3 lb_hi = scaled_bits(l_bits, TINY_BOOST), lb_lo = vec3(0.0);
