@@ -313,17 +313,6 @@ vec3 scaled_bits(uvec3 b, int boost) {
     return a;
 }
 
-// Whether T is parallel to N by FORMULAS.md §1's rule |n x t| <= 1e-12, tested as
-// |N x T|^2 <= 1e-24 |N|^2 |T|^2 on the scaled inputs (scale_pow2), N x T exact to a pair
-// (cross_ff: two-products and two-sums, every operation `precise`): an exact multiple of N
-// gives exactly 0, whatever the device contracts, as in the reference.
-bool tangent_parallel(vec3 ns, vec3 ts) {
-    vec3 x_hi, x_lo;
-    cross_ff(ns, ts, x_hi, x_lo);
-    return ff_round(length2_ff3(x_hi, x_lo))
-        <= 1e-24 * ff_round(dot_ff(ns, ns)) * ff_round(dot_ff(ts, ts));
-}
-
 // The boost of scaled_bits for the tiny-cosine and tiny-|l + v| paths (see there).
 const int TINY_BOOST = 60;
 
@@ -543,11 +532,8 @@ uint make_frame(Row r, GpuMaterial m, out Frame f) {
         dvec3 nxt64 = cross(unit64(r.n_bits), unit64(r.t_bits));
         bool parallel = dot(nxt64, nxt64) <= 1e-24LF;
 #else
-        // Without f64: from the scaled inputs, the cross product exact to a pair. Not s2:
-        // cross() and dot() are built-ins, which `precise` does not keep from being
-        // contracted into FMAs (the f32 frame on an H200 counted 0.91 M invalid tuples of
-        // 10 M where the reference counts 1.15 M).
-        bool parallel = tangent_parallel(scale_pow2(r.n), scale_pow2(r.t));
+        // Without f64: in make_frame's f32 branch, from N x T exact to a pair.
+        bool parallel = false;
 #endif
         if (!ok_t || parallel) {
             return STATUS_INVALID;
@@ -641,7 +627,28 @@ uint make_frame(Row r, GpuMaterial m, out Frame f) {
     //   which need f64's exponent range, not its precision.
     vec3 ls = scale_pow2(r.l), vs = scale_pow2(r.v), ns = scale_pow2(r.n);
     vec2 nl = ff_sqrt(dot_ff(ls, ls)), nv = ff_sqrt(dot_ff(vs, vs));
-    vec2 nn = ff_sqrt(dot_ff(ns, ns));
+    vec2 nn2 = dot_ff(ns, ns);
+    vec2 nn = ff_sqrt(nn2);
+#if defined(HAS_ANISOTROPIC) && defined(HAS_TANGENTS)
+    // The tangent-parallel test of FORMULAS.md §1, |n x t| <= 1e-12, as |N x T|^2 <=
+    // 1e-24 |N|^2 |T|^2 on the scaled inputs, N x T exact to a pair (cross_ff: two-products
+    // and two-sums, every operation `precise`): a tangent that is an exact multiple of N
+    // gives exactly 0, as in the reference, whatever the device contracts. Not the shared
+    // s2 above: cross() and dot() are built-ins, which `precise` does not keep from being
+    // contracted into FMAs (the f32 frame on an H200 counted 0.91 M invalid tuples of 10 M
+    // where the reference counts 1.15 M). Made before the horizon test, as the reference
+    // makes it; N x T is the b of the tangent frame below.
+    vec3 b_hi = vec3(0.0), b_lo = vec3(0.0);
+    vec2 nxt2 = vec2(0.0);
+    if (is_anisotropic(m)) {
+        vec3 ts = scale_pow2(r.t);
+        cross_ff(ns, ts, b_hi, b_lo);
+        nxt2 = length2_ff3(b_hi, b_lo);
+        if (ff_round(nxt2) <= 1e-24 * ff_round(nn2) * ff_round(dot_ff(ts, ts))) {
+            return STATUS_INVALID;
+        }
+    }
+#endif
     // The horizon test on the exact dot products' signs, as the reference decides it: a
     // cosine below 7e-46 rounds to 0 in f32, and below FLT_MIN a GPU flushes it to 0.
     bool above_i, above_o;
@@ -696,9 +703,8 @@ uint make_frame(Row r, GpuMaterial m, out Frame f) {
 #if defined(HAS_ANISOTROPIC) && defined(HAS_TANGENTS)
     if (is_anisotropic(m)) {
         // b = N x T/|N x T| and t = b x n as pair vectors (the f64 branch's construction).
-        vec3 b_hi, b_lo, t_hi, t_lo;
-        cross_ff(ns, scale_pow2(r.t), b_hi, b_lo);
-        div_ff3(b_hi, b_lo, ff_sqrt(length2_ff3(b_hi, b_lo)));
+        vec3 t_hi, t_lo;
+        div_ff3(b_hi, b_lo, ff_sqrt(nxt2)); // N x T from the parallel test above
         cross_ff3(b_hi, b_lo, n_hi, n_lo, t_hi, t_lo);
         f.hx = ff_round(dot_ff3(h_hi, h_lo, t_hi, t_lo));
         f.hy = ff_round(dot_ff3(h_hi, h_lo, b_hi, b_lo));
