@@ -18,7 +18,10 @@ fn main() -> vkbrdf::Result<()> {
             "row {row} {:?} material {}: {:?}",
             cases[0], materials[t.material].name, t
         );
-        println!("  vulkan brdf {:?} terms {:?}", out.brdf, out.terms);
+        println!(
+            "  vulkan brdf {:?} terms {:?} counts {:?}",
+            out.brdf, out.terms, out.counts
+        );
         println!("  reference {r:?}");
     }
     Ok(())

@@ -286,17 +286,74 @@ vec3 scale_pow2(vec3 a) {
     return ldexp(a, ivec3(-e));
 }
 
+// a 2^(boost - e) with 2^e <= max |a_i| < 2^(e + 1), from the f32 bits of a (finite and
+// non-zero: checked before), by integer arithmetic: component i is M 2^X (M the integer
+// mantissa, hidden bit included; a subnormal's X is -149) and becomes float(M) 2^(X +
+// boost - e), exact. GPUs flush f32 subnormals to zero in arithmetic and in the inputs of
+// arithmetic (NVIDIA does; VKBRDF_EMULATE_FTZ=1 makes lavapipe do it too), so a subnormal
+// component of a vector whose largest one is normal (the stress corpus's tiny cosines,
+// N along an axis and 1e-45 the component of L along it) reads as 0 in scale_pow2 and in
+// every product formed from it: the cosine is then 0, the tuple below the horizon. With a
+// boost of 2^60 every component down to 2^-149 of the largest lands in the normal range,
+// and products of two such vectors stay below 2^123.
+vec3 scaled_bits(uvec3 b, int boost) {
+    uvec3 mag = b & 0x7fffffffu;
+    uint top = max(mag.x, max(mag.y, mag.z));
+    int e = top >= 0x00800000u ? int(top >> 23) - 127 : findMSB(top) - 149;
+    vec3 a;
+    for (int i = 0; i < 3; i++) {
+        bool normal = mag[i] >= 0x00800000u;
+        uint m = normal ? (mag[i] & 0x007fffffu) | 0x00800000u : mag[i];
+        int x = (normal ? int(mag[i] >> 23) - 150 : -149) + boost - e;
+        // Below 2^-126 after the boost the component is flushed (or subnormal) anyway; the
+        // test keeps ldexp's exponent in range.
+        float c = x < -150 ? 0.0 : ldexp(float(m), x);
+        a[i] = (b[i] & 0x80000000u) != 0u ? -c : c;
+    }
+    return a;
+}
+
+// The boost of scaled_bits for the tiny-cosine and tiny-|l + v| paths (see there).
+const int TINY_BOOST = 60;
+
+// A cosine N.W/(|N||W|) of the scaled inputs ns, ws (|N||W| = lengths as a pair): the pair
+// (float-float where the dot product is above 2^-80, else its float32 rounding, 0 below
+// FLT_MIN), its m 2^e form, and whether it is > 0 (the horizon test, made on the exact
+// dot product's sign as the reference makes it). Where the dot product of the scaled
+// inputs is below 2^-80 it is formed again from the inputs' bits boosted by 2^60 each
+// (scaled_bits): under flush-to-zero the scaled inputs lose components below 2^-126 of
+// the largest and every product below 2^-126, an absolute error of ~2^-123 that is all
+// of a cosine of 1e-38 or 1e-45 (its sign too); above 2^-80 it is below 2^-43 relative.
+vec2 frame_cosine(vec3 ns, vec3 ws, uvec3 n_bits, uvec3 w_bits, vec2 lengths, out vec2 cos_xf,
+                  out bool above) {
+    vec2 d = dot_ff(ns, ws);
+    if (abs(d.x) >= 8.2718061e-25) { // 2^-80
+        vec2 c = ff_div(d, lengths);
+        above = c.x > 0.0;
+        cos_xf = xf(ff_round(c));
+        return c;
+    }
+    d = dot_ff(scaled_bits(n_bits, TINY_BOOST), scaled_bits(w_bits, TINY_BOOST));
+    above = d.x > 0.0; // the pair's hi is 0 only for an exact 0
+    cos_xf = above ? xf_div(xf(d.x), xf(ff_round(lengths))) - vec2(0.0, float(2 * TINY_BOOST))
+                   : vec2(0.0);
+    return vec2(xf_float(cos_xf), 0.0);
+}
+
 // |l + v| for unit l, v, from the scaled inputs L, V, their lengths and lv = l + v as a
 // pair vector (the reference's construction, src/reference/frame.rs): |l + v|^2 =
 // 2 (1 + l.v) with p = L.V exact to a pair, q = |L||V|. For p >= 0, 1 + l.v = 1 + p/q;
 // for p < 0 that sum cancels near l = -v (grazing mirror geometry), and Lagrange's
 // identity |L|^2|V|^2 - (L.V)^2 = |L x V|^2 turns it into |L x V|^2/(q (q - p)), a
-// quotient of positives. Where |L x V|^2 leaves float32's normal range (|l + v| below
-// ~1e-18: mirrored directions with components of 1e-38 or 1e-45) it would flush to 0 and
-// h to NaN; |l + v| then comes from lv itself, scaled by 2^k (exact) into range: lv is
-// returned scaled and k set, |l + v| = result 2^-k.
-vec2 lv_length(vec3 ls, vec3 vs, vec2 nl, vec2 nv, inout vec3 lv_hi, inout vec3 lv_lo,
-               out float k) {
+// quotient of positives. Where |L x V| is small its terms are scaled by 2^k (exact): lv
+// is returned scaled and k set, |l + v| = result 2^-k (k = 0 for |L x V| >= 2^-30). Where
+// |L x V| is below 2^-100 (|l + v| below ~1e-30: mirrored directions with components of
+// 1e-38 or 1e-45) it would be lost to flush-to-zero and h be NaN; |l + v| then comes from
+// lv itself, formed again from the inputs' bits boosted by 2^60 (scaled_bits): the tiny
+// components that make it up are below 2^-126 of the largest, and the unit vectors of
+// the frame have lost them under flush-to-zero (exact mirrors summed to lv = 0).
+vec2 lv_length(vec3 ls, vec3 vs, vec2 nl, vec2 nv, uvec3 l_bits, uvec3 v_bits,
+               inout vec3 lv_hi, inout vec3 lv_lo, out float k) {
     k = 0.0;
     vec2 p = dot_ff(ls, vs);
     vec2 q = ff_mul(nl, nv);
@@ -305,27 +362,38 @@ vec2 lv_length(vec3 ls, vec3 vs, vec2 nl, vec2 nv, inout vec3 lv_hi, inout vec3 
     }
     vec3 x_hi, x_lo;
     cross_ff(ls, vs, x_hi, x_lo);
-    vec2 lxv2 = length2_ff3(x_hi, x_lo);
-    if (lxv2.x >= 7.5e-37) {
-        vec2 lxv = ff_sqrt(lxv2);
+    float xm = max(max(abs(x_hi.x), abs(x_hi.y)), abs(x_hi.z));
+    if (xm >= 7.8886091e-31) { // 2^-100
+        // Below |L x V| = 2^-30 its square and the products below leave the range where a
+        // two-product is exact under flush-to-zero (its partial products below 2^-126 are
+        // flushed: an absolute error of ~2^-124, 1e-4 relative at |l + v| = 5e-19), so
+        // L x V is scaled by 2^k first (exact) and |l + v| 2^k returned, lv scaled alike.
+        if (xm < 9.3132257e-10) { // 2^-30
+            int j = 127 - int((floatBitsToUint(xm) >> 23) & 0xffu);
+            k = float(j);
+            x_hi = ldexp(x_hi, ivec3(j));
+            x_lo = ldexp(x_lo, ivec3(j));
+            lv_hi = ldexp(lv_hi, ivec3(j));
+            lv_lo = ldexp(lv_lo, ivec3(j));
+        }
+        vec2 lxv = ff_sqrt(length2_ff3(x_hi, x_lo));
         return ff_sqrt(ff_mul_f(ff_mul(ff_div(lxv, q), ff_div(lxv, ff_add(q, -p))), 2.0));
     }
-    vec3 s = scale_pow2(lv_hi);
+    vec3 lb_hi = scaled_bits(l_bits, TINY_BOOST), lb_lo = vec3(0.0);
+    vec3 vb_hi = scaled_bits(v_bits, TINY_BOOST), vb_lo = vec3(0.0);
+    div_ff3(lb_hi, lb_lo, nl);
+    div_ff3(vb_hi, vb_lo, nv);
+    add_ff3(lb_hi, lb_lo, vb_hi, vb_lo, lv_hi, lv_lo); // (l + v) 2^60
     float m = max(max(abs(lv_hi.x), abs(lv_hi.y)), abs(lv_hi.z));
     if (m == 0.0) {
         return vec2(0.0); // l = -v exactly: below the horizon, and never read
     }
-    k = xf(max(max(abs(s.x), abs(s.y)), abs(s.z))).y - xf(m).y;
-    lv_lo = ldexp(lv_lo, ivec3(int(k)));
-    lv_hi = s;
+    // m >= 2^-90 here (|l + v| >= cos_i + cos_o >= 2^-150): a normal number.
+    int j = 127 - int((floatBitsToUint(m) >> 23) & 0xffu);
+    k = float(TINY_BOOST + j);
+    lv_hi = ldexp(lv_hi, ivec3(j));
+    lv_lo = ldexp(lv_lo, ivec3(j));
     return ff_sqrt(length2_ff3(lv_hi, lv_lo));
-}
-
-// A cosine N.X/(|N||X|) in m 2^e form (ff.glsl) from the hi part of the exact dot product:
-// below float32's normal range the quotient of the pairs is a subnormal with few bits (a
-// cosine of 1e-45 came out 1.4e-45 or 2.8e-45), the quotient of m 2^e forms is not.
-vec2 cosine_xf(float dot_hi, vec2 lengths, float cosine) {
-    return cosine >= 1e-30 ? xf(cosine) : xf_div(xf(dot_hi), xf(ff_round(lengths)));
 }
 #endif
 
@@ -464,7 +532,8 @@ uint make_frame(Row r, GpuMaterial m, out Frame f) {
         dvec3 nxt64 = cross(unit64(r.n_bits), unit64(r.t_bits));
         bool parallel = dot(nxt64, nxt64) <= 1e-24LF;
 #else
-        bool parallel = s2 <= 1e-24;
+        // Without f64: in make_frame's f32 branch, from N x T exact to a pair.
+        bool parallel = false;
 #endif
         if (!ok_t || parallel) {
             return STATUS_INVALID;
@@ -559,20 +628,38 @@ uint make_frame(Row r, GpuMaterial m, out Frame f) {
     //   which need f64's exponent range, not its precision.
     vec3 ls = scale_pow2(r.l), vs = scale_pow2(r.v), ns = scale_pow2(r.n);
     vec2 nl = ff_sqrt(dot_ff(ls, ls)), nv = ff_sqrt(dot_ff(vs, vs));
-    vec2 nn = ff_sqrt(dot_ff(ns, ns));
-    vec2 n_dot_l = dot_ff(ns, ls), n_dot_v = dot_ff(ns, vs);
-    vec2 nn_nl = ff_mul(nn, nl), nn_nv = ff_mul(nn, nv);
-    vec2 cos_i = ff_div(n_dot_l, nn_nl);
-    vec2 cos_o = ff_div(n_dot_v, nn_nv);
+    vec2 nn2 = dot_ff(ns, ns);
+    vec2 nn = ff_sqrt(nn2);
+#if defined(HAS_ANISOTROPIC) && defined(HAS_TANGENTS)
+    // The tangent-parallel test of FORMULAS.md §1, |n x t| <= 1e-12, as |N x T|^2 <=
+    // 1e-24 |N|^2 |T|^2 on the scaled inputs, N x T exact to a pair (cross_ff: two-products
+    // and two-sums, every operation `precise`): a tangent that is an exact multiple of N
+    // gives exactly 0, as in the reference, whatever the device contracts. Not the shared
+    // s2 above: cross() and dot() are built-ins, which `precise` does not keep from being
+    // contracted into FMAs (the f32 frame on an H200 counted 0.91 M invalid tuples of 10 M
+    // where the reference counts 1.15 M). Made before the horizon test, as the reference
+    // makes it; N x T is the b of the tangent frame below.
+    vec3 b_hi = vec3(0.0), b_lo = vec3(0.0);
+    vec2 nxt2 = vec2(0.0);
+    if (is_anisotropic(m)) {
+        vec3 ts = scale_pow2(r.t);
+        cross_ff(ns, ts, b_hi, b_lo);
+        nxt2 = length2_ff3(b_hi, b_lo);
+        if (ff_round(nxt2) <= 1e-24 * ff_round(nn2) * ff_round(dot_ff(ts, ts))) {
+            return STATUS_INVALID;
+        }
+    }
+#endif
+    // The horizon test on the exact dot products' signs, as the reference decides it: a
+    // cosine below 7e-46 rounds to 0 in f32, and below FLT_MIN a GPU flushes it to 0.
+    bool above_i, above_o;
+    vec2 cos_i = frame_cosine(ns, ls, r.n_bits, r.l_bits, ff_mul(nn, nl), f.cos_i_xf, above_i);
+    vec2 cos_o = frame_cosine(ns, vs, r.n_bits, r.v_bits, ff_mul(nn, nv), f.cos_o_xf, above_o);
     f.cos_i = ff_round(cos_i);
     f.cos_o = ff_round(cos_o);
-    // The horizon test on the pairs' signs (hi is 0 only for an exact 0), as the reference
-    // decides it: a cosine below 7e-46 rounds to 0 in f32.
-    if (cos_i.x <= 0.0 || cos_o.x <= 0.0) {
+    if (!(above_i && above_o)) {
         return STATUS_BELOW_HORIZON;
     }
-    f.cos_i_xf = cosine_xf(n_dot_l.x, nn_nl, f.cos_i);
-    f.cos_o_xf = cosine_xf(n_dot_v.x, nn_nv, f.cos_o);
     vec3 l_hi = ls, l_lo = vec3(0.0), v_hi = vs, v_lo = vec3(0.0), n_hi = ns, n_lo = vec3(0.0);
     div_ff3(l_hi, l_lo, nl);
     div_ff3(v_hi, v_lo, nv);
@@ -581,7 +668,7 @@ uint make_frame(Row r, GpuMaterial m, out Frame f) {
     add_ff3(l_hi, l_lo, v_hi, v_lo, h_hi, h_lo); // l + v, made unit below
     // |l + v| = lv_len 2^-k: k = 0 but where |l + v| < ~1e-15 (see lv_length).
     float k;
-    vec2 lv_len = lv_length(ls, vs, nl, nv, h_hi, h_lo, k);
+    vec2 lv_len = lv_length(ls, vs, nl, nv, r.l_bits, r.v_bits, h_hi, h_lo, k);
     // cos_h = (cos_i + cos_o)/|l + v| and c = |l + v|/2, as in the f64 branch: dot(n, h)
     // and dot(v, h) would inherit h's direction error, which grows as 1/|l + v|.
     vec2 lv_xf = xf(ff_round(lv_len)) - vec2(0.0, k);
@@ -617,9 +704,8 @@ uint make_frame(Row r, GpuMaterial m, out Frame f) {
 #if defined(HAS_ANISOTROPIC) && defined(HAS_TANGENTS)
     if (is_anisotropic(m)) {
         // b = N x T/|N x T| and t = b x n as pair vectors (the f64 branch's construction).
-        vec3 b_hi, b_lo, t_hi, t_lo;
-        cross_ff(ns, scale_pow2(r.t), b_hi, b_lo);
-        div_ff3(b_hi, b_lo, ff_sqrt(length2_ff3(b_hi, b_lo)));
+        vec3 t_hi, t_lo;
+        div_ff3(b_hi, b_lo, ff_sqrt(nxt2)); // N x T from the parallel test above
         cross_ff3(b_hi, b_lo, n_hi, n_lo, t_hi, t_lo);
         f.hx = ff_round(dot_ff3(h_hi, h_lo, t_hi, t_lo));
         f.hy = ff_round(dot_ff3(h_hi, h_lo, b_hi, b_lo));

@@ -241,21 +241,22 @@ void cross_terms(vec3 a, vec3 b, int i, out float t[4]) {
 // or 0, e an integer held as a float. Every operation rounds m once: float32's relative
 // precision, f64's range.
 
-// x >= 0 (subnormal included) as m 2^e.
+// x >= 0 (subnormal included) as m 2^e. A subnormal is read from its bits, M 2^-149 with
+// M its integer mantissa (float(M) is exact and normal): frexp of a subnormal is undefined
+// in GLSL, and a device that flushes subnormals (GPUs; lavapipe under VKBRDF_EMULATE_FTZ)
+// reads the value itself as 0 in any arithmetic, a scaling by 2^64 included.
 vec2 xf(float x) {
-    if (x == 0.0) {
+    uint b = floatBitsToUint(x) & 0x7fffffffu;
+    if (b == 0u) {
         return vec2(0.0);
     }
-    float shift = 0.0;
-    if (x < 1.1754944e-38) {
-        // frexp of a subnormal is undefined in GLSL: bring it into the normal range first
-        // (exact, a power of two).
-        x *= 18446744073709551616.0; // 2^64
-        shift = -64.0;
-    }
     int e;
+    if (b < 0x00800000u) {
+        float m = frexp(float(b), e);
+        return vec2(m, float(e) - 149.0);
+    }
     float m = frexp(x, e);
-    return vec2(m, float(e) + shift);
+    return vec2(m, float(e));
 }
 
 // m 2^e renormalised (m finite, >= 0, and normal: products and quotients of two m's are).

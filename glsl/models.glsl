@@ -106,6 +106,12 @@ float ln_cos_h(Frame f) {
     if (f.cos_h < FLT_MIN) {
         return float(log_f64(f.cos_h_exact));
     }
+#else
+    // The same from the m 2^e form: under flush-to-zero the f32 cos_h is 0 here, and
+    // log_acc(0) is a finite wrong number (RTR at e = 1 came out 3.6e-3, not 7e-46).
+    if (f.cos_h < FLT_MIN) {
+        return ff_round(xf_log_pair(f.cos_h_xf));
+    }
 #endif
     return log_cos(f.cos_h, f.sin2_h);
 }
@@ -209,7 +215,9 @@ Eval model_blinn_phong(Frame f, GpuMaterial m) {
             vec2 ln_q = ff_add(ff_mul_f(ln_cos_h, m.lobe.x), -xf_log_pair(f.cos_i_xf));
             return eval_lobe_xf(m, xf_mul(xf(m.scale.x), xf_exp(ln_q)));
         }
-        return eval_lobe_xf(m, xf_div(xf(m.scale.x * p), f.cos_i_xf));
+        // scale p as m 2^e: the float product is below FLT_MIN where p is just above it
+        // (cos_h = 1.4e-38 at cosines of 1e-38), and a GPU flushes it to 0.
+        return eval_lobe_xf(m, xf_div(xf_mul(xf(m.scale.x), xf(p)), f.cos_i_xf));
     }
 #endif
     return eval_lobe(m, m.scale.x * p / f.cos_i);
@@ -238,7 +246,9 @@ Eval model_ward(Frame f, GpuMaterial m) {
     }
 #else
     if (min(f.cos_i, f.cos_o) < TINY_COS) {
-        return eval_lobe_xf(m, xf_div(xf(m.scale.x * x), xf_sqrt(xf_mul(f.cos_i_xf, f.cos_o_xf))));
+        // scale x as m 2^e, as in model_blinn_phong (the scale is ~1e-9 at roughness 1e4).
+        return eval_lobe_xf(m, xf_div(xf_mul(xf(m.scale.x), xf(x)),
+                                      xf_sqrt(xf_mul(f.cos_i_xf, f.cos_o_xf))));
     }
 #endif
     // Where exp underflows to 0 the lobe is 0; the guard keeps 0 * inf (cos_i, cos_o both

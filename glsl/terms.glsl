@@ -216,6 +216,13 @@ vec3 F_Dielectric(float c, vec3 mu2m1, vec3 mu2m1_lo, double_or_float c_exact) {
     vec3 g2 = vec3(g2d);
     vec3 g = vec3(sqrt(max(g2d, 0.0)));
 #else
+    // c below FLT_MIN (both cosines are then below it; a GPU flushes c to 0): F = 1 -
+    // O(c/g) for mu != 1 (mu^2 - 1 is at least ~1e-16 there, and under total internal
+    // reflection F = 1), F = 0 for mu = 1 (g = c). The lines below would divide 0 by
+    // g + c = 0 for mu = 1 (NaN).
+    if (c < FLT_MIN) {
+        return mix(vec3(1.0), vec3(0.0), equal(mu2m1, vec3(0.0)));
+    }
     // The same sum as a float-float pair per channel (c_exact = c to ~48 bits): without it
     // g^2 near the critical angle is a difference of O(1) floats (see above).
     vec3 g2, g;
