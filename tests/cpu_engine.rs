@@ -1,0 +1,213 @@
+//! The native CPU engine (`vkbrdf::cpu::CpuEngine`) against the f64 reference: every legal
+//! combination under the conformance rule, the stress corpus (no non-finite output, counts
+//! equal), results independent of the thread count, mixed-material batches, cancellation.
+
+use vkbrdf::backend::{Backend, Request};
+use vkbrdf::batch::{memory_source, Batch};
+use vkbrdf::cancel::Cancel;
+use vkbrdf::check::{self, CheckOptions};
+use vkbrdf::cpu::kernel::Plan;
+use vkbrdf::cpu::CpuEngine;
+use vkbrdf::material::{parse_materials, Material};
+use vkbrdf::reference::CpuReference;
+
+fn materials(toml: &str) -> Vec<Material> {
+    parse_materials(toml, "test").expect("materials parse")
+}
+
+#[test]
+fn every_combination_matches_the_reference() {
+    let mut engine = CpuEngine::new();
+    let options = CheckOptions {
+        tuples: 3000,
+        seed: 7,
+        only: None,
+    };
+    let reports = check::run(&mut engine, &options, &mut |_| {}).expect("check run");
+    assert_eq!(reports.len(), 198);
+    let failures: Vec<String> = reports
+        .iter()
+        .filter(|r| !r.pass())
+        .map(|r| {
+            format!(
+                "{}\n{}",
+                r.row(),
+                r.worst.as_ref().map(|w| w.to_string()).unwrap_or_default()
+            )
+        })
+        .collect();
+    assert!(
+        failures.is_empty(),
+        "{} of 198 combinations fail:\n{}",
+        failures.len(),
+        failures.join("\n")
+    );
+    let well = reports
+        .iter()
+        .map(|r| r.max_rel_well_conditioned)
+        .fold(0.0, f64::max);
+    assert!(well <= check::RELATIVE_TOLERANCE, "well-conditioned error {well:e}");
+}
+
+#[test]
+fn the_common_groups_run_in_the_lanes_and_the_rest_falls_back() {
+    let combos = check::combinations(1).expect("combinations");
+    let simd: Vec<&str> = combos
+        .iter()
+        .filter(|c| c.materials.iter().all(|m| Plan::for_material(m).is_simd()))
+        .map(|c| c.name.as_str())
+        .collect();
+    // Lambert and isotropic Cook–Torrance with GGX/Beckmann: every geometry, Fresnel and
+    // convention that is legal with them.
+    for name in &simd {
+        assert!(
+            name.contains("lambert") || name.contains("ggx") || name.contains("beckmann"),
+            "{name}"
+        );
+        assert!(!name.contains("aniso"), "{name}");
+    }
+    assert!(simd.len() >= 60, "only {} combinations in the lanes", simd.len());
+    for m in materials(
+        r#"
+        [[material]]
+        name = "w"
+        model = "ward"
+        roughness = [0.2, 0.4]
+        [[material]]
+        name = "p"
+        model = "phong"
+        exponent = 20
+        "#,
+    ) {
+        assert!(!Plan::for_material(&m).is_simd(), "{}", m.name);
+    }
+}
+
+/// Rows over several materials in an interleaved order, with invalid and below-horizon rows.
+fn mixed_batch(n: usize) -> (Batch, Vec<Material>) {
+    let mats = materials(
+        r#"
+        [[material]]
+        name = "ggx"
+        model = "cook-torrance"
+        distribution = "ggx"
+        geometry = "smith-correlated"
+        fresnel = "conductor"
+        ior = [0.2, 0.9, 1.1]
+        extinction = [3.9, 2.4, 2.2]
+        roughness = 0.3
+        [[material]]
+        name = "matte"
+        model = "lambert"
+        diffuse = [0.5, 0.4, 0.3]
+        [[material]]
+        name = "ward"
+        model = "ward"
+        roughness = 0.2
+        specular = [0.1, 0.1, 0.1]
+        [[material]]
+        name = "beck"
+        model = "cook-torrance"
+        distribution = "beckmann"
+        geometry = "smith"
+        fresnel = "dielectric"
+        ior = [1.5, 1.5, 1.5]
+        roughness = 0.05
+        "#,
+    );
+    let mut rows = Vec::with_capacity(n * 10);
+    let mut s = 12345u64;
+    let mut rnd = || {
+        s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        ((s >> 40) as f32 / (1u64 << 24) as f32) * 2.0 - 1.0
+    };
+    for i in 0..n {
+        let l = [rnd(), rnd(), rnd().abs() + 0.01];
+        let mut v = [rnd(), rnd(), rnd().abs() + 0.01];
+        if i % 97 == 3 {
+            v[2] = -v[2]; // below the horizon
+        }
+        let mut nrm = [0.0, 0.0, 1.0];
+        if i % 101 == 7 {
+            nrm = [0.0, 0.0, 0.0]; // invalid
+        }
+        if i % 103 == 9 {
+            nrm = [f32::NAN, 0.0, 1.0]; // invalid
+        }
+        rows.extend_from_slice(&l);
+        rows.extend_from_slice(&v);
+        rows.extend_from_slice(&nrm);
+        rows.push(((i * 7) % 4) as f32);
+    }
+    let batch = Batch::new(rows, 10, mats.len(), &memory_source()).expect("batch");
+    (batch, mats)
+}
+
+#[test]
+fn mixed_materials_give_the_reference_counts_and_values_for_any_thread_count() {
+    let (batch, mats) = mixed_batch(70_001);
+    let request = Request { terms: true };
+    let reference = CpuReference::new()
+        .evaluate(&batch, &mats, &request)
+        .expect("reference");
+    let one = CpuEngine::with_threads(1)
+        .evaluate(&batch, &mats, &request)
+        .expect("one thread");
+    let three = CpuEngine::with_threads(3)
+        .evaluate(&batch, &mats, &request)
+        .expect("three threads");
+    assert_eq!(one, three, "the thread count changed a result");
+    assert_eq!(one.counts, reference.counts);
+    assert!(one.counts.invalid > 0 && one.counts.below_horizon > 0);
+    assert_eq!(one.counts.first_invalid, Some(7));
+    let terms = one.terms.as_ref().expect("terms");
+    let ref_terms = reference.terms.as_ref().expect("terms");
+    for i in 0..batch.len() {
+        let t = batch.tuple(i);
+        let s = check::f32_sensitivity(&t, &mats[t.material]);
+        for c in 0..3 {
+            let (x, r) = (f64::from(one.brdf[i * 3 + c]), f64::from(reference.brdf[i * 3 + c]));
+            assert!((x - r).abs() <= check::allowed_error(r, s[c]), "row {i} ch {c}: {x} vs {r}");
+        }
+        for c in 0..6 {
+            let (x, r) = (f64::from(terms[i * 6 + c]), f64::from(ref_terms[i * 6 + c]));
+            assert!((x - r).abs() <= check::allowed_error(r, s[3 + c]), "row {i} term {c}: {x} vs {r}");
+        }
+    }
+}
+
+#[test]
+fn without_terms_the_brdf_and_counts_are_the_same() {
+    let (batch, mats) = mixed_batch(5_000);
+    let with = CpuEngine::new()
+        .evaluate(&batch, &mats, &Request { terms: true })
+        .expect("with terms");
+    let without = CpuEngine::new()
+        .evaluate(&batch, &mats, &Request { terms: false })
+        .expect("without terms");
+    assert!(without.terms.is_none());
+    assert_eq!(with.brdf, without.brdf);
+    assert_eq!(with.counts, without.counts);
+}
+
+#[test]
+fn a_cancelled_token_stops_the_evaluation() {
+    let (batch, mats) = mixed_batch(50_000);
+    let mut engine = CpuEngine::new();
+    let cancel = Cancel::new();
+    engine.set_cancel(cancel.clone());
+    cancel.cancel();
+    let r = engine.evaluate(&batch, &mats, &Request::default());
+    assert!(matches!(r, Err(vkbrdf::Error::Cancelled)), "{r:?}");
+}
+
+#[test]
+fn an_empty_batch_gives_empty_outputs() {
+    let (_, mats) = mixed_batch(1);
+    let batch = Batch::new(Vec::new(), 10, mats.len(), &memory_source()).expect("batch");
+    let out = CpuEngine::new()
+        .evaluate(&batch, &mats, &Request { terms: true })
+        .expect("empty");
+    assert!(out.brdf.is_empty());
+    assert_eq!(out.counts.tuples, 0);
+}
