@@ -102,7 +102,7 @@ impl pulp::WithSimd for ChunkOp<'_, '_> {
 }
 
 #[inline(always)]
-fn block(plan: &Plan, inp: &Inputs, out: &mut Outputs) {
+pub(crate) fn block(plan: &Plan, inp: &Inputs, out: &mut Outputs) {
     use kernel::*;
     let Plan::Microfacet { d, g, f, p } = plan else {
         if let Plan::Lambert(p) = plan {
