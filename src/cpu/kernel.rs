@@ -11,9 +11,7 @@
 
 use crate::backend::TERM_COLUMNS;
 use crate::cpu::math::{erfc, exp_neg};
-use crate::material::{
-    Convention, Distribution, Fresnel, Geometry, Material, Model, Roughness,
-};
+use crate::material::{Convention, Distribution, Fresnel, Geometry, Material, Model, Roughness};
 use std::f64::consts::PI;
 
 /// Tuples per block: 16 f32 lanes fill one AVX-512 register (two AVX2 registers).
@@ -222,7 +220,8 @@ struct Frame {
 #[inline(always)]
 fn frame(x: &[f32; 9]) -> Frame {
     let w = |i: usize| f64::from(x[i]);
-    let (lx, ly, lz, vx, vy, vz, nx, ny, nz) = (w(0), w(1), w(2), w(3), w(4), w(5), w(6), w(7), w(8));
+    let (lx, ly, lz, vx, vy, vz, nx, ny, nz) =
+        (w(0), w(1), w(2), w(3), w(4), w(5), w(6), w(7), w(8));
     // Products of f32 values are exact in f64, and squares of f32 magnitudes stay inside
     // f64's normal range, so these lengths neither overflow nor underflow.
     let ll = lx * lx + ly * ly + lz * lz;
@@ -409,7 +408,12 @@ pub fn microfacet_block<const D: u8, const G: u8, const F: u8>(
             let norm = (p.d_norm / (cos_h2 * cos_h2)) as f32;
             e * norm * e
         };
-        let (cos_i, cos_o, cos_h, c) = (fr.cos_i as f32, fr.cos_o as f32, fr.cos_h as f32, fr.c as f32);
+        let (cos_i, cos_o, cos_h, c) = (
+            fr.cos_i as f32,
+            fr.cos_o as f32,
+            fr.cos_h as f32,
+            fr.c as f32,
+        );
         // G (FORMULAS.md §3); q2 = m² tan²θ formed in f64 from |n × w|².
         let q2_i = (p.m2 * fr.sin2_i / (fr.cos_i * fr.cos_i)) as f32;
         let q2_o = (p.m2 * fr.sin2_o / (fr.cos_o * fr.cos_o)) as f32;
@@ -470,7 +474,9 @@ mod tests {
             [0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0],
             [0.5, 0.5, 0.2, 0.1, -0.6, 0.4, 0.1, 0.05, 1.0],
         ];
-        let mut inp = Inputs { v: [[0.0; LANES]; 9] };
+        let mut inp = Inputs {
+            v: [[0.0; LANES]; 9],
+        };
         for k in 0..LANES {
             for j in 0..9 {
                 inp.v[j][k] = dirs[k % 4][j];
@@ -478,7 +484,13 @@ mod tests {
         }
         let mut count = 0;
         for d in ["ggx", "beckmann"] {
-            for g in ["none", "cook-torrance", "smith", "smith-correlated", "smith-fast"] {
+            for g in [
+                "none",
+                "cook-torrance",
+                "smith",
+                "smith-correlated",
+                "smith-fast",
+            ] {
                 if g == "smith-fast" && d != "beckmann" {
                     continue;
                 }
@@ -496,12 +508,26 @@ mod tests {
                              diffuse_weight = 0.5\nspecular_weight = 0.7\n"
                         );
                         let m = &parse_materials(&toml, "t").unwrap()[0];
-                        let Plan::Microfacet { d: dd, g: gg, f: ff, p } = Plan::for_material(m)
+                        let Plan::Microfacet {
+                            d: dd,
+                            g: gg,
+                            f: ff,
+                            p,
+                        } = Plan::for_material(m)
                         else {
                             panic!("{d} {g} {f} {conv} is not in the lanes");
                         };
                         let mut out = Outputs::default();
-                        crate::cpu::block(&Plan::Microfacet { d: dd, g: gg, f: ff, p }, &inp, &mut out);
+                        crate::cpu::block(
+                            &Plan::Microfacet {
+                                d: dd,
+                                g: gg,
+                                f: ff,
+                                p,
+                            },
+                            &inp,
+                            &mut out,
+                        );
                         for k in 0..LANES {
                             assert!(!out.rescue[k], "{d} {g} {f} {conv}: lane {k} rescued");
                             let w = |a: usize| f64::from(dirs[k % 4][a]);
@@ -513,15 +539,27 @@ mod tests {
                                 m,
                             );
                             assert_eq!(e.status, Status::Valid);
-                            let want = [e.brdf[0], e.brdf[1], e.brdf[2], e.d, e.g, e.f[0], e.f[1], e.f[2], e.k];
+                            let want = [
+                                e.brdf[0], e.brdf[1], e.brdf[2], e.d, e.g, e.f[0], e.f[1], e.f[2],
+                                e.k,
+                            ];
                             let got = [
-                                out.brdf[0][k], out.brdf[1][k], out.brdf[2][k], out.terms[0][k],
-                                out.terms[1][k], out.terms[2][k], out.terms[3][k], out.terms[4][k],
+                                out.brdf[0][k],
+                                out.brdf[1][k],
+                                out.brdf[2][k],
+                                out.terms[0][k],
+                                out.terms[1][k],
+                                out.terms[2][k],
+                                out.terms[3][k],
+                                out.terms[4][k],
                                 out.terms[5][k],
                             ];
                             for (i, (x, r)) in got.iter().zip(want).enumerate() {
                                 let err = (f64::from(*x) - r).abs() / r.abs().max(1e-6);
-                                assert!(err < 2e-6, "{d} {g} {f} {conv} lane {k} col {i}: {x} vs {r}");
+                                assert!(
+                                    err < 2e-6,
+                                    "{d} {g} {f} {conv} lane {k} col {i}: {x} vs {r}"
+                                );
                             }
                         }
                         count += 1;
@@ -534,7 +572,9 @@ mod tests {
 
     #[test]
     fn grazing_invalid_and_below_horizon_lanes_are_rescued() {
-        let mut inp = Inputs { v: [[0.0; LANES]; 9] };
+        let mut inp = Inputs {
+            v: [[0.0; LANES]; 9],
+        };
         let rows: [[f32; 9]; 4] = [
             [1.0, 0.0, 1e-6, -0.2, 0.1, 0.8, 0.0, 0.0, 1.0], // cos_i ≈ 1e-6
             [0.3, 0.2, 0.9, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0],   // V = 0

@@ -25,7 +25,8 @@ pub fn exp_neg(x: f32) -> f32 {
         + r * (1.0
             + r * (1.0 / 2.0
                 + r * (1.0 / 6.0
-                    + r * (1.0 / 24.0 + r * (1.0 / 120.0 + r * (1.0 / 720.0 + r * (1.0 / 5040.0)))))));
+                    + r * (1.0 / 24.0
+                        + r * (1.0 / 120.0 + r * (1.0 / 720.0 + r * (1.0 / 5040.0)))))));
     let scale = f32::from_bits(((k as i32 + 127) as u32) << 23);
     if x < -87.0 {
         0.0
@@ -76,7 +77,10 @@ mod tests {
             let got = f64::from(erfc(z as f32));
             let want = libm::erfc(f64::from(z as f32));
             let err = (got - want).abs();
-            assert!(err <= 5e-7 && err <= 1e-5 * want + 1e-30, "z = {z}: {got} vs {want}");
+            assert!(
+                err <= 5e-7 && err <= 1e-5 * want + 1e-30,
+                "z = {z}: {got} vs {want}"
+            );
         }
     }
 }

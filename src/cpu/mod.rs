@@ -145,7 +145,11 @@ fn rescue(batch: &Batch, m: &Material, row: usize, j: usize, w: &mut Work, count
     match e.status {
         Status::Invalid => {
             counts.invalid += 1;
-            counts.first_invalid = Some(counts.first_invalid.map_or(row as u64, |f| f.min(row as u64)));
+            counts.first_invalid = Some(
+                counts
+                    .first_invalid
+                    .map_or(row as u64, |f| f.min(row as u64)),
+            );
         }
         Status::BelowHorizon => counts.below_horizon += 1,
         Status::Valid => counts.saturated += u64::from(e.saturated()),
@@ -286,11 +290,7 @@ impl Backend for CpuEngine {
                         None => None,
                     };
                     queue.push(Work {
-                        material: if single {
-                            batch.material(0)
-                        } else {
-                            mi
-                        },
+                        material: if single { batch.material(0) } else { mi },
                         start,
                         brdf: b,
                         terms: t,
