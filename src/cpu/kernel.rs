@@ -60,6 +60,8 @@ pub struct Params {
     pub spec: [f32; 3],
     /// `m²`.
     pub m2: f64,
+    /// `1/m²`.
+    pub inv_m2: f64,
     /// The D normalisation: `1/(k m²)` for Beckmann, `m²/π` for GGX.
     pub d_norm: f64,
     /// K's numerator: 1/4 modern, 1/π Cook–Torrance 1982, 1 seed.
@@ -126,6 +128,7 @@ impl Plan {
         p.diffuse = f32x3(m.diffuse.map(|c| ct.diffuse_weight * c / PI));
         p.spec = f32x3(m.specular.map(|c| ct.specular_weight * c));
         p.m2 = mr * mr;
+        p.inv_m2 = 1.0 / p.m2;
         let beckmann_k = match ct.convention {
             Convention::Seed => 4.0,
             Convention::CookTorrance1982 => 1.0,
@@ -217,6 +220,16 @@ struct Frame {
     ok: bool,
 }
 
+/// `1/√x` to ~1e-14 relative for x in f32's range: the f32 estimate (cheap in wide
+/// lanes) refined by one Newton step in f64, which squares its relative error (~1e-7).
+/// Outside f32's range the estimate is 0 or ∞ and the result 0 or NaN: the frame then
+/// fails its tests and the lane is rescued.
+#[inline(always)]
+fn rsqrt(x: f64) -> f64 {
+    let y0 = f64::from(1.0 / (x as f32).sqrt());
+    y0 * (1.5 - 0.5 * x * y0 * y0)
+}
+
 #[inline(always)]
 fn frame(x: &[f32; 9]) -> Frame {
     let w = |i: usize| f64::from(x[i]);
@@ -234,14 +247,14 @@ fn frame(x: &[f32; 9]) -> Frame {
         && ll < f64::INFINITY
         && vv < f64::INFINITY
         && nn < f64::INFINITY;
-    let (il, iv, inn) = (1.0 / ll.sqrt(), 1.0 / vv.sqrt(), 1.0 / nn.sqrt());
+    let (il, iv, inn) = (rsqrt(ll), rsqrt(vv), rsqrt(nn));
     let (lx, ly, lz) = (lx * il, ly * il, lz * il);
     let (vx, vy, vz) = (vx * iv, vy * iv, vz * iv);
     let (nx, ny, nz) = (nx * inn, ny * inn, nz * inn);
     let cos_i = nx * lx + ny * ly + nz * lz;
     let cos_o = nx * vx + ny * vy + nz * vz;
     let (hx, hy, hz) = (lx + vx, ly + vy, lz + vz);
-    let ih = 1.0 / (hx * hx + hy * hy + hz * hz).sqrt();
+    let ih = rsqrt(hx * hx + hy * hy + hz * hz);
     let (hx, hy, hz) = (hx * ih, hy * ih, hz * ih);
     let cos_h = nx * hx + ny * hy + nz * hz;
     let c = vx * hx + vy * hy + vz * hz;
@@ -394,18 +407,20 @@ pub fn microfacet_block<const D: u8, const G: u8, const F: u8>(
     for k in 0..LANES {
         let fr = frame(&lane_inputs(inp, k));
         let cos_h2 = fr.cos_h * fr.cos_h;
-        // D (FORMULAS.md §2).
+        // D (FORMULAS.md §2), in f64: one division.
         let d = if D == D_GGX {
-            // m²/(π (m² cos_h² + sin²_h)²): no 1/cos_h⁴ to overflow.
+            // m²/(π (m² cos_h² + sin²_h)²): no 1/cos_h⁴ to overflow; in f64 because the
+            // square of the sum leaves f32's normal range for m near its lower bound.
             let s = p.m2 * cos_h2 + fr.sin2_h;
             (p.d_norm / (s * s)) as f32
         } else {
             // exp(−tan²/m²)/(k m² cos⁴) as (e·norm)·e with e = exp(−tan²/(2m²)): each
             // factor stays in f32's range until tan²/m² ≈ 174, where the direct
             // exp(−x)·norm would already have underflowed to 0 next to a large norm.
-            let half_x = (fr.sin2_h / (cos_h2 * p.m2) * 0.5) as f32;
+            let ic = 1.0 / cos_h2;
+            let half_x = (fr.sin2_h * ic * p.inv_m2 * 0.5) as f32;
             let e = exp_neg(-half_x);
-            let norm = (p.d_norm / (cos_h2 * cos_h2)) as f32;
+            let norm = (p.d_norm * ic * ic) as f32;
             e * norm * e
         };
         let (cos_i, cos_o, cos_h, c) = (
@@ -414,9 +429,12 @@ pub fn microfacet_block<const D: u8, const G: u8, const F: u8>(
             fr.cos_h as f32,
             fr.c as f32,
         );
-        // G (FORMULAS.md §3); q2 = m² tan²θ formed in f64 from |n × w|².
-        let q2_i = (p.m2 * fr.sin2_i / (fr.cos_i * fr.cos_i)) as f32;
-        let q2_o = (p.m2 * fr.sin2_o / (fr.cos_o * fr.cos_o)) as f32;
+        // G (FORMULAS.md §3) from q2 = m² tan²θ = m² |n × w|² / cos²θ: products and
+        // quotients of positive numbers, which f32 carries to a few ulp (the cancelling
+        // parts, |n × w|² and the cosines, come from the f64 frame).
+        let m2 = p.m2 as f32;
+        let q2_i = m2 * (fr.sin2_i as f32) / (cos_i * cos_i);
+        let q2_o = m2 * (fr.sin2_o as f32) / (cos_o * cos_o);
         let g = match G {
             G_NONE => 1.0,
             G_CT => {

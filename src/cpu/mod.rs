@@ -15,7 +15,7 @@ pub mod kernel;
 pub mod math;
 
 use crate::backend::{Backend, Counts, Output, Request, TERM_COLUMNS};
-use crate::batch::Batch;
+use crate::batch::{Batch, COLUMNS_PLAIN, COLUMNS_TANGENT};
 use crate::cancel::Cancel;
 use crate::error::Result;
 use crate::material::Material;
@@ -31,6 +31,27 @@ const CHUNK: usize = 16_384;
 pub struct CpuEngine {
     threads: usize,
     cancel: Cancel,
+    last: Tally,
+}
+
+/// Where the tuples of the last evaluation went.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Tally {
+    /// Tuples of material groups that run in the lanes.
+    pub lanes: u64,
+    /// Of those, tuples re-evaluated by the reference (invalid, below the horizon, grazing,
+    /// or an output the lanes cannot vouch for).
+    pub rescued: u64,
+    /// Tuples of material groups that run on the reference.
+    pub reference: u64,
+}
+
+impl Tally {
+    fn add(&mut self, o: &Tally) {
+        self.lanes += o.lanes;
+        self.rescued += o.rescued;
+        self.reference += o.reference;
+    }
 }
 
 impl Default for CpuEngine {
@@ -66,7 +87,13 @@ impl CpuEngine {
         CpuEngine {
             threads: threads.max(1),
             cancel: Cancel::new(),
+            last: Tally::default(),
         }
+    }
+
+    /// Where the tuples of the last [`Backend::evaluate`] went: lanes, rescued, reference.
+    pub fn last_tally(&self) -> Tally {
+        self.last
     }
 
     /// Worker threads.
@@ -93,10 +120,10 @@ struct ChunkOp<'a, 'b> {
 }
 
 impl pulp::WithSimd for ChunkOp<'_, '_> {
-    type Output = Counts;
+    type Output = (Counts, Tally);
 
     #[inline(always)]
-    fn with_simd<S: pulp::Simd>(self, _simd: S) -> Counts {
+    fn with_simd<S: pulp::Simd>(self, _simd: S) -> (Counts, Tally) {
         run_chunk(self.plan, self.batch, self.order, self.work, self.material)
     }
 }
@@ -164,6 +191,16 @@ fn rescue(batch: &Batch, m: &Material, row: usize, j: usize, w: &mut Work, count
     }
 }
 
+/// Columns 0–8 (L, V, N) of `LANES` consecutive rows of `C` columns into lanes.
+#[inline(always)]
+fn transpose<const C: usize>(rows: &[f32], inp: &mut Inputs) {
+    for (c, col) in inp.v.iter_mut().enumerate() {
+        for (k, x) in col.iter_mut().enumerate() {
+            *x = rows[k * C + c];
+        }
+    }
+}
+
 #[inline(always)]
 fn run_chunk(
     plan: &Plan,
@@ -171,16 +208,19 @@ fn run_chunk(
     order: Option<&[u32]>,
     w: &mut Work,
     m: &Material,
-) -> Counts {
+) -> (Counts, Tally) {
     let rows = |p: usize| order.map_or(p, |o| o[p] as usize);
     let mut counts = Counts::default();
     let len = w.brdf.len() / 3;
+    let mut tally = Tally::default();
     if !plan.is_simd() {
         for j in 0..len {
             rescue(batch, m, rows(w.start + j), j, w, &mut counts);
         }
-        return counts;
+        tally.reference = len as u64;
+        return (counts, tally);
     }
+    tally.lanes = len as u64;
     let data = batch.as_slice();
     let cols = batch.columns();
     let mut inp = Inputs {
@@ -195,10 +235,20 @@ fn run_chunk(
             // The tail block repeats its last row: its extra lanes are computed and dropped.
             *slot = rows(w.start + j0 + k.min(n - 1));
         }
-        for (k, &r) in idx.iter().enumerate() {
-            let row = &data[r * cols..r * cols + 9];
-            for (c, &x) in row.iter().enumerate() {
-                inp.v[c][k] = x;
+        if order.is_none() && n == LANES {
+            // Consecutive rows: a fixed-stride transpose the compiler unrolls.
+            let base = idx[0] * cols;
+            if cols == COLUMNS_PLAIN {
+                transpose::<COLUMNS_PLAIN>(&data[base..base + LANES * COLUMNS_PLAIN], &mut inp);
+            } else {
+                transpose::<COLUMNS_TANGENT>(&data[base..base + LANES * COLUMNS_TANGENT], &mut inp);
+            }
+        } else {
+            for (k, &r) in idx.iter().enumerate() {
+                let row = &data[r * cols..r * cols + 9];
+                for (c, &x) in row.iter().enumerate() {
+                    inp.v[c][k] = x;
+                }
             }
         }
         block(plan, &inp, &mut out);
@@ -216,11 +266,12 @@ fn run_chunk(
         for k in 0..n {
             if out.rescue[k] {
                 rescue(batch, m, idx[k], j0 + k, w, &mut counts);
+                tally.rescued += 1;
             }
         }
         j0 += n;
     }
-    counts
+    (counts, tally)
 }
 
 impl Backend for CpuEngine {
@@ -248,8 +299,13 @@ impl Backend for CpuEngine {
         // Group the rows by material: a stable counting sort, skipped when one material
         // covers the batch (then the grouped order is the row order).
         let mut counts_per = vec![0usize; materials.len()];
-        for i in 0..n {
-            counts_per[batch.material(i)] += 1;
+        if materials.len() == 1 {
+            // Every row is material 0 (the batch validated its indices): no pass over it.
+            counts_per[0] = n;
+        } else {
+            for i in 0..n {
+                counts_per[batch.material(i)] += 1;
+            }
         }
         let single = counts_per.iter().filter(|&&c| c > 0).count() <= 1;
         let mut group_start = vec![0usize; materials.len() + 1];
@@ -304,8 +360,9 @@ impl Backend for CpuEngine {
         let cancel = &self.cancel;
         let workers = self.threads.min(n.div_ceil(CHUNK)).max(1);
         let arch = pulp::Arch::new();
-        let work = |_: usize| -> Counts {
+        let work = |_: usize| -> (Counts, Tally) {
             let mut total = Counts::default();
+            let mut tally = Tally::default();
             loop {
                 if cancel.is_cancelled() {
                     break;
@@ -313,7 +370,7 @@ impl Backend for CpuEngine {
                 let Some(mut w) = queue.lock().expect("queue lock").pop() else {
                     break;
                 };
-                let c = arch.dispatch(ChunkOp {
+                let (c, t) = arch.dispatch(ChunkOp {
                     plan: &plans[w.material],
                     batch,
                     order: order.as_deref(),
@@ -321,10 +378,11 @@ impl Backend for CpuEngine {
                     work: &mut w,
                 });
                 total.absorb(&c);
+                tally.add(&t);
             }
-            total
+            (total, tally)
         };
-        let parts: Vec<Counts> = if workers == 1 {
+        let parts: Vec<(Counts, Tally)> = if workers == 1 {
             vec![work(0)]
         } else {
             std::thread::scope(|s| {
@@ -340,8 +398,10 @@ impl Backend for CpuEngine {
             tuples: n as u64,
             ..Counts::default()
         };
-        for c in &parts {
+        self.last = Tally::default();
+        for (c, t) in &parts {
             counts.absorb(c);
+            self.last.add(t);
         }
         // Back to row order.
         if let Some(order) = order {
