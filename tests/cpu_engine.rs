@@ -2,6 +2,8 @@
 //! combination under the conformance rule, the stress corpus (no non-finite output, counts
 //! equal), results independent of the thread count, mixed-material batches, cancellation.
 
+mod common;
+
 use vkbrdf::backend::{Backend, Request};
 use vkbrdf::batch::{memory_source, Batch};
 use vkbrdf::cancel::Cancel;
@@ -259,4 +261,127 @@ fn the_stress_corpus_keeps_the_policy_with_every_count_equal() {
     assert_eq!(report.below_horizon.0, report.below_horizon.1);
     assert!(report.policy_holds(), "{}", report.to_markdown(1e-5));
     assert!(report.saturated.1 > 0 && report.invalid.1 > 0);
+}
+
+// ---------------------------------------------------------------------------------------
+// The CLI: `--backend auto|vulkan|cpu|reference`.
+
+fn eval_json(
+    dir: &std::path::Path,
+    backend: Option<&str>,
+    env: &[(&str, &str)],
+) -> serde_json::Value {
+    let m = dir.join("m.toml");
+    std::fs::write(
+        &m,
+        "[[material]]\nname = \"metal\"\nmodel = \"cook-torrance\"\ndistribution = \"ggx\"\n\
+         geometry = \"smith\"\nfresnel = \"conductor\"\nior = [0.2, 0.9, 1.1]\n\
+         extinction = [3.9, 2.4, 2.2]\nroughness = 0.3\n",
+    )
+    .unwrap();
+    let t = dir.join("t.npy");
+    if !t.exists() {
+        assert!(common::generate(&m, 5000, &t).status.success());
+    }
+    let out = dir.join(format!("brdf-{}.npy", backend.unwrap_or("default")));
+    let mut args = vec![
+        "eval",
+        "-m",
+        common::path(&m),
+        "-i",
+        common::path(&t),
+        "-o",
+        common::path(&out),
+        "--json",
+    ];
+    if let Some(b) = backend {
+        args.extend_from_slice(&["--backend", b]);
+    }
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_vkbrdf"))
+        .args(&args)
+        .env_remove("VKBRDF_DEVICE")
+        .envs(env.iter().copied())
+        .output()
+        .expect("run vkbrdf");
+    assert!(o.status.success(), "{:?}: {}", backend, common::stderr(&o));
+    serde_json::from_slice(&o.stdout).expect("JSON summary")
+}
+
+#[test]
+fn backend_cpu_is_the_engine_and_reference_is_the_f64_judge() {
+    let dir = tempfile::tempdir().unwrap();
+    let cpu = eval_json(dir.path(), Some("cpu"), &[]);
+    let reference = eval_json(dir.path(), Some("reference"), &[]);
+    let engine = cpu["engine"].as_str().unwrap();
+    assert!(engine.starts_with("cpu ("), "{cpu}");
+    assert!(
+        reference["engine"]
+            .as_str()
+            .unwrap()
+            .starts_with("cpu-reference"),
+        "{reference}"
+    );
+    let (a, _) = vkbrdf::batch::read_npy_f32(&dir.path().join("brdf-cpu.npy")).unwrap();
+    let (b, _) = vkbrdf::batch::read_npy_f32(&dir.path().join("brdf-reference.npy")).unwrap();
+    assert_eq!(a.len(), b.len());
+    assert_ne!(
+        a, b,
+        "the engine computes in f32: some value differs from the f64 judge's"
+    );
+    for (x, r) in a.iter().zip(&b) {
+        let (x, r) = (f64::from(*x), f64::from(*r));
+        assert!((x - r).abs() <= 1e-5 * r.abs().max(1e-6), "{x} vs {r}");
+    }
+}
+
+#[test]
+fn auto_picks_the_engine_without_a_gpu_and_vulkan_for_a_named_device() {
+    let has_gpu = vkbrdf::gpu::list_devices().is_ok_and(|l| {
+        l.iter()
+            .any(|d| d.device_type == "discrete GPU" || d.device_type == "integrated GPU")
+    });
+    let dir = tempfile::tempdir().unwrap();
+    let default = eval_json(dir.path(), None, &[]);
+    let auto = eval_json(dir.path(), Some("auto"), &[]);
+    assert_eq!(default["engine"], auto["engine"]);
+    let name = auto["engine"].as_str().unwrap();
+    if has_gpu {
+        assert!(!name.starts_with("cpu"), "{name}");
+    } else {
+        assert!(name.starts_with("cpu ("), "{name}");
+    }
+    // A named device means Vulkan, whatever its type.
+    if let Some(d) = vkbrdf::gpu::list_devices()
+        .ok()
+        .and_then(|l| l.first().cloned())
+    {
+        let index = d.index.to_string();
+        let named = eval_json(
+            dir.path(),
+            Some("auto"),
+            &[("VKBRDF_DEVICE", index.as_str())],
+        );
+        assert!(
+            named["engine"].as_str().unwrap().starts_with("vulkan"),
+            "{named}"
+        );
+    }
+}
+
+#[test]
+fn help_and_devices_announce_the_names() {
+    let help = common::vkbrdf(&["eval", "--help"]);
+    let text = String::from_utf8_lossy(&help.stdout);
+    for word in ["auto", "vulkan", "reference", "`cpu` meant it"] {
+        assert!(text.contains(word), "eval --help lacks {word:?}: {text}");
+    }
+    let bad = common::vkbrdf(&["eval", "--backend", "gpu", "-m", "x", "-i", "y", "-o", "z"]);
+    assert_eq!(bad.status.code(), Some(2));
+    let err = common::stderr(&bad);
+    assert!(err.contains("auto") && err.contains("reference"), "{err}");
+    if vkbrdf::gpu::list_devices().is_ok_and(|l| !l.is_empty()) {
+        let d = common::vkbrdf(&["devices"]);
+        let text = String::from_utf8_lossy(&d.stdout);
+        assert!(text.contains("--backend auto (the default) runs"), "{text}");
+    }
 }
