@@ -291,7 +291,7 @@ fn help_texts_match_behaviour() {
     assert!(list.contains("smith-correlated"), "{list}");
     assert!(!list.contains("SmithCorrelated"), "{list}");
     // Commands without --backend do not suggest it as if they had it.
-    for cmd in ["check", "devices"] {
+    for cmd in ["devices"] {
         let h = help(&[cmd, "--help"]);
         assert!(!h.contains("--backend cpu"), "{cmd} --help: {h}");
     }

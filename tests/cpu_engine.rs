@@ -385,3 +385,20 @@ fn help_and_devices_announce_the_names() {
         assert!(text.contains("--backend auto (the default) runs"), "{text}");
     }
 }
+
+#[test]
+fn check_runs_on_the_engine() {
+    let o = common::vkbrdf(&[
+        "check",
+        "--backend",
+        "cpu",
+        "--tuples",
+        "300",
+        "--filter",
+        "beckmann",
+    ]);
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert_eq!(o.status.code(), Some(0), "{text}{}", common::stderr(&o));
+    assert!(text.contains("backend:   cpu ("), "{text}");
+    assert!(text.contains(" 0 fail"), "{text}");
+}
