@@ -170,6 +170,7 @@ fn mixed_batch(n: usize) -> (Batch, Vec<Material>) {
 }
 
 #[test]
+#[allow(clippy::needless_range_loop)] // column c indexes the output and the sensitivities
 fn mixed_materials_give_the_reference_counts_and_values_for_any_thread_count() {
     let (batch, mats) = mixed_batch(70_001);
     let request = Request { terms: true };

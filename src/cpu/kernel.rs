@@ -9,6 +9,10 @@
 //! invalid and below-horizon tuples, cosines below [`GRAZING`], and any output that came
 //! out non-finite or above [`OUTPUT_LIMIT`] (the saturation and overflow cases).
 
+// The lane loops index several arrays with the same lane (or column) number; iterator
+// forms would hide that the loops are the vectorised dimension.
+#![allow(clippy::needless_range_loop)]
+
 use crate::backend::TERM_COLUMNS;
 use crate::cpu::math::{erfc, exp_neg};
 use crate::material::{Convention, Distribution, Fresnel, Geometry, Material, Model, Roughness};
@@ -463,13 +467,12 @@ pub fn microfacet_block<const D: u8, const G: u8, const F: u8>(
         for ch in 0..3 {
             let b = p.diffuse[ch] + p.spec[ch] * (d * g * f[ch] * kk);
             out.brdf[ch][k] = b;
-            bad |= !(b.abs() <= OUTPUT_LIMIT);
+            bad |= b.is_nan() || b.abs() > OUTPUT_LIMIT;
         }
         let terms = [d, g, f[0], f[1], f[2], kk];
         for (t, x) in terms.into_iter().enumerate() {
             out.terms[t][k] = x;
-            // `!(x <= limit)` is also true for NaN.
-            bad |= !(x.abs() <= OUTPUT_LIMIT);
+            bad |= x.is_nan() || x.abs() > OUTPUT_LIMIT;
         }
         out.rescue[k] = bad;
     }

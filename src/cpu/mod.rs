@@ -11,6 +11,9 @@
 //! one portable binary, and no `unsafe` here — pulp proves the CPU feature before it enters
 //! a function compiled for it.
 
+// Lane loops index the lanes' arrays by lane number (see kernel.rs).
+#![allow(clippy::needless_range_loop)]
+
 pub mod kernel;
 pub mod math;
 
