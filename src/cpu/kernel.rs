@@ -384,12 +384,29 @@ fn conductor(c: f32, n: f32, k: f32, e2rm1: f32) -> f32 {
     0.5 * (r_par + r_perp)
 }
 
-/// Lambert on one block.
+/// Lambert on one block: only the validity and the horizon matter, so only the two
+/// cosines are formed (in f64; their sign is all Lambert needs, and a cosine below
+/// [`GRAZING`] still goes to the reference, which decides the horizon case).
 #[inline(always)]
 pub fn lambert_block(p: &Params, inp: &Inputs, out: &mut Outputs) {
     for k in 0..LANES {
-        let fr = frame(&lane_inputs(inp, k));
-        out.rescue[k] = !fr.ok;
+        let x = lane_inputs(inp, k);
+        let w = |i: usize| f64::from(x[i]);
+        let (lx, ly, lz, vx, vy, vz, nx, ny, nz) =
+            (w(0), w(1), w(2), w(3), w(4), w(5), w(6), w(7), w(8));
+        let ll = lx * lx + ly * ly + lz * lz;
+        let vv = vx * vx + vy * vy + vz * vz;
+        let nn = nx * nx + ny * ny + nz * nz;
+        let finite = ll > 0.0
+            && vv > 0.0
+            && nn > 0.0
+            && ll < f64::INFINITY
+            && vv < f64::INFINITY
+            && nn < f64::INFINITY;
+        let inn = rsqrt(nn);
+        let cos_i = (nx * lx + ny * ly + nz * lz) * inn * rsqrt(ll);
+        let cos_o = (nx * vx + ny * vy + nz * vz) * inn * rsqrt(vv);
+        out.rescue[k] = !(finite && cos_i >= GRAZING && cos_o >= GRAZING);
         for ch in 0..3 {
             out.brdf[ch][k] = p.diffuse[ch];
         }

@@ -204,6 +204,17 @@ fn transpose<const C: usize>(rows: &[f32], inp: &mut Inputs) {
     }
 }
 
+/// `C` lane arrays into `LANES` rows of `C` columns.
+#[inline(always)]
+fn untranspose<const C: usize>(cols: &[[f32; LANES]; C], rows: &mut [f32]) {
+    let rows = &mut rows[..LANES * C];
+    for k in 0..LANES {
+        for c in 0..C {
+            rows[k * C + c] = cols[c][k];
+        }
+    }
+}
+
 #[inline(always)]
 fn run_chunk(
     plan: &Plan,
@@ -255,14 +266,25 @@ fn run_chunk(
             }
         }
         block(plan, &inp, &mut out);
-        for k in 0..n {
-            let j = j0 + k;
-            for ch in 0..3 {
-                w.brdf[j * 3 + ch] = out.brdf[ch][k];
-            }
+        if n == LANES {
+            // Fixed-size interleaving stores the compiler turns into shuffles.
+            untranspose::<3>(&out.brdf, &mut w.brdf[j0 * 3..(j0 + LANES) * 3]);
             if let Some(t) = w.terms.as_deref_mut() {
-                for c in 0..TERM_COLUMNS {
-                    t[j * TERM_COLUMNS + c] = out.terms[c][k];
+                untranspose::<TERM_COLUMNS>(
+                    &out.terms,
+                    &mut t[j0 * TERM_COLUMNS..(j0 + LANES) * TERM_COLUMNS],
+                );
+            }
+        } else {
+            for k in 0..n {
+                let j = j0 + k;
+                for ch in 0..3 {
+                    w.brdf[j * 3 + ch] = out.brdf[ch][k];
+                }
+                if let Some(t) = w.terms.as_deref_mut() {
+                    for c in 0..TERM_COLUMNS {
+                        t[j * TERM_COLUMNS + c] = out.terms[c][k];
+                    }
                 }
             }
         }
