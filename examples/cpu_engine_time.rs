@@ -2,13 +2,16 @@
 //! reference, with the largest relative error against the reference and cycles per
 //! evaluation (time × the TSC frequency, read from /proc/cpuinfo when it says).
 //!
-//! `cargo run --release --example cpu_engine_time -- [TUPLES] [SCENARIO…]`
+//! `cargo run --release --example cpu_engine_time -- [TUPLES] [SCENARIO…]`; with a Vulkan
+//! device (lavapipe: `VK_DRIVER_FILES=/usr/share/vulkan/icd.d/lvp_icd.json`) the kernel's
+//! end-to-end and kernel-only rates too.
 //! (default 4,194,304 tuples; lambert, mitsuba-beckmann, mitsuba-ggx).
 
 use std::time::Instant;
 use vkbrdf::backend::{Backend, Request};
 use vkbrdf::bench::scenarios;
 use vkbrdf::cpu::CpuEngine;
+use vkbrdf::gpu::{DeviceSelector, VulkanBackend, VulkanOptions};
 use vkbrdf::reference::CpuReference;
 
 fn best_of(reps: usize, f: &mut dyn FnMut()) -> f64 {
@@ -55,6 +58,8 @@ fn main() {
             .to_vec();
     }
     let hz = tsc_hz();
+    // The Vulkan kernel beside it when a device opens (lavapipe: VK_DRIVER_FILES=…/lvp_icd.json).
+    let mut vulkan = VulkanBackend::new(DeviceSelector::from_env(), VulkanOptions::default()).ok();
     println!("instruction set: {}, clock {:?} GHz, {n} tuples; M evals/s from wall time (best of 5) unless marked CPU time", vkbrdf::cpu::instruction_set(), hz.map(|h| h / 1e9));
     println!(
         "{:<18} {:<22} {:>12} {:>10} {:>12}",
@@ -102,6 +107,17 @@ fn main() {
                 out = e.evaluate(&batch, &s.materials, &req).expect("engine").brdf
             });
             report(&format!("cpu, {threads} thread(s)"), secs, &out);
+        }
+        if let Some(v) = vulkan.as_mut() {
+            let mut out = Vec::new();
+            let secs = best_of(3, &mut || {
+                out = v.evaluate(&batch, &s.materials, &req).expect("vulkan").brdf
+            });
+            report("vulkan end-to-end", secs, &out);
+            let k = v
+                .kernel_seconds(&batch, &s.materials, &req, 3)
+                .expect("kernel time");
+            report("vulkan kernel-only", k, &out);
         }
         let mut r = CpuReference::new();
         let mut out = Vec::new();

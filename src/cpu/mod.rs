@@ -117,7 +117,7 @@ struct Work<'a> {
 struct ChunkOp<'a, 'b> {
     plan: &'a Plan,
     batch: &'a Batch,
-    order: Option<&'a [u32]>,
+    order: Option<&'a [usize]>,
     work: &'a mut Work<'b>,
     material: &'a Material,
 }
@@ -219,11 +219,11 @@ fn untranspose<const C: usize>(cols: &[[f32; LANES]; C], rows: &mut [f32]) {
 fn run_chunk(
     plan: &Plan,
     batch: &Batch,
-    order: Option<&[u32]>,
+    order: Option<&[usize]>,
     w: &mut Work,
     m: &Material,
 ) -> (Counts, Tally) {
-    let rows = |p: usize| order.map_or(p, |o| o[p] as usize);
+    let rows = |p: usize| order.map_or(p, |o| o[p]);
     let mut counts = Counts::default();
     let len = w.brdf.len() / 3;
     let mut tally = Tally::default();
@@ -337,12 +337,12 @@ impl Backend for CpuEngine {
         for (mi, c) in counts_per.iter().enumerate() {
             group_start[mi + 1] = group_start[mi] + c;
         }
-        let order: Option<Vec<u32>> = (!single).then(|| {
+        let order: Option<Vec<usize>> = (!single).then(|| {
             let mut next = group_start.clone();
-            let mut order = vec![0u32; n];
+            let mut order = vec![0usize; n];
             for i in 0..n {
                 let mi = batch.material(i);
-                order[next[mi]] = i as u32;
+                order[next[mi]] = i;
                 next[mi] += 1;
             }
             order
@@ -432,14 +432,12 @@ impl Backend for CpuEngine {
         if let Some(order) = order {
             let mut b = vec![0f32; n * 3];
             for (p, &r) in order.iter().enumerate() {
-                let r = r as usize;
                 b[r * 3..r * 3 + 3].copy_from_slice(&brdf[p * 3..p * 3 + 3]);
             }
             brdf = b;
             if let Some(t) = terms.as_mut() {
                 let mut u = vec![0f32; n * TERM_COLUMNS];
                 for (p, &r) in order.iter().enumerate() {
-                    let r = r as usize;
                     u[r * TERM_COLUMNS..(r + 1) * TERM_COLUMNS]
                         .copy_from_slice(&t[p * TERM_COLUMNS..(p + 1) * TERM_COLUMNS]);
                 }
