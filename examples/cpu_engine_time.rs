@@ -92,13 +92,14 @@ fn main() {
             // One thread runs on this thread: its CPU time, not the wall clock.
             let mut e = CpuEngine::with_threads(1);
             let mut out = Vec::new();
-            let mut best = f64::INFINITY;
-            for _ in 0..5 {
-                let t = thread_cpu();
+            // The mean over enough calls for ~1 s of work: schedstat advances at scheduler
+            // ticks, too coarsely for one short call.
+            let reps = (40_000_000 / n).clamp(5, 400);
+            let t = thread_cpu();
+            for _ in 0..reps {
                 out = e.evaluate(&batch, &s.materials, &req).expect("engine").brdf;
-                best = best.min(thread_cpu() - t);
             }
-            report("cpu, 1 thread, CPU time", best, &out);
+            report("cpu, 1 thread, CPU time", (thread_cpu() - t) / reps as f64, &out);
         }
         for threads in [1, 2] {
             let mut e = CpuEngine::with_threads(threads);
