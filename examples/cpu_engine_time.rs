@@ -99,7 +99,11 @@ fn main() {
             for _ in 0..reps {
                 out = e.evaluate(&batch, &s.materials, &req).expect("engine").brdf;
             }
-            report("cpu, 1 thread, CPU time", (thread_cpu() - t) / reps as f64, &out);
+            report(
+                "cpu, 1 thread, CPU time",
+                (thread_cpu() - t) / reps as f64,
+                &out,
+            );
         }
         for threads in [1, 2] {
             let mut e = CpuEngine::with_threads(threads);
