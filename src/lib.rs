@@ -34,6 +34,7 @@ pub mod batch;
 pub mod bench;
 pub mod cancel;
 pub mod check;
+pub mod cpu;
 pub mod directions;
 pub mod error;
 pub mod features;

@@ -118,7 +118,7 @@ fn eval_round_trip_matches_the_reference() {
     let o = vkbrdf(&[
         "eval",
         "--backend",
-        "cpu",
+        "reference",
         "-m",
         &m,
         "-i",
@@ -171,7 +171,7 @@ fn strict_refuses_invalid_tuples_and_writes_nothing() {
     let o = vkbrdf(&[
         "eval",
         "--backend",
-        "cpu",
+        "reference",
         "--strict",
         "-m",
         &m,
@@ -200,7 +200,7 @@ fn errors_exit_2_name_the_file_and_leave_existing_output_untouched() {
     let o = vkbrdf(&[
         "eval",
         "--backend",
-        "cpu",
+        "reference",
         "-m",
         bad.to_str().unwrap(),
         "-i",
@@ -219,7 +219,7 @@ fn errors_exit_2_name_the_file_and_leave_existing_output_untouched() {
     let o = vkbrdf(&[
         "eval",
         "--backend",
-        "cpu",
+        "reference",
         "-m",
         &m,
         "-i",
@@ -267,7 +267,7 @@ fn merl_export_then_eval_as_a_measured_material_returns_the_analytic_values() {
         "--material",
         "gold",
         "--backend",
-        "cpu",
+        "reference",
         "--output",
         binary.to_str().unwrap(),
     ]);

@@ -30,13 +30,27 @@ fn cases(dir: &Path) -> Vec<Case> {
     let eval = s(&["eval", "-m", &m, "-i", &t, "-o", &p("o.npy")]);
     let generate = s(&["generate", "-m", &m, "-o", &p("g.npy")]);
     let demo = s(&["demo", "--out-dir", &p("demo")]);
-    let stress = s(&["stress", "--backend", "cpu"]);
+    let stress = s(&["stress", "--backend", "reference"]);
     let bench = s(&["bench", "--quick", "--no-peers", "--scenario", "lambert"]);
     let check = s(&["check", "--filter", "lambert"]);
-    let slice = s(&["table", "slice", "--material", "gold", "--backend", "cpu"]);
-    let albedo = s(&["table", "albedo", "--backend", "cpu", "--size", "2"]);
-    let dfg = s(&["table", "dfg", "--backend", "cpu", "--size", "2"]);
-    let preview = s(&["table", "preview", "--material", "gold", "--backend", "cpu"]);
+    let slice = s(&[
+        "table",
+        "slice",
+        "--material",
+        "gold",
+        "--backend",
+        "reference",
+    ]);
+    let albedo = s(&["table", "albedo", "--backend", "reference", "--size", "2"]);
+    let dfg = s(&["table", "dfg", "--backend", "reference", "--size", "2"]);
+    let preview = s(&[
+        "table",
+        "preview",
+        "--material",
+        "gold",
+        "--backend",
+        "reference",
+    ]);
     let case = |command: Vec<String>, option, past_max| Case {
         command,
         option,
@@ -276,11 +290,9 @@ fn help_texts_match_behaviour() {
     let list = help(&["materials"]);
     assert!(list.contains("smith-correlated"), "{list}");
     assert!(!list.contains("SmithCorrelated"), "{list}");
-    // Commands without --backend do not suggest it as if they had it.
-    for cmd in ["check", "devices"] {
-        let h = help(&[cmd, "--help"]);
-        assert!(!h.contains("--backend cpu"), "{cmd} --help: {h}");
-    }
+    // Commands without --backend do not suggest it as if they had it (check has it now).
+    let h = help(&["devices", "--help"]);
+    assert!(!h.contains("--backend cpu"), "devices --help: {h}");
 }
 
 /// A closed standard output ends the process quietly (as `| head` does to other tools).

@@ -13,7 +13,7 @@ const LAYERS: &[&[&str]] = &[
     &["batch", "directions"],
     &["backend", "precision", "sample"],
     &["reference", "features"],
-    &["gpu"],
+    &["gpu", "cpu"],
     &["table", "check", "stress", "bench", "stream"],
 ];
 

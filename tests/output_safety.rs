@@ -32,7 +32,7 @@ fn setup() -> (tempfile::TempDir, PathBuf, PathBuf) {
 
 /// `vkbrdf eval` on the CPU reference (no device needed).
 fn eval(m: &Path, t: &Path, extra: &[&str]) -> Output {
-    let mut args = vec!["--backend", "cpu"];
+    let mut args = vec!["--backend", "reference"];
     args.extend_from_slice(extra);
     common::eval(m, t, &args)
 }
@@ -120,7 +120,7 @@ fn two_outputs_naming_one_file_are_refused() {
         "table",
         "albedo",
         "--backend",
-        "cpu",
+        "reference",
         "--size",
         "2",
         "--samples",
@@ -235,7 +235,7 @@ trap 'umount $mnt' EXIT
 head -c 32768 /dev/zero | tr '\0' 'b' > $mnt/brdf.npy
 head -c 4096 /dev/zero | tr '\0' 't' > $mnt/terms.npy
 set +e
-{bin} eval --backend cpu -m {m} -i {t} -o $mnt/brdf.npy --terms $mnt/terms.npy
+{bin} eval --backend reference -m {m} -i {t} -o $mnt/brdf.npy --terms $mnt/terms.npy
 echo "exit=$?"
 set -e
 echo "brdf=$(tr -d 'b' < $mnt/brdf.npy | wc -c) $(wc -c < $mnt/brdf.npy)"
@@ -335,7 +335,7 @@ fn sigint_during_a_run_keeps_the_previous_output() {
     let out = dir.path().join("out.npy");
     fs::write(&out, b"previous").unwrap();
     let child = Command::new(env!("CARGO_BIN_EXE_vkbrdf"))
-        .args(["eval", "--backend", "cpu", "-m"])
+        .args(["eval", "--backend", "reference", "-m"])
         .arg(&m)
         .arg("-i")
         .arg(&big)

@@ -127,7 +127,7 @@ fn cli_eval_refuses_an_anisotropic_batch_without_tangents_and_writes_nothing() {
     let t = dir.path().join("plain.npy");
     write_npy_f32(&t, &rows(100, |i| i % 3), 10).unwrap();
     let out = dir.path().join("f.npy");
-    let o = eval(&m, &t, &["--backend", "cpu", "-o", path(&out)]);
+    let o = eval(&m, &t, &["--backend", "reference", "-o", path(&out)]);
     let msg = stderr(&o);
     assert_eq!(o.status.code(), Some(2), "{msg}");
     assert!(
@@ -137,7 +137,7 @@ fn cli_eval_refuses_an_anisotropic_batch_without_tangents_and_writes_nothing() {
     assert!(!out.exists());
     // The same table, rows that do not use `brushed`: evaluated, nothing invalid.
     write_npy_f32(&t, &rows(100, |i| [0, 2][i % 2]), 10).unwrap();
-    let o = eval(&m, &t, &["--backend", "cpu", "-o", path(&out)]);
+    let o = eval(&m, &t, &["--backend", "reference", "-o", path(&out)]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(stderr(&o).contains(" 0 invalid"), "{}", stderr(&o));
 }
@@ -162,7 +162,7 @@ fn generate_adds_tangents_when_a_material_needs_them() {
         }
         // The generated batch evaluates with no invalid tuple.
         let out = dir.path().join("f.npy");
-        let o = eval(&m, &t, &["--backend", "cpu", "-o", path(&out)]);
+        let o = eval(&m, &t, &["--backend", "reference", "-o", path(&out)]);
         assert!(o.status.success(), "{}", stderr(&o));
         assert!(stderr(&o).contains(" 0 invalid"), "{}", stderr(&o));
     }
@@ -352,7 +352,7 @@ fn cli_table_slice_half_warns_with_the_count() {
         "--terms",
         "--half",
         "--backend",
-        "cpu",
+        "reference",
         "--output",
         out.to_str().unwrap(),
     ]);
@@ -373,7 +373,7 @@ fn cli_table_slice_half_warns_with_the_count() {
         "30x2000",
         "--terms",
         "--backend",
-        "cpu",
+        "reference",
         "--output",
         out.to_str().unwrap(),
     ]);

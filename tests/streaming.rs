@@ -46,7 +46,7 @@ fn a_batch_larger_than_its_budget_streams_to_the_same_output() {
             "--terms",
             path(&at),
             "--backend",
-            "cpu",
+            "reference",
             "--max-memory",
             "1GiB",
         ],
@@ -61,7 +61,7 @@ fn a_batch_larger_than_its_budget_streams_to_the_same_output() {
             "--terms",
             path(&bt),
             "--backend",
-            "cpu",
+            "reference",
             "--max-memory",
             "1MiB",
         ],
@@ -130,7 +130,7 @@ fn strict_and_the_first_invalid_row_hold_across_chunks() {
             "-o",
             path(&out),
             "--backend",
-            "cpu",
+            "reference",
             "--max-memory",
             "1MiB",
             "--strict",
@@ -158,7 +158,7 @@ fn strict_and_the_first_invalid_row_hold_across_chunks() {
             "-o",
             path(&out),
             "--backend",
-            "cpu",
+            "reference",
             "--max-memory",
             "1MiB",
             "--json",
@@ -186,7 +186,14 @@ fn a_bad_material_in_a_later_chunk_is_named_by_its_batch_row() {
     let r = eval(
         &m,
         &t,
-        &["-o", path(&out), "--backend", "cpu", "--max-memory", "1MiB"],
+        &[
+            "-o",
+            path(&out),
+            "--backend",
+            "reference",
+            "--max-memory",
+            "1MiB",
+        ],
     );
     let text = stderr(&r);
     assert_eq!(r.status.code(), Some(2), "{text}");
@@ -232,7 +239,14 @@ fn merged_shards_equal_the_unsharded_run() {
         let whole = eval(
             &m,
             &t,
-            &["-o", path(&a), "--terms", path(&at), "--backend", "cpu"],
+            &[
+                "-o",
+                path(&a),
+                "--terms",
+                path(&at),
+                "--backend",
+                "reference",
+            ],
         );
         assert!(whole.status.success(), "{}", stderr(&whole));
         let mut parts = Vec::new();
@@ -249,7 +263,7 @@ fn merged_shards_equal_the_unsharded_run() {
                     "--terms",
                     path(&pt),
                     "--backend",
-                    "cpu",
+                    "reference",
                     "--shard",
                     &shard,
                 ],
@@ -310,7 +324,7 @@ fn merge_refuses_parts_that_do_not_belong_together() {
         let r = eval(
             &m,
             input,
-            &["-o", path(&p), "--backend", "cpu", "--shard", shard],
+            &["-o", path(&p), "--backend", "reference", "--shard", shard],
         );
         assert!(r.status.success(), "{}", stderr(&r));
         p

@@ -43,7 +43,8 @@ pub struct Args {
     /// Print JSON instead of a table.
     #[arg(long)]
     pub json: bool,
-    /// Evaluator: the f64 reference by default here (`cpu`); `vulkan` runs the kernel.
+    /// Evaluator: the f64 reference by default here (`reference`); `cpu`, `vulkan` and
+    /// `auto` run an engine.
     #[command(flatten)]
     pub backend: BackendArgs,
 }
@@ -158,8 +159,10 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
     let columns = if tangent { 13 } else { 10 };
     let batch = Batch::new(rows, columns, 1, &vkbrdf::batch::memory_source())?;
     let mut backend: Box<dyn Backend> = match args.backend.backend {
-        None | Some(BackendKind::Cpu) => Box::new(vkbrdf::reference::CpuReference::new()),
-        Some(BackendKind::Vulkan) => backend_choice::open(&args.backend)?,
+        None | Some(BackendKind::Reference) => Box::new(vkbrdf::reference::CpuReference::new()),
+        Some(BackendKind::Cpu | BackendKind::Vulkan | BackendKind::Auto) => {
+            backend_choice::open(&args.backend)?
+        }
     };
     let out = backend.evaluate(
         &batch,

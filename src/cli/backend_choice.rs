@@ -1,23 +1,31 @@
 //! `--backend`, `--device` and `--max-gpu-memory`: which evaluator a command runs on.
 
 use vkbrdf::backend::Backend;
+use vkbrdf::cpu::CpuEngine;
 use vkbrdf::gpu::{DeviceSelector, VulkanBackend, VulkanOptions};
 use vkbrdf::reference::CpuReference;
 
 /// The evaluators a command can run on.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum BackendKind {
-    /// Vulkan compute (the GLSL kernel) on the chosen device.
+    /// The Vulkan kernel when `--device`/VKBRDF_DEVICE names a device or a discrete or
+    /// integrated GPU exists, else the native CPU engine (the default).
+    Auto,
+    /// Vulkan compute (the GLSL kernel) on the chosen device (lavapipe without a GPU).
     Vulkan,
-    /// The f64 CPU reference (exact; the judge).
+    /// The native CPU engine: f32 SIMD lanes on every core (`cpu` named the f64
+    /// reference until this engine existed; that is now `reference`).
     Cpu,
+    /// The f64 CPU reference (exact; the judge).
+    Reference,
 }
 
 /// Backend options shared by the commands that evaluate.
 #[derive(clap::Args, Debug, Clone, Default)]
 pub struct BackendArgs {
-    /// Evaluator: `vulkan` (default; falls back to `cpu` with a message when no Vulkan
-    /// driver is installed) or `cpu` (the f64 reference).
+    /// Evaluator: `auto` (default: Vulkan on a GPU or a named device, else `cpu`),
+    /// `vulkan`, `cpu` (the native SIMD engine) or `reference` (the f64 judge; `cpu`
+    /// meant it before the native engine existed).
     #[arg(long, value_enum)]
     pub backend: Option<BackendKind>,
     #[command(flatten)]
@@ -70,8 +78,31 @@ pub fn open_vulkan(args: &DeviceArgs) -> anyhow::Result<VulkanBackend> {
     Ok(VulkanBackend::new(selector, options)?)
 }
 
-/// Opens the requested backend. Without `--backend`, Vulkan is tried first and the CPU
-/// reference used (with a message saying how to get Vulkan) when no driver is found.
+/// What `auto` picks on this machine, and why: `(true, why)` for the Vulkan kernel,
+/// `(false, why)` for the native CPU engine.
+pub fn auto_choice(args: &DeviceArgs) -> (bool, String) {
+    if args.device.is_some() {
+        return (true, "--device names a Vulkan device".into());
+    }
+    if DeviceSelector::from_env().is_some() {
+        return (true, "VKBRDF_DEVICE names a Vulkan device".into());
+    }
+    match vkbrdf::gpu::list_devices() {
+        Ok(list) => match list
+            .iter()
+            .find(|d| d.device_type == "discrete GPU" || d.device_type == "integrated GPU")
+        {
+            Some(d) => (true, format!("{} is a {}", d.name, d.device_type)),
+            None => (
+                false,
+                "no discrete or integrated GPU (a CPU Vulkan device such as lavapipe is slower than the native engine; --backend vulkan uses it)".into(),
+            ),
+        },
+        Err(e) => (false, format!("no Vulkan driver ({e})")),
+    }
+}
+
+/// Opens the requested backend (`auto` when none is named).
 pub fn open(args: &BackendArgs) -> anyhow::Result<Box<dyn Backend>> {
     let mut backend = open_uncancellable(args)?;
     backend.set_cancel(super::cancel());
@@ -79,20 +110,16 @@ pub fn open(args: &BackendArgs) -> anyhow::Result<Box<dyn Backend>> {
 }
 
 fn open_uncancellable(args: &BackendArgs) -> anyhow::Result<Box<dyn Backend>> {
-    match args.backend {
-        Some(BackendKind::Cpu) => Ok(Box::new(CpuReference::new())),
-        Some(BackendKind::Vulkan) => Ok(Box::new(open_vulkan(&args.device)?)),
-        None => match open_vulkan(&args.device) {
-            Ok(b) => Ok(Box::new(b)),
-            // Only when nothing asked for a device: a selector (flag or VKBRDF_DEVICE)
-            // that matches no device is the user's error, not a reason to switch engines.
-            Err(e) if args.device.device.is_none() && DeviceSelector::from_env().is_none() => {
-                eprintln!(
-                    "note: no Vulkan device ({e:#});\n      falling back to the CPU reference (--backend cpu). For Vulkan on any machine, install lavapipe:\n      sudo apt-get install mesa-vulkan-drivers libvulkan1"
-                );
-                Ok(Box::new(CpuReference::new()))
+    match args.backend.unwrap_or(BackendKind::Auto) {
+        BackendKind::Reference => Ok(Box::new(CpuReference::new())),
+        BackendKind::Cpu => Ok(Box::new(CpuEngine::new())),
+        BackendKind::Vulkan => Ok(Box::new(open_vulkan(&args.device)?)),
+        BackendKind::Auto => {
+            if auto_choice(&args.device).0 {
+                Ok(Box::new(open_vulkan(&args.device)?))
+            } else {
+                Ok(Box::new(CpuEngine::new()))
             }
-            Err(e) => Err(e),
-        },
+        }
     }
 }

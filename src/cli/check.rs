@@ -1,5 +1,6 @@
 //! `vkbrdf check`: the conformance table — every legal material combination evaluated on
-//! the Vulkan backend and compared with the f64 reference ([`vkbrdf::check`]).
+//! the Vulkan backend (or `--backend cpu`, the native engine) and compared with the f64
+//! reference ([`vkbrdf::check`]).
 
 use std::process::ExitCode;
 use std::time::Instant;
@@ -23,6 +24,9 @@ value well, more only near grazing mirror geometry with sharp lobes, where no f3
 evaluation can do better. `tol used` is the largest |x - ref| / allowed (1 = at the limit).
 Failing combinations are followed by their worst tuple (inputs and material).
 
+--backend cpu checks the native CPU engine instead of the Vulkan kernel (auto: the one
+`--backend auto` picks on the evaluating commands; reference: the judge against itself).
+
 Exit status: 0 every combination passes, 1 some fail (or --validation reported a
 message), 2 error (no Vulkan device, bad arguments).
 
@@ -30,7 +34,8 @@ Examples:
   vkbrdf check                               # 2000 tuples per combination
   vkbrdf check --tuples 20000 --seed 7       # a longer run with other random draws
   vkbrdf check --filter ggx-aniso --verbose  # one family, worst tuple of each
-  vkbrdf check --device llvmpipe --validation")]
+  vkbrdf check --device llvmpipe --validation
+  vkbrdf check --backend cpu                 # the native CPU engine")]
 pub struct Args {
     /// Vulkan device: an index or part of a name from `vkbrdf devices` (default: a GPU if
     /// present, else lavapipe; the environment variable VKBRDF_DEVICE does the same).
@@ -52,6 +57,10 @@ pub struct Args {
     /// Print the worst tuple of every combination, not only of failing ones.
     #[arg(long)]
     pub verbose: bool,
+    /// Engine to check: `vulkan` (default), `cpu` (the native CPU engine), `auto` or
+    /// `reference`.
+    #[arg(long, value_enum)]
+    pub backend: Option<super::backend_choice::BackendKind>,
     /// Run with the Vulkan validation layer and fail if it reports any warning or error
     /// (also enabled by VKBRDF_VALIDATION=1).
     #[arg(long)]
@@ -60,12 +69,29 @@ pub struct Args {
 
 /// Runs `vkbrdf check`.
 pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
+    use super::backend_choice::{auto_choice, BackendKind, DeviceArgs};
     let options = VulkanOptions {
         validation: args.validation || vkbrdf::gpu::validation_from_env(),
         ..VulkanOptions::default()
     };
-    let mut gpu = VulkanBackend::new(args.device.clone(), options)?;
-    let counter = gpu.validation_counter();
+    let device_args = DeviceArgs {
+        device: args.device.clone(),
+        ..DeviceArgs::default()
+    };
+    let vulkan = match args.backend.unwrap_or(BackendKind::Vulkan) {
+        BackendKind::Vulkan => true,
+        BackendKind::Auto => auto_choice(&device_args).0,
+        BackendKind::Cpu | BackendKind::Reference => false,
+    };
+    let (mut gpu, counter): (Box<dyn Backend>, _) = if vulkan {
+        let g = VulkanBackend::new(args.device.clone(), options)?;
+        let c = g.validation_counter();
+        (Box::new(g), Some(c))
+    } else if args.backend == Some(BackendKind::Reference) {
+        (Box::new(vkbrdf::reference::CpuReference::new()), None)
+    } else {
+        (Box::new(vkbrdf::cpu::CpuEngine::new()), None)
+    };
     let check_options = CheckOptions {
         tuples: args.tuples,
         seed: args.seed,
@@ -78,7 +104,7 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
     outln!("{}", CombinationReport::header());
     let t0 = Instant::now();
     let verbose = args.verbose;
-    let reports = check::run(&mut gpu, &check_options, &mut |r| {
+    let reports = check::run(gpu.as_mut(), &check_options, &mut |r| {
         outln!("{}", r.row());
         if verbose || !r.pass() {
             if let Some(w) = &r.worst {
@@ -114,8 +140,8 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         saturated.1
     );
     outln!("largest relative error {max_rel:.2e} overall, {well:.2e} where f32 inputs determine the value well");
-    let messages = counter.count();
-    if messages > 0 {
+    let messages = counter.as_ref().map_or(0, |c| c.count());
+    if let Some(counter) = counter.as_ref().filter(|_| messages > 0) {
         outln!(
             "validation layer: {messages} warning(s)/error(s); the first:\n{}",
             counter.messages().join("\n")

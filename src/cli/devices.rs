@@ -11,7 +11,9 @@ largest storage-buffer range and memory heaps. `(default)` marks the device vkbr
 on its own: a discrete GPU, else an integrated one, else a virtual one, else a CPU
 implementation such as lavapipe (llvmpipe). Choose another with `--device INDEX` or
 `--device NAME` (any part of the name, case-insensitive) on the evaluating commands, or
-with the environment variable VKBRDF_DEVICE.
+with the environment variable VKBRDF_DEVICE. The last line says what `--backend auto`
+(the default) runs and why: the Vulkan kernel when a device is named or a discrete or
+integrated GPU exists, else the native CPU engine.
 
 Exit status: 0 devices listed, 2 no Vulkan loader or no device.
 
@@ -45,5 +47,12 @@ pub fn run(_args: &Args) -> anyhow::Result<ExitCode> {
         }
         outln!("VKBRDF_DEVICE={sel} is set: it overrides the default choice.");
     }
+    let (vulkan, why) = super::backend_choice::auto_choice(&Default::default());
+    let engine = if vulkan {
+        "the Vulkan kernel".to_string()
+    } else {
+        format!("the native CPU engine ({})", vkbrdf::cpu::instruction_set())
+    };
+    outln!("--backend auto (the default) runs {engine}: {why}.");
     Ok(ExitCode::SUCCESS)
 }

@@ -19,8 +19,11 @@ counted as saturated; the policy: no inf or NaN, and invalid and saturated count
 the reference's.
 
 Examples:
-  vkbrdf stress --tuples 200000                  # Vulkan and the CPU reference
-  vkbrdf stress --tuples 10000000 --backend vulkan --backend cpu --report stress.md")]
+  vkbrdf stress --tuples 200000                  # Vulkan, the CPU engine, the reference
+  vkbrdf stress --tuples 10000000 --backend cpu --backend vulkan --report stress.md
+
+`--backend cpu` is the native CPU engine; the f64 reference is `--backend reference` (it
+was `cpu` before the engine existed).")]
 pub struct Args {
     /// Number of corpus tuples per backend, 1 to 10^10 (evaluated in chunks).
     #[arg(long, short = 'n', default_value_t = 1_000_000, allow_negative_numbers = true,
@@ -63,14 +66,18 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         })
     };
     // Default: every backend this machine has — the Vulkan kernel when a device opens,
-    // and the reference (which judges itself against its own invariants).
+    // the native CPU engine, and the reference (which judges itself against its own
+    // invariants).
     let backends = if args.backend.is_empty() {
         let mut list = Vec::new();
         match open(BackendKind::Vulkan) {
             Ok(b) => list.push(b),
-            Err(e) => eprintln!("note: stressing the CPU reference only: no Vulkan device ({e:#})"),
+            Err(e) => eprintln!(
+                "note: stressing the CPU engine and the reference only: no Vulkan device ({e:#})"
+            ),
         }
         list.push(open(BackendKind::Cpu)?);
+        list.push(open(BackendKind::Reference)?);
         list
     } else {
         args.backend

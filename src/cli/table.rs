@@ -15,7 +15,8 @@ use vkbrdf::table::{merl, Grid, Runner};
 /// Arguments of `vkbrdf table`.
 #[derive(clap::Args, Debug)]
 #[command(after_help = "\
-Every table evaluates f through the chosen backend (--backend vulkan|cpu), writes its file
+Every table evaluates f through the chosen backend (--backend auto|vulkan|cpu|reference),
+writes its file
 atomically (a failed or interrupted run leaves the previous file and no partial one; a
 symlink is written through; several outputs appear together or not at all; a FIFO, a
 device or `-` is written directly after success, atomicity being a promise for regular
@@ -68,7 +69,8 @@ Columns: theta_h = x^2 * 90° (MERL's square-root spacing; --linear: x * 90°); 
 theta_d = y * 90°; phi_d = 90°, phi_h = 0, n = +z, t = +x. Layer `brdf` holds R, G, B = f
 in 1/sr; --terms adds layer `terms` with D, G, F.R, F.G, F.B, K. On Vulkan the kernel
 makes the directions itself (nothing but the material is uploaded; up to 2^24 texels);
---backend cpu evaluates host-made directions with the f64 reference.
+--backend cpu (the native CPU engine) and --backend reference (the f64 reference)
+evaluate host-made directions.
 
 Example:
   vkbrdf table slice --materials m.toml --material plastic --output plastic.exr --terms")]

@@ -18,8 +18,9 @@ use std::sync::{Arc, Mutex};
 /// What to tell a user whose machine has no usable Vulkan driver.
 pub const INSTALL_HINT: &str = "install a Vulkan driver and loader (on Debian/Ubuntu: \
 `apt-get install mesa-vulkan-drivers libvulkan1`, which includes lavapipe, a CPU \
-implementation); the commands that take `--backend` (eval, demo, stress, table) can \
-run on the CPU reference with `--backend cpu` instead";
+implementation); the commands that take `--backend` (eval, demo, stress, table, check) \
+run on the native CPU engine with `--backend cpu` (what the default `auto` picks without \
+a GPU) or on the f64 reference with `--backend reference`";
 
 /// The name of the Khronos validation layer.
 const VALIDATION_LAYER: &CStr = c"VK_LAYER_KHRONOS_validation";

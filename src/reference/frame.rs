@@ -1,8 +1,8 @@
 //! FORMULAS.md §1: inputs of one evaluation, the validity rule and the derived quantities.
 
 // The vector helpers live in `crate::vector`; re-exported for callers that name them here.
-pub use crate::vector::{cross, cross_accurate, dot, dot_accurate, length_squared, normalize};
 use crate::vector::Dd;
+pub use crate::vector::{cross, cross_accurate, dot, dot_accurate, length_squared, normalize};
 
 /// Everything the terms read, derived once per tuple (the table of FORMULAS.md §1).
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -29,9 +29,13 @@ pub fn vulkan() -> Option<VulkanBackend> {
     }
 }
 
-/// The CPU reference and, when a Vulkan device exists, the Vulkan backend.
+/// The CPU reference, the native CPU engine and, when a Vulkan device exists, the Vulkan
+/// backend.
 pub fn backends() -> Vec<Box<dyn Backend>> {
-    let mut v: Vec<Box<dyn Backend>> = vec![Box::new(CpuReference::new())];
+    let mut v: Vec<Box<dyn Backend>> = vec![
+        Box::new(CpuReference::new()),
+        Box::new(vkbrdf::cpu::CpuEngine::new()),
+    ];
     if let Some(b) = vulkan() {
         v.push(Box::new(b));
     }

@@ -1,0 +1,638 @@
+//! The specialised lanes: one block of [`LANES`] tuples of one material group, the frame in
+//! f64 lanes, the terms in f32 lanes (FORMULAS.md §1–§6), compiled once per material group
+//! (distribution × geometry × Fresnel, as const generics) and per instruction set (the
+//! caller dispatches with `pulp`). Every loop runs over the lanes with no data-dependent
+//! branch and no call, so it vectorises to the widest registers the dispatch enabled.
+//!
+//! A lane whose tuple the f32 arithmetic cannot be trusted with is flagged for *rescue* —
+//! the caller re-evaluates it with the f64 reference, which also decides its status:
+//! invalid and below-horizon tuples, cosines below [`GRAZING`], and any output that came
+//! out non-finite or above [`OUTPUT_LIMIT`] (the saturation and overflow cases).
+
+// The lane loops index several arrays with the same lane (or column) number; iterator
+// forms would hide that the loops are the vectorised dimension.
+#![allow(clippy::needless_range_loop)]
+
+use crate::backend::TERM_COLUMNS;
+use crate::cpu::math::{erfc, exp_neg};
+use crate::material::{Convention, Distribution, Fresnel, Geometry, Material, Model, Roughness};
+use std::f64::consts::PI;
+
+/// Tuples per block: 16 f32 lanes fill one AVX-512 register (two AVX2 registers).
+pub const LANES: usize = 16;
+
+/// Cosines (`cos_i`, `cos_o`, `cos_h`, `c`) below this go to the reference: there K and
+/// the 1/cos factors of D and Λ leave the range where a few f32 roundings stay far inside
+/// the tolerance, and the reference's log-domain and scaled forms take over (FORMULAS.md
+/// §1, "Overflow": cosines down to the smallest subnormal must still come out exact).
+pub const GRAZING: f64 = 1e-4;
+
+/// Outputs above this go to the reference, which decides saturation (FORMULAS.md §1): an
+/// f32 result this large may be a rounded value of an exact one above `f32::MAX`.
+pub const OUTPUT_LIMIT: f32 = 1e37;
+
+/// Distribution: GGX.
+pub const D_GGX: u8 = 0;
+/// Distribution: Beckmann.
+pub const D_BECKMANN: u8 = 1;
+/// Geometry: none.
+pub const G_NONE: u8 = 0;
+/// Geometry: Cook–Torrance V-cavity.
+pub const G_CT: u8 = 1;
+/// Geometry: separable Smith.
+pub const G_SMITH: u8 = 2;
+/// Geometry: height-correlated Smith.
+pub const G_SMITH_CORRELATED: u8 = 3;
+/// Geometry: Walter's rational Smith–Beckmann fit.
+pub const G_SMITH_FAST: u8 = 4;
+/// Fresnel: none.
+pub const F_NONE: u8 = 0;
+/// Fresnel: Schlick.
+pub const F_SCHLICK: u8 = 1;
+/// Fresnel: exact dielectric.
+pub const F_DIELECTRIC: u8 = 2;
+/// Fresnel: exact conductor.
+pub const F_CONDUCTOR: u8 = 3;
+
+/// The constants of one material, prepared once per batch (in f64 where the lanes use
+/// f64, then rounded once).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Params {
+    /// `d · c_diff / π` (Lambert: `c_diff / π`).
+    pub diffuse: [f32; 3],
+    /// `s · c_spec`.
+    pub spec: [f32; 3],
+    /// `m²`.
+    pub m2: f64,
+    /// `1/m²`.
+    pub inv_m2: f64,
+    /// The D normalisation: `1/(k m²)` for Beckmann, `m²/π` for GGX.
+    pub d_norm: f64,
+    /// K's numerator: 1/4 modern, 1/π Cook–Torrance 1982, 1 seed.
+    pub k_num: f32,
+    /// Whether K divides by `cos_i` too (all but the seed convention).
+    pub k_cos_i: bool,
+    /// Schlick's F0.
+    pub f0: [f32; 3],
+    /// Dielectric μ.
+    pub ior: [f64; 3],
+    /// Dielectric `μ² − 1`, as `(μ − 1)(μ + 1)`.
+    pub mu2m1: [f64; 3],
+    /// Conductor n.
+    pub cn: [f32; 3],
+    /// Conductor k.
+    pub ck: [f32; 3],
+    /// Conductor `Re(η²) − 1 = n² − k² − 1`, formed in f64.
+    pub e2rm1: [f32; 3],
+}
+
+/// How a material group is evaluated.
+#[derive(Debug, Clone, Copy)]
+pub enum Plan {
+    /// Lambert in the lanes.
+    Lambert(Params),
+    /// Isotropic Cook–Torrance with GGX or Beckmann in the lanes.
+    Microfacet {
+        /// [`D_GGX`] or [`D_BECKMANN`].
+        d: u8,
+        /// One of the `G_*` constants.
+        g: u8,
+        /// One of the `F_*` constants.
+        f: u8,
+        /// The material's constants.
+        p: Params,
+    },
+    /// Every tuple through the f64 reference.
+    Reference,
+}
+
+fn f32x3(a: [f64; 3]) -> [f32; 3] {
+    a.map(|x| x as f32)
+}
+
+impl Plan {
+    /// The plan for `m`: the lanes for Lambert and for isotropic Cook–Torrance with GGX or
+    /// Beckmann (any geometry, Fresnel and convention), the reference for everything else.
+    pub fn for_material(m: &Material) -> Plan {
+        let mut p = Params {
+            diffuse: f32x3(m.diffuse.map(|c| c / PI)),
+            spec: f32x3(m.specular),
+            ..Params::default()
+        };
+        let ct = match &m.model {
+            Model::Lambert => return Plan::Lambert(p),
+            Model::CookTorrance(ct) => ct,
+            _ => return Plan::Reference,
+        };
+        let (d, mr) = match ct.distribution {
+            Distribution::Ggx(Roughness::Isotropic(mr)) => (D_GGX, mr),
+            Distribution::Beckmann(Roughness::Isotropic(mr)) => (D_BECKMANN, mr),
+            _ => return Plan::Reference,
+        };
+        p.diffuse = f32x3(m.diffuse.map(|c| ct.diffuse_weight * c / PI));
+        p.spec = f32x3(m.specular.map(|c| ct.specular_weight * c));
+        p.m2 = mr * mr;
+        p.inv_m2 = 1.0 / p.m2;
+        let beckmann_k = match ct.convention {
+            Convention::Seed => 4.0,
+            Convention::CookTorrance1982 => 1.0,
+            Convention::Modern => PI,
+        };
+        p.d_norm = if d == D_GGX {
+            p.m2 / PI
+        } else {
+            1.0 / (beckmann_k * p.m2)
+        };
+        (p.k_num, p.k_cos_i) = match ct.convention {
+            Convention::Seed => (1.0, false),
+            Convention::CookTorrance1982 => ((1.0 / PI) as f32, true),
+            Convention::Modern => (0.25, true),
+        };
+        let g = match ct.geometry {
+            Geometry::None => G_NONE,
+            Geometry::CookTorrance => G_CT,
+            Geometry::Smith => G_SMITH,
+            Geometry::SmithCorrelated => G_SMITH_CORRELATED,
+            Geometry::SmithFast => G_SMITH_FAST,
+            // Not in the lanes yet: the reference evaluates these groups.
+            Geometry::SchlickSmith | Geometry::Neubelt => return Plan::Reference,
+        };
+        let f = match ct.fresnel {
+            Fresnel::None => F_NONE,
+            Fresnel::Schlick { f0 } => {
+                p.f0 = f32x3(f0);
+                F_SCHLICK
+            }
+            Fresnel::Dielectric { ior } => {
+                p.ior = ior;
+                p.mu2m1 = ior.map(|mu| (mu - 1.0) * (mu + 1.0));
+                F_DIELECTRIC
+            }
+            Fresnel::Conductor { ior, extinction } => {
+                p.cn = f32x3(ior);
+                p.ck = f32x3(extinction);
+                p.e2rm1 = f32x3(std::array::from_fn(|c| {
+                    (ior[c] - 1.0) * (ior[c] + 1.0) - extinction[c] * extinction[c]
+                }));
+                F_CONDUCTOR
+            }
+        };
+        Plan::Microfacet { d, g, f, p }
+    }
+
+    /// Whether the plan runs in the lanes.
+    pub fn is_simd(&self) -> bool {
+        !matches!(self, Plan::Reference)
+    }
+}
+
+/// One block's inputs as structure of arrays (f32, as read from the rows).
+#[derive(Clone, Copy)]
+pub struct Inputs {
+    /// L, V, N components: `v[j][k]` is column `j` (0–8) of lane `k`.
+    pub v: [[f32; LANES]; 9],
+}
+
+/// One block's outputs.
+pub struct Outputs {
+    /// RGB per lane.
+    pub brdf: [[f32; LANES]; 3],
+    /// D, G, F_r, F_g, F_b, K per lane.
+    pub terms: [[f32; LANES]; TERM_COLUMNS],
+    /// Lanes to re-evaluate with the reference.
+    pub rescue: [bool; LANES],
+}
+
+impl Default for Outputs {
+    fn default() -> Self {
+        Outputs {
+            brdf: [[0.0; LANES]; 3],
+            terms: [[0.0; LANES]; TERM_COLUMNS],
+            rescue: [false; LANES],
+        }
+    }
+}
+
+/// The f64 frame of one lane (FORMULAS.md §1) and whether the lanes may take it.
+#[derive(Clone, Copy, Default)]
+struct Frame {
+    cos_i: f64,
+    cos_o: f64,
+    cos_h: f64,
+    c: f64,
+    sin2_h: f64,
+    sin2_i: f64,
+    sin2_o: f64,
+    ok: bool,
+}
+
+/// `1/√x` to ~1e-14 relative for x in f32's range: the f32 estimate (cheap in wide
+/// lanes) refined by one Newton step in f64, which squares its relative error (~1e-7).
+/// Outside f32's range the estimate is 0 or ∞ and the result 0 or NaN: the frame then
+/// fails its tests and the lane is rescued.
+#[inline(always)]
+fn rsqrt(x: f64) -> f64 {
+    let y0 = f64::from(1.0 / (x as f32).sqrt());
+    y0 * (1.5 - 0.5 * x * y0 * y0)
+}
+
+#[inline(always)]
+fn frame(x: &[f32; 9]) -> Frame {
+    let w = |i: usize| f64::from(x[i]);
+    let (lx, ly, lz, vx, vy, vz, nx, ny, nz) =
+        (w(0), w(1), w(2), w(3), w(4), w(5), w(6), w(7), w(8));
+    // Products of f32 values are exact in f64, and squares of f32 magnitudes stay inside
+    // f64's normal range, so these lengths neither overflow nor underflow.
+    let ll = lx * lx + ly * ly + lz * lz;
+    let vv = vx * vx + vy * vy + vz * vz;
+    let nn = nx * nx + ny * ny + nz * nz;
+    // NaN fails both comparisons, ±inf the second: a non-finite or zero input is invalid.
+    let finite = ll > 0.0
+        && vv > 0.0
+        && nn > 0.0
+        && ll < f64::INFINITY
+        && vv < f64::INFINITY
+        && nn < f64::INFINITY;
+    let (il, iv, inn) = (rsqrt(ll), rsqrt(vv), rsqrt(nn));
+    let (lx, ly, lz) = (lx * il, ly * il, lz * il);
+    let (vx, vy, vz) = (vx * iv, vy * iv, vz * iv);
+    let (nx, ny, nz) = (nx * inn, ny * inn, nz * inn);
+    let cos_i = nx * lx + ny * ly + nz * lz;
+    let cos_o = nx * vx + ny * vy + nz * vz;
+    let (hx, hy, hz) = (lx + vx, ly + vy, lz + vz);
+    let ih = rsqrt(hx * hx + hy * hy + hz * hz);
+    let (hx, hy, hz) = (hx * ih, hy * ih, hz * ih);
+    let cos_h = nx * hx + ny * hy + nz * hz;
+    let c = vx * hx + vy * hy + vz * hz;
+    let cross2 = |ax: f64, ay: f64, az: f64| {
+        let (cx, cy, cz) = (ny * az - nz * ay, nz * ax - nx * az, nx * ay - ny * ax);
+        cx * cx + cy * cy + cz * cz
+    };
+    // `>=` is false for NaN: lanes that went non-finite above are rescued too.
+    let ok = finite && cos_i >= GRAZING && cos_o >= GRAZING && cos_h >= GRAZING && c >= GRAZING;
+    Frame {
+        cos_i,
+        cos_o,
+        cos_h,
+        c,
+        sin2_h: cross2(hx, hy, hz),
+        sin2_i: cross2(lx, ly, lz),
+        sin2_o: cross2(vx, vy, vz),
+        ok,
+    }
+}
+
+#[inline(always)]
+fn lane_inputs(inp: &Inputs, k: usize) -> [f32; 9] {
+    std::array::from_fn(|j| inp.v[j][k])
+}
+
+#[inline(always)]
+fn min(a: f32, b: f32) -> f32 {
+    if a < b {
+        a
+    } else {
+        b
+    }
+}
+
+/// Smith Λ (FORMULAS.md §3) given `q2 = m² tan²θ`, for the distribution `D`.
+#[inline(always)]
+fn lambda<const D: u8>(q2: f32) -> f32 {
+    if D == D_GGX {
+        // (−1 + √(1 + q2))/2, rewritten q2 / (2 (1 + √(1 + q2))) for q2 ≤ 1 where the
+        // direct form cancels.
+        let r = (1.0 + q2).sqrt();
+        if q2 <= 1.0 {
+            q2 / (2.0 * (1.0 + r))
+        } else {
+            0.5 * (r - 1.0)
+        }
+    } else {
+        // (erf(a) − 1)/2 + exp(−a²)/(2a√π) = (exp(−a²)/(a√π) − erfc(a))/2, a = 1/√q2;
+        // q2 = 0 (w = n) is Λ = 0, where a = ∞ would make inf·0 below.
+        let a = 1.0 / q2.sqrt();
+        let v = 0.5 * (exp_neg(-a * a) * (std::f32::consts::FRAC_2_SQRT_PI * 0.5) / a - erfc(a));
+        if q2 == 0.0 {
+            0.0
+        } else {
+            v
+        }
+    }
+}
+
+/// Walter et al. 2007's rational Smith–Beckmann G1 given `q2 = m² tan²θ`, as published.
+#[inline(always)]
+fn smith_fast_g1(q2: f32) -> f32 {
+    let a = 1.0 / q2.sqrt(); // q2 = 0: a = ∞ and G1 = 1
+    let r = (3.535 * a + 2.181 * a * a) / (1.0 + 2.276 * a + 2.577 * a * a);
+    if a < 1.6 {
+        r
+    } else {
+        1.0
+    }
+}
+
+/// Exact dielectric Fresnel (FORMULAS.md §4) in f64, the reference's grouping.
+#[inline(always)]
+fn dielectric(c: f64, s2: f64, mu: f64, mu2m1: f64) -> f32 {
+    let g2 = if mu2m1.abs() + c * c <= mu * mu + s2 {
+        mu2m1 + c * c
+    } else {
+        mu * mu - s2
+    };
+    let g = g2.max(0.0).sqrt();
+    let r = mu2m1 / (g + c) / (g + c);
+    let q = (c * g - s2) / (c * g + s2);
+    let f = 0.5 * r * r * (1.0 + q * q);
+    if g2 < 0.0 {
+        1.0
+    } else {
+        f as f32
+    }
+}
+
+/// Exact conductor Fresnel (FORMULAS.md §4) in f32, as the kernel's `F_Conductor`
+/// (`glsl/terms.glsl`): `η²` divided through `|η|²` one factor at a time so that large
+/// extinctions do not overflow, the complex root by the larger of its two candidates.
+#[inline(always)]
+fn conductor(c: f32, n: f32, k: f32, e2rm1: f32) -> f32 {
+    let e2r = n * n - k * k;
+    let e2i = 2.0 * n * k;
+    let q = n * n + k * k;
+    let (a, b) = (e2r / q, e2i / q);
+    let ar = e2rm1 + c * c;
+    let zr = (ar * a + e2i * b) / q;
+    let zi = (1.0 - c) * (1.0 + c) * b / q;
+    // Principal √(zr + i zi), scaled by the larger component (the squares underflow for
+    // |z| < 1e-19); the 1e-37 and 1e-30 floors keep z = 0 from 0/0.
+    let m = zr.abs().max(zi.abs()).max(1e-37);
+    let (xs, ys) = (zr / m, zi / m);
+    let r = m * (xs * xs + ys * ys).sqrt();
+    let sp = (0.5 * (r + zr)).sqrt();
+    let sn = (0.5 * (r - zr)).sqrt();
+    let im_p = 0.5 * zi / sp.max(1e-30);
+    let re_n = 0.5 * zi.abs() / sn.max(1e-30);
+    let im_n = if zi < 0.0 { -sn } else { sn };
+    let (ctr, cti) = if zr < 0.0 { (re_n, im_n) } else { (sp, im_p) };
+    let (ecr, eci) = (n * c, k * c);
+    let (pr, pi) = (ecr - ctr, eci - cti);
+    let (qr, qi) = (ecr + ctr, eci + cti);
+    let r_par = (pr * pr + pi * pi) / (qr * qr + qi * qi);
+    let ecr2 = n * ctr - k * cti;
+    let eci2 = n * cti + k * ctr;
+    let (ur, wr) = (c - ecr2, c + ecr2);
+    let r_perp = (ur * ur + eci2 * eci2) / (wr * wr + eci2 * eci2);
+    0.5 * (r_par + r_perp)
+}
+
+/// Lambert on one block: only the validity and the horizon matter, so only the two
+/// cosines are formed (in f64; their sign is all Lambert needs, and a cosine below
+/// [`GRAZING`] still goes to the reference, which decides the horizon case).
+#[inline(always)]
+pub fn lambert_block(p: &Params, inp: &Inputs, out: &mut Outputs) {
+    for k in 0..LANES {
+        let x = lane_inputs(inp, k);
+        let w = |i: usize| f64::from(x[i]);
+        let (lx, ly, lz, vx, vy, vz, nx, ny, nz) =
+            (w(0), w(1), w(2), w(3), w(4), w(5), w(6), w(7), w(8));
+        let ll = lx * lx + ly * ly + lz * lz;
+        let vv = vx * vx + vy * vy + vz * vz;
+        let nn = nx * nx + ny * ny + nz * nz;
+        let finite = ll > 0.0
+            && vv > 0.0
+            && nn > 0.0
+            && ll < f64::INFINITY
+            && vv < f64::INFINITY
+            && nn < f64::INFINITY;
+        let inn = rsqrt(nn);
+        let cos_i = (nx * lx + ny * ly + nz * lz) * inn * rsqrt(ll);
+        let cos_o = (nx * vx + ny * vy + nz * vz) * inn * rsqrt(vv);
+        out.rescue[k] = !(finite && cos_i >= GRAZING && cos_o >= GRAZING);
+        for ch in 0..3 {
+            out.brdf[ch][k] = p.diffuse[ch];
+        }
+        out.terms[0][k] = 0.0;
+        for t in 1..TERM_COLUMNS {
+            out.terms[t][k] = 1.0;
+        }
+    }
+}
+
+/// Isotropic Cook–Torrance on one block, specialised to one distribution, geometry and
+/// Fresnel term.
+#[inline(always)]
+pub fn microfacet_block<const D: u8, const G: u8, const F: u8>(
+    p: &Params,
+    inp: &Inputs,
+    out: &mut Outputs,
+) {
+    for k in 0..LANES {
+        let fr = frame(&lane_inputs(inp, k));
+        let cos_h2 = fr.cos_h * fr.cos_h;
+        // D (FORMULAS.md §2), in f64: one division.
+        let d = if D == D_GGX {
+            // m²/(π (m² cos_h² + sin²_h)²): no 1/cos_h⁴ to overflow; in f64 because the
+            // square of the sum leaves f32's normal range for m near its lower bound.
+            let s = p.m2 * cos_h2 + fr.sin2_h;
+            (p.d_norm / (s * s)) as f32
+        } else {
+            // exp(−tan²/m²)/(k m² cos⁴) as (e·norm)·e with e = exp(−tan²/(2m²)): each
+            // factor stays in f32's range until tan²/m² ≈ 174, where the direct
+            // exp(−x)·norm would already have underflowed to 0 next to a large norm.
+            let ic = 1.0 / cos_h2;
+            let half_x = (fr.sin2_h * ic * p.inv_m2 * 0.5) as f32;
+            let e = exp_neg(-half_x);
+            let norm = (p.d_norm * ic * ic) as f32;
+            e * norm * e
+        };
+        let (cos_i, cos_o, cos_h, c) = (
+            fr.cos_i as f32,
+            fr.cos_o as f32,
+            fr.cos_h as f32,
+            fr.c as f32,
+        );
+        // G (FORMULAS.md §3) from q2 = m² tan²θ = m² |n × w|² / cos²θ: products and
+        // quotients of positive numbers, which f32 carries to a few ulp (the cancelling
+        // parts, |n × w|² and the cosines, come from the f64 frame).
+        let m2 = p.m2 as f32;
+        let q2_i = m2 * (fr.sin2_i as f32) / (cos_i * cos_i);
+        let q2_o = m2 * (fr.sin2_o as f32) / (cos_o * cos_o);
+        let g = match G {
+            G_NONE => 1.0,
+            G_CT => {
+                let t = 2.0 * cos_h / c;
+                min(1.0, min(t * cos_o, t * cos_i))
+            }
+            G_SMITH => 1.0 / (1.0 + lambda::<D>(q2_o)) * (1.0 / (1.0 + lambda::<D>(q2_i))),
+            G_SMITH_CORRELATED => 1.0 / (1.0 + lambda::<D>(q2_o) + lambda::<D>(q2_i)),
+            _ => smith_fast_g1(q2_o) * smith_fast_g1(q2_i),
+        };
+        // F (FORMULAS.md §4) per channel.
+        let one_minus_c = (1.0 - fr.c) as f32; // in f64: 1 − c of a rounded c cancels
+        let s2 = (1.0 - fr.c) * (1.0 + fr.c);
+        let f: [f32; 3] = std::array::from_fn(|ch| match F {
+            F_NONE => 1.0,
+            F_SCHLICK => {
+                let x2 = one_minus_c * one_minus_c;
+                p.f0[ch] + (1.0 - p.f0[ch]) * (x2 * x2 * one_minus_c)
+            }
+            F_DIELECTRIC => dielectric(fr.c, s2, p.ior[ch], p.mu2m1[ch]),
+            _ => conductor(c, p.cn[ch], p.ck[ch], p.e2rm1[ch]),
+        });
+        // K (FORMULAS.md §5), one cosine at a time.
+        let kk = p.k_num / cos_o / if p.k_cos_i { cos_i } else { 1.0 };
+        let mut bad = !fr.ok;
+        for ch in 0..3 {
+            let b = p.diffuse[ch] + p.spec[ch] * (d * g * f[ch] * kk);
+            out.brdf[ch][k] = b;
+            bad |= b.is_nan() || b.abs() > OUTPUT_LIMIT;
+        }
+        let terms = [d, g, f[0], f[1], f[2], kk];
+        for (t, x) in terms.into_iter().enumerate() {
+            out.terms[t][k] = x;
+            bad |= x.is_nan() || x.abs() > OUTPUT_LIMIT;
+        }
+        out.rescue[k] = bad;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::material::parse_materials;
+    use crate::reference::{evaluate, Status};
+
+    /// Every lanes-group on ordinary directions: no lane is rescued (so the lanes, not the
+    /// reference, made the numbers) and every output is within 2e-6 relative of the
+    /// reference (these tuples are well conditioned).
+    #[test]
+    fn every_lanes_group_computes_without_rescue() {
+        let dirs: [[f32; 9]; 4] = [
+            [0.3, 0.2, 0.9, -0.2, 0.1, 0.8, 0.0, 0.0, 1.0],
+            [0.7, -0.1, 0.3, -0.6, 0.2, 0.5, 0.0, 0.0, 2.0],
+            [0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0],
+            [0.5, 0.5, 0.2, 0.1, -0.6, 0.4, 0.1, 0.05, 1.0],
+        ];
+        let mut inp = Inputs {
+            v: [[0.0; LANES]; 9],
+        };
+        for k in 0..LANES {
+            for j in 0..9 {
+                inp.v[j][k] = dirs[k % 4][j];
+            }
+        }
+        let mut count = 0;
+        for d in ["ggx", "beckmann"] {
+            for g in [
+                "none",
+                "cook-torrance",
+                "smith",
+                "smith-correlated",
+                "smith-fast",
+            ] {
+                if g == "smith-fast" && d != "beckmann" {
+                    continue;
+                }
+                for f in [
+                    "fresnel = \"none\"",
+                    "fresnel = \"schlick\"\nf0 = [0.04, 0.5, 0.9]",
+                    "fresnel = \"dielectric\"\nior = [1.5, 0.7, 2.4]",
+                    "fresnel = \"conductor\"\nior = [0.2, 0.9, 1.1]\nextinction = [3.9, 2.4, 0.0]",
+                ] {
+                    for conv in ["modern", "seed", "cook-torrance-1982"] {
+                        let toml = format!(
+                            "[[material]]\nname = \"x\"\nmodel = \"cook-torrance\"\n\
+                             distribution = \"{d}\"\ngeometry = \"{g}\"\n{f}\nroughness = 0.3\n\
+                             convention = \"{conv}\"\ndiffuse = [0.2, 0.3, 0.4]\n\
+                             diffuse_weight = 0.5\nspecular_weight = 0.7\n"
+                        );
+                        let m = &parse_materials(&toml, "t").unwrap()[0];
+                        let Plan::Microfacet {
+                            d: dd,
+                            g: gg,
+                            f: ff,
+                            p,
+                        } = Plan::for_material(m)
+                        else {
+                            panic!("{d} {g} {f} {conv} is not in the lanes");
+                        };
+                        let mut out = Outputs::default();
+                        crate::cpu::block(
+                            &Plan::Microfacet {
+                                d: dd,
+                                g: gg,
+                                f: ff,
+                                p,
+                            },
+                            &inp,
+                            &mut out,
+                        );
+                        for k in 0..LANES {
+                            assert!(!out.rescue[k], "{d} {g} {f} {conv}: lane {k} rescued");
+                            let w = |a: usize| f64::from(dirs[k % 4][a]);
+                            let e = evaluate(
+                                [w(0), w(1), w(2)],
+                                [w(3), w(4), w(5)],
+                                [w(6), w(7), w(8)],
+                                None,
+                                m,
+                            );
+                            assert_eq!(e.status, Status::Valid);
+                            let want = [
+                                e.brdf[0], e.brdf[1], e.brdf[2], e.d, e.g, e.f[0], e.f[1], e.f[2],
+                                e.k,
+                            ];
+                            let got = [
+                                out.brdf[0][k],
+                                out.brdf[1][k],
+                                out.brdf[2][k],
+                                out.terms[0][k],
+                                out.terms[1][k],
+                                out.terms[2][k],
+                                out.terms[3][k],
+                                out.terms[4][k],
+                                out.terms[5][k],
+                            ];
+                            for (i, (x, r)) in got.iter().zip(want).enumerate() {
+                                let err = (f64::from(*x) - r).abs() / r.abs().max(1e-6);
+                                assert!(
+                                    err < 2e-6,
+                                    "{d} {g} {f} {conv} lane {k} col {i}: {x} vs {r}"
+                                );
+                            }
+                        }
+                        count += 1;
+                    }
+                }
+            }
+        }
+        assert_eq!(count, 2 * 4 * 4 * 3 + 4 * 3);
+    }
+
+    #[test]
+    fn grazing_invalid_and_below_horizon_lanes_are_rescued() {
+        let mut inp = Inputs {
+            v: [[0.0; LANES]; 9],
+        };
+        let rows: [[f32; 9]; 4] = [
+            [1.0, 0.0, 1e-6, -0.2, 0.1, 0.8, 0.0, 0.0, 1.0], // cos_i ≈ 1e-6
+            [0.3, 0.2, 0.9, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0],   // V = 0
+            [0.3, 0.2, -0.9, -0.2, 0.1, 0.8, 0.0, 0.0, 1.0], // below the horizon
+            [0.3, 0.2, 0.9, f32::INFINITY, 0.1, 0.8, 0.0, 0.0, 1.0],
+        ];
+        for k in 0..LANES {
+            for j in 0..9 {
+                inp.v[j][k] = rows[k % 4][j];
+            }
+        }
+        let m = &parse_materials(
+            "[[material]]\nname = \"x\"\nmodel = \"lambert\"\ndiffuse = [0.5, 0.5, 0.5]\n",
+            "t",
+        )
+        .unwrap()[0];
+        let mut out = Outputs::default();
+        crate::cpu::block(&Plan::for_material(m), &inp, &mut out);
+        assert!(out.rescue.iter().all(|&r| r));
+    }
+}

@@ -1,0 +1,405 @@
+//! The native CPU engine (`vkbrdf::cpu::CpuEngine`) against the f64 reference: every legal
+//! combination under the conformance rule, the stress corpus (no non-finite output, counts
+//! equal), results independent of the thread count, mixed-material batches, cancellation.
+
+mod common;
+
+use vkbrdf::backend::{Backend, Request};
+use vkbrdf::batch::{memory_source, Batch};
+use vkbrdf::cancel::Cancel;
+use vkbrdf::check::{self, CheckOptions};
+use vkbrdf::cpu::kernel::Plan;
+use vkbrdf::cpu::CpuEngine;
+use vkbrdf::material::{parse_materials, Material};
+use vkbrdf::reference::CpuReference;
+
+fn materials(toml: &str) -> Vec<Material> {
+    parse_materials(toml, "test").expect("materials parse")
+}
+
+#[test]
+fn every_combination_matches_the_reference() {
+    let mut engine = CpuEngine::new();
+    let options = CheckOptions {
+        tuples: 3000,
+        seed: 7,
+        only: None,
+    };
+    let mut tally = vkbrdf::cpu::Tally::default();
+    let reports = check::run(&mut engine.clone(), &options, &mut |_| {}).expect("check run");
+    assert_eq!(reports.len(), 314); // every legal combination (derived in src/check.rs)
+    // The lanes made the numbers: in the groups they run, the reference re-did few tuples.
+    for c in check::combinations(options.seed).expect("combinations") {
+        let batch = check::generate(&c, 2000, 1).expect("batch");
+        engine
+            .evaluate(&batch, &c.materials, &Request { terms: true })
+            .expect("evaluate");
+        let t = engine.last_tally();
+        tally.lanes += t.lanes;
+        tally.rescued += t.rescued;
+        tally.reference += t.reference;
+    }
+    eprintln!("{tally:?}");
+    assert!(tally.lanes > 100_000, "{tally:?}");
+    assert!(tally.rescued * 50 < tally.lanes, "{tally:?}");
+    let failures: Vec<String> = reports
+        .iter()
+        .filter(|r| !r.pass())
+        .map(|r| {
+            format!(
+                "{}\n{}",
+                r.row(),
+                r.worst.as_ref().map(|w| w.to_string()).unwrap_or_default()
+            )
+        })
+        .collect();
+    assert!(
+        failures.is_empty(),
+        "{} of 314 combinations fail:\n{}",
+        failures.len(),
+        failures.join("\n")
+    );
+    let well = reports
+        .iter()
+        .map(|r| r.max_rel_well_conditioned)
+        .fold(0.0, f64::max);
+    assert!(
+        well <= check::RELATIVE_TOLERANCE,
+        "well-conditioned error {well:e}"
+    );
+}
+
+#[test]
+fn the_common_groups_run_in_the_lanes_and_the_rest_falls_back() {
+    let combos = check::combinations(1).expect("combinations");
+    let simd: Vec<&str> = combos
+        .iter()
+        .filter(|c| c.materials.iter().all(|m| Plan::for_material(m).is_simd()))
+        .map(|c| c.name.as_str())
+        .collect();
+    // Lambert and isotropic Cook–Torrance with GGX/Beckmann: every geometry, Fresnel and
+    // convention that is legal with them.
+    for name in &simd {
+        assert!(
+            name.contains("lambert") || name.contains("ggx") || name.contains("beckmann"),
+            "{name}"
+        );
+        assert!(!name.contains("aniso"), "{name}");
+    }
+    assert!(
+        simd.len() >= 60,
+        "only {} combinations in the lanes",
+        simd.len()
+    );
+    for m in materials(
+        r#"
+        [[material]]
+        name = "w"
+        model = "ward"
+        roughness = [0.2, 0.4]
+        [[material]]
+        name = "p"
+        model = "phong"
+        exponent = 20
+        "#,
+    ) {
+        assert!(!Plan::for_material(&m).is_simd(), "{}", m.name);
+    }
+}
+
+/// Rows over several materials in an interleaved order, with invalid and below-horizon rows.
+fn mixed_batch(n: usize) -> (Batch, Vec<Material>) {
+    let mats = materials(
+        r#"
+        [[material]]
+        name = "ggx"
+        model = "cook-torrance"
+        distribution = "ggx"
+        geometry = "smith-correlated"
+        fresnel = "conductor"
+        ior = [0.2, 0.9, 1.1]
+        extinction = [3.9, 2.4, 2.2]
+        roughness = 0.3
+        [[material]]
+        name = "matte"
+        model = "lambert"
+        diffuse = [0.5, 0.4, 0.3]
+        [[material]]
+        name = "ward"
+        model = "ward"
+        roughness = 0.2
+        specular = [0.1, 0.1, 0.1]
+        [[material]]
+        name = "beck"
+        model = "cook-torrance"
+        distribution = "beckmann"
+        geometry = "smith"
+        fresnel = "dielectric"
+        ior = [1.5, 1.5, 1.5]
+        roughness = 0.05
+        "#,
+    );
+    let mut rows = Vec::with_capacity(n * 10);
+    let mut s = 12345u64;
+    let mut rnd = || {
+        s = s
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((s >> 40) as f32 / (1u64 << 24) as f32) * 2.0 - 1.0
+    };
+    for i in 0..n {
+        let l = [rnd(), rnd(), rnd().abs() + 0.01];
+        let mut v = [rnd(), rnd(), rnd().abs() + 0.01];
+        if i % 97 == 3 {
+            v[2] = -v[2]; // below the horizon
+        }
+        let mut nrm = [0.0, 0.0, 1.0];
+        if i % 101 == 7 {
+            nrm = [0.0, 0.0, 0.0]; // invalid
+        }
+        if i % 103 == 9 {
+            nrm = [f32::NAN, 0.0, 1.0]; // invalid
+        }
+        rows.extend_from_slice(&l);
+        rows.extend_from_slice(&v);
+        rows.extend_from_slice(&nrm);
+        rows.push(((i * 7) % 4) as f32);
+    }
+    let batch = Batch::new(rows, 10, mats.len(), &memory_source()).expect("batch");
+    (batch, mats)
+}
+
+#[test]
+#[allow(clippy::needless_range_loop)] // column c indexes the output and the sensitivities
+fn mixed_materials_give_the_reference_counts_and_values_for_any_thread_count() {
+    let (batch, mats) = mixed_batch(70_001);
+    let request = Request { terms: true };
+    let reference = CpuReference::new()
+        .evaluate(&batch, &mats, &request)
+        .expect("reference");
+    let one = CpuEngine::with_threads(1)
+        .evaluate(&batch, &mats, &request)
+        .expect("one thread");
+    let three = CpuEngine::with_threads(3)
+        .evaluate(&batch, &mats, &request)
+        .expect("three threads");
+    assert_eq!(one, three, "the thread count changed a result");
+    assert_eq!(one.counts, reference.counts);
+    assert!(one.counts.invalid > 0 && one.counts.below_horizon > 0);
+    assert_eq!(one.counts.first_invalid, Some(7));
+    let terms = one.terms.as_ref().expect("terms");
+    let ref_terms = reference.terms.as_ref().expect("terms");
+    for i in 0..batch.len() {
+        let t = batch.tuple(i);
+        let s = check::f32_sensitivity(&t, &mats[t.material]);
+        for c in 0..3 {
+            let (x, r) = (
+                f64::from(one.brdf[i * 3 + c]),
+                f64::from(reference.brdf[i * 3 + c]),
+            );
+            assert!(
+                (x - r).abs() <= check::allowed_error(r, s[c]),
+                "row {i} ch {c}: {x} vs {r}"
+            );
+        }
+        for c in 0..6 {
+            let (x, r) = (f64::from(terms[i * 6 + c]), f64::from(ref_terms[i * 6 + c]));
+            assert!(
+                (x - r).abs() <= check::allowed_error(r, s[3 + c]),
+                "row {i} term {c}: {x} vs {r}"
+            );
+        }
+    }
+}
+
+#[test]
+fn without_terms_the_brdf_and_counts_are_the_same() {
+    let (batch, mats) = mixed_batch(5_000);
+    let with = CpuEngine::new()
+        .evaluate(&batch, &mats, &Request { terms: true })
+        .expect("with terms");
+    let without = CpuEngine::new()
+        .evaluate(&batch, &mats, &Request { terms: false })
+        .expect("without terms");
+    assert!(without.terms.is_none());
+    assert_eq!(with.brdf, without.brdf);
+    assert_eq!(with.counts, without.counts);
+}
+
+#[test]
+fn a_cancelled_token_stops_the_evaluation() {
+    let (batch, mats) = mixed_batch(50_000);
+    let mut engine = CpuEngine::new();
+    let cancel = Cancel::new();
+    engine.set_cancel(cancel.clone());
+    cancel.cancel();
+    let r = engine.evaluate(&batch, &mats, &Request::default());
+    assert!(matches!(r, Err(vkbrdf::Error::Cancelled)), "{r:?}");
+}
+
+#[test]
+fn an_empty_batch_gives_empty_outputs() {
+    let (_, mats) = mixed_batch(1);
+    let batch = Batch::new(Vec::new(), 10, mats.len(), &memory_source()).expect("batch");
+    let out = CpuEngine::new()
+        .evaluate(&batch, &mats, &Request { terms: true })
+        .expect("empty");
+    assert!(out.brdf.is_empty());
+    assert_eq!(out.counts.tuples, 0);
+}
+
+#[test]
+fn the_stress_corpus_keeps_the_policy_with_every_count_equal() {
+    const TUPLES: usize = 200_000;
+    let mut engine = CpuEngine::new();
+    let report = vkbrdf::stress::run(&mut engine, TUPLES, 7, 1 << 16, &mut |_| {}).expect("stress");
+    assert_eq!(report.tuples, TUPLES as u64);
+    assert_eq!(report.non_finite, 0, "{}", report.to_markdown(1e-5));
+    assert_eq!(report.invalid.0, report.invalid.1);
+    assert_eq!(report.saturated.0, report.saturated.1);
+    // Every lane the f32 path cannot decide goes to the reference, which decides the
+    // status: even the below-horizon count is the reference's, ambiguous tuples included.
+    assert_eq!(report.below_horizon.0, report.below_horizon.1);
+    assert!(report.policy_holds(), "{}", report.to_markdown(1e-5));
+    assert!(report.saturated.1 > 0 && report.invalid.1 > 0);
+}
+
+// ---------------------------------------------------------------------------------------
+// The CLI: `--backend auto|vulkan|cpu|reference`.
+
+fn eval_json(
+    dir: &std::path::Path,
+    backend: Option<&str>,
+    env: &[(&str, &str)],
+) -> serde_json::Value {
+    let m = dir.join("m.toml");
+    std::fs::write(
+        &m,
+        "[[material]]\nname = \"metal\"\nmodel = \"cook-torrance\"\ndistribution = \"ggx\"\n\
+         geometry = \"smith\"\nfresnel = \"conductor\"\nior = [0.2, 0.9, 1.1]\n\
+         extinction = [3.9, 2.4, 2.2]\nroughness = 0.3\n",
+    )
+    .unwrap();
+    let t = dir.join("t.npy");
+    if !t.exists() {
+        assert!(common::generate(&m, 5000, &t).status.success());
+    }
+    let out = dir.join(format!("brdf-{}.npy", backend.unwrap_or("default")));
+    let mut args = vec![
+        "eval",
+        "-m",
+        common::path(&m),
+        "-i",
+        common::path(&t),
+        "-o",
+        common::path(&out),
+        "--json",
+    ];
+    if let Some(b) = backend {
+        args.extend_from_slice(&["--backend", b]);
+    }
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_vkbrdf"))
+        .args(&args)
+        .env_remove("VKBRDF_DEVICE")
+        .envs(env.iter().copied())
+        .output()
+        .expect("run vkbrdf");
+    assert!(o.status.success(), "{:?}: {}", backend, common::stderr(&o));
+    serde_json::from_slice(&o.stdout).expect("JSON summary")
+}
+
+#[test]
+fn backend_cpu_is_the_engine_and_reference_is_the_f64_judge() {
+    let dir = tempfile::tempdir().unwrap();
+    let cpu = eval_json(dir.path(), Some("cpu"), &[]);
+    let reference = eval_json(dir.path(), Some("reference"), &[]);
+    let engine = cpu["engine"].as_str().unwrap();
+    assert!(engine.starts_with("cpu ("), "{cpu}");
+    assert!(
+        reference["engine"]
+            .as_str()
+            .unwrap()
+            .starts_with("cpu-reference"),
+        "{reference}"
+    );
+    let (a, _) = vkbrdf::batch::read_npy_f32(&dir.path().join("brdf-cpu.npy")).unwrap();
+    let (b, _) = vkbrdf::batch::read_npy_f32(&dir.path().join("brdf-reference.npy")).unwrap();
+    assert_eq!(a.len(), b.len());
+    assert_ne!(
+        a, b,
+        "the engine computes in f32: some value differs from the f64 judge's"
+    );
+    for (x, r) in a.iter().zip(&b) {
+        let (x, r) = (f64::from(*x), f64::from(*r));
+        assert!((x - r).abs() <= 1e-5 * r.abs().max(1e-6), "{x} vs {r}");
+    }
+}
+
+#[test]
+fn auto_picks_the_engine_without_a_gpu_and_vulkan_for_a_named_device() {
+    let has_gpu = vkbrdf::gpu::list_devices().is_ok_and(|l| {
+        l.iter()
+            .any(|d| d.device_type == "discrete GPU" || d.device_type == "integrated GPU")
+    });
+    let dir = tempfile::tempdir().unwrap();
+    let default = eval_json(dir.path(), None, &[]);
+    let auto = eval_json(dir.path(), Some("auto"), &[]);
+    assert_eq!(default["engine"], auto["engine"]);
+    let name = auto["engine"].as_str().unwrap();
+    if has_gpu {
+        assert!(!name.starts_with("cpu"), "{name}");
+    } else {
+        assert!(name.starts_with("cpu ("), "{name}");
+    }
+    // A named device means Vulkan, whatever its type.
+    if let Some(d) = vkbrdf::gpu::list_devices()
+        .ok()
+        .and_then(|l| l.first().cloned())
+    {
+        let index = d.index.to_string();
+        let named = eval_json(
+            dir.path(),
+            Some("auto"),
+            &[("VKBRDF_DEVICE", index.as_str())],
+        );
+        assert!(
+            named["engine"].as_str().unwrap().starts_with("vulkan"),
+            "{named}"
+        );
+    }
+}
+
+#[test]
+fn help_and_devices_announce_the_names() {
+    let help = common::vkbrdf(&["eval", "--help"]);
+    let text = String::from_utf8_lossy(&help.stdout);
+    for word in ["auto", "vulkan", "reference", "`cpu` meant it"] {
+        assert!(text.contains(word), "eval --help lacks {word:?}: {text}");
+    }
+    let bad = common::vkbrdf(&["eval", "--backend", "gpu", "-m", "x", "-i", "y", "-o", "z"]);
+    assert_eq!(bad.status.code(), Some(2));
+    let err = common::stderr(&bad);
+    assert!(err.contains("auto") && err.contains("reference"), "{err}");
+    if vkbrdf::gpu::list_devices().is_ok_and(|l| !l.is_empty()) {
+        let d = common::vkbrdf(&["devices"]);
+        let text = String::from_utf8_lossy(&d.stdout);
+        assert!(text.contains("--backend auto (the default) runs"), "{text}");
+    }
+}
+
+#[test]
+fn check_runs_on_the_engine() {
+    let o = common::vkbrdf(&[
+        "check",
+        "--backend",
+        "cpu",
+        "--tuples",
+        "300",
+        "--filter",
+        "beckmann",
+    ]);
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert_eq!(o.status.code(), Some(0), "{text}{}", common::stderr(&o));
+    assert!(text.contains("backend:   cpu ("), "{text}");
+    assert!(text.contains(" 0 fail"), "{text}");
+}
