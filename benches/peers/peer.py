@@ -105,6 +105,12 @@ def load_input(np, path):
     return np.ascontiguousarray(a)
 
 
+def median(ts):
+    st = sorted(ts)
+    m = len(st)
+    return st[m // 2] if m % 2 else 0.5 * (st[m // 2 - 1] + st[m // 2])
+
+
 def time_median(fn, repeats):
     fn()  # warm-up (compiles the Dr.Jit kernel, faults the pages in)
     ts = []
@@ -113,10 +119,7 @@ def time_median(fn, repeats):
         t0 = time.perf_counter()
         out = fn()
         ts.append(time.perf_counter() - t0)
-    st = sorted(ts)
-    m = len(st)
-    med = st[m // 2] if m % 2 else 0.5 * (st[m // 2 - 1] + st[m // 2])
-    return med, ts, out
+    return median(ts), ts, out
 
 
 # ---------------------------------------------------------------------------
@@ -444,10 +447,7 @@ def time_torch(torch, device, fn, repeats, warmups=3):
             t0 = time.perf_counter()
             out = fn()
             ts.append(time.perf_counter() - t0)
-    st = sorted(ts)
-    m = len(st)
-    med = st[m // 2] if m % 2 else 0.5 * (st[m // 2 - 1] + st[m // 2])
-    return med, ts, out
+    return median(ts), ts, out
 
 
 def run_torch(args, np, t, compiled=False):

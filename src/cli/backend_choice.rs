@@ -41,31 +41,9 @@ pub struct DeviceArgs {
     pub device: Option<DeviceSelector>,
     /// Device memory budget for the tuple and output buffers, e.g. 256M or 2G, from 1K
     /// to 1024G; larger batches stream through in chunks.
-    #[arg(long, value_name = "BYTES", value_parser = parse_bytes, default_value = "256M",
-          allow_negative_numbers = true)]
+    #[arg(long, value_name = "BYTES", value_parser = super::ranges::bytes(1 << 10, 1 << 40),
+          default_value = "256M", allow_negative_numbers = true)]
     pub max_gpu_memory: u64,
-}
-
-/// Parses `123`, `64K`, `256M`, `2G` (binary multiples).
-pub fn parse_bytes(s: &str) -> Result<u64, String> {
-    let s = s.trim();
-    let (num, mult) = match s.char_indices().last() {
-        Some((i, 'k' | 'K')) => (&s[..i], 1u64 << 10),
-        Some((i, 'm' | 'M')) => (&s[..i], 1 << 20),
-        Some((i, 'g' | 'G')) => (&s[..i], 1 << 30),
-        _ => (s, 1),
-    };
-    let n: f64 = num
-        .trim()
-        .parse()
-        .map_err(|_| format!("`{s}` is not a size like 256M or 2G"))?;
-    let bytes = n * mult as f64;
-    if !(n.is_finite() && (1024.0..=(1u64 << 40) as f64).contains(&bytes)) {
-        return Err(format!(
-            "`{s}` is out of range; give a size from 1K to 1024G"
-        ));
-    }
-    Ok(bytes as u64)
 }
 
 /// Opens the Vulkan backend on the selected device.

@@ -68,7 +68,8 @@ pub struct Args {
     pub json: bool,
     /// Host memory for the chunks being read, evaluated and written: bytes, or with a
     /// suffix KiB, MiB, GiB (1 MiB to 1 TiB).
-    #[arg(long, value_name = "BYTES", default_value = "512MiB", value_parser = parse_bytes,
+    #[arg(long, value_name = "BYTES", default_value = "512MiB",
+          value_parser = super::ranges::bytes(1 << 20, 1 << 40),
           allow_negative_numbers = true)]
     pub max_memory: u64,
     /// `exact` (FORMULAS.md as written) or `fast` (Schlick for exact Fresnel, smith-fast
@@ -207,27 +208,4 @@ fn peak_memory() -> Option<u64> {
     let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
     let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
     Some(kib / 1024)
-}
-
-/// `--max-memory`: bytes, or a number with KiB, MiB or GiB (also K, M, G), 1 MiB to 1 TiB.
-fn parse_bytes(s: &str) -> Result<u64, String> {
-    let t = s.trim();
-    let split = t.find(|c: char| c.is_ascii_alphabetic()).unwrap_or(t.len());
-    let (num, unit) = t.split_at(split);
-    let scale: u64 = match unit.trim() {
-        "" | "B" => 1,
-        "K" | "KiB" | "k" => 1 << 10,
-        "M" | "MiB" => 1 << 20,
-        "G" | "GiB" => 1 << 30,
-        other => return Err(format!("unknown unit {other:?}; use KiB, MiB or GiB")),
-    };
-    let value: f64 = num
-        .trim()
-        .parse()
-        .map_err(|_| format!("{s:?} is not a size such as 512MiB"))?;
-    let bytes = value * scale as f64;
-    if !(bytes >= (1u64 << 20) as f64 && bytes <= (1u64 << 40) as f64) {
-        return Err(format!("{s} is outside 1MiB ..= 1TiB"));
-    }
-    Ok(bytes as u64)
 }

@@ -57,3 +57,45 @@ pub const MAX_IN_MEMORY_TUPLES: u64 = 100_000_000;
 pub const MAX_STRESS_TUPLES: u64 = 10_000_000_000;
 /// Largest per-combination sample of `check` and per-preset sample of `demo --check`.
 pub const MAX_CHECK_TUPLES: u64 = 10_000_000;
+
+/// A size in bytes in `lo..=hi`: a number with an optional binary unit — `K`/`KiB`,
+/// `M`/`MiB`, `G`/`GiB` (also lower-case `k`, `m`, `g`), or none for bytes.
+pub fn bytes(lo: u64, hi: u64) -> impl Fn(&str) -> Result<u64, String> + Clone + Send + Sync {
+    move |s: &str| {
+        let t = s.trim();
+        let split = t.find(|c: char| c.is_ascii_alphabetic()).unwrap_or(t.len());
+        let (num, unit) = t.split_at(split);
+        let range = || format!("give a size from {} to {}", human(lo), human(hi));
+        let scale: u64 = match unit.trim() {
+            "" | "B" => 1,
+            "K" | "k" | "KiB" => 1 << 10,
+            "M" | "m" | "MiB" => 1 << 20,
+            "G" | "g" | "GiB" => 1 << 30,
+            other => {
+                return Err(format!(
+                    "unknown unit `{other}`; use K, M or G (KiB, MiB, GiB); {}",
+                    range()
+                ))
+            }
+        };
+        let n: f64 = num
+            .trim()
+            .parse()
+            .map_err(|_| format!("`{s}` is not a size like 256M or 2GiB; {}", range()))?;
+        let value = n * scale as f64;
+        if !(value.is_finite() && value >= lo as f64 && value <= hi as f64) {
+            return Err(format!("`{s}` is out of range; {}", range()));
+        }
+        Ok(value as u64)
+    }
+}
+
+/// `n` bytes as the largest binary unit that divides it (`512MiB`, `1TiB`).
+fn human(n: u64) -> String {
+    for (unit, shift) in [("TiB", 40), ("GiB", 30), ("MiB", 20), ("KiB", 10)] {
+        if n >= 1 << shift && n % (1 << shift) == 0 {
+            return format!("{}{unit}", n >> shift);
+        }
+    }
+    format!("{n} bytes")
+}
