@@ -236,23 +236,50 @@ fn rsqrt(x: f64) -> f64 {
     y0 * (1.5 - 0.5 * x * y0 * y0)
 }
 
+/// One lane's L, V, N in f64 with their squared lengths, and whether all three are finite
+/// and non-zero (the invalid test, shared by the frame and Lambert's cosines).
+struct Raw {
+    l: [f64; 3],
+    v: [f64; 3],
+    n: [f64; 3],
+    ll: f64,
+    vv: f64,
+    nn: f64,
+    finite: bool,
+}
+
 #[inline(always)]
-fn frame(x: &[f32; 9]) -> Frame {
+fn raw(x: &[f32; 9]) -> Raw {
     let w = |i: usize| f64::from(x[i]);
-    let (lx, ly, lz, vx, vy, vz, nx, ny, nz) =
-        (w(0), w(1), w(2), w(3), w(4), w(5), w(6), w(7), w(8));
+    let (l, v, n) = ([w(0), w(1), w(2)], [w(3), w(4), w(5)], [w(6), w(7), w(8)]);
     // Products of f32 values are exact in f64, and squares of f32 magnitudes stay inside
     // f64's normal range, so these lengths neither overflow nor underflow.
-    let ll = lx * lx + ly * ly + lz * lz;
-    let vv = vx * vx + vy * vy + vz * vz;
-    let nn = nx * nx + ny * ny + nz * nz;
+    let sq = |a: [f64; 3]| a[0] * a[0] + a[1] * a[1] + a[2] * a[2];
+    let (ll, vv, nn) = (sq(l), sq(v), sq(n));
     // NaN fails both comparisons, ±inf the second: a non-finite or zero input is invalid.
-    let finite = ll > 0.0
-        && vv > 0.0
-        && nn > 0.0
-        && ll < f64::INFINITY
-        && vv < f64::INFINITY
-        && nn < f64::INFINITY;
+    let ok = |q: f64| q > 0.0 && q < f64::INFINITY;
+    Raw {
+        l,
+        v,
+        n,
+        ll,
+        vv,
+        nn,
+        finite: ok(ll) && ok(vv) && ok(nn),
+    }
+}
+
+#[inline(always)]
+fn frame(x: &[f32; 9]) -> Frame {
+    let Raw {
+        l: [lx, ly, lz],
+        v: [vx, vy, vz],
+        n: [nx, ny, nz],
+        ll,
+        vv,
+        nn,
+        finite,
+    } = raw(x);
     let (il, iv, inn) = (rsqrt(ll), rsqrt(vv), rsqrt(nn));
     let (lx, ly, lz) = (lx * il, ly * il, lz * il);
     let (vx, vy, vz) = (vx * iv, vy * iv, vz * iv);
@@ -393,18 +420,15 @@ fn conductor(c: f32, n: f32, k: f32, e2rm1: f32) -> f32 {
 pub fn lambert_block(p: &Params, inp: &Inputs, out: &mut Outputs) {
     for k in 0..LANES {
         let x = lane_inputs(inp, k);
-        let w = |i: usize| f64::from(x[i]);
-        let (lx, ly, lz, vx, vy, vz, nx, ny, nz) =
-            (w(0), w(1), w(2), w(3), w(4), w(5), w(6), w(7), w(8));
-        let ll = lx * lx + ly * ly + lz * lz;
-        let vv = vx * vx + vy * vy + vz * vz;
-        let nn = nx * nx + ny * ny + nz * nz;
-        let finite = ll > 0.0
-            && vv > 0.0
-            && nn > 0.0
-            && ll < f64::INFINITY
-            && vv < f64::INFINITY
-            && nn < f64::INFINITY;
+        let Raw {
+            l: [lx, ly, lz],
+            v: [vx, vy, vz],
+            n: [nx, ny, nz],
+            ll,
+            vv,
+            nn,
+            finite,
+        } = raw(&x);
         let inn = rsqrt(nn);
         let cos_i = (nx * lx + ny * ly + nz * lz) * inn * rsqrt(ll);
         let cos_o = (nx * vx + ny * vy + nz * vz) * inn * rsqrt(vv);
