@@ -189,13 +189,7 @@ pub fn stage(
     cancel: &Cancel,
     body: impl FnOnce(&mut Sink) -> std::io::Result<()>,
 ) -> Result<Staged> {
-    let failed = |source: std::io::Error| {
-        if cancel.is_cancelled() {
-            Error::Cancelled
-        } else {
-            io_error(path, source)
-        }
-    };
+    let failed = |source| write_error(cancel, path, source);
     cancel.check()?;
     let bytes = match destination(path)? {
         Destination::Regular { target } => {
@@ -313,11 +307,7 @@ impl Write for StagedWriter {
 impl StagedWriter {
     /// The error for a failed write to this output (or [`Error::Cancelled`]).
     pub fn error(&self, source: std::io::Error) -> Error {
-        if self.cancel.is_cancelled() {
-            Error::Cancelled
-        } else {
-            io_error(&self.path, source)
-        }
+        write_error(&self.cancel, &self.path, source)
     }
 
     /// Flushes and syncs the output: it is then ready for [`commit`].
@@ -327,13 +317,7 @@ impl StagedWriter {
             inner,
             cancel,
         } = self;
-        let failed = |source: std::io::Error| {
-            if cancel.is_cancelled() {
-                Error::Cancelled
-            } else {
-                io_error(&path, source)
-            }
-        };
+        let failed = |source| write_error(&cancel, &path, source);
         let bytes = match inner {
             WriterInner::Temp {
                 file,
@@ -578,6 +562,16 @@ fn is_fifo(path: &Path) -> bool {
 #[cfg(not(unix))]
 fn is_fifo(_path: &Path) -> bool {
     false
+}
+
+/// A failed write to `path`: [`Error::Cancelled`] when the token was the cause (the writer
+/// refused the block), else the I/O error naming the path.
+fn write_error(cancel: &Cancel, path: &Path, source: std::io::Error) -> Error {
+    if cancel.is_cancelled() {
+        Error::Cancelled
+    } else {
+        io_error(path, source)
+    }
 }
 
 fn io_error(path: &Path, source: std::io::Error) -> Error {

@@ -110,8 +110,7 @@ fn copy_kernel_moves_the_row_and_three_floats() {
             "the copy kernel's output is not read back"
         );
     }
-    // The capacity follows the device's limits, never zero.
-    assert!(gpu.resident_capacity(13) >= 1);
+    // Wider rows fit fewer tuples into the same device limits.
     assert!(gpu.resident_capacity(10) >= gpu.resident_capacity(13));
     assert_clean(&gpu);
 }
