@@ -140,6 +140,11 @@ double log_f64(double x) {
 // e^x for a double x whose result may lie beyond float32's range: x = k ln 2 + r with
 // |r| <= ln 2 / 2, e^x = 2^k e^r (relative error ~2 ulp of float32).
 double exp_f64(double x) {
+    // Beyond |x| = 800 the value is 0 or above every float32 and float64 anyway. Without
+    // the clamp, x = -1e20 (a lobe cos_h^1e18) leaves r = x - k ln 2 at the size of x's
+    // rounding error, thousands, and e^r overflows: the H200, which fuses that product
+    // into an FMA, returned inf for a value that is 0.
+    x = clamp(x, -800.0LF, 800.0LF);
     double k = floor(x * 1.44269504088896340736LF + 0.5LF);
     double r = x - k * 0.69314718055994530942LF;
     return ldexp(double(exp_acc(float(r))), int(clamp(k, -1100.0LF, 1100.0LF)));
