@@ -89,6 +89,11 @@ impl Batch {
         Ok(batch)
     }
 
+    /// The row-major data, for reuse (see [`NpyRows::next_chunk_reusing`]).
+    pub fn into_data(self) -> Vec<f32> {
+        self.data
+    }
+
     fn first_bad_material(&self, material_count: usize) -> Option<(usize, f32)> {
         self.data
             .chunks_exact(self.columns)

@@ -108,10 +108,13 @@ pub fn evaluate(
     // channel, so at most about five are alive at once (`chunk_rows` divides the budget).
     let (read_tx, read_rx) = std::sync::mpsc::sync_channel::<Result<(u64, Batch, f64)>>(1);
     let (write_tx, write_rx) = std::sync::mpsc::sync_channel::<(Vec<f32>, Option<Vec<f32>>)>(1);
+    // Spent input buffers go back to the reader, which reads the next chunk into one.
+    let (spent_tx, spent_rx) = std::sync::mpsc::sync_channel::<Vec<f32>>(2);
     let (written, evaluated) = std::thread::scope(|scope| {
         let reader = scope.spawn(move || loop {
             let t = std::time::Instant::now();
-            let next = rows.next_chunk(chunk).and_then(|c| {
+            let buffer = spent_rx.try_recv().unwrap_or_default();
+            let next = rows.next_chunk_reusing(chunk, buffer).and_then(|c| {
                 if let Some((first, batch)) = &c {
                     check_tangent_rows(
                         batch.as_slice(),
@@ -158,6 +161,7 @@ pub fn evaluate(
                 summary.counts.absorb(&counted);
                 summary.chunks += 1;
                 progress(first + batch.len() as u64 - part.start, n);
+                let _ = spent_tx.try_send(batch.into_data()); // full: the reader has spares
                 if write_tx.send((out.brdf, out.terms)).is_err() {
                     break; // the writer failed: its error is reported below
                 }
@@ -209,6 +213,23 @@ pub fn evaluate(
     Ok(summary)
 }
 
+/// Writes `chunks` (each a block of whole rows of `columns` floats, `rows` in all) as one
+/// float32 `.npy` at `path`, block by block as [`evaluate`] writes them, staged and renamed
+/// at the end: the write stage of the bench ([`crate::bench::stages`]).
+pub fn write_chunks(
+    path: &Path,
+    rows: u64,
+    columns: usize,
+    chunks: &[Vec<f32>],
+    cancel: &Cancel,
+) -> Result<()> {
+    let mut out = NpyOut::start(path, rows, columns, cancel)?;
+    for c in chunks {
+        out.rows(c)?;
+    }
+    atomic::commit(vec![out.finish()?])
+}
+
 /// A float32 `.npy` of known shape written row block by row block.
 struct NpyOut {
     writer: StagedWriter,
@@ -232,13 +253,14 @@ impl NpyOut {
     }
 
     fn rows(&mut self, values: &[f32]) -> Result<()> {
-        let mut bytes = Vec::with_capacity(4 * values.len());
-        for v in values {
-            bytes.extend_from_slice(&v.to_le_bytes());
-        }
-        self.writer
-            .write_all(&bytes)
-            .map_err(|e| self.writer.error(e))?;
+        let written = if cfg!(target_endian = "little") {
+            // The floats' own bytes: no copy before the file's buffer.
+            self.writer.write_all(bytemuck::cast_slice(values))
+        } else {
+            let bytes: Vec<u8> = values.iter().flat_map(|v| v.to_le_bytes()).collect();
+            self.writer.write_all(&bytes)
+        };
+        written.map_err(|e| self.writer.error(e))?;
         self.written += values.len() as u64;
         Ok(())
     }

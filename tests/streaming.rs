@@ -360,3 +360,59 @@ fn merge_refuses_parts_that_do_not_belong_together() {
         assert_eq!(r.status.code(), Some(2), "--shard {bad}: {}", stderr(&r));
     }
 }
+
+/// `vkbrdf bench` times each stage of the streamed path on its own and the whole of it:
+/// every engine's row carries a positive rate for read, engine and write and end to end,
+/// names the slowest of the three, and its ratio is end to end over that stage's rate.
+#[test]
+fn bench_reports_each_streaming_stage() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let json = dir.path().join("bench.json");
+    let out = common::vkbrdf(&[
+        "bench",
+        "--quick",
+        "--no-peers",
+        "--scenario",
+        "lambert",
+        "--repeats",
+        "1",
+        "--sustained-tuples",
+        "1000",
+        "--stage-tuples",
+        "5000",
+        "--json",
+        path(&json),
+    ]);
+    assert!(out.status.success(), "bench: {}", stderr(&out));
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).expect("json")).expect("parses");
+    let rows = report["stages"].as_array().expect("a stages array");
+    assert!(
+        rows.iter()
+            .any(|r| r["backend"].as_str().unwrap_or("").starts_with("cpu")),
+        "the CPU engine has a row: {rows:?}"
+    );
+    for r in rows {
+        let rate = |k: &str| r[k].as_f64().unwrap_or(f64::NAN);
+        for k in ["read", "engine", "write", "end_to_end"] {
+            assert!(rate(k).is_finite() && rate(k) > 0.0, "{k} in {r}");
+        }
+        assert_eq!(r["tuples"], 5000, "{r}");
+        let slowest = r["slowest"].as_str().expect("slowest");
+        let min = ["read", "engine", "write"]
+            .into_iter()
+            .map(|k| (k, rate(k)))
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .expect("three");
+        assert_eq!(slowest, min.0, "{r}");
+        assert!(
+            (rate("ratio") - rate("end_to_end") / min.1).abs() < 1e-9 * rate("ratio"),
+            "{r}"
+        );
+        if r["backend"].as_str().unwrap_or("").starts_with("vulkan") {
+            for k in ["upload", "kernel", "readback"] {
+                assert!(rate(k).is_finite() && rate(k) > 0.0, "{k} in {r}");
+            }
+        }
+    }
+}

@@ -6,6 +6,7 @@
 pub mod peers;
 pub mod plot;
 pub mod scenarios;
+pub mod stages;
 
 use crate::backend::{Backend, Output, Request};
 use crate::batch::Batch;

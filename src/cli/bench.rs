@@ -5,7 +5,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use std::path::PathBuf;
 use std::process::ExitCode;
 use vkbrdf::backend::Request;
-use vkbrdf::bench::{self, peers, plot, scenarios, ResultRow};
+use vkbrdf::bench::{self, peers, plot, scenarios, stages, ResultRow};
 use vkbrdf::directions::SliceGrid;
 use vkbrdf::features::FeatureSet;
 use vkbrdf::gpu::VulkanBackend;
@@ -64,6 +64,12 @@ pub struct Args {
     /// Path of benches/peers/peer.py.
     #[arg(long, value_name = "PATH")]
     pub peers_script: Option<PathBuf>,
+    /// Tuples of the streamed-eval stage table (read, engine, upload, kernel, readback,
+    /// write and file-to-file end to end per engine), 1e3 to 1e9; default 2^22 (--quick:
+    /// 2^20). The file goes to the temporary directory ($TMPDIR).
+    #[arg(long, value_name = "N", allow_negative_numbers = true,
+          value_parser = super::ranges::integer::<usize>(1_000, 1_000_000_000))]
+    pub stage_tuples: Option<usize>,
     #[command(flatten)]
     pub device: DeviceArgs,
 }
@@ -78,6 +84,7 @@ struct Report {
     device: String,
     results: Vec<ResultRow>,
     bandwidth: Vec<BandwidthRow>,
+    stages: Vec<stages::StageRow>,
     peers: Vec<peers::PeerRow>,
 }
 
@@ -203,6 +210,7 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         bandwidth = sustained_rows(v, &list, *sizes.last().expect("sizes"), sustained, repeats)?;
         results.push(dfg_row(v, repeats)?);
     }
+    let stage_rows = stage_rows(args, &list, vulkan.as_mut(), &mut engine, repeats)?;
     let mut peer_rows = Vec::new();
     let script = args
         .peers_script
@@ -251,11 +259,13 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
     }
     print_report(&results, &peer_rows, &list);
     print_bandwidth(&bandwidth, &peer_rows);
+    stages::print(&stage_rows);
     let report = Report {
         schema_version: SCHEMA_VERSION,
         device,
         results,
         bandwidth,
+        stages: stage_rows,
         peers: peer_rows,
     };
     if let Some(path) = &args.json {
@@ -305,6 +315,62 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         );
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// The streamed-eval stage table: Lambert (memory-bound) and the Mitsuba GGX scenario
+/// (compute-bound) when selected, else the first scenario; on each engine (the Vulkan
+/// kernel with its sub-stages; the CPU engine unless `--no-cpu`), at the default memory
+/// budget of `eval`.
+fn stage_rows(
+    args: &Args,
+    list: &[scenarios::Scenario],
+    mut vulkan: Option<&mut VulkanBackend>,
+    engine: &mut vkbrdf::cpu::CpuEngine,
+    repeats: usize,
+) -> anyhow::Result<Vec<stages::StageRow>> {
+    let n = args
+        .stage_tuples
+        .unwrap_or(if args.quick { 1 << 20 } else { 1 << 22 });
+    let mut chosen: Vec<&scenarios::Scenario> = list
+        .iter()
+        .filter(|s| s.name == "lambert" || s.name == "mitsuba-ggx")
+        .collect();
+    if chosen.is_empty() {
+        chosen.push(&list[0]);
+    }
+    let dir = tempfile::Builder::new()
+        .prefix("vkbrdf-bench-stages")
+        .tempdir()?;
+    let budget = vkbrdf::stream::DEFAULT_MAX_MEMORY;
+    let repeats = repeats.min(5);
+    let mut rows = Vec::new();
+    for sc in chosen {
+        eprintln!("stages {} on {n} tuples …", sc.name);
+        let batch = scenarios::batch(sc, n, 42);
+        if let Some(v) = vulkan.as_deref_mut() {
+            rows.push(stages::measure(
+                stages::Engine::Vulkan(v),
+                sc.name,
+                &batch,
+                &sc.materials,
+                dir.path(),
+                budget,
+                repeats,
+            )?);
+        }
+        if !args.no_cpu {
+            rows.push(stages::measure(
+                stages::Engine::Any(engine),
+                sc.name,
+                &batch,
+                &sc.materials,
+                dir.path(),
+                budget,
+                repeats,
+            )?);
+        }
+    }
+    Ok(rows)
 }
 
 /// The side-by-side kernel comparisons of one scenario at `n` tuples: specialised against

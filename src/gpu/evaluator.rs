@@ -156,6 +156,23 @@ impl BufferBytes {
     }
 }
 
+/// Host seconds of the streamed evaluation's stages, summed over the calls since the last
+/// [`VulkanBackend::reset_host_stages`]: what `vkbrdf bench` reports as the upload, wait and
+/// readback stages (the kernel's own time comes from device timestamps instead).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct HostStages {
+    /// Grouping rows by material and copying them into the device-visible input buffers.
+    pub upload_s: f64,
+    /// Waiting on chunk fences: the device's kernel and transfers not hidden behind the
+    /// host's own work.
+    pub wait_s: f64,
+    /// Copying results out of the device-visible output buffers (scattered back to row
+    /// order when grouped).
+    pub readback_s: f64,
+    /// Chunks evaluated.
+    pub chunks: u64,
+}
+
 /// Where a submitted chunk's results go when it is read back.
 #[derive(Debug, Clone)]
 struct Pending {
@@ -217,6 +234,8 @@ pub struct VulkanBackend {
     options: VulkanOptions,
     /// Checked before each chunk is submitted.
     cancel: crate::cancel::Cancel,
+    /// Host time per stage, for the bench.
+    stages: HostStages,
     device: Arc<Device>,
 }
 
@@ -272,8 +291,19 @@ impl VulkanBackend {
             last_features: None,
             options,
             cancel: crate::cancel::Cancel::new(),
+            stages: HostStages::default(),
             device,
         })
+    }
+
+    /// Host seconds per stage since the last [`reset_host_stages`](Self::reset_host_stages).
+    pub fn host_stages(&self) -> HostStages {
+        self.stages
+    }
+
+    /// Starts the [`HostStages`] sums again from zero.
+    pub fn reset_host_stages(&mut self) {
+        self.stages = HostStages::default();
     }
 
     /// The device's name (e.g. `llvmpipe (LLVM 15.0.6, 256 bits)`).
@@ -563,6 +593,7 @@ impl VulkanBackend {
         bucketed: bool,
         terms: bool,
     ) -> Result<Option<Vec<u32>>> {
+        let started = std::time::Instant::now();
         let len = rows.len() / cols;
         let order = bucketed.then(|| bucket_order(rows, cols, material_count));
         let grouped = order.as_ref().map(|o| gather_rows(rows, cols, o));
@@ -584,6 +615,7 @@ impl VulkanBackend {
             }
             slot.counts.write(0, &[GpuCounts::INITIAL]);
         }
+        self.stages.upload_s += started.elapsed().as_secs_f64();
         Ok(order)
     }
 
@@ -753,7 +785,9 @@ impl VulkanBackend {
             return Ok(());
         };
         let slot = &self.slots[s];
+        let started = std::time::Instant::now();
         slot.fence.wait_and_reset()?;
+        let waited = started.elapsed();
         let mut counts = [GpuCounts::INITIAL];
         // SAFETY: the fence is signalled, so the dispatch and its compute→host barrier have
         // completed: the buffers hold final, host-visible results and nothing writes them.
@@ -766,6 +800,9 @@ impl VulkanBackend {
             }
             slot.counts.read(0, &mut counts);
         }
+        self.stages.wait_s += waited.as_secs_f64();
+        self.stages.readback_s += (started.elapsed() - waited).as_secs_f64();
+        self.stages.chunks += 1;
         let c = counts[0];
         out.counts.absorb(&Counts {
             tuples: 0,
