@@ -330,3 +330,36 @@ fn merl_export_then_eval_as_a_measured_material_returns_the_analytic_values() {
         }
     }
 }
+
+/// Without a GPU, `auto` runs the CPU engine and the demo prints, beside it, the same work
+/// timed on the Vulkan kernel's CPU device (lavapipe); with a GPU, `auto` runs the kernel
+/// and no comparison is printed.
+#[test]
+fn demo_names_its_engine_and_the_lavapipe_figure_beside_it() {
+    let Some(v) = common::vulkan() else {
+        return;
+    };
+    let gpu = !v.is_cpu_device();
+    drop(v);
+    let out = common::vkbrdf(&["demo", "--no-tables", "--tuples", "5000", "--check", "10"]);
+    assert!(out.status.success(), "demo: {}", common::stderr(&out));
+    let text = String::from_utf8_lossy(&out.stdout);
+    let first = text.lines().next().unwrap_or("");
+    if gpu {
+        assert!(first.contains(" on vulkan"), "{text}");
+        assert!(
+            !text.contains("the same tuples on the Vulkan kernel"),
+            "{text}"
+        );
+    } else {
+        assert!(first.contains(" on cpu ("), "the CPU engine ran: {text}");
+        let line = text
+            .lines()
+            .find(|l| l.contains("the same tuples on the Vulkan kernel"))
+            .unwrap_or_else(|| panic!("no lavapipe line: {text}"));
+        assert!(
+            line.contains("M tuples/s") && line.contains("× the CPU engine's time"),
+            "{line}"
+        );
+    }
+}

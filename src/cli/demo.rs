@@ -7,7 +7,7 @@ use super::backend_choice::{self, BackendArgs};
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
-use vkbrdf::backend::Request;
+use vkbrdf::backend::{Backend, Request};
 use vkbrdf::material::presets;
 
 /// Arguments of `vkbrdf demo`.
@@ -57,6 +57,9 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         out.counts.below_horizon,
         out.counts.invalid
     );
+    if args.backend.backend.is_none() && !backend_choice::auto_choice(&args.backend.device).0 {
+        beside_lavapipe(&args.backend.device, &batch, &materials, secs);
+    }
     outln!(
         "{:<15} {:>9} {:>27} {:>12} {:>13}",
         "preset",
@@ -99,6 +102,35 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         tables(backend.as_mut(), &args.out_dir)?;
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// `auto` chose the CPU engine (no GPU): the same work on the Vulkan kernel's CPU device
+/// (lavapipe), timed the same way, so the user sees what the engine choice gained. Says
+/// so and moves on when no Vulkan device exists.
+fn beside_lavapipe(
+    device: &backend_choice::DeviceArgs,
+    batch: &vkbrdf::batch::Batch,
+    materials: &[vkbrdf::material::Material],
+    engine_secs: f64,
+) {
+    let timed = || -> anyhow::Result<(String, f64)> {
+        let mut v = backend_choice::open_vulkan(device)?;
+        v.set_cancel(super::cancel());
+        let warm = vkbrdf::sample::sample_batch(1024, materials.len(), 1, false);
+        v.evaluate(&warm, materials, &Request::default())?;
+        let t = Instant::now();
+        v.evaluate(batch, materials, &Request::default())?;
+        Ok((v.device_name(), t.elapsed().as_secs_f64()))
+    };
+    match timed() {
+        Ok((name, secs)) => outln!(
+            "  (no GPU, so `auto` ran the CPU engine; the same tuples on the Vulkan kernel ({name}): {:.3} s ({:.1} M tuples/s), {:.2}× the CPU engine's time)",
+            secs,
+            batch.len() as f64 / secs.max(1e-9) / 1e6,
+            secs / engine_secs.max(1e-9)
+        ),
+        Err(e) => outln!("  (no GPU, so `auto` ran the CPU engine; no Vulkan device to compare with: {e:#})"),
+    }
 }
 
 /// The default table set, each file timed.
