@@ -1,7 +1,8 @@
 //! Hand-derived values for every model, distribution D, geometry term G, Fresnel term F and
 //! convention K of FORMULAS.md, checked against the CPU reference (`reference::evaluate`)
-//! to 1e-12 relative, plus the rules of §1 (invalid tuples, the horizon) and the numeric
-//! guards of §2 and §4.
+//! to 1e-12 relative and, through `Backend::evaluate` with the terms output, against every
+//! engine (the native CPU engine, the Vulkan kernel) under the conformance rule; plus the
+//! rules of §1 (invalid tuples, the horizon) and the numeric guards of §2 and §4.
 //!
 //! Every expected value is derived here from the formula, with the numbers written out;
 //! nothing calls the code under test to get an expectation. Materials are built from TOML
@@ -27,7 +28,13 @@
 //! `t = (1/2, √3/2, 0)`, `b = n × t = (−√3/2, 1/2, 0)` and `h` in that frame
 //! `(hx, hy, hz) = (√2/4, −√6/4, √2/2)`, so `(hx/hz)² = 1/4`, `(hy/hz)² = 3/4`.
 
+mod common;
+
 use std::f64::consts::PI;
+use std::sync::{Mutex, OnceLock};
+use vkbrdf::backend::{Backend, Request};
+use vkbrdf::batch::{Batch, Tuple};
+use vkbrdf::check::{allowed_error, f32_sensitivity};
 use vkbrdf::material::{parse_materials, Material};
 use vkbrdf::reference::{evaluate, fresnel, Evaluation, Status};
 use vkbrdf::vector::scale;
@@ -184,6 +191,88 @@ fn check_material(label: &str, m: &Material, body: &str, setup: &Setup, want: &W
             ctx()
         );
     }
+    let nine = [
+        want.brdf[0],
+        want.brdf[1],
+        want.brdf[2],
+        want.d,
+        want.g,
+        want.f[0],
+        want.f[1],
+        want.f[2],
+        want.k,
+    ];
+    engines_agree(label, m, setup, nine, &[0, 1, 2, 3, 4, 5, 6, 7, 8]);
+}
+
+/// Every engine (`common::backends()`: the native CPU engine and the Vulkan kernel beside
+/// the reference), created once for the whole file.
+fn engines() -> &'static Mutex<Vec<Box<dyn Backend + Send>>> {
+    static ENGINES: OnceLock<Mutex<Vec<Box<dyn Backend + Send>>>> = OnceLock::new();
+    ENGINES.get_or_init(|| {
+        let mut v: Vec<Box<dyn Backend + Send>> = vec![Box::new(vkbrdf::cpu::CpuEngine::new())];
+        if let Some(b) = common::vulkan() {
+            v.push(Box::new(b));
+        }
+        Mutex::new(v)
+    })
+}
+
+/// The same known value through every engine's `Backend::evaluate` with the terms output:
+/// the setup's directions rounded to f32 (the engines' input), each of the nine outputs
+/// within the conformance rule of `vkbrdf check` around the hand-derived value
+/// (`1e-5 · max(|want|, 1e-6) + 4 · f32 sensitivity`; the sensitivity covers the move from
+/// the f64 directions the value was derived for to their f32 roundings). Only the columns
+/// in `which` are compared (all nine for a full check, G alone for `check_g`).
+/// Setups with components outside f32's normal range (z = 1e-100 for the reference's
+/// log-domain guards) have no f32 counterpart: only the reference sees them.
+fn engines_agree(label: &str, m: &Material, setup: &Setup, want: [f64; 9], which: &[usize]) {
+    let mut components = [setup.l, setup.v, setup.n, setup.t.unwrap_or([1.0; 3])]
+        .into_iter()
+        .flatten();
+    if components.any(|x| {
+        x != 0.0 && !(f64::from(f32::MIN_POSITIVE)..=f64::from(f32::MAX)).contains(&x.abs())
+    }) {
+        return;
+    }
+    let f = |a: [f64; 3]| a.map(|x| x as f32);
+    let mut row = Vec::new();
+    row.extend(f(setup.l));
+    row.extend(f(setup.v));
+    row.extend(f(setup.n));
+    row.push(0.0);
+    if let Some(t) = setup.t {
+        row.extend(f(t));
+    }
+    let columns = row.len();
+    let batch = Batch::new(row, columns, 1, std::path::Path::new("known_values.rs")).expect("row");
+    let tuple: Tuple = batch.tuple(0);
+    let sensitivity = f32_sensitivity(&tuple, m);
+    let materials = [m.clone()];
+    let mut engines = engines().lock().unwrap_or_else(|e| e.into_inner());
+    for engine in engines.iter_mut() {
+        let out = engine
+            .evaluate(&batch, &materials, &Request { terms: true })
+            .unwrap_or_else(|e| panic!("[{label}] {}: {e}", engine.name()));
+        let terms = out.terms.as_ref().expect("terms asked for");
+        let got: Vec<f64> = out
+            .brdf
+            .iter()
+            .chain(terms)
+            .map(|&x| f64::from(x))
+            .collect();
+        for &i in which {
+            let allowed = allowed_error(want[i], sensitivity[i]);
+            assert!(
+                (got[i] - want[i]).abs() <= allowed,
+                "[{label}] {} at {}: output {i} (brdf R G B, D G F_r F_g F_b K) is {:e}, the hand-derived value {:e}, allowed error {allowed:e}",
+                engine.name(),
+                setup.name,
+                got[i],
+                want[i]
+            );
+        }
+    }
 }
 
 fn check(label: &str, body: &str, setup: &Setup, want: &Want) {
@@ -192,13 +281,17 @@ fn check(label: &str, body: &str, setup: &Setup, want: &Want) {
 
 /// Only the G column (for geometries whose other terms are not closed forms).
 fn check_g(label: &str, body: &str, setup: &Setup, want_g: f64) {
-    let e = setup.eval(&material(body));
+    let m = material(body);
+    let e = setup.eval(&m);
     assert!(
         e.status == Status::Valid && close(e.g, want_g, TOL),
         "[{label}] G: got {:e}, want {want_g:e}\nat {}: {setup:?}\nmaterial:\n{body}\ngot {e:?}",
         e.g,
         setup.name
     );
+    let mut nine = [0.0; 9];
+    nine[4] = want_g;
+    engines_agree(label, &m, setup, nine, &[4]);
 }
 
 // ---------------------------------------------------------------------------------------
@@ -1410,8 +1503,6 @@ fn grazing_product_is_never_nan() {
 //   c/g, r⊥ = −1 + 2c/g and r∥ = −1 + 2η²c/g, so F = 1 − 2c·Re((1 + η²)/g); with
 //   η² = 1 + 2ik − k² and g = √(2ik − k² + c²) = √k (1 + i)(1 + O(k) + O(c²/k)) this is
 //   F = 1 − 2c/√k to an absolute 1e-9 (the dropped terms are O(c k^½) and O(c²/k)).
-
-mod common;
 
 const GRAZING: [f32; 3] = [1e-4, 1e-8, 1e-12];
 
