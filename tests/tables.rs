@@ -407,16 +407,21 @@ fn slice_file(backend: &mut dyn Backend) {
         let terms = by_name["terms"].2;
         let names: Vec<&str> = terms.iter().map(|c| c.0.as_str()).collect();
         assert_eq!(names, ["D", "F.B", "F.G", "F.R", "G", "K"]);
-        // Texel (i, j) against the reference at its half/difference angles.
+        // Texel (i, j) against the reference at its half/difference angles, the directions
+        // written out here rather than taken from `slice`: MERL's θ_h axis is x² · 90° on
+        // `sqrt` spacing, x · 90° on linear; at φ_d = 90° with h = (sin θ_h, 0, cos θ_h),
+        // l = (cos θ_d sin θ_h, sin θ_d, cos θ_d cos θ_h) and v is l with y negated.
         let red = f32s(&brdf[2].1);
         let d = f32s(&terms[0].1);
         for (i, j) in [(0, 0), (3, 2), (11, 6), (7, 5)] {
             let x = (i as f64 + 0.5) / 12.0;
-            let (th, td) = (
-                slice::theta_h(x, spacing),
-                (j as f64 + 0.5) / 7.0 * FRAC_PI_2,
-            );
-            let (l, v) = slice::from_half_diff(th, td, FRAC_PI_2);
+            let th = match spacing {
+                Spacing::Sqrt => x * x * FRAC_PI_2,
+                Spacing::Linear => x * FRAC_PI_2,
+            };
+            let td = (j as f64 + 0.5) / 7.0 * FRAC_PI_2;
+            let (sh, ch, sd, cd) = (th.sin(), th.cos(), td.sin(), td.cos());
+            let (l, v) = ([cd * sh, sd, cd * ch], [cd * sh, -sd, cd * ch]);
             let e = reference::evaluate(l, v, [0.0, 0.0, 1.0], Some([1.0, 0.0, 0.0]), &material);
             let (got, want) = (f64::from(red[j * 12 + i]), e.brdf[0]);
             assert!(

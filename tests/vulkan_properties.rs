@@ -488,7 +488,9 @@ fn random_batches_give_finite_non_negative_outputs() {
     );
 }
 
-/// Property 2 on every backend: every value within the conformance tolerance.
+/// Property 2 on every backend: every value within the conformance tolerance. On the
+/// reference itself this is a plumbing test (its batch path, threads and f32 outputs
+/// against its own per-tuple function); the engines' rows are the agreement test.
 #[test]
 fn random_batches_match_the_reference() {
     for_every_backend(
