@@ -1,0 +1,50 @@
+#!/usr/bin/env bash
+# The streaming proof of docs/STREAMING.md: peak resident memory of `vkbrdf eval` at the
+# default memory budget, for batch sizes from 10^6 to 2·10^8 tuples (8 GB of input), on
+# each engine; prints a Markdown table row per size.
+#
+#   bash benches/stream_memory.sh [DIR] [SIZES...]     (default: a directory under $TMPDIR;
+#                                                       1e6 1e7 5e7 2e8)
+#
+# Needs /usr/bin/time (Debian: `time`) and free disk of 52 bytes per tuple of the largest
+# size (input 40, output 12). Each input is generated once, then read once so that every
+# engine reads it from the page cache. The reference is skipped above 5·10^7 tuples (it
+# evaluates ~5 M tuples/s here, so 2·10^8 takes minutes and says nothing new about memory).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+bin=./target/release/vkbrdf
+dir=${1:-$(mktemp -d "${TMPDIR:-/tmp}/vkbrdf-stream-memory.XXXXXX")}
+shift || true
+sizes=("$@")
+[ ${#sizes[@]} -gt 0 ] || sizes=(1000000 10000000 50000000 200000000)
+[ -x /usr/bin/time ] || { echo "error: /usr/bin/time missing (apt-get install time)" >&2; exit 2; }
+mkdir -p "$dir"
+cat >"$dir/m.toml" <<'EOF'
+[[material]]
+name = "gold"
+preset = "gold"
+
+[[material]]
+name = "white"
+model = "lambert"
+diffuse = 0.8
+EOF
+engines=(cpu vulkan reference)
+echo "| tuples | input |$(printf ' %s |' "${engines[@]}")"
+echo "|---:|---:|$(printf -- '---:|%.0s' "${engines[@]}")"
+for n in "${sizes[@]}"; do
+  n=$(printf '%.0f' "$n")
+  "$bin" generate -m "$dir/m.toml" -n "$n" -o "$dir/t.npy" >/dev/null 2>&1
+  cat "$dir/t.npy" >/dev/null # into the page cache
+  row="| $n | $(( $(stat -c %s "$dir/t.npy") / 1000000 )) MB |"
+  for e in "${engines[@]}"; do
+    if [ "$e" = reference ] && [ "$n" -gt 50000000 ]; then row+=" (skipped) |"; continue; fi
+    /usr/bin/time -f '%M' -o "$dir/peak" "$bin" eval -m "$dir/m.toml" -i "$dir/t.npy" \
+      -o "$dir/o.npy" --backend "$e" >/dev/null 2>"$dir/err" \
+      || { echo "error: eval --backend $e on $n tuples failed:" >&2; cat "$dir/err" >&2; exit 1; }
+    row+=" $(( $(tail -n 1 "$dir/peak") / 1024 )) MiB |"
+    rm -f "$dir/o.npy"
+  done
+  echo "$row"
+  rm -f "$dir/t.npy"
+done
