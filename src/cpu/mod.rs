@@ -183,22 +183,33 @@ impl pulp::WithSimd for ChunkOp<'_, '_> {
     }
 }
 
+/// One block of `plan`'s lanes; `z`: every lane's N is (0, 0, 1) (the local form), which
+/// runs the frame without N's arithmetic, to the same bits.
 #[inline(always)]
-pub(crate) fn block(plan: &Plan, inp: &Inputs, out: &mut Outputs) {
+pub(crate) fn block(plan: &Plan, inp: &Inputs, out: &mut Outputs, z: bool) {
+    if z {
+        block_of::<true>(plan, inp, out)
+    } else {
+        block_of::<false>(plan, inp, out)
+    }
+}
+
+#[inline(always)]
+fn block_of<const Z: bool>(plan: &Plan, inp: &Inputs, out: &mut Outputs) {
     use kernel::*;
     let Plan::Microfacet { d, g, f, p } = plan else {
         if let Plan::Lambert(p) = plan {
-            lambert_block(p, inp, out);
+            lambert_block::<Z>(p, inp, out);
         }
         return;
     };
     macro_rules! by_f {
         ($d:expr, $g:expr) => {
             match *f {
-                F_NONE => microfacet_block::<$d, $g, F_NONE>(p, inp, out),
-                F_SCHLICK => microfacet_block::<$d, $g, F_SCHLICK>(p, inp, out),
-                F_DIELECTRIC => microfacet_block::<$d, $g, F_DIELECTRIC>(p, inp, out),
-                _ => microfacet_block::<$d, $g, F_CONDUCTOR>(p, inp, out),
+                F_NONE => microfacet_block::<$d, $g, F_NONE, Z>(p, inp, out),
+                F_SCHLICK => microfacet_block::<$d, $g, F_SCHLICK, Z>(p, inp, out),
+                F_DIELECTRIC => microfacet_block::<$d, $g, F_DIELECTRIC, Z>(p, inp, out),
+                _ => microfacet_block::<$d, $g, F_CONDUCTOR, Z>(p, inp, out),
             }
         };
     }
@@ -337,7 +348,7 @@ fn run_chunk(
                 }
             }
         }
-        block(plan, &inp, &mut out);
+        block(plan, &inp, &mut out, cols == COLUMNS_LOCAL);
         if n == LANES {
             // Fixed-size interleaving stores the compiler turns into shuffles.
             untranspose::<3>(&out.brdf, &mut w.brdf[j0 * 3..(j0 + LANES) * 3]);
