@@ -1,28 +1,24 @@
-//! Times the native CPU engine on the benchmark scenarios, 1 and 2 threads, beside the f64
-//! reference, with the largest relative error against the reference and cycles per
-//! evaluation (time × the TSC frequency, read from /proc/cpuinfo when it says).
+//! Times the native CPU engine on the benchmark scenarios, variants interleaved round by
+//! round (the machine is shared and noisy), with the largest relative error against the f64
+//! reference and cycles per evaluation (time × the TSC frequency, read from /proc/cpuinfo).
 //!
-//! `cargo run --release --example cpu_engine_time -- [TUPLES] [SCENARIO…]`; with a Vulkan
-//! device (lavapipe: `VK_DRIVER_FILES=/usr/share/vulkan/icd.d/lvp_icd.json`) the kernel's
-//! end-to-end and kernel-only rates too.
-//! (default 4,194,304 tuples; lambert, mitsuba-beckmann, mitsuba-ggx).
+//! `cargo run --release --example cpu_engine_time -- [--with-peers] [TUPLES] [SCENARIO…]`
+//! (default 4,194,304 tuples; lambert, mitsuba-beckmann, mitsuba-ggx). Variants:
+//! - `rows fresh`: `evaluate` on 10-column rows, new output vectors every call;
+//! - `rows reused`: `evaluate_into` the previous call's output;
+//! - `local reused`: `evaluate_local_into` on the 6-column local form (N = +z);
+//!
+//! each on one thread as the calling thread's CPU time (/proc/thread-self/schedstat, which
+//! other processes do not inflate) and on 1 and 2 threads as wall time (best round).
+//! `--with-peers` adds the Vulkan kernel (lavapipe: `VK_DRIVER_FILES=…/lvp_icd.json`) and
+//! the reference, as before.
 
 use std::time::Instant;
-use vkbrdf::backend::{Backend, Request};
+use vkbrdf::backend::{Backend, Output, Request};
 use vkbrdf::bench::scenarios;
 use vkbrdf::cpu::CpuEngine;
 use vkbrdf::gpu::{DeviceSelector, VulkanBackend, VulkanOptions};
 use vkbrdf::reference::CpuReference;
-
-fn best_of(reps: usize, f: &mut dyn FnMut()) -> f64 {
-    (0..reps)
-        .map(|_| {
-            let t = Instant::now();
-            f();
-            t.elapsed().as_secs_f64()
-        })
-        .fold(f64::INFINITY, f64::min)
-}
 
 /// The clock in Hz from /proc/cpuinfo's "cpu MHz" (the TSC rate on this VM), if it says.
 fn tsc_hz() -> Option<f64> {
@@ -45,8 +41,17 @@ fn thread_cpu() -> f64 {
         .map_or(0.0, |ns| ns * 1e-9)
 }
 
+#[derive(Clone, Copy, PartialEq)]
+enum Form {
+    RowsFresh,
+    RowsReused,
+    LocalReused,
+}
+
 fn main() {
-    let args: Vec<String> = std::env::args().skip(1).collect();
+    let mut args: Vec<String> = std::env::args().skip(1).collect();
+    let peers = args.iter().any(|a| a == "--with-peers");
+    args.retain(|a| a != "--with-peers");
     let n: usize = args
         .first()
         .and_then(|a| a.parse().ok())
@@ -58,16 +63,22 @@ fn main() {
             .to_vec();
     }
     let hz = tsc_hz();
-    // The Vulkan kernel beside it when a device opens (lavapipe: VK_DRIVER_FILES=…/lvp_icd.json).
-    let mut vulkan = VulkanBackend::new(DeviceSelector::from_env(), VulkanOptions::default()).ok();
-    println!("instruction set: {}, clock {:?} GHz, {n} tuples; M evals/s from wall time (best of 5) unless marked CPU time", vkbrdf::cpu::instruction_set(), hz.map(|h| h / 1e9));
+    let mut vulkan = peers
+        .then(|| VulkanBackend::new(DeviceSelector::from_env(), VulkanOptions::default()).ok())
+        .flatten();
     println!(
-        "{:<18} {:<22} {:>12} {:>10} {:>12}",
+        "instruction set: {}, clock {:?} GHz, {n} tuples; best round of interleaved variants",
+        vkbrdf::cpu::instruction_set(),
+        hz.map(|h| h / 1e9)
+    );
+    println!(
+        "{:<18} {:<34} {:>12} {:>10} {:>12}",
         "scenario", "engine", "M evals/s", "cyc/eval", "max rel err"
     );
     for name in names {
         let s = scenarios::by_name(&name).unwrap_or_else(|| panic!("no scenario {name}"));
         let batch = scenarios::batch(&s, n, 42);
+        let local = scenarios::local_batch(&s, n, 42);
         let req = Request::default();
         let reference = CpuReference::new()
             .evaluate(&batch, &s.materials, &req)
@@ -80,7 +91,7 @@ fn main() {
                 .fold(0.0, f64::max);
             let cyc = hz.map_or(String::from("-"), |h| format!("{:.1}", secs * h / n as f64));
             println!(
-                "{:<18} {:<22} {:>12.1} {:>10} {:>12.2e}",
+                "{:<18} {:<34} {:>12.1} {:>10} {:>12.2e}",
                 name,
                 label,
                 n as f64 / secs / 1e6,
@@ -88,47 +99,96 @@ fn main() {
                 err
             );
         };
-        {
-            // One thread runs on this thread: its CPU time, not the wall clock.
-            let mut e = CpuEngine::with_threads(1);
-            let mut out = Vec::new();
-            // The mean over enough calls for ~1 s of work: schedstat advances at scheduler
-            // ticks, too coarsely for one short call.
-            let reps = (40_000_000 / n).clamp(5, 400);
-            let t = thread_cpu();
-            for _ in 0..reps {
-                out = e.evaluate(&batch, &s.materials, &req).expect("engine").brdf;
-            }
-            report(
-                "cpu, 1 thread, CPU time",
-                (thread_cpu() - t) / reps as f64,
-                &out,
-            );
+        let mut forms = vec![Form::RowsFresh, Form::RowsReused];
+        if local.is_some() {
+            forms.push(Form::LocalReused);
         }
-        for threads in [1, 2] {
-            let mut e = CpuEngine::with_threads(threads);
-            let mut out = Vec::new();
-            let secs = best_of(5, &mut || {
-                out = e.evaluate(&batch, &s.materials, &req).expect("engine").brdf
-            });
-            report(&format!("cpu, {threads} thread(s)"), secs, &out);
+        let label = |f: Form| match f {
+            Form::RowsFresh => "rows fresh",
+            Form::RowsReused => "rows reused",
+            Form::LocalReused => "local reused",
+        };
+        // (form, threads, CPU time?) → best seconds per call, and the last output.
+        let mut variants: Vec<(Form, usize, bool, f64, Output, CpuEngine)> = Vec::new();
+        for &f in &forms {
+            variants.push((
+                f,
+                1,
+                true,
+                f64::INFINITY,
+                Output::default(),
+                CpuEngine::with_threads(1),
+            ));
+            for threads in [1, 2] {
+                variants.push((
+                    f,
+                    threads,
+                    false,
+                    f64::INFINITY,
+                    Output::default(),
+                    CpuEngine::with_threads(threads),
+                ));
+            }
+        }
+        // CPU time advances at scheduler ticks: a round of one variant is enough calls for
+        // ~0.2 s of work.
+        let reps = (8_000_000 / n).clamp(1, 200);
+        for _round in 0..5 {
+            for (f, _, cpu, best, out, e) in variants.iter_mut() {
+                let (t, c) = (Instant::now(), thread_cpu());
+                for _ in 0..reps {
+                    match f {
+                        Form::RowsFresh => {
+                            *out = e.evaluate(&batch, &s.materials, &req).expect("engine")
+                        }
+                        Form::RowsReused => e
+                            .evaluate_into(&batch, &s.materials, &req, out)
+                            .expect("engine"),
+                        Form::LocalReused => e
+                            .evaluate_local_into(
+                                local.as_ref().expect("local"),
+                                &s.materials,
+                                &req,
+                                out,
+                            )
+                            .expect("engine"),
+                    }
+                }
+                let secs = if *cpu {
+                    thread_cpu() - c
+                } else {
+                    t.elapsed().as_secs_f64()
+                };
+                *best = best.min(secs / reps as f64);
+            }
+        }
+        for (f, threads, cpu, best, out, _) in &variants {
+            let l = if *cpu {
+                format!("cpu {}, 1 thread, CPU time", label(*f))
+            } else {
+                format!("cpu {}, {threads} thread(s), wall", label(*f))
+            };
+            report(&l, *best, &out.brdf);
         }
         if let Some(v) = vulkan.as_mut() {
             let mut out = Vec::new();
-            let secs = best_of(3, &mut || {
-                out = v.evaluate(&batch, &s.materials, &req).expect("vulkan").brdf
-            });
-            report("vulkan end-to-end", secs, &out);
+            let mut best = f64::INFINITY;
+            for _ in 0..3 {
+                let t = Instant::now();
+                out = v.evaluate(&batch, &s.materials, &req).expect("vulkan").brdf;
+                best = best.min(t.elapsed().as_secs_f64());
+            }
+            report("vulkan end-to-end", best, &out);
             let k = v
                 .kernel_seconds(&batch, &s.materials, &req, 3)
                 .expect("kernel time");
             report("vulkan kernel-only", k, &out);
         }
-        let mut r = CpuReference::new();
-        let mut out = Vec::new();
-        let secs = best_of(2, &mut || {
-            out = r.evaluate(&batch, &s.materials, &req).expect("ref").brdf
-        });
-        report("reference, 2 threads", secs, &out);
+        if peers {
+            let mut r = CpuReference::new();
+            let t = Instant::now();
+            let out = r.evaluate(&batch, &s.materials, &req).expect("ref").brdf;
+            report("reference, 2 threads", t.elapsed().as_secs_f64(), &out);
+        }
     }
 }

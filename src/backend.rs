@@ -1,7 +1,7 @@
 //! The one evaluation interface: the CPU reference and the Vulkan evaluator both implement
 //! [`Backend`], so tests, tables and benchmarks take any backend.
 
-use crate::batch::Batch;
+use crate::batch::{Batch, LocalBatch};
 use crate::directions::{ImportanceJob, SliceGrid};
 use crate::error::Result;
 use crate::material::Material;
@@ -77,6 +77,11 @@ impl Output {
     }
 }
 
+/// Rows of a local-frame batch expanded to 10-column rows at a time by the default
+/// [`Backend::evaluate_local_into`]: large enough to keep a device busy, small enough that
+/// the expansion (40 bytes a row) stays a fraction of the batch's own memory.
+pub const LOCAL_EXPAND_ROWS: usize = 1 << 18;
+
 /// An evaluator of BRDF batches.
 pub trait Backend {
     /// A short human-readable name (e.g. `cpu-reference`, `vulkan: llvmpipe`).
@@ -90,6 +95,61 @@ pub trait Backend {
         materials: &[Material],
         request: &Request,
     ) -> Result<Output>;
+
+    /// [`Backend::evaluate`] into `out`, whose buffers an engine may reuse: a caller that
+    /// evaluates batch after batch (the streaming path, a benchmark) hands back the previous
+    /// output and saves allocating and zero-filling fresh memory for each. `out`'s previous
+    /// contents do not matter; afterwards it holds exactly what `evaluate` would return.
+    /// The default calls `evaluate`.
+    fn evaluate_into(
+        &mut self,
+        batch: &Batch,
+        materials: &[Material],
+        request: &Request,
+        out: &mut Output,
+    ) -> Result<()> {
+        *out = self.evaluate(batch, materials, request)?;
+        Ok(())
+    }
+
+    /// Evaluates a local-frame batch (`Lx Ly Lz Vx Vy Vz`, N = +z, one material) into
+    /// `out` (as [`Backend::evaluate_into`]); the result equals that of the 10-column rows
+    /// with N = (0, 0, 1). The default expands [`LOCAL_EXPAND_ROWS`] rows at a time into
+    /// ordinary rows and evaluates those; an engine that reads the local form directly
+    /// overrides it.
+    fn evaluate_local_into(
+        &mut self,
+        batch: &LocalBatch,
+        materials: &[Material],
+        request: &Request,
+        out: &mut Output,
+    ) -> Result<()> {
+        let n = batch.len();
+        out.brdf.clear();
+        out.terms = request.terms.then(|| out.terms.take().unwrap_or_default());
+        if let Some(t) = out.terms.as_mut() {
+            t.clear();
+        }
+        out.counts = Counts {
+            tuples: n as u64,
+            ..Counts::default()
+        };
+        let mut part = Output::default();
+        let mut start = 0;
+        while start < n {
+            let end = n.min(start + LOCAL_EXPAND_ROWS);
+            self.evaluate_into(&batch.rows(start..end), materials, request, &mut part)?;
+            out.brdf.extend_from_slice(&part.brdf);
+            if let (Some(t), Some(p)) = (out.terms.as_mut(), part.terms.as_ref()) {
+                t.extend_from_slice(p);
+            }
+            let mut c = part.counts;
+            c.first_invalid = c.first_invalid.map(|r| r + start as u64);
+            out.counts.absorb(&c);
+            start = end;
+        }
+        Ok(())
+    }
 
     /// Gives the backend a cancellation token: [`Backend::evaluate`] and the table paths
     /// check it between chunks and return [`crate::Error::Cancelled`] once it is set. The

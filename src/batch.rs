@@ -1,6 +1,7 @@
 //! Tuple batches: `n × 10` or `n × 13` float32 rows
 //! `Lx Ly Lz Vx Vy Vz Nx Ny Nz material [Tx Ty Tz]` (FORMULAS.md §1), read from and written
-//! to `.npy` with the `npyz` crate.
+//! to `.npy` with the `npyz` crate; and the local-frame form [`LocalBatch`], `n × 6` rows
+//! `Lx Ly Lz Vx Vy Vz` with N = +z and one material for the whole batch.
 
 mod rows;
 pub use rows::NpyRows;
@@ -16,6 +17,8 @@ use std::path::{Path, PathBuf};
 pub const COLUMNS_PLAIN: usize = 10;
 /// Columns of a batch with tangents.
 pub const COLUMNS_TANGENT: usize = 13;
+/// Columns of a local-frame batch ([`LocalBatch`]): `Lx Ly Lz Vx Vy Vz`, N = +z.
+pub const COLUMNS_LOCAL: usize = 6;
 
 /// A validated batch of tuples, stored row-major as `f32`.
 ///
@@ -181,6 +184,161 @@ impl Batch {
         }
         Batch::new(data, shape[1] as usize, material_count, source)
     }
+}
+
+/// A local-frame batch: `n × 6` float32 rows `Lx Ly Lz Vx Vy Vz` in the surface's own
+/// frame (N = +z, no tangent) and one material for every row — the input of users whose
+/// directions are already local (a renderer's `wi`, `wo`), 24 bytes a tuple instead of 40.
+///
+/// Every tuple means the same as the 10-column row `Lx Ly Lz Vx Vy Vz 0 0 1 material`;
+/// engines that take rows expand it in chunks ([`LocalBatch::rows`]), the CPU engine
+/// evaluates it as it is.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LocalBatch {
+    data: Vec<f32>,
+    material: usize,
+}
+
+impl LocalBatch {
+    /// Wraps row-major `n × 6` data evaluated with material `material` of a table of
+    /// `materials`. Errors (naming `source`) when the data are not whole rows of 6, when
+    /// `material` is not an index into the table, or when that material is anisotropic
+    /// (it needs a tangent, which the local form does not carry).
+    pub fn new(
+        data: Vec<f32>,
+        material: usize,
+        materials: &[Material],
+        source: &Path,
+    ) -> Result<LocalBatch> {
+        check_local_material(material, materials, source)?;
+        if data.len() % COLUMNS_LOCAL != 0 {
+            return Err(Error::Batch {
+                path: source.to_owned(),
+                message: format!(
+                    "{} values do not make whole rows of {COLUMNS_LOCAL} (Lx Ly Lz Vx Vy Vz)",
+                    data.len()
+                ),
+            });
+        }
+        Ok(LocalBatch { data, material })
+    }
+
+    /// Number of tuples.
+    pub fn len(&self) -> usize {
+        self.data.len() / COLUMNS_LOCAL
+    }
+
+    /// Whether the batch holds no tuple.
+    pub fn is_empty(&self) -> bool {
+        self.data.is_empty()
+    }
+
+    /// The material of every row.
+    pub fn material(&self) -> usize {
+        self.material
+    }
+
+    /// The raw row-major data (6 floats a row).
+    pub fn as_slice(&self) -> &[f32] {
+        &self.data
+    }
+
+    /// Tuple `i`, with N = (0, 0, 1).
+    pub fn tuple(&self, i: usize) -> Tuple {
+        let r = &self.data[i * COLUMNS_LOCAL..(i + 1) * COLUMNS_LOCAL];
+        Tuple {
+            l: [r[0], r[1], r[2]],
+            v: [r[3], r[4], r[5]],
+            n: [0.0, 0.0, 1.0],
+            material: self.material,
+            t: None,
+        }
+    }
+
+    /// Rows `range` as an ordinary 10-column [`Batch`] (N = (0, 0, 1), the material column
+    /// filled in), for engines that read rows.
+    pub fn rows(&self, range: std::ops::Range<usize>) -> Batch {
+        let mut data = Vec::with_capacity(range.len() * COLUMNS_PLAIN);
+        let m = self.material as f32;
+        for r in self.data[range.start * COLUMNS_LOCAL..range.end * COLUMNS_LOCAL]
+            .chunks_exact(COLUMNS_LOCAL)
+        {
+            data.extend_from_slice(r);
+            data.extend_from_slice(&[0.0, 0.0, 1.0, m]);
+        }
+        Batch {
+            data,
+            columns: COLUMNS_PLAIN,
+        }
+    }
+}
+
+/// The material of a local-frame batch from the user's choice (`--material NAME|INDEX`): an
+/// index into `materials` or a material's name; with no choice, the only material of a
+/// one-material table. Errors name `source` (the batch) and list the materials when the
+/// choice matches none or a table of several leaves it open.
+pub fn local_material(
+    choice: Option<&str>,
+    materials: &[Material],
+    source: &Path,
+) -> Result<usize> {
+    let listing = || {
+        materials
+            .iter()
+            .enumerate()
+            .map(|(i, m)| format!("{i} `{}`", m.name))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let err = |message: String| Error::Batch {
+        path: source.to_owned(),
+        message,
+    };
+    let index = match choice {
+        None if materials.len() == 1 => 0,
+        None => {
+            return Err(err(format!(
+                "a 6-column local-frame batch (Lx Ly Lz Vx Vy Vz) has one material for every row, and the materials file defines {}: choose one with --material NAME|INDEX ({})",
+                materials.len(),
+                listing()
+            )))
+        }
+        Some(c) => match materials.iter().position(|m| m.name == c) {
+            Some(i) => i,
+            None => c.trim().parse::<usize>().ok().filter(|&i| i < materials.len()).ok_or_else(|| {
+                err(format!(
+                    "--material {c:?} is neither a material's name nor an index in 0..{} (the materials file defines {})",
+                    materials.len(),
+                    listing()
+                ))
+            })?,
+        },
+    };
+    check_local_material(index, materials, source)?;
+    Ok(index)
+}
+
+/// Checks that `material` may evaluate a local-frame batch: an index into `materials`
+/// and not anisotropic (the local form has no tangent column). `source` names the batch.
+pub fn check_local_material(material: usize, materials: &[Material], source: &Path) -> Result<()> {
+    let err = |message: String| Error::Batch {
+        path: source.to_owned(),
+        message,
+    };
+    let Some(m) = materials.get(material) else {
+        return Err(err(format!(
+            "material {material} is not an index in 0..{} (the materials file defines {})",
+            materials.len(),
+            materials.len()
+        )));
+    };
+    if m.is_anisotropic() {
+        return Err(err(format!(
+            "material {material} (`{}`) is anisotropic (roughness [mx, my]) and needs a tangent, which the 6-column local-frame form (Lx Ly Lz Vx Vy Vz, N = +z) does not carry; give rows of shape (n, 13) instead",
+            m.name
+        )));
+    }
+    Ok(())
 }
 
 /// [`Batch::check_tangents`] on part of a batch: `rows` (row-major, `columns` floats per

@@ -11,8 +11,8 @@
 pub mod shard;
 
 use crate::atomic::{self, StagedWriter};
-use crate::backend::{Backend, Counts, Request, TERM_COLUMNS};
-use crate::batch::{check_tangent_rows, Batch, NpyRows};
+use crate::backend::{Backend, Counts, Output, Request, TERM_COLUMNS};
+use crate::batch::{check_tangent_rows, local_material, Batch, LocalBatch, NpyRows, COLUMNS_LOCAL};
 use crate::cancel::Cancel;
 use crate::error::{Error, Result};
 use crate::material::Material;
@@ -24,8 +24,12 @@ pub const DEFAULT_MAX_MEMORY: u64 = 512 << 20;
 
 /// What to evaluate and where the results go.
 pub struct StreamJob<'a> {
-    /// The tuples (`.npy`, `(n, 10)` or `(n, 13)`, float32 or float64).
+    /// The tuples (`.npy`, `(n, 10)` or `(n, 13)`, or the local-frame `(n, 6)`; float32
+    /// or float64).
     pub input: &'a Path,
+    /// The material of a local-frame `(n, 6)` input, by name or index (see
+    /// [`local_material`]); must be `None` for rows, which carry their own.
+    pub material: Option<&'a str>,
     /// The materials the rows index.
     pub materials: &'a [Material],
     /// Where the BRDF goes (`.npy`, float32 `(n, 3)`).
@@ -65,12 +69,19 @@ pub struct StreamSummary {
 /// (`row_bytes`) and as f32, and the outputs (3 floats, 6 more with the terms) both in the
 /// engine's result and in the writer's buffer; with the three stages overlapping about five
 /// chunks are alive at once, and a sixth of the budget is left to the engine's own working
-/// memory and the buffered writers. At least one row.
+/// memory and the buffered writers. At least one row, at most [`MAX_CHUNK_ROWS`].
 pub fn chunk_rows(max_memory: u64, row_bytes: usize, columns: usize, terms: bool) -> usize {
     let outputs = 4 * (3 + if terms { TERM_COLUMNS } else { 0 });
     let per_row = (row_bytes + 4 * columns + 2 * outputs) as u64;
-    ((max_memory / 6) / per_row).clamp(1, u64::from(u32::MAX)) as usize
+    ((max_memory / 6) / per_row).clamp(1, MAX_CHUNK_ROWS as u64) as usize
 }
+
+/// The largest chunk, whatever the budget: the stages overlap only from the second chunk
+/// on, and the first and last run alone, so a batch of a few budget-sized chunks (at the
+/// default budget, 860,000 rows each) barely overlapped. 2^18 rows (10 MiB of float32
+/// rows) keep every engine efficient (the Vulkan kernel streams 256 K-tuple chunks
+/// itself, the CPU engine cuts 16 K-row blocks) and a 10^6-tuple batch in four chunks.
+pub const MAX_CHUNK_ROWS: usize = 1 << 18;
 
 /// Evaluates `job` on `backend`, chunk by chunk; `progress` is told the rows done so far.
 pub fn evaluate(
@@ -80,6 +91,20 @@ pub fn evaluate(
     mut progress: impl FnMut(u64, u64),
 ) -> Result<StreamSummary> {
     let mut rows = NpyRows::open(job.input, job.materials.len())?;
+    // The local form's one material, resolved before any work.
+    let local = if rows.columns() == COLUMNS_LOCAL {
+        Some(local_material(job.material, job.materials, job.input)?)
+    } else if let Some(m) = job.material {
+        return Err(Error::Batch {
+            path: job.input.to_owned(),
+            message: format!(
+                "--material {m:?} applies only to a 6-column local-frame batch (Lx Ly Lz Vx Vy Vz); this batch has {} columns and each row names its material in column 9",
+                rows.columns()
+            ),
+        });
+    } else {
+        None
+    };
     let total = rows.rows();
     let part = job.shard.map_or(0..total, |s| s.rows(total));
     rows.restrict(part.clone())?;
@@ -106,26 +131,35 @@ pub fn evaluate(
     // Three stages overlap: a reader thread reads chunk k+1 while the engine evaluates chunk
     // k on this thread and a writer thread writes chunk k-1. One chunk waits in each
     // channel, so at most about five are alive at once (`chunk_rows` divides the budget).
-    let (read_tx, read_rx) = std::sync::mpsc::sync_channel::<Result<(u64, Batch, f64)>>(1);
-    let (write_tx, write_rx) = std::sync::mpsc::sync_channel::<(Vec<f32>, Option<Vec<f32>>)>(1);
+    // The writer hands each written output back, and the engine evaluates into it again:
+    // a few buffers serve the whole batch, faulted in and zeroed once.
+    let (read_tx, read_rx) = std::sync::mpsc::sync_channel::<Result<(u64, Chunk, f64)>>(1);
+    let (write_tx, write_rx) = std::sync::mpsc::sync_channel::<Output>(1);
+    let (recycle_tx, recycle_rx) = std::sync::mpsc::channel::<Output>();
     // Spent input buffers go back to the reader, which reads the next chunk into one.
     let (spent_tx, spent_rx) = std::sync::mpsc::sync_channel::<Vec<f32>>(2);
     let (written, evaluated) = std::thread::scope(|scope| {
         let reader = scope.spawn(move || loop {
             let t = std::time::Instant::now();
-            let buffer = spent_rx.try_recv().unwrap_or_default();
-            let next = rows.next_chunk_reusing(chunk, buffer).and_then(|c| {
-                if let Some((first, batch)) = &c {
-                    check_tangent_rows(
-                        batch.as_slice(),
-                        batch.columns(),
-                        *first,
-                        job.materials,
-                        job.input,
-                    )?;
-                }
-                Ok(c)
-            });
+            let next = match local {
+                Some(m) => rows
+                    .next_local(chunk, m, job.materials)
+                    .map(|c| c.map(|(first, b)| (first, Chunk::Local(b)))),
+                None => rows
+                    .next_chunk_reusing(chunk, spent_rx.try_recv().unwrap_or_default())
+                    .and_then(|c| {
+                        if let Some((first, batch)) = &c {
+                            check_tangent_rows(
+                                batch.as_slice(),
+                                batch.columns(),
+                                *first,
+                                job.materials,
+                                job.input,
+                            )?;
+                        }
+                        Ok(c.map(|(first, b)| (first, Chunk::Rows(b))))
+                    }),
+            };
             let message = match next {
                 Ok(None) => break,
                 Ok(Some((first, batch))) => Ok((first, batch, t.elapsed().as_secs_f64())),
@@ -138,13 +172,15 @@ pub fn evaluate(
         });
         let writer = scope.spawn(move || -> Result<(NpyOut, Option<NpyOut>, f64)> {
             let mut write_s = 0.0;
-            for (values, term_values) in write_rx {
+            for out in write_rx {
                 let t = std::time::Instant::now();
-                brdf.rows(&values)?;
-                if let (Some(w), Some(v)) = (terms.as_mut(), term_values.as_ref()) {
+                brdf.rows(&out.brdf)?;
+                if let (Some(w), Some(v)) = (terms.as_mut(), out.terms.as_ref()) {
                     w.rows(v)?;
                 }
                 write_s += t.elapsed().as_secs_f64();
+                // The evaluator may have stopped; then the buffer is simply dropped.
+                let _ = recycle_tx.send(out);
             }
             Ok((brdf, terms, write_s))
         });
@@ -154,15 +190,27 @@ pub fn evaluate(
                 let (first, batch, read_s) = message?;
                 summary.read_s += read_s;
                 let t = std::time::Instant::now();
-                let out = backend.evaluate(&batch, job.materials, &request)?;
+                let mut out = recycle_rx.try_recv().unwrap_or_default();
+                let len = match &batch {
+                    Chunk::Rows(b) => {
+                        backend.evaluate_into(b, job.materials, &request, &mut out)?;
+                        b.len()
+                    }
+                    Chunk::Local(b) => {
+                        backend.evaluate_local_into(b, job.materials, &request, &mut out)?;
+                        b.len()
+                    }
+                };
                 summary.eval_s += t.elapsed().as_secs_f64();
                 let mut counted = out.counts;
                 counted.first_invalid = counted.first_invalid.map(|r| r + first);
                 summary.counts.absorb(&counted);
                 summary.chunks += 1;
-                progress(first + batch.len() as u64 - part.start, n);
-                let _ = spent_tx.try_send(batch.into_data()); // full: the reader has spares
-                if write_tx.send((out.brdf, out.terms)).is_err() {
+                progress(first + len as u64 - part.start, n);
+                if let Chunk::Rows(b) = batch {
+                    let _ = spent_tx.try_send(b.into_data()); // full: the reader has spares
+                }
+                if write_tx.send(out).is_err() {
                     break; // the writer failed: its error is reported below
                 }
             }
@@ -220,7 +268,7 @@ pub fn write_chunks(
     path: &Path,
     rows: u64,
     columns: usize,
-    chunks: &[Vec<f32>],
+    chunks: &[&[f32]],
     cancel: &Cancel,
 ) -> Result<()> {
     let mut out = NpyOut::start(path, rows, columns, cancel)?;
@@ -230,12 +278,19 @@ pub fn write_chunks(
     atomic::commit(vec![out.finish()?])
 }
 
+/// One chunk as read: rows, or the local-frame form.
+enum Chunk {
+    Rows(Batch),
+    Local(LocalBatch),
+}
+
 /// A float32 `.npy` of known shape written row block by row block.
 struct NpyOut {
     writer: StagedWriter,
     path: PathBuf,
     expected: u64,
     written: u64,
+    bytes: Vec<u8>,
 }
 
 impl NpyOut {
@@ -249,6 +304,7 @@ impl NpyOut {
             path: path.to_owned(),
             expected: rows * columns as u64,
             written: 0,
+            bytes: Vec::new(),
         })
     }
 
@@ -257,8 +313,13 @@ impl NpyOut {
             // The floats' own bytes: no copy before the file's buffer.
             self.writer.write_all(bytemuck::cast_slice(values))
         } else {
-            let bytes: Vec<u8> = values.iter().flat_map(|v| v.to_le_bytes()).collect();
-            self.writer.write_all(&bytes)
+            // One byte buffer for every chunk (a fresh one per chunk is fresh pages to fault).
+            let bytes = &mut self.bytes;
+            bytes.clear();
+            for v in values {
+                bytes.extend_from_slice(&v.to_le_bytes());
+            }
+            self.writer.write_all(bytes)
         };
         written.map_err(|e| self.writer.error(e))?;
         self.written += values.len() as u64;

@@ -3,8 +3,11 @@
 //! straight into a float buffer (float64 files rounded to float32, as [`Batch::read_npy`]
 //! does).
 
-use super::{npy_head, open_sized, Batch, COLUMNS_PLAIN, COLUMNS_TANGENT};
+use super::{
+    npy_head, open_sized, Batch, LocalBatch, COLUMNS_LOCAL, COLUMNS_PLAIN, COLUMNS_TANGENT,
+};
 use crate::error::{Error, Result};
+use crate::material::Material;
 use std::fs::File;
 use std::io::{BufReader, Read, Seek, SeekFrom};
 use std::path::{Path, PathBuf};
@@ -16,7 +19,8 @@ enum Dtype {
     F8,
 }
 
-/// A `.npy` batch of shape `(n, 10)` or `(n, 13)`, read chunk by chunk.
+/// A `.npy` batch of shape `(n, 10)` or `(n, 13)`, or the local-frame `(n, 6)`, read chunk
+/// by chunk.
 pub struct NpyRows {
     reader: BufReader<File>,
     rows: u64,
@@ -32,7 +36,7 @@ pub struct NpyRows {
 
 impl NpyRows {
     /// Opens `path` and checks its header: 2-D, C order, float32 or float64, 10 or 13
-    /// columns, and (for a regular file) as much data as the shape says.
+    /// columns or the local-frame 6 (read with [`NpyRows::next_local`]), and (for a regular file) as much data as the shape says.
     pub fn open(path: &Path, material_count: usize) -> Result<NpyRows> {
         let err = |message: String| Error::Batch {
             path: path.to_owned(),
@@ -60,13 +64,13 @@ impl NpyRows {
         let shape = npy.shape().to_vec();
         if shape.len() != 2 {
             return Err(err(format!(
-                "expected a 2-D array of shape (n, 10) or (n, 13), found shape {shape:?}"
+                "expected a 2-D array of shape (n, 10), (n, 13) or (n, 6), found shape {shape:?}"
             )));
         }
         let columns = shape[1] as usize;
-        if columns != COLUMNS_PLAIN && columns != COLUMNS_TANGENT {
+        if columns != COLUMNS_PLAIN && columns != COLUMNS_TANGENT && columns != COLUMNS_LOCAL {
             return Err(err(format!(
-                "expected 10 columns (Lx Ly Lz Vx Vy Vz Nx Ny Nz material) or 13 (plus Tx Ty Tz), found {columns}"
+                "expected 10 columns (Lx Ly Lz Vx Vy Vz Nx Ny Nz material), 13 (plus Tx Ty Tz) or 6 (Lx Ly Lz Vx Vy Vz in the local frame, N = +z, one material), found {columns}"
             )));
         }
         Ok(NpyRows {
@@ -88,7 +92,7 @@ impl NpyRows {
         self.rows
     }
 
-    /// 10, or 13 with tangents.
+    /// 10, 13 with tangents, or 6 for the local-frame form.
     pub fn columns(&self) -> usize {
         self.columns
     }
@@ -115,7 +119,7 @@ impl NpyRows {
 
     /// The next at most `max_rows` rows as a [`Batch`] (materials checked, row numbers in
     /// errors counted from the file's start) with the index of its first row; `None` at the
-    /// end. (float64 files: the byte buffer is reused between calls.)
+    /// end. A local-frame file (6 columns) is read with [`NpyRows::next_local`] instead.
     pub fn next_chunk(&mut self, max_rows: usize) -> Result<Option<(u64, Batch)>> {
         self.next_chunk_reusing(max_rows, Vec::new())
     }
@@ -128,6 +132,37 @@ impl NpyRows {
         max_rows: usize,
         buffer: Vec<f32>,
     ) -> Result<Option<(u64, Batch)>> {
+        let Some((first, data)) = self.next_floats(max_rows, buffer)? else {
+            return Ok(None);
+        };
+        let batch = Batch::new_at(data, self.columns, self.material_count, &self.source, first)?;
+        Ok(Some((first, batch)))
+    }
+
+    /// [`NpyRows::next_chunk`] for a local-frame file (6 columns): the rows as a
+    /// [`LocalBatch`] of material `material` (checked by [`LocalBatch::new`]).
+    pub fn next_local(
+        &mut self,
+        max_rows: usize,
+        material: usize,
+        materials: &[Material],
+    ) -> Result<Option<(u64, LocalBatch)>> {
+        let Some((first, data)) = self.next_floats(max_rows, Vec::new())? else {
+            return Ok(None);
+        };
+        Ok(Some((
+            first,
+            LocalBatch::new(data, material, materials, &self.source)?,
+        )))
+    }
+
+    /// The next at most `max_rows` rows as floats (in `buffer`'s memory), with the index of
+    /// the first. float64 files go through a byte buffer reused between calls.
+    fn next_floats(
+        &mut self,
+        max_rows: usize,
+        buffer: Vec<f32>,
+    ) -> Result<Option<(u64, Vec<f32>)>> {
         let left = self.end_row - self.next_row;
         if left == 0 {
             return Ok(None);
@@ -170,7 +205,6 @@ impl NpyRows {
         };
         let first = self.next_row;
         self.next_row += n as u64;
-        let batch = Batch::new_at(data, self.columns, self.material_count, &self.source, first)?;
-        Ok(Some((first, batch)))
+        Ok(Some((first, data)))
     }
 }

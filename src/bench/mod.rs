@@ -3,6 +3,7 @@
 //! run, and specialised against all-features kernels. Results go to a table, JSON and SVG
 //! plots ([`plot`]).
 
+pub mod equal;
 pub mod peers;
 pub mod plot;
 pub mod scenarios;

@@ -1,7 +1,7 @@
 //! The benchmark scenarios: fixed materials and seeded inputs with N = +z and unit L, V
 //! uniform over the upper hemisphere (the layout the peers read too).
 
-use crate::batch::{Batch, COLUMNS_PLAIN, COLUMNS_TANGENT};
+use crate::batch::{Batch, LocalBatch, COLUMNS_LOCAL, COLUMNS_PLAIN, COLUMNS_TANGENT};
 use crate::material::{parse_materials, Material};
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64Mcg;
@@ -193,4 +193,21 @@ pub fn batch(scenario: &Scenario, n: usize, seed: u64) -> Batch {
         }
     }
     Batch::new(data, cols, m, &crate::batch::memory_source()).expect("benchmark batches are valid")
+}
+
+/// [`batch`]'s tuples in the local-frame form (`Lx Ly Lz Vx Vy Vz`, 24 bytes a tuple — what
+/// the Mitsuba peer reads): `None` for a scenario of several materials or with tangents.
+pub fn local_batch(scenario: &Scenario, n: usize, seed: u64) -> Option<LocalBatch> {
+    if scenario.tangents || scenario.materials.len() != 1 {
+        return None;
+    }
+    let rows = batch(scenario, n, seed);
+    let mut data = Vec::with_capacity(n * COLUMNS_LOCAL);
+    for r in rows.as_slice().chunks_exact(COLUMNS_PLAIN) {
+        data.extend_from_slice(&r[..COLUMNS_LOCAL]);
+    }
+    Some(
+        LocalBatch::new(data, 0, &scenario.materials, &crate::batch::memory_source())
+            .expect("benchmark batches are valid"),
+    )
 }

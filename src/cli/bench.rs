@@ -70,6 +70,11 @@ pub struct Args {
     #[arg(long, value_name = "N", allow_negative_numbers = true,
           value_parser = super::ranges::integer::<usize>(1_000, 1_000_000_000))]
     pub stage_tuples: Option<usize>,
+    /// Run only the equal-bytes comparison with Mitsuba (the CPU engine on the 6-column
+    /// local form against Mitsuba's roughconductor on the same wi/wo, 4,194,304 and
+    /// 262,144 tuples; 1 → 2 threads; Lambert against a copy of its bytes).
+    #[arg(long)]
+    pub equal_bytes_only: bool,
     #[command(flatten)]
     pub device: DeviceArgs,
 }
@@ -86,6 +91,7 @@ struct Report {
     bandwidth: Vec<BandwidthRow>,
     stages: Vec<stages::StageRow>,
     peers: Vec<peers::PeerRow>,
+    equal_bytes: Vec<bench::equal::EqualBytesRow>,
 }
 
 /// The sustained kernel of one scenario beside the device copy kernel moving the same bytes.
@@ -119,6 +125,32 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
     // loop also measures: their exact rows are the ones to compare against.
     debug_assert!(sizes.contains(&peer_n));
     let repeats = args.repeats.unwrap_or(if args.quick { 3 } else { 7 });
+    let script = args
+        .peers_script
+        .clone()
+        .unwrap_or_else(peers::default_script);
+    let equal_sizes = if args.quick {
+        [1 << 20, 1 << 16]
+    } else {
+        [1 << 22, 1 << 18]
+    };
+    if args.equal_bytes_only {
+        let rows = bench::equal::rows(&script, &equal_sizes, repeats, args.no_peers, &mut |m| {
+            eprintln!("{m} …")
+        })?;
+        outln!("{}", bench::equal::table(&rows));
+        if let Some(path) = &args.json {
+            let doc = serde_json::json!({
+                "schema_version": SCHEMA_VERSION,
+                "device": format!("cpu ({})", vkbrdf::cpu::instruction_set()),
+                "equal_bytes": rows,
+            });
+            let text = serde_json::to_string_pretty(&doc)?;
+            vkbrdf::atomic::write(path, |w| std::io::Write::write_all(w, text.as_bytes()))?;
+            eprintln!("wrote {}", path.display());
+        }
+        return Ok(ExitCode::SUCCESS);
+    }
     let mut list = scenarios::all();
     if !args.scenario.is_empty() {
         list.retain(|s| args.scenario.iter().any(|n| n == s.name));
@@ -212,10 +244,6 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
     }
     let stage_rows = stage_rows(args, &list, vulkan.as_mut(), &mut engine, repeats)?;
     let mut peer_rows = Vec::new();
-    let script = args
-        .peers_script
-        .clone()
-        .unwrap_or_else(peers::default_script);
     for sc in list.iter().filter(|s| s.peer.is_some()) {
         let batch = scenarios::batch(sc, peer_n, 42);
         let ps = sc.peer.expect("filtered");
@@ -257,9 +285,19 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         r.scenario = "52 B/tuple copied".into(); // not a BRDF: no ratio row
         peer_rows.push(r);
     }
+    let equal_bytes = if args.no_cpu {
+        Vec::new()
+    } else {
+        bench::equal::rows(&script, &equal_sizes, repeats, args.no_peers, &mut |m| {
+            eprintln!("{m} …")
+        })?
+    };
     print_report(&results, &peer_rows, &list);
     print_bandwidth(&bandwidth, &peer_rows);
     stages::print(&stage_rows);
+    if !equal_bytes.is_empty() {
+        outln!("\n{}", bench::equal::table(&equal_bytes));
+    }
     let report = Report {
         schema_version: SCHEMA_VERSION,
         device,
@@ -267,6 +305,7 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         bandwidth,
         stages: stage_rows,
         peers: peer_rows,
+        equal_bytes,
     };
     if let Some(path) = &args.json {
         let text = serde_json::to_string_pretty(&report)?;

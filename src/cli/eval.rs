@@ -15,7 +15,12 @@ use vkbrdf::stream;
 Input: a float32 or float64 .npy array, C order, shape (n, 10) or (n, 13), columns
   Lx Ly Lz Vx Vy Vz Nx Ny Nz material [Tx Ty Tz]
 (material = row index into the materials file's [[material]] tables, from 0; the tangent
-columns are needed only by anisotropic materials).
+columns are needed only by anisotropic materials); or the local-frame form, shape (n, 6),
+  Lx Ly Lz Vx Vy Vz
+with N = +z and one material for every row (--material NAME|INDEX; may be left out when
+the materials file defines one; not anisotropic). Each tuple means what the 10-column row
+Lx Ly Lz Vx Vy Vz 0 0 1 material means, in 24 bytes instead of 40; `cpu` evaluates it as
+it is, the other engines expand it to rows chunk by chunk.
 
 Output: BRDF.npy, float32 (n, 3): RGB f in 1/sr (no cosine); TERMS.npy, float32 (n, 6):
 D, G, F_r, F_g, F_b, K. Invalid tuples (zero or non-finite vectors, a bad tangent) and
@@ -46,9 +51,13 @@ pub struct Args {
     /// Materials file (TOML, [[material]] tables; see `vkbrdf materials --help`).
     #[arg(long, short = 'm', value_name = "M.toml")]
     pub materials: PathBuf,
-    /// Tuples (.npy, shape (n, 10) or (n, 13)).
+    /// Tuples (.npy, shape (n, 10) or (n, 13), or (n, 6) in the local frame).
     #[arg(long, short = 'i', value_name = "T.npy")]
     pub input: PathBuf,
+    /// The material of a 6-column local-frame input, by name or index (only for that
+    /// form: rows of 10 or 13 columns name their own).
+    #[arg(long, value_name = "NAME|INDEX")]
+    pub material: Option<String>,
     /// Where to write the RGB BRDF values (.npy, float32 (n, 3)).
     #[arg(long, short = 'o', value_name = "BRDF.npy")]
     pub output: PathBuf,
@@ -134,6 +143,7 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
     };
     let job = stream::StreamJob {
         input: &args.input,
+        material: args.material.as_deref(),
         materials: &materials,
         output: &args.output,
         terms: args.terms.as_deref(),

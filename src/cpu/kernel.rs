@@ -84,6 +84,15 @@ pub struct Params {
     pub ck: [f32; 3],
     /// Conductor `Re(η²) − 1 = n² − k² − 1`, formed in f64.
     pub e2rm1: [f32; 3],
+    /// Conductor `Re(η²)/|η|²` (the constant factors of the scaled root, formed in f64:
+    /// the lanes then multiply where the kernel divides per tuple).
+    pub c_a: [f32; 3],
+    /// Conductor `Im(η²)²/|η|²`.
+    pub c_eb: [f32; 3],
+    /// Conductor `1/|η|²`.
+    pub c_iq: [f32; 3],
+    /// Conductor `Im(η²)/|η|⁴`.
+    pub c_bq: [f32; 3],
 }
 
 /// How a material group is evaluated.
@@ -174,6 +183,13 @@ impl Plan {
                 p.e2rm1 = f32x3(std::array::from_fn(|c| {
                     (ior[c] - 1.0) * (ior[c] + 1.0) - extinction[c] * extinction[c]
                 }));
+                let (n, k) = (ior, extinction);
+                let q: [f64; 3] = std::array::from_fn(|c| n[c] * n[c] + k[c] * k[c]);
+                let e2i: [f64; 3] = std::array::from_fn(|c| 2.0 * n[c] * k[c]);
+                p.c_a = f32x3(std::array::from_fn(|c| (n[c] * n[c] - k[c] * k[c]) / q[c]));
+                p.c_eb = f32x3(std::array::from_fn(|c| e2i[c] * e2i[c] / q[c]));
+                p.c_iq = f32x3(q.map(|q| 1.0 / q));
+                p.c_bq = f32x3(std::array::from_fn(|c| e2i[c] / q[c] / q[c]));
                 F_CONDUCTOR
             }
         };
@@ -269,8 +285,14 @@ fn raw(x: &[f32; 9]) -> Raw {
     }
 }
 
+/// The frame of one lane; `Z`: N is (0, 0, 1) (the local form), whose dot and cross
+/// products with N reduce to single components — the same operations on the same values as
+/// the general frame with that N, so both give the same bits.
 #[inline(always)]
-fn frame(x: &[f32; 9]) -> Frame {
+fn frame<const Z: bool>(x: &[f32; 9]) -> Frame {
+    if Z {
+        return frame_z(x);
+    }
     let Raw {
         l: [lx, ly, lz],
         v: [vx, vy, vz],
@@ -305,6 +327,38 @@ fn frame(x: &[f32; 9]) -> Frame {
         sin2_h: cross2(hx, hy, hz),
         sin2_i: cross2(lx, ly, lz),
         sin2_o: cross2(vx, vy, vz),
+        ok,
+    }
+}
+
+/// [`frame`] with N = (0, 0, 1). With that N, |N|² = 1 and its `rsqrt` are exactly 1, each
+/// `n · w` is `0·wx + 0·wy + 1·wz = wz` (a zero's sign aside, and a zero cosine is rescued
+/// either way) and each `|n × w|²` is `(−wy)² + wx² + 0 = wy·wy + wx·wx`: the general
+/// frame's bits without its N arithmetic.
+#[inline(always)]
+fn frame_z(x: &[f32; 9]) -> Frame {
+    let w = |i: usize| f64::from(x[i]);
+    let (lx, ly, lz) = (w(0), w(1), w(2));
+    let (vx, vy, vz) = (w(3), w(4), w(5));
+    let (ll, vv) = (lx * lx + ly * ly + lz * lz, vx * vx + vy * vy + vz * vz);
+    let finite_sq = |q: f64| q > 0.0 && q < f64::INFINITY;
+    let finite = finite_sq(ll) && finite_sq(vv);
+    let (il, iv) = (rsqrt(ll), rsqrt(vv));
+    let (lx, ly, lz) = (lx * il, ly * il, lz * il);
+    let (vx, vy, vz) = (vx * iv, vy * iv, vz * iv);
+    let (hx, hy, hz) = (lx + vx, ly + vy, lz + vz);
+    let ih = rsqrt(hx * hx + hy * hy + hz * hz);
+    let (hx, hy, hz) = (hx * ih, hy * ih, hz * ih);
+    let c = vx * hx + vy * hy + vz * hz;
+    let ok = finite && lz >= GRAZING && vz >= GRAZING && hz >= GRAZING && c >= GRAZING;
+    Frame {
+        cos_i: lz,
+        cos_o: vz,
+        cos_h: hz,
+        c,
+        sin2_h: hy * hy + hx * hx,
+        sin2_i: ly * ly + lx * lx,
+        sin2_o: vy * vy + vx * vx,
         ok,
     }
 }
@@ -379,29 +433,38 @@ fn dielectric(c: f64, s2: f64, mu: f64, mu2m1: f64) -> f32 {
     }
 }
 
-/// Exact conductor Fresnel (FORMULAS.md §4) in f32, as the kernel's `F_Conductor`
-/// (`glsl/terms.glsl`): `η²` divided through `|η|²` one factor at a time so that large
-/// extinctions do not overflow, the complex root by the larger of its two candidates.
+/// Exact conductor Fresnel (FORMULAS.md §4) in f32, after the kernel's `F_Conductor`
+/// (`glsl/terms.glsl`): `η²` divided through `|η|²` so that large extinctions do not
+/// overflow — here by the per-material constants `c_a`, `c_eb`, `c_iq`, `c_bq` (formed
+/// once in f64) — and the complex root taken by its larger component, whose square root
+/// both sign cases share: 4 divisions and 2 square roots a channel instead of 9 and 3
+/// (division is the lanes' most expensive instruction). η = 1 (zi = 0) stays exactly 0.
 #[inline(always)]
-fn conductor(c: f32, n: f32, k: f32, e2rm1: f32) -> f32 {
-    let e2r = n * n - k * k;
-    let e2i = 2.0 * n * k;
-    let q = n * n + k * k;
-    let (a, b) = (e2r / q, e2i / q);
-    let ar = e2rm1 + c * c;
-    let zr = (ar * a + e2i * b) / q;
-    let zi = (1.0 - c) * (1.0 + c) * b / q;
+fn conductor(c: f32, s2: f32, p: &Params, ch: usize) -> f32 {
+    let (n, k) = (p.cn[ch], p.ck[ch]);
+    let ar = p.e2rm1[ch] + c * c;
+    let zr = (ar * p.c_a[ch] + p.c_eb[ch]) * p.c_iq[ch];
+    let zi = s2 * p.c_bq[ch];
     // Principal √(zr + i zi), scaled by the larger component (the squares underflow for
     // |z| < 1e-19); the 1e-37 and 1e-30 floors keep z = 0 from 0/0.
-    let m = zr.abs().max(zi.abs()).max(1e-37);
-    let (xs, ys) = (zr / m, zi / m);
-    let r = m * (xs * xs + ys * ys).sqrt();
-    let sp = (0.5 * (r + zr)).sqrt();
-    let sn = (0.5 * (r - zr)).sqrt();
-    let im_p = 0.5 * zi / sp.max(1e-30);
-    let re_n = 0.5 * zi.abs() / sn.max(1e-30);
-    let im_n = if zi < 0.0 { -sn } else { sn };
-    let (ctr, cti) = if zr < 0.0 { (re_n, im_n) } else { (sp, im_p) };
+    // |z| = big·√(1 + (small/big)²): the larger component scaled by itself is exactly 1,
+    // as in the kernel's zr/m, zi/m, so a real z (zi = 0) gives r = |zr| exactly and the
+    // root √((r + zr)/2) = √(c²) the exact c; multiplying by 1/m instead (m·(1/m) ≠ 1)
+    // left F(η = 1) a rounding error of 1e-15, which a D of 1e13 turned into 0.3.
+    let (ar_, ai_) = (zr.abs(), zi.abs());
+    let big = ar_.max(ai_).max(1e-37);
+    let small = ar_.min(ai_);
+    let ratio = small / big;
+    let r = big * (1.0 + ratio * ratio).sqrt();
+    // The root's larger component is √((r + |zr|)/2) (the real part for zr ≥ 0, the
+    // imaginary one for zr < 0), the other zi/2 over it.
+    let t = (0.5 * (r + zr.abs())).sqrt();
+    let o = 0.5 * zi / t.max(1e-30);
+    let (ctr, cti) = if zr < 0.0 {
+        (o.abs(), if zi < 0.0 { -t } else { t })
+    } else {
+        (t, o)
+    };
     let (ecr, eci) = (n * c, k * c);
     let (pr, pi) = (ecr - ctr, eci - cti);
     let (qr, qi) = (ecr + ctr, eci + cti);
@@ -413,13 +476,33 @@ fn conductor(c: f32, n: f32, k: f32, e2rm1: f32) -> f32 {
     0.5 * (r_par + r_perp)
 }
 
-/// Lambert on one block: only the validity and the horizon matter, so only the two
+/// Lambert on one block (`Z`: N = (0, 0, 1), the local form): only the validity and the horizon matter, so only the two
 /// cosines are formed (in f64; their sign is all Lambert needs, and a cosine below
 /// [`GRAZING`] still goes to the reference, which decides the horizon case).
 #[inline(always)]
-pub fn lambert_block(p: &Params, inp: &Inputs, out: &mut Outputs) {
+pub fn lambert_block<const Z: bool>(p: &Params, inp: &Inputs, out: &mut Outputs) {
     for k in 0..LANES {
         let x = lane_inputs(inp, k);
+        if Z {
+            // N = (0, 0, 1): the general form's bits (see `frame_z`), `lz · 1 · r = lz · r`.
+            let w = |i: usize| f64::from(x[i]);
+            let (lx, ly, lz) = (w(0), w(1), w(2));
+            let (vx, vy, vz) = (w(3), w(4), w(5));
+            let (ll, vv) = (lx * lx + ly * ly + lz * lz, vx * vx + vy * vy + vz * vz);
+            let finite_sq = |q: f64| q > 0.0 && q < f64::INFINITY;
+            let cos_i = lz * rsqrt(ll);
+            let cos_o = vz * rsqrt(vv);
+            out.rescue[k] =
+                !(finite_sq(ll) && finite_sq(vv) && cos_i >= GRAZING && cos_o >= GRAZING);
+            for ch in 0..3 {
+                out.brdf[ch][k] = p.diffuse[ch];
+            }
+            out.terms[0][k] = 0.0;
+            for t in 1..TERM_COLUMNS {
+                out.terms[t][k] = 1.0;
+            }
+            continue;
+        }
         let Raw {
             l: [lx, ly, lz],
             v: [vx, vy, vz],
@@ -444,15 +527,15 @@ pub fn lambert_block(p: &Params, inp: &Inputs, out: &mut Outputs) {
 }
 
 /// Isotropic Cook–Torrance on one block, specialised to one distribution, geometry and
-/// Fresnel term.
+/// Fresnel term, and (`Z`) to N = (0, 0, 1) for the local form.
 #[inline(always)]
-pub fn microfacet_block<const D: u8, const G: u8, const F: u8>(
+pub fn microfacet_block<const D: u8, const G: u8, const F: u8, const Z: bool>(
     p: &Params,
     inp: &Inputs,
     out: &mut Outputs,
 ) {
     for k in 0..LANES {
-        let fr = frame(&lane_inputs(inp, k));
+        let fr = frame::<Z>(&lane_inputs(inp, k));
         let cos_h2 = fr.cos_h * fr.cos_h;
         // D (FORMULAS.md §2), in f64: one division.
         let d = if D == D_GGX {
@@ -495,15 +578,21 @@ pub fn microfacet_block<const D: u8, const G: u8, const F: u8>(
         // F (FORMULAS.md §4) per channel.
         let one_minus_c = (1.0 - fr.c) as f32; // in f64: 1 − c of a rounded c cancels
         let s2 = (1.0 - fr.c) * (1.0 + fr.c);
-        let f: [f32; 3] = std::array::from_fn(|ch| match F {
-            F_NONE => 1.0,
-            F_SCHLICK => {
-                let x2 = one_minus_c * one_minus_c;
-                p.f0[ch] + (1.0 - p.f0[ch]) * (x2 * x2 * one_minus_c)
-            }
-            F_DIELECTRIC => dielectric(fr.c, s2, p.ior[ch], p.mu2m1[ch]),
-            _ => conductor(c, p.cn[ch], p.ck[ch], p.e2rm1[ch]),
-        });
+        let s2_f = s2 as f32;
+        // A loop, not `array::from_fn`: LLVM declined to inline from_fn's closure around
+        // the conductor, which made every lane a call and nothing vectorised.
+        let mut f = [1.0f32; 3];
+        for ch in 0..3 {
+            f[ch] = match F {
+                F_NONE => 1.0,
+                F_SCHLICK => {
+                    let x2 = one_minus_c * one_minus_c;
+                    p.f0[ch] + (1.0 - p.f0[ch]) * (x2 * x2 * one_minus_c)
+                }
+                F_DIELECTRIC => dielectric(fr.c, s2, p.ior[ch], p.mu2m1[ch]),
+                _ => conductor(c, s2_f, p, ch),
+            };
+        }
         // K (FORMULAS.md §5), one cosine at a time.
         let kk = p.k_num / cos_o / if p.k_cos_i { cos_i } else { 1.0 };
         let mut bad = !fr.ok;
@@ -591,6 +680,7 @@ mod tests {
                             },
                             &inp,
                             &mut out,
+                            false,
                         );
                         for k in 0..LANES {
                             assert!(!out.rescue[k], "{d} {g} {f} {conv}: lane {k} rescued");
@@ -656,7 +746,132 @@ mod tests {
         )
         .unwrap()[0];
         let mut out = Outputs::default();
-        crate::cpu::block(&Plan::for_material(m), &inp, &mut out);
+        crate::cpu::block(&Plan::for_material(m), &inp, &mut out, false);
         assert!(out.rescue.iter().all(|&r| r));
+    }
+
+    /// The N = +z lanes (the local form) give the general lanes' bits when N = (0, 0, 1):
+    /// every group, on random, grazing, below-horizon and invalid directions.
+    #[test]
+    fn the_local_frame_lanes_give_the_general_bits() {
+        let mut seed = 99u64;
+        let mut rnd = || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((seed >> 40) as f32 / (1u64 << 24) as f32) * 2.0 - 1.0
+        };
+        let mut blocks = Vec::new();
+        for b in 0..64 {
+            let mut inp = Inputs {
+                v: [[0.0; LANES]; 9],
+            };
+            for k in 0..LANES {
+                for j in 0..6 {
+                    inp.v[j][k] = rnd() * if b % 3 == 0 { 1e-3 } else { 1.0 };
+                }
+                match (b * LANES + k) % 13 {
+                    0 => inp.v[2][k] = 1e-6,
+                    1 => inp.v[5][k] = -inp.v[5][k].abs(),
+                    2 => inp.v[0][k] = f32::NAN,
+                    3 => inp.v[3..6].iter_mut().for_each(|c| c[k] = 0.0),
+                    4 => inp.v[1][k] = f32::INFINITY,
+                    5..=7 => {
+                        // Near the specular peak, where |n × h|² is tiny.
+                        let l = [inp.v[0][k], inp.v[1][k], inp.v[2][k].abs() + 0.1];
+                        inp.v[0][k] = l[0];
+                        inp.v[1][k] = l[1];
+                        inp.v[2][k] = l[2];
+                        inp.v[3][k] = -l[0] * (1.0 + 1e-3 * rnd());
+                        inp.v[4][k] = -l[1] + 1e-4 * rnd();
+                        inp.v[5][k] = l[2];
+                    }
+                    _ => {
+                        inp.v[2][k] = inp.v[2][k].abs();
+                        inp.v[5][k] = inp.v[5][k].abs();
+                    }
+                }
+                inp.v[8][k] = 1.0;
+            }
+            blocks.push(inp);
+        }
+        let mut groups = 0;
+        for model in [
+            "model = \"lambert\"".to_string(),
+            "model = \"cook-torrance\"\nroughness = 0.02".to_string(),
+        ] {
+            for d in ["ggx", "beckmann"] {
+                for g in [
+                    "none",
+                    "cook-torrance",
+                    "smith",
+                    "smith-correlated",
+                    "smith-fast",
+                ] {
+                    for f in [
+                        "fresnel = \"none\"",
+                        "fresnel = \"schlick\"\nf0 = [0.04, 0.5, 0.9]",
+                        "fresnel = \"dielectric\"\nior = [1.5, 0.7, 2.4]",
+                        "fresnel = \"conductor\"\nior = [0.2, 0.9, 1.1]\nextinction = [3.9, 2.4, 0.0]",
+                    ] {
+                        let extra = if model.contains("lambert") {
+                            String::new()
+                        } else {
+                            format!("distribution = \"{d}\"\ngeometry = \"{g}\"\n{f}\n")
+                        };
+                        let toml = format!(
+                            "[[material]]\nname = \"x\"\n{model}\n{extra}diffuse = [0.2, 0.3, 0.4]\n"
+                        );
+                        let Ok(ms) = parse_materials(&toml, "t") else {
+                            continue; // smith-fast is Beckmann's only
+                        };
+                        let plan = Plan::for_material(&ms[0]);
+                        assert!(plan.is_simd(), "{toml}");
+                        for inp in &blocks {
+                            let (mut a, mut b) = (Outputs::default(), Outputs::default());
+                            crate::cpu::block(&plan, inp, &mut a, false);
+                            crate::cpu::block(&plan, inp, &mut b, true);
+                            assert_eq!(a.rescue, b.rescue, "{toml}");
+                            for k in 0..LANES {
+                                if a.rescue[k] {
+                                    continue; // the reference writes these lanes
+                                }
+                                for ch in 0..3 {
+                                    assert_eq!(a.brdf[ch][k].to_bits(), b.brdf[ch][k].to_bits(), "{toml}");
+                                }
+                                for t in 0..TERM_COLUMNS {
+                                    assert_eq!(a.terms[t][k].to_bits(), b.terms[t][k].to_bits(), "{toml}");
+                                }
+                            }
+                        }
+                        groups += 1;
+                    }
+                }
+            }
+        }
+        assert!(groups > 40, "{groups}");
+    }
+
+    /// η = 1 reflects nothing: the conductor must give exactly 0 at every angle, since a
+    /// Beckmann D of 1e13 (roughness 1e-7 at the peak) multiplies any rounding left in it
+    /// (a stress-corpus tuple came out 0.37 instead of 0.032 when it did not).
+    #[test]
+    fn a_conductor_of_eta_one_reflects_exactly_nothing() {
+        let m = &parse_materials(
+            "[[material]]\nname = \"x\"\nmodel = \"cook-torrance\"\ndistribution = \"beckmann\"\n\
+             geometry = \"none\"\nfresnel = \"conductor\"\nior = 1.0\nextinction = 0.0\nroughness = 1e-7\n",
+            "t",
+        )
+        .unwrap()[0];
+        let Plan::Microfacet { p, .. } = Plan::for_material(m) else {
+            panic!("in the lanes");
+        };
+        for i in 1..=10_000 {
+            let c = i as f64 / 10_000.0;
+            let s2 = ((1.0 - c) * (1.0 + c)) as f32;
+            for ch in 0..3 {
+                assert_eq!(conductor(c as f32, s2, &p, ch), 0.0, "c = {c}");
+            }
+        }
     }
 }

@@ -3,9 +3,12 @@
 //! the f64 reference, tuple by tuple, in parallel (docs/CPU_ENGINE.md).
 //!
 //! Rows are grouped by material (a stable counting sort when the batch has several), cut
-//! into chunks that never straddle two groups, and the chunks are taken by scoped worker
-//! threads from a shared queue. Each tuple's result depends only on the tuple and its
-//! material, so the output is the same for any chunk size and thread count.
+//! into chunks that never straddle two groups, and the chunks are taken from a shared
+//! queue by the calling thread and the workers of a persistent pool (`rayon-core`, built
+//! once per engine). Each tuple's result depends only on the tuple and its material, so the
+//! output is the same for any chunk size and thread count. The local-frame form
+//! ([`LocalBatch`]: `Lx Ly Lz Vx Vy Vz`, N = +z, one material) is read as it is, never
+//! expanded to rows.
 //!
 //! Instruction sets are chosen at run time by `pulp` (AVX-512, AVX2+FMA, or the baseline):
 //! one portable binary, and no `unsafe` here — pulp proves the CPU feature before it enters
@@ -18,13 +21,13 @@ pub mod kernel;
 pub mod math;
 
 use crate::backend::{Backend, Counts, Output, Request, TERM_COLUMNS};
-use crate::batch::{Batch, COLUMNS_PLAIN, COLUMNS_TANGENT};
+use crate::batch::{Batch, LocalBatch, Tuple, COLUMNS_LOCAL, COLUMNS_PLAIN, COLUMNS_TANGENT};
 use crate::cancel::Cancel;
 use crate::error::Result;
 use crate::material::Material;
 use crate::reference::{evaluate_tuple, to_output_f32, Status};
 use kernel::{Inputs, Outputs, Plan, LANES};
-use std::sync::Mutex;
+use std::sync::{Arc, Mutex};
 
 /// Rows per chunk: the unit the workers take and between which they check the cancel token.
 const CHUNK: usize = 16_384;
@@ -35,6 +38,10 @@ pub struct CpuEngine {
     threads: usize,
     cancel: Cancel,
     last: Tally,
+    /// The `threads − 1` workers beside the calling thread, started at the first batch of
+    /// more than one chunk and kept for the engine's life (spawning threads per call cost
+    /// a large share of a small batch's time).
+    pool: Option<Arc<rayon_core::ThreadPool>>,
 }
 
 /// Where the tuples of the last evaluation went.
@@ -91,6 +98,7 @@ impl CpuEngine {
             threads: threads.max(1),
             cancel: Cancel::new(),
             last: Tally::default(),
+            pool: None,
         }
     }
 
@@ -105,6 +113,50 @@ impl CpuEngine {
     }
 }
 
+/// What the engine reads: ordinary rows, or the local-frame form.
+#[derive(Clone, Copy)]
+enum Source<'a> {
+    Rows(&'a Batch),
+    Local(&'a LocalBatch),
+}
+
+impl Source<'_> {
+    fn len(&self) -> usize {
+        match self {
+            Source::Rows(b) => b.len(),
+            Source::Local(b) => b.len(),
+        }
+    }
+
+    fn material(&self, i: usize) -> usize {
+        match self {
+            Source::Rows(b) => b.material(i),
+            Source::Local(b) => b.material(),
+        }
+    }
+
+    fn tuple(&self, i: usize) -> Tuple {
+        match self {
+            Source::Rows(b) => b.tuple(i),
+            Source::Local(b) => b.tuple(i),
+        }
+    }
+
+    fn data(&self) -> &[f32] {
+        match self {
+            Source::Rows(b) => b.as_slice(),
+            Source::Local(b) => b.as_slice(),
+        }
+    }
+
+    fn columns(&self) -> usize {
+        match self {
+            Source::Rows(b) => b.columns(),
+            Source::Local(_) => COLUMNS_LOCAL,
+        }
+    }
+}
+
 /// One unit of work: rows `start..end` of the (grouped) order, all of material `material`.
 struct Work<'a> {
     material: usize,
@@ -116,7 +168,7 @@ struct Work<'a> {
 /// The lanes over one chunk, inside the instruction set pulp chose.
 struct ChunkOp<'a, 'b> {
     plan: &'a Plan,
-    batch: &'a Batch,
+    batch: Source<'a>,
     order: Option<&'a [usize]>,
     work: &'a mut Work<'b>,
     material: &'a Material,
@@ -131,22 +183,33 @@ impl pulp::WithSimd for ChunkOp<'_, '_> {
     }
 }
 
+/// One block of `plan`'s lanes; `z`: every lane's N is (0, 0, 1) (the local form), which
+/// runs the frame without N's arithmetic, to the same bits.
 #[inline(always)]
-pub(crate) fn block(plan: &Plan, inp: &Inputs, out: &mut Outputs) {
+pub(crate) fn block(plan: &Plan, inp: &Inputs, out: &mut Outputs, z: bool) {
+    if z {
+        block_of::<true>(plan, inp, out)
+    } else {
+        block_of::<false>(plan, inp, out)
+    }
+}
+
+#[inline(always)]
+fn block_of<const Z: bool>(plan: &Plan, inp: &Inputs, out: &mut Outputs) {
     use kernel::*;
     let Plan::Microfacet { d, g, f, p } = plan else {
         if let Plan::Lambert(p) = plan {
-            lambert_block(p, inp, out);
+            lambert_block::<Z>(p, inp, out);
         }
         return;
     };
     macro_rules! by_f {
         ($d:expr, $g:expr) => {
             match *f {
-                F_NONE => microfacet_block::<$d, $g, F_NONE>(p, inp, out),
-                F_SCHLICK => microfacet_block::<$d, $g, F_SCHLICK>(p, inp, out),
-                F_DIELECTRIC => microfacet_block::<$d, $g, F_DIELECTRIC>(p, inp, out),
-                _ => microfacet_block::<$d, $g, F_CONDUCTOR>(p, inp, out),
+                F_NONE => microfacet_block::<$d, $g, F_NONE, Z>(p, inp, out),
+                F_SCHLICK => microfacet_block::<$d, $g, F_SCHLICK, Z>(p, inp, out),
+                F_DIELECTRIC => microfacet_block::<$d, $g, F_DIELECTRIC, Z>(p, inp, out),
+                _ => microfacet_block::<$d, $g, F_CONDUCTOR, Z>(p, inp, out),
             }
         };
     }
@@ -170,7 +233,7 @@ pub(crate) fn block(plan: &Plan, inp: &Inputs, out: &mut Outputs) {
 
 /// Writes the f64 reference's result for batch row `row` at position `j` of the chunk and
 /// counts its status.
-fn rescue(batch: &Batch, m: &Material, row: usize, j: usize, w: &mut Work, counts: &mut Counts) {
+fn rescue(batch: Source, m: &Material, row: usize, j: usize, w: &mut Work, counts: &mut Counts) {
     let e = evaluate_tuple(&batch.tuple(row), m);
     match e.status {
         Status::Invalid => {
@@ -194,10 +257,11 @@ fn rescue(batch: &Batch, m: &Material, row: usize, j: usize, w: &mut Work, count
     }
 }
 
-/// Columns 0–8 (L, V, N) of `LANES` consecutive rows of `C` columns into lanes.
+/// Columns `0..K` (L, V, and N when K = 9) of `LANES` consecutive rows of `C` columns into
+/// lanes.
 #[inline(always)]
-fn transpose<const C: usize>(rows: &[f32], inp: &mut Inputs) {
-    for (c, col) in inp.v.iter_mut().enumerate() {
+fn transpose<const C: usize, const K: usize>(rows: &[f32], inp: &mut Inputs) {
+    for (c, col) in inp.v[..K].iter_mut().enumerate() {
         for (k, x) in col.iter_mut().enumerate() {
             *x = rows[k * C + c];
         }
@@ -218,7 +282,7 @@ fn untranspose<const C: usize>(cols: &[[f32; LANES]; C], rows: &mut [f32]) {
 #[inline(always)]
 fn run_chunk(
     plan: &Plan,
-    batch: &Batch,
+    batch: Source,
     order: Option<&[usize]>,
     w: &mut Work,
     m: &Material,
@@ -235,11 +299,14 @@ fn run_chunk(
         return (counts, tally);
     }
     tally.lanes = len as u64;
-    let data = batch.as_slice();
+    let data = batch.data();
     let cols = batch.columns();
     let mut inp = Inputs {
         v: [[0.0; LANES]; 9],
     };
+    // The local form's N = (0, 0, 1) in every lane; its transposes fill only L and V.
+    inp.v[8] = [1.0; LANES];
+    let take = cols.min(9);
     let mut out = Outputs::default();
     let mut idx = [0usize; LANES];
     let mut j0 = 0;
@@ -252,20 +319,36 @@ fn run_chunk(
         if order.is_none() && n == LANES {
             // Consecutive rows: a fixed-stride transpose the compiler unrolls.
             let base = idx[0] * cols;
-            if cols == COLUMNS_PLAIN {
-                transpose::<COLUMNS_PLAIN>(&data[base..base + LANES * COLUMNS_PLAIN], &mut inp);
-            } else {
-                transpose::<COLUMNS_TANGENT>(&data[base..base + LANES * COLUMNS_TANGENT], &mut inp);
+            match cols {
+                COLUMNS_LOCAL => {
+                    // Through a copy of the block that the compiler cannot see through: the
+                    // stride-6 transpose straight from the batch compiled to masked loads
+                    // which, missing the cache, cost twice the whole tuple.
+                    let block: [f32; LANES * COLUMNS_LOCAL] = std::hint::black_box(
+                        data[base..base + LANES * COLUMNS_LOCAL]
+                            .try_into()
+                            .expect("a whole block"),
+                    );
+                    transpose::<COLUMNS_LOCAL, COLUMNS_LOCAL>(&block, &mut inp)
+                }
+                COLUMNS_PLAIN => transpose::<COLUMNS_PLAIN, 9>(
+                    &data[base..base + LANES * COLUMNS_PLAIN],
+                    &mut inp,
+                ),
+                _ => transpose::<COLUMNS_TANGENT, 9>(
+                    &data[base..base + LANES * COLUMNS_TANGENT],
+                    &mut inp,
+                ),
             }
         } else {
             for (k, &r) in idx.iter().enumerate() {
-                let row = &data[r * cols..r * cols + 9];
+                let row = &data[r * cols..r * cols + take];
                 for (c, &x) in row.iter().enumerate() {
                     inp.v[c][k] = x;
                 }
             }
         }
-        block(plan, &inp, &mut out);
+        block(plan, &inp, &mut out, cols == COLUMNS_LOCAL);
         if n == LANES {
             // Fixed-size interleaving stores the compiler turns into shuffles.
             untranspose::<3>(&out.brdf, &mut w.brdf[j0 * 3..(j0 + LANES) * 3]);
@@ -299,6 +382,190 @@ fn run_chunk(
     (counts, tally)
 }
 
+impl CpuEngine {
+    /// The whole evaluation of `src` into `out` (see [`Backend::evaluate_into`]).
+    fn run(
+        &mut self,
+        src: Source,
+        materials: &[Material],
+        request: &Request,
+        out: &mut Output,
+    ) -> Result<()> {
+        let n = src.len();
+        let plans: Vec<Plan> = materials.iter().map(Plan::for_material).collect();
+        // Group the rows by material: a stable counting sort, skipped when one material
+        // covers the batch (then the grouped order is the row order).
+        let mut counts_per = vec![0usize; materials.len()];
+        match src {
+            // Every row is material 0 (the batch validated its indices): no pass over it.
+            Source::Rows(_) if materials.len() == 1 => counts_per[0] = n,
+            Source::Local(b) => counts_per[b.material()] = n,
+            Source::Rows(_) => {
+                for i in 0..n {
+                    counts_per[src.material(i)] += 1;
+                }
+            }
+        }
+        let single = counts_per.iter().filter(|&&c| c > 0).count() <= 1;
+        let mut group_start = vec![0usize; materials.len() + 1];
+        for (mi, c) in counts_per.iter().enumerate() {
+            group_start[mi + 1] = group_start[mi] + c;
+        }
+        let order: Option<Vec<usize>> = (!single).then(|| {
+            let mut next = group_start.clone();
+            let mut order = vec![0usize; n];
+            for i in 0..n {
+                let mi = src.material(i);
+                order[next[mi]] = i;
+                next[mi] += 1;
+            }
+            order
+        });
+
+        // Outputs in the grouped order: the caller's buffers themselves when there is one
+        // group (reused, so no fresh pages to fault in and zero), else scratch buffers
+        // scattered back to row order below.
+        let mut scratch_b = Vec::new();
+        let mut scratch_t = None;
+        let (brdf, mut terms): (&mut Vec<f32>, Option<&mut Vec<f32>>) = if single {
+            out.terms = request.terms.then(|| out.terms.take().unwrap_or_default());
+            (&mut out.brdf, out.terms.as_mut())
+        } else {
+            scratch_t = request.terms.then(Vec::new);
+            (&mut scratch_b, scratch_t.as_mut())
+        };
+        set_len(brdf, n * 3);
+        if let Some(t) = terms.as_deref_mut() {
+            set_len(t, n * TERM_COLUMNS);
+        }
+        let mut queue = Vec::new();
+        {
+            let mut rest_b: &mut [f32] = brdf;
+            let mut rest_t: Option<&mut [f32]> = terms.map(|t| t.as_mut_slice());
+            for (mi, &count) in counts_per.iter().enumerate() {
+                let mut start = group_start[mi];
+                let end = start + count;
+                while start < end {
+                    let len = CHUNK.min(end - start);
+                    let (b, rb) = std::mem::take(&mut rest_b).split_at_mut(len * 3);
+                    rest_b = rb;
+                    let t = match rest_t.take() {
+                        Some(t) => {
+                            let (a, rt) = t.split_at_mut(len * TERM_COLUMNS);
+                            rest_t = Some(rt);
+                            Some(a)
+                        }
+                        None => None,
+                    };
+                    queue.push(Work {
+                        material: if single { src.material(0) } else { mi },
+                        start,
+                        brdf: b,
+                        terms: t,
+                    });
+                    start += len;
+                }
+            }
+        }
+        queue.reverse(); // workers pop from the back: rows go out roughly in order
+        let chunks = queue.len();
+        let queue = Mutex::new(queue);
+        let helpers = self.threads.min(chunks).saturating_sub(1);
+        let pool = if helpers > 0 { self.pool() } else { None };
+        let cancel = &self.cancel;
+        let arch = pulp::Arch::new();
+        let work = || -> (Counts, Tally) {
+            let mut total = Counts::default();
+            let mut tally = Tally::default();
+            loop {
+                if cancel.is_cancelled() {
+                    break;
+                }
+                let Some(mut w) = queue.lock().expect("queue lock").pop() else {
+                    break;
+                };
+                let (c, t) = arch.dispatch(ChunkOp {
+                    plan: &plans[w.material],
+                    batch: src,
+                    order: order.as_deref(),
+                    material: &materials[w.material],
+                    work: &mut w,
+                });
+                total.absorb(&c);
+                tally.add(&t);
+            }
+            (total, tally)
+        };
+        let parts: Vec<(Counts, Tally)> = match pool {
+            None => vec![work()],
+            Some(pool) => {
+                let parts = Mutex::new(Vec::with_capacity(helpers + 1));
+                pool.in_place_scope(|s| {
+                    for _ in 0..helpers {
+                        s.spawn(|_| {
+                            let p = work();
+                            parts.lock().expect("parts lock").push(p);
+                        });
+                    }
+                    let p = work();
+                    parts.lock().expect("parts lock").push(p);
+                });
+                parts.into_inner().expect("parts lock")
+            }
+        };
+        self.cancel.check()?;
+        let mut counts = Counts {
+            tuples: n as u64,
+            ..Counts::default()
+        };
+        self.last = Tally::default();
+        for (c, t) in &parts {
+            counts.absorb(c);
+            self.last.add(t);
+        }
+        out.counts = counts;
+        // Back to row order.
+        if let Some(order) = order {
+            set_len(&mut out.brdf, n * 3);
+            for (p, &r) in order.iter().enumerate() {
+                out.brdf[r * 3..r * 3 + 3].copy_from_slice(&scratch_b[p * 3..p * 3 + 3]);
+            }
+            out.terms = scratch_t.map(|t| {
+                let mut u = out.terms.take().unwrap_or_default();
+                set_len(&mut u, n * TERM_COLUMNS);
+                for (p, &r) in order.iter().enumerate() {
+                    u[r * TERM_COLUMNS..(r + 1) * TERM_COLUMNS]
+                        .copy_from_slice(&t[p * TERM_COLUMNS..(p + 1) * TERM_COLUMNS]);
+                }
+                u
+            });
+        }
+        Ok(())
+    }
+
+    /// The worker pool, started on first use; `None` (the calling thread works alone) if
+    /// the system refuses the threads.
+    fn pool(&mut self) -> Option<Arc<rayon_core::ThreadPool>> {
+        if self.pool.is_none() {
+            self.pool = rayon_core::ThreadPoolBuilder::new()
+                .num_threads(self.threads - 1)
+                .thread_name(|i| format!("vkbrdf-cpu-{i}"))
+                .build()
+                .ok()
+                .map(Arc::new);
+        }
+        self.pool.clone()
+    }
+}
+
+/// Makes `v` exactly `len` long. Every element is overwritten by the evaluation, so a
+/// reused buffer keeps its stale values instead of being zeroed again; only growth is
+/// filled (and fresh memory faulted in).
+fn set_len(v: &mut Vec<f32>, len: usize) {
+    v.truncate(len);
+    v.resize(len, 0.0);
+}
+
 impl Backend for CpuEngine {
     fn name(&self) -> String {
         format!(
@@ -319,135 +586,28 @@ impl Backend for CpuEngine {
         materials: &[Material],
         request: &Request,
     ) -> Result<Output> {
-        let n = batch.len();
-        let plans: Vec<Plan> = materials.iter().map(Plan::for_material).collect();
-        // Group the rows by material: a stable counting sort, skipped when one material
-        // covers the batch (then the grouped order is the row order).
-        let mut counts_per = vec![0usize; materials.len()];
-        if materials.len() == 1 {
-            // Every row is material 0 (the batch validated its indices): no pass over it.
-            counts_per[0] = n;
-        } else {
-            for i in 0..n {
-                counts_per[batch.material(i)] += 1;
-            }
-        }
-        let single = counts_per.iter().filter(|&&c| c > 0).count() <= 1;
-        let mut group_start = vec![0usize; materials.len() + 1];
-        for (mi, c) in counts_per.iter().enumerate() {
-            group_start[mi + 1] = group_start[mi] + c;
-        }
-        let order: Option<Vec<usize>> = (!single).then(|| {
-            let mut next = group_start.clone();
-            let mut order = vec![0usize; n];
-            for i in 0..n {
-                let mi = batch.material(i);
-                order[next[mi]] = i;
-                next[mi] += 1;
-            }
-            order
-        });
+        let mut out = Output::default();
+        self.run(Source::Rows(batch), materials, request, &mut out)?;
+        Ok(out)
+    }
 
-        // Outputs in the grouped order (the row order itself when there is one group).
-        let mut brdf = vec![0f32; n * 3];
-        let mut terms = request.terms.then(|| vec![0f32; n * TERM_COLUMNS]);
-        let mut queue = Vec::new();
-        {
-            let mut rest_b: &mut [f32] = &mut brdf;
-            let mut rest_t: Option<&mut [f32]> = terms.as_deref_mut();
-            for (mi, &count) in counts_per.iter().enumerate() {
-                let mut start = group_start[mi];
-                let end = start + count;
-                while start < end {
-                    let len = CHUNK.min(end - start);
-                    let (b, rb) = std::mem::take(&mut rest_b).split_at_mut(len * 3);
-                    rest_b = rb;
-                    let t = match rest_t.take() {
-                        Some(t) => {
-                            let (a, rt) = t.split_at_mut(len * TERM_COLUMNS);
-                            rest_t = Some(rt);
-                            Some(a)
-                        }
-                        None => None,
-                    };
-                    queue.push(Work {
-                        material: if single { batch.material(0) } else { mi },
-                        start,
-                        brdf: b,
-                        terms: t,
-                    });
-                    start += len;
-                }
-            }
-        }
-        queue.reverse(); // workers pop from the back: rows go out roughly in order
-        let queue = Mutex::new(queue);
-        let cancel = &self.cancel;
-        let workers = self.threads.min(n.div_ceil(CHUNK)).max(1);
-        let arch = pulp::Arch::new();
-        let work = |_: usize| -> (Counts, Tally) {
-            let mut total = Counts::default();
-            let mut tally = Tally::default();
-            loop {
-                if cancel.is_cancelled() {
-                    break;
-                }
-                let Some(mut w) = queue.lock().expect("queue lock").pop() else {
-                    break;
-                };
-                let (c, t) = arch.dispatch(ChunkOp {
-                    plan: &plans[w.material],
-                    batch,
-                    order: order.as_deref(),
-                    material: &materials[w.material],
-                    work: &mut w,
-                });
-                total.absorb(&c);
-                tally.add(&t);
-            }
-            (total, tally)
-        };
-        let parts: Vec<(Counts, Tally)> = if workers == 1 {
-            vec![work(0)]
-        } else {
-            std::thread::scope(|s| {
-                let handles: Vec<_> = (0..workers).map(|t| s.spawn(move || work(t))).collect();
-                handles
-                    .into_iter()
-                    .map(|h| h.join().expect("cpu engine worker panicked"))
-                    .collect()
-            })
-        };
-        self.cancel.check()?;
-        let mut counts = Counts {
-            tuples: n as u64,
-            ..Counts::default()
-        };
-        self.last = Tally::default();
-        for (c, t) in &parts {
-            counts.absorb(c);
-            self.last.add(t);
-        }
-        // Back to row order.
-        if let Some(order) = order {
-            let mut b = vec![0f32; n * 3];
-            for (p, &r) in order.iter().enumerate() {
-                b[r * 3..r * 3 + 3].copy_from_slice(&brdf[p * 3..p * 3 + 3]);
-            }
-            brdf = b;
-            if let Some(t) = terms.as_mut() {
-                let mut u = vec![0f32; n * TERM_COLUMNS];
-                for (p, &r) in order.iter().enumerate() {
-                    u[r * TERM_COLUMNS..(r + 1) * TERM_COLUMNS]
-                        .copy_from_slice(&t[p * TERM_COLUMNS..(p + 1) * TERM_COLUMNS]);
-                }
-                *t = u;
-            }
-        }
-        Ok(Output {
-            brdf,
-            terms,
-            counts,
-        })
+    fn evaluate_into(
+        &mut self,
+        batch: &Batch,
+        materials: &[Material],
+        request: &Request,
+        out: &mut Output,
+    ) -> Result<()> {
+        self.run(Source::Rows(batch), materials, request, out)
+    }
+
+    fn evaluate_local_into(
+        &mut self,
+        batch: &LocalBatch,
+        materials: &[Material],
+        request: &Request,
+        out: &mut Output,
+    ) -> Result<()> {
+        self.run(Source::Local(batch), materials, request, out)
     }
 }

@@ -1,0 +1,257 @@
+//! The comparison with Mitsuba 3's LLVM backend at equal bytes: Mitsuba's `roughconductor`
+//! reads 24 bytes a tuple (wi, wo) and writes 12, so the engine gets the same — the 6-column
+//! local-frame batch ([`crate::batch::LocalBatch`]) evaluated into a reused output — on the
+//! same directions, in the same run. Beside it, the engine's 1 → 2-thread ratio on an
+//! in-cache batch and Lambert against the memory-copy ceiling for its 36 bytes a tuple.
+
+use super::{max_rel_err, median, memcpy_ceiling, peers, scenarios};
+use crate::backend::{Backend, Output, Request};
+use crate::batch::LocalBatch;
+use crate::cpu::CpuEngine;
+use crate::error::Result;
+use crate::material::Material;
+use std::path::Path;
+use std::time::Instant;
+
+/// Bytes a tuple moves in the local form: 6 floats in, 3 out.
+pub const LOCAL_BYTES: usize = 36;
+
+/// One equal-bytes point: the engine and the peer on the same tuples.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct EqualBytesRow {
+    /// Our scenario (`mitsuba-beckmann`, `mitsuba-ggx`, `lambert`).
+    pub scenario: String,
+    /// What the engine is compared with: `mitsuba` (its LLVM backend), `memcpy` (a copy of
+    /// the same bytes), or `cpu 1 thread` (the thread-scaling row).
+    pub peer: String,
+    /// Tuples per call.
+    pub tuples: usize,
+    /// Bytes a tuple moves (in + out), the same for both sides.
+    pub bytes_per_tuple: usize,
+    /// The instruction set the engine ran (`avx512`, `avx2+fma`, `scalar`).
+    pub instruction_set: String,
+    /// The engine's worker threads.
+    pub threads: usize,
+    /// The engine's median evaluations per second.
+    pub cpu_evals_per_s: f64,
+    /// The engine's cycles per evaluation (seconds × TSC rate, all threads' wall time).
+    pub cpu_cycles_per_eval: Option<f64>,
+    /// The engine's max relative error against the f64 reference.
+    pub cpu_max_rel_err: f64,
+    /// The peer's median evaluations per second, when it ran.
+    pub peer_evals_per_s: Option<f64>,
+    /// The peer's cycles per evaluation.
+    pub peer_cycles_per_eval: Option<f64>,
+    /// The peer's max relative error against the f64 reference, when it returns values.
+    pub peer_max_rel_err: Option<f64>,
+    /// Engine over peer.
+    pub ratio: Option<f64>,
+    /// Why the peer did not run.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub skipped: Option<String>,
+}
+
+/// The TSC rate in Hz from /proc/cpuinfo's `cpu MHz` (what this VM reports), if it says.
+pub fn tsc_hz() -> Option<f64> {
+    let info = std::fs::read_to_string("/proc/cpuinfo").ok()?;
+    let line = info.lines().find(|l| l.starts_with("cpu MHz"))?;
+    line.split(':')
+        .nth(1)?
+        .trim()
+        .parse::<f64>()
+        .ok()
+        .map(|m| m * 1e6)
+}
+
+/// Median seconds of `repeats` calls of the engine on `local` (one warm-up call first),
+/// evaluating into the same output each time, and that output.
+pub fn time_local(
+    engine: &mut CpuEngine,
+    local: &LocalBatch,
+    materials: &[Material],
+    repeats: usize,
+) -> Result<(f64, Output)> {
+    let request = Request::default();
+    let mut out = Output::default();
+    engine.evaluate_local_into(local, materials, &request, &mut out)?;
+    let mut secs = Vec::with_capacity(repeats);
+    for _ in 0..repeats.max(1) {
+        let t = Instant::now();
+        engine.evaluate_local_into(local, materials, &request, &mut out)?;
+        secs.push(t.elapsed().as_secs_f64());
+    }
+    Ok((median(secs), out))
+}
+
+/// The equal-bytes rows: each Mitsuba scenario at each of `sizes` against the peer (run
+/// with `script` unless `no_peers`), the engine timed before and after the peer (the
+/// median of both runs: the machine may be shared); then 1 → 2 threads on the smallest
+/// size of `mitsuba-ggx`, and Lambert against the copy ceiling at the largest size.
+pub fn rows(
+    script: &Path,
+    sizes: &[usize],
+    repeats: usize,
+    no_peers: bool,
+    progress: &mut dyn FnMut(&str),
+) -> Result<Vec<EqualBytesRow>> {
+    let hz = tsc_hz();
+    let cyc = |evals_per_s: f64| hz.map(|h| h / evals_per_s);
+    let isa = crate::cpu::instruction_set().to_string();
+    let mut engine = CpuEngine::new();
+    let threads = engine.threads();
+    let mut out = Vec::new();
+    let row = |scenario: &str, peer: &str, n: usize, threads: usize, evals: f64, err: f64| {
+        EqualBytesRow {
+            scenario: scenario.into(),
+            peer: peer.into(),
+            tuples: n,
+            bytes_per_tuple: LOCAL_BYTES,
+            instruction_set: isa.clone(),
+            threads,
+            cpu_evals_per_s: evals,
+            cpu_cycles_per_eval: cyc(evals),
+            cpu_max_rel_err: err,
+            peer_evals_per_s: None,
+            peer_cycles_per_eval: None,
+            peer_max_rel_err: None,
+            ratio: None,
+            skipped: None,
+        }
+    };
+    for name in ["mitsuba-beckmann", "mitsuba-ggx"] {
+        let sc = scenarios::by_name(name).expect("the Mitsuba scenarios exist");
+        let ps = sc.peer.expect("the Mitsuba scenarios have a peer");
+        for &n in sizes {
+            let rows_batch = scenarios::batch(&sc, n, 42);
+            let local = scenarios::local_batch(&sc, n, 42).expect("one material, no tangents");
+            progress(&format!("equal bytes: cpu {name} on {n} tuples"));
+            let (before, o) = time_local(&mut engine, &local, &sc.materials, repeats)?;
+            let err = max_rel_err(&rows_batch, &sc.materials, &o.brdf, 20_000);
+            let peer = if no_peers {
+                None
+            } else {
+                progress(&format!("equal bytes: mitsuba {ps} on {n} tuples"));
+                Some(peers::run(script, "mitsuba", ps, &rows_batch, repeats))
+            };
+            let (after, _) = time_local(&mut engine, &local, &sc.materials, repeats)?;
+            let secs = median(vec![before, after]);
+            let mut r = row(name, "mitsuba", n, threads, n as f64 / secs, 0.0);
+            r.cpu_max_rel_err = err;
+            match peer {
+                None => r.skipped = Some("--no-peers".into()),
+                Some(p) => {
+                    r.skipped = p.skipped.clone();
+                    r.peer_evals_per_s = p.evals_per_s;
+                    r.peer_cycles_per_eval = p.evals_per_s.and_then(cyc);
+                    r.peer_max_rel_err = p
+                        .brdf
+                        .as_ref()
+                        .map(|f| max_rel_err(&rows_batch, &sc.materials, f, 20_000));
+                    r.ratio = p.evals_per_s.map(|v| r.cpu_evals_per_s / v);
+                }
+            }
+            out.push(r);
+        }
+    }
+    // 1 → 2 threads where the arithmetic decides: in cache, a microfacet scenario.
+    if let Some(&n) = sizes.iter().min() {
+        let sc = scenarios::by_name("mitsuba-ggx").expect("exists");
+        let local = scenarios::local_batch(&sc, n, 42).expect("local");
+        let rows_batch = scenarios::batch(&sc, n, 42);
+        let mut one = CpuEngine::with_threads(1);
+        let mut two = CpuEngine::with_threads(2);
+        progress(&format!("equal bytes: 1 and 2 threads on {n} tuples"));
+        let (mut s1, mut s2) = (Vec::new(), Vec::new());
+        let mut last = Output::default();
+        for _ in 0..3 {
+            s1.push(time_local(&mut one, &local, &sc.materials, repeats)?.0);
+            let (s, o) = time_local(&mut two, &local, &sc.materials, repeats)?;
+            s2.push(s);
+            last = o;
+        }
+        let (e1, e2) = (n as f64 / median(s1), n as f64 / median(s2));
+        let mut r = row(
+            "mitsuba-ggx",
+            "cpu 1 thread",
+            n,
+            2,
+            e2,
+            max_rel_err(&rows_batch, &sc.materials, &last.brdf, 20_000),
+        );
+        r.peer_evals_per_s = Some(e1);
+        r.peer_cycles_per_eval = cyc(e1);
+        r.ratio = Some(e2 / e1);
+        out.push(r);
+    }
+    // Lambert moves its bytes and little else: against a copy of the same bytes.
+    if let Some(&n) = sizes.iter().max() {
+        let sc = scenarios::by_name("lambert").expect("exists");
+        let local = scenarios::local_batch(&sc, n, 42).expect("local");
+        let rows_batch = scenarios::batch(&sc, n, 42);
+        progress(&format!(
+            "equal bytes: lambert and a copy of {LOCAL_BYTES} B on {n} tuples"
+        ));
+        let (secs, o) = time_local(&mut engine, &local, &sc.materials, repeats)?;
+        // memcpy_ceiling moves (columns + 3) floats a tuple: 6 + 3 = 36 bytes.
+        let copy = memcpy_ceiling(n, 6, repeats);
+        let e = n as f64 / secs;
+        let mut r = row(
+            "lambert",
+            "memcpy",
+            n,
+            threads,
+            e,
+            max_rel_err(&rows_batch, &sc.materials, &o.brdf, 20_000),
+        );
+        r.peer_evals_per_s = Some(copy);
+        r.peer_cycles_per_eval = cyc(copy);
+        r.ratio = Some(e / copy);
+        out.push(r);
+    }
+    Ok(out)
+}
+
+/// The rows as a text table.
+pub fn table(rows: &[EqualBytesRow]) -> String {
+    let mut s = String::from(
+        "equal bytes (36 B a tuple: the engine on the 6-column local form, reused output):\n",
+    );
+    s += &format!(
+        "{:<17} {:<13} {:>9} {:>9} {:>11} {:>9} {:>11} {:>9} {:>7} {:>10} {:>10}\n",
+        "scenario",
+        "vs",
+        "tuples",
+        "isa/thr",
+        "cpu M/s",
+        "cpu cyc",
+        "peer M/s",
+        "peer cyc",
+        "ratio",
+        "cpu err",
+        "peer err"
+    );
+    let f = |x: Option<f64>, scale: f64, prec: usize| {
+        x.map_or("-".to_string(), |v| format!("{:.*}", prec, v * scale))
+    };
+    for r in rows {
+        s += &format!(
+            "{:<17} {:<13} {:>9} {:>9} {:>11.1} {:>9} {:>11} {:>9} {:>7} {:>10.2e} {:>10}{}\n",
+            r.scenario,
+            r.peer,
+            r.tuples,
+            format!("{}/{}", r.instruction_set, r.threads),
+            r.cpu_evals_per_s / 1e6,
+            f(r.cpu_cycles_per_eval, 1.0, 1),
+            f(r.peer_evals_per_s, 1e-6, 1),
+            f(r.peer_cycles_per_eval, 1.0, 1),
+            f(r.ratio, 1.0, 2),
+            r.cpu_max_rel_err,
+            r.peer_max_rel_err
+                .map_or("-".to_string(), |e| format!("{e:.2e}")),
+            r.skipped
+                .as_ref()
+                .map_or(String::new(), |w| format!("  (peer skipped: {w})")),
+        );
+    }
+    s
+}
