@@ -119,6 +119,10 @@ fn tables(backend: &mut dyn vkbrdf::backend::Backend, dir: &std::path::Path) -> 
         spec: ggx,
         grid,
         samples: albedo::DEFAULT_SAMPLES,
+        axes: dfg::Axes::DEFAULT,
+        layout: dfg::Layout::ScaleBias,
+        sampler: albedo::Sampler::Visible,
+        style: None,
         half: false,
         output: dir.join("dfg.exr"),
     };
@@ -126,6 +130,7 @@ fn tables(backend: &mut dyn vkbrdf::backend::Backend, dir: &std::path::Path) -> 
         spec: ggx,
         grid,
         samples: albedo::DEFAULT_SAMPLES,
+        axes: dfg::Axes::DEFAULT,
         half: false,
         output: dir.join("albedo.exr"),
         average: Some(dir.join("albedo-average.exr")),
