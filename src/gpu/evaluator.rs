@@ -13,8 +13,8 @@ pub use timing::{KernelClock, KernelTiming};
 use super::context::{Device, DeviceSelector, ValidationCounter};
 use super::kernel::{Kernels, WORKGROUP_SIZE};
 use super::layout::{
-    descriptor_type, gpu_materials, GpuCounts, GpuMaterial, PushConstants, BINDING_COUNT,
-    BINDING_TUPLE_TEXELS,
+    descriptor_type, gpu_materials, measured_tables, GpuCounts, GpuMaterial, PushConstants,
+    BINDING_COUNT, BINDING_TUPLE_TEXELS,
 };
 use super::memory::{Buffer, MemoryUse, TexelView};
 use super::sync::{CommandPool, DescriptorPool, Fence};
@@ -207,6 +207,11 @@ pub struct VulkanBackend {
     // last the device (Drop waits idle before any of them goes).
     slots: Vec<Slot>,
     materials: Option<Buffer>,
+    /// The MERL tables of the last measured batch ([`BINDING_MERL`](super::layout::BINDING_MERL)),
+    /// uploaded once and kept while the next batch uses the same tables.
+    merl: Option<Buffer>,
+    /// The tables `merl` holds, in order (kept alive, so a pointer match is a table match).
+    merl_tables: Vec<std::sync::Arc<crate::material::merl::MeasuredMerl>>,
     dummy: Buffer,
     /// Owns the slots' descriptor sets (freed with the pool).
     _descriptors: DescriptorPool,
@@ -265,6 +270,8 @@ impl VulkanBackend {
         Ok(VulkanBackend {
             slots,
             materials: None,
+            merl: None,
+            merl_tables: Vec::new(),
             dummy,
             _descriptors: descriptors,
             _commands: commands,
@@ -461,11 +468,6 @@ impl VulkanBackend {
         materials: &[Material],
         features: FeatureSet,
     ) -> Result<Output> {
-        if features.contains(FeatureSet::MEASURED) {
-            return Err(Error::Unsupported(
-                "the batch uses a measured (MERL) material, which the Vulkan kernel does not evaluate; use --backend cpu".into(),
-            ));
-        }
         let n = batch.len();
         let terms = features.contains(FeatureSet::TERMS);
         let mut out = Output::zeroed(n, terms);
@@ -474,6 +476,8 @@ impl VulkanBackend {
             return Ok(out);
         }
         let chunk = self.chunk_tuples(materials.len())?;
+        // Before the pipeline: a device without f64 refuses measured materials here.
+        self.upload_measured(materials)?;
         let pipeline = self.kernels.pipeline(features)?.raw();
         self.upload_materials(&gpu_materials(materials))?;
         let bucketed = features.contains(FeatureSet::BUCKETED);
@@ -599,6 +603,43 @@ impl VulkanBackend {
         Ok(())
     }
 
+    /// Uploads the MERL tables of `materials` ([`measured_tables`]) unless the buffer holds
+    /// exactly these already: a measured material costs one 17.5 MB upload per table, not
+    /// one per batch. Precondition: nothing is pending.
+    fn upload_measured(&mut self, materials: &[Material]) -> Result<()> {
+        debug_assert!(self.slots.iter().all(|s| s.pending.is_none()));
+        let tables = measured_tables(materials);
+        if !tables.is_empty() && !self.float64_frame() {
+            return Err(Error::Unsupported(format!(
+                "measured (MERL) materials need a device with 64-bit floats in shaders \
+                 (shaderFloat64): the bin lookup takes the reference's angles in f64, and \
+                 an f32 atan2 picks the neighbouring bin for about 1 tuple in 10^4; {} runs \
+                 the f32 frame; use --backend cpu",
+                self.device_name()
+            )));
+        }
+        let same = tables.len() == self.merl_tables.len()
+            && tables
+                .iter()
+                .zip(&self.merl_tables)
+                .all(|(a, b)| std::sync::Arc::ptr_eq(a, b));
+        if tables.is_empty() || same {
+            return Ok(());
+        }
+        let per_table = 3 * crate::material::merl::SAMPLES;
+        let bytes = (4 * per_table * tables.len()) as u64;
+        ensure(&self.device, &mut self.merl, bytes, MemoryUse::Upload)?;
+        self.merl_tables.clear();
+        let buffer = self.merl.as_mut().expect("ensured");
+        for (t, table) in tables.iter().enumerate() {
+            // SAFETY: no submitted work is pending (precondition), so the device does not
+            // read the buffer while it is rewritten.
+            unsafe { buffer.write((4 * per_table * t) as u64, &table.values_f32()) };
+        }
+        self.merl_tables = tables;
+        Ok(())
+    }
+
     /// Grows slot `s`'s buffers to the given float counts and points its descriptor set at
     /// the current buffers. Precondition: slot `s` is not pending.
     fn prepare(
@@ -673,6 +714,7 @@ impl VulkanBackend {
             // BINDING_TUPLE_TEXELS: the input again, through its view (written below).
             slot.input.as_ref().expect("ensured"),
             slot.order.as_ref().unwrap_or(&self.dummy),
+            self.merl.as_ref().unwrap_or(&self.dummy),
         ];
         let ids = wanted.map(Buffer::id);
         if ids != slot.bound {

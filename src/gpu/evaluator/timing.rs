@@ -281,6 +281,7 @@ impl VulkanBackend {
                 &self.slots[0].counts,
                 &input,
                 order.as_ref().unwrap_or(&self.dummy),
+                self.merl.as_ref().unwrap_or(&self.dummy),
             ];
             let ids = wanted.map(Buffer::id);
             // Slot 0 has no work in flight between calls, and `one_shot` waited for its own
