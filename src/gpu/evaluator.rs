@@ -212,6 +212,8 @@ pub struct VulkanBackend {
     merl: Option<Buffer>,
     /// The tables `merl` holds, in order (kept alive, so a pointer match is a table match).
     merl_tables: Vec<std::sync::Arc<crate::material::merl::MeasuredMerl>>,
+    /// MERL tables uploaded so far ([`VulkanBackend::measured_uploads`]).
+    merl_uploads: u64,
     dummy: Buffer,
     /// Owns the slots' descriptor sets (freed with the pool).
     _descriptors: DescriptorPool,
@@ -272,6 +274,7 @@ impl VulkanBackend {
             materials: None,
             merl: None,
             merl_tables: Vec::new(),
+            merl_uploads: 0,
             dummy,
             _descriptors: descriptors,
             _commands: commands,
@@ -281,6 +284,12 @@ impl VulkanBackend {
             cancel: crate::cancel::Cancel::new(),
             device,
         })
+    }
+
+    /// How many MERL tables this backend has uploaded: each once while consecutive batches
+    /// use the same tables.
+    pub fn measured_uploads(&self) -> u64 {
+        self.merl_uploads
     }
 
     /// The device's name (e.g. `llvmpipe (LLVM 15.0.6, 256 bits)`).
@@ -636,6 +645,7 @@ impl VulkanBackend {
             // read the buffer while it is rewritten.
             unsafe { buffer.write((4 * per_table * t) as u64, &table.values_f32()) };
         }
+        self.merl_uploads += tables.len() as u64;
         self.merl_tables = tables;
         Ok(())
     }
