@@ -19,7 +19,7 @@ use vkbrdf::material::{parse_materials, presets, Material};
 use vkbrdf::reference::{self, CpuReference};
 use vkbrdf::Error;
 
-/// Tuples per combination in the full conformance test (314 combinations).
+/// Tuples per combination in the full conformance test (316 combinations).
 const TUPLES_PER_COMBINATION: usize = 1000;
 
 /// A validating Vulkan backend, or `None` (after a loud notice) when the machine has no

@@ -12,7 +12,9 @@ use vkbrdf::gpu::{DeviceSelector, VulkanBackend, VulkanOptions};
 #[derive(clap::Args, Debug, Clone)]
 #[command(after_help = "\
 Every legal combination of model, distribution, geometry, Fresnel term, convention and
-anisotropy (314) is evaluated on seeded random tuples (random lengths, cos_i and cos_o at
+anisotropy (314), and measured (MERL) materials with each lookup (merl nearest, merl
+linear: two analytic materials exported to MERL in memory; skipped, with the reason, on a
+device without 64-bit floats), is evaluated on seeded random tuples (random lengths, cos_i and cos_o at
 least 1e-3, roughness at least 0.01, exponents up to 20000) and compared with the f64 CPU
 reference, value by value: the RGB BRDF and the terms D, G, F_r, F_g, F_b, K.
 
