@@ -138,7 +138,12 @@ fn exported(material: &Material, lookup: Lookup) -> Material {
     measured(&data, &source, lookup, &material.name)
 }
 
-fn measured(data: &Arc<MeasuredMerl>, path: &std::path::Path, lookup: Lookup, name: &str) -> Material {
+fn measured(
+    data: &Arc<MeasuredMerl>,
+    path: &std::path::Path,
+    lookup: Lookup,
+    name: &str,
+) -> Material {
     Material {
         name: format!("{name} ({})", lookup.toml_name()),
         model: Model::Measured(Measured {
@@ -226,7 +231,10 @@ fn band_errors(material: &Material) -> Vec<(&'static str, usize, f64, f64, f64, 
         };
         let (l, v) = (dir(&mut rng), dir(&mut rng));
         let theta = l[2].min(v[2]).acos().to_degrees();
-        let Some(b) = bands.iter().position(|&(_, lo, hi)| theta >= lo && theta < hi) else {
+        let Some(b) = bands
+            .iter()
+            .position(|&(_, lo, hi)| theta >= lo && theta < hi)
+        else {
             continue;
         };
         if errs[b].0.len() >= 4000 {
@@ -270,7 +278,9 @@ fn band_errors(material: &Material) -> Vec<(&'static str, usize, f64, f64, f64, 
 fn linear_lookup_beats_nearest_on_exported_materials() {
     for name in ["gold", "shiny-plastic"] {
         let m = presets::preset(name).unwrap().unwrap();
-        eprintln!("{name}: band | samples | nearest median | nearest p99 | linear median | linear p99");
+        eprintln!(
+            "{name}: band | samples | nearest median | nearest p99 | linear median | linear p99"
+        );
         for (label, count, nm, n99, lm, l99) in band_errors(&m) {
             eprintln!("| {label} | {count} | {nm:.2e} | {n99:.2e} | {lm:.2e} | {l99:.2e} |");
             // Where both are at f32 round-off (a plastic's flat diffuse region) they tie.
@@ -296,6 +306,12 @@ fn materials_file_merl_runs_through_parse() {
     )
     .unwrap();
     // At normal incidence and view: bin (0, 0, 0) exactly.
-    let e = reference::evaluate([0.0, 0.0, 1.0], [0.0, 0.0, 1.0], [0.0, 0.0, 1.0], None, &list[0]);
+    let e = reference::evaluate(
+        [0.0, 0.0, 1.0],
+        [0.0, 0.0, 1.0],
+        [0.0, 0.0, 1.0],
+        None,
+        &list[0],
+    );
     assert!((e.brdf[0] - 5.0 * SCALES[0]).abs() < 1e-15, "{:?}", e.brdf);
 }
