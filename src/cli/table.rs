@@ -68,13 +68,16 @@ pub struct MaterialArgs {
 #[command(after_help = "\
 Columns: theta_h = x^2 * 90° (MERL's square-root spacing; --linear: x * 90°); rows:
 theta_d = y * 90°; phi_d = 90°, phi_h = 0, n = +z, t = +x. Layer `brdf` holds R, G, B = f
-in 1/sr; --terms adds layer `terms` with D, G, F.R, F.G, F.B, K. On Vulkan the kernel
+in 1/sr; --terms adds layer `terms` with D, G, F.R, F.G, F.B, K. --png writes the same
+texels as a picture (theta_h across, theta_d down from 0 at the top), pi * f in display
+sRGB: a white Lambertian is white, brighter values are scaled to keep their hue. On Vulkan the kernel
 makes the directions itself (nothing but the material is uploaded; up to 2^24 texels);
 --backend cpu (the native CPU engine) and --backend reference (the f64 reference)
 evaluate host-made directions.
 
 Example:
-  vkbrdf table slice --materials m.toml --material plastic --output plastic.exr --terms")]
+  vkbrdf table slice --materials m.toml --material plastic --output plastic.exr --terms
+  vkbrdf table slice --material gold --output gold.exr --png gold-slice.png")]
 pub struct SliceArgs {
     #[command(flatten)]
     material: MaterialArgs,
@@ -91,6 +94,10 @@ pub struct SliceArgs {
     /// Add the layer `terms` (D, G, F.R, F.G, F.B, K).
     #[arg(long)]
     terms: bool,
+    /// Also write the slice as a PNG: pixel (i, j) = texel (i, j), showing π·f in display
+    /// sRGB (a white Lambertian is white; brighter values keep their hue).
+    #[arg(long, value_name = "S.png")]
+    png: Option<PathBuf>,
     /// Write float16 instead of float32.
     #[arg(long)]
     half: bool,
@@ -219,9 +226,12 @@ pub struct MerlArgs {
 #[command(group(clap::ArgGroup::new("pictures").required(true).multiple(true)))]
 #[command(after_help = "\
 The sphere: orthographic, lit by one directional light from the upper left (irradiance
-pi * exposure: a white Lambertian facing it shows 1), Reinhard tone mapping, sRGB. The
-polar plot: f in the plane of incidence for light at --incidence degrees (solid yellow),
-mirror direction dashed, radius scaled to the largest value; one white curve, or R, G, B.
+pi * exposure), shown in display-referred sRGB: at exposure 1 a white Lambertian's peak is
+1 = white (255), and a brighter pixel is scaled as a whole to keep its hue (a gold highlight
+stays gold). The polar plot: f in the plane of incidence for light at --incidence degrees
+(solid yellow), mirror direction dashed, radius scaled to the largest value (stated in
+1/sr), one white curve or R, G, B; titled with the material and labelled with the view
+angle.
 
 Example:
   vkbrdf table preview --material shiny-plastic --sphere plastic.png \\
@@ -316,7 +326,7 @@ impl MaterialArgs {
 
 /// A checked job of any kind.
 enum Job {
-    Slice(SliceJob),
+    Slice(SliceJob, Option<PathBuf>),
     Albedo(AlbedoJob),
     Dfg(DfgJob),
     Merl(Material, PathBuf),
@@ -334,7 +344,7 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         .with_progress(true)
         .with_cancel(super::cancel());
     match &job {
-        Job::Slice(j) => slice::write(&mut runner, j)?,
+        Job::Slice(j, png) => slice::write_with_png(&mut runner, j, png.as_deref())?,
         Job::Albedo(j) => albedo::write(&mut runner, j)?,
         Job::Dfg(j) => dfg::write(&mut runner, j)?,
         Job::Merl(m, path) => merl::write(&mut runner, m, path)?,
@@ -356,7 +366,7 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
 /// The material a job evaluates, for the jobs that have one.
 fn material_of(job: &Job) -> Option<&Material> {
     match job {
-        Job::Slice(j) => Some(&j.material),
+        Job::Slice(j, _) => Some(&j.material),
         Job::Merl(m, _) => Some(m),
         Job::Preview(j) => Some(&j.material),
         Job::Albedo(_) | Job::Dfg(_) => None,
@@ -380,7 +390,10 @@ fn prepare(kind: &Kind) -> anyhow::Result<(Job, &BackendArgs, Vec<PathBuf>)> {
                 output: a.output.clone(),
             };
             job.check()?;
-            (Job::Slice(job), &a.backend)
+            if let Some(p) = &a.png {
+                vkbrdf::table::check_output(p)?;
+            }
+            (Job::Slice(job, a.png.clone()), &a.backend)
         }
         Kind::Albedo(a) => {
             let job = AlbedoJob {
@@ -449,7 +462,9 @@ fn prepare(kind: &Kind) -> anyhow::Result<(Job, &BackendArgs, Vec<PathBuf>)> {
         }
     };
     let outputs = match &job {
-        Job::Slice(j) => vec![j.output.clone()],
+        Job::Slice(j, png) => std::iter::once(j.output.clone())
+            .chain(png.clone())
+            .collect(),
         Job::Albedo(j) => std::iter::once(j.output.clone())
             .chain(j.average.clone())
             .collect(),
