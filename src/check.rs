@@ -805,6 +805,9 @@ pub fn run(
     Ok(run_with_skips(backend, options, progress)?.0)
 }
 
+/// A combination left out of a run, and why (the backend's message).
+pub type Skipped = (String, String);
+
 /// [`run`], also returning the combinations skipped and why: the measured ones on a backend
 /// that refuses measured materials ([`crate::Error::Unsupported`], a Vulkan device without
 /// f64). Any other error, and an unsupported analytic combination, stops the run.
@@ -812,7 +815,7 @@ pub fn run_with_skips(
     backend: &mut dyn Backend,
     options: &CheckOptions,
     progress: &mut dyn FnMut(&CombinationReport),
-) -> Result<(Vec<CombinationReport>, Vec<(String, String)>)> {
+) -> Result<(Vec<CombinationReport>, Vec<Skipped>)> {
     let mut reports = Vec::new();
     let mut skipped = Vec::new();
     for (i, c) in combinations(options.seed)?.iter().enumerate() {

@@ -48,12 +48,11 @@ fn linear_lookup_interpolates_between_sample_points() {
         let (th, td, pd) = angles(x, y, z);
         let got = t.linear_half_diff(th, td, pd);
         let tri = z.min(180.0 - z);
-        for c in 0..3 {
+        for (c, g) in got.iter().enumerate() {
             let want = expect(x, y, tri, c);
             assert!(
-                (got[c] - want).abs() <= 1e-9 * want,
-                "({x}, {y}, {z}) channel {c}: {} vs {want}",
-                got[c]
+                (g - want).abs() <= 1e-9 * want,
+                "({x}, {y}, {z}) channel {c}: {g} vs {want}"
             );
         }
     }
