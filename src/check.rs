@@ -458,7 +458,7 @@ fn measured_combinations() -> Result<Vec<Combination>> {
 
 /// Every legal combination (see the module docs), with materials drawn from `seed`; the
 /// analytic ones go through the TOML parser, so "legal" means what validation accepts. Last
-/// come the two measured ones ([`measured_combinations`]).
+/// come the two measured ones, `merl nearest` and `merl linear`.
 pub fn combinations(seed: u64) -> Result<Vec<Combination>> {
     let mut out = Vec::new();
     for shape in shapes() {

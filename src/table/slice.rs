@@ -152,7 +152,7 @@ pub fn write(runner: &mut Runner, job: &SliceJob) -> Result<()> {
     write_with_png(runner, job, None)
 }
 
-/// [`write`], and the slice as a PNG at `png` too when given: pixel `(i, j)` is texel
+/// [`write()`], and the slice as a PNG at `png` too when given: pixel `(i, j)` is texel
 /// `(i, j)` (θ_h across, θ_d down, row 0 at θ_d = 0), showing `π·f` through
 /// [`super::preview::display_srgb8`] (a white Lambertian, f = 1/π, is display white; values
 /// above 1 keep their hue). The EXR and the PNG appear together or not at all.
