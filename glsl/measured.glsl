@@ -26,10 +26,13 @@ vec3 merl_rgb(uint table, uint i, uint j, uint k) {
 }
 
 #if !defined(HAS_FLOAT64)
-// The host refuses measured materials on a device without f64 (src/gpu/evaluator.rs,
-// upload_measured): an f32 atan2 cannot choose the reference's bin.
-#error "measured materials need the f64 frame (HAS_FLOAT64)"
-#endif
+// Never dispatched: the host refuses measured materials on a device without f64
+// (src/gpu/evaluator.rs, upload_measured), since an f32 atan2 cannot choose the reference's
+// bin. The variant still compiles (every feature set does), and reads as 0.
+Eval model_measured(Row r, GpuMaterial m) {
+    return eval_zero();
+}
+#else
 
 const double PI64 = 3.14159265358979323846LF;
 
@@ -131,5 +134,6 @@ Eval model_measured(Row r, GpuMaterial m) {
     e.k = 1.0;
     return e;
 }
+#endif
 
 #endif
