@@ -314,3 +314,41 @@ fn materials_file_merl_runs_through_parse() {
     );
     assert!((e.brdf[0] - 5.0 * SCALES[0]).abs() < 1e-15, "{:?}", e.brdf);
 }
+
+/// A measured material's half/difference slice made on the device (the kernel makes the
+/// directions itself) equals the reference's slice, both lookups.
+#[test]
+fn measured_slice_on_vulkan_matches_the_reference() {
+    use vkbrdf::table::slice::{compute, Spacing};
+    use vkbrdf::table::Grid;
+    let Some(mut gpu) = common::vulkan() else {
+        return;
+    };
+    let gold = presets::preset("gold").unwrap().unwrap();
+    let nearest = exported(&gold, Lookup::Nearest);
+    let Model::Measured(d) = &nearest.model else {
+        unreachable!()
+    };
+    let linear = measured(&d.data, &d.path, Lookup::Linear, "gold");
+    let grid = Grid::new(64, 48).unwrap();
+    for m in [&nearest, &linear] {
+        let (want, _) = compute(
+            &mut Runner::new(&mut CpuReference::new()),
+            m,
+            grid,
+            Spacing::Sqrt,
+            false,
+        )
+        .unwrap();
+        let (got, _) = compute(&mut Runner::new(&mut gpu), m, grid, Spacing::Sqrt, false).unwrap();
+        for (k, (g, w)) in got.iter().zip(&want).enumerate() {
+            let err = (f64::from(*g) - f64::from(*w)).abs() / f64::from(w.abs()).max(1e-6);
+            assert!(
+                err <= 1e-5,
+                "{} texel {}: vulkan {g}, reference {w}",
+                m.name,
+                k / 3
+            );
+        }
+    }
+}

@@ -637,14 +637,38 @@ impl VulkanBackend {
         }
         let per_table = 3 * crate::material::merl::SAMPLES;
         let bytes = (4 * per_table * tables.len()) as u64;
-        ensure(&self.device, &mut self.merl, bytes, MemoryUse::Upload)?;
+        // Device-local (VRAM on a discrete GPU), filled once through a staging buffer: every
+        // lookup reads it, up to 24 reads per tuple with the linear lookup.
+        self.merl = None;
         self.merl_tables.clear();
-        let buffer = self.merl.as_mut().expect("ensured");
+        let merl = Buffer::new(&self.device, bytes, MemoryUse::Resident)?;
+        let mut staging = Buffer::new(&self.device, bytes, MemoryUse::Upload)?;
         for (t, table) in tables.iter().enumerate() {
-            // SAFETY: no submitted work is pending (precondition), so the device does not
-            // read the buffer while it is rewritten.
-            unsafe { buffer.write((4 * per_table * t) as u64, &table.values_f32()) };
+            // SAFETY: a fresh host-visible buffer no submitted work uses.
+            unsafe { staging.write((4 * per_table * t) as u64, &table.values_f32()) };
         }
+        self.one_shot(|d, cmd| {
+            let region = [vk::BufferCopy::default().size(bytes)];
+            // The copy's writes made visible to the kernels' reads (later submissions).
+            let barrier = [vk::MemoryBarrier::default()
+                .src_access_mask(vk::AccessFlags::TRANSFER_WRITE)
+                .dst_access_mask(vk::AccessFlags::SHADER_READ)];
+            // SAFETY: recording into slot 0's command buffer (begun by `one_shot`); the
+            // region lies inside both buffers (same size).
+            unsafe {
+                d.cmd_copy_buffer(cmd, staging.raw(), merl.raw(), &region);
+                d.cmd_pipeline_barrier(
+                    cmd,
+                    vk::PipelineStageFlags::TRANSFER,
+                    vk::PipelineStageFlags::COMPUTE_SHADER,
+                    vk::DependencyFlags::empty(),
+                    &barrier,
+                    &[],
+                    &[],
+                );
+            }
+        })?;
+        self.merl = Some(merl);
         self.merl_uploads += tables.len() as u64;
         self.merl_tables = tables;
         Ok(())
