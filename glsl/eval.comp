@@ -745,6 +745,10 @@ uint make_frame(Row r, GpuMaterial m, out Frame f) {
     return STATUS_VALID;
 }
 
+#if defined(HAS_MEASURED)
+#include "measured.glsl"
+#endif
+
 Eval evaluate(Frame f, GpuMaterial m) {
     switch (m.kind.x) {
 #if defined(HAS_LAMBERT)
@@ -885,6 +889,11 @@ void evaluate_row(uint row) {
     Frame f;
     uint status = make_frame(r, m, f);
     Eval e = status == STATUS_VALID ? evaluate(f, m) : eval_zero();
+#if defined(HAS_MEASURED)
+    if (status == STATUS_VALID && m.kind.x == MODEL_MEASURED) {
+        e = model_measured(r, m);
+    }
+#endif
     // FORMULAS.md §1, "Overflow": an output beyond FLT_MAX (here +inf) is stored as FLT_MAX
     // and the tuple counted as saturated. Every output counts, the terms too whether or not
     // they are written, so the count does not depend on the request (as on the reference).

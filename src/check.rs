@@ -7,7 +7,9 @@
 //! anisotropic; cook-torrance for every convention × distribution × anisotropy × geometry ×
 //! fresnel that FORMULAS.md allows ([`crate::material::legality`] decides: `smith*` and
 //! `schlick-smith` only with beckmann/ggx, `smith-fast` with beckmann only, anisotropic
-//! beckmann/ggx in the modern convention only, `schlick-smith` isotropic). 314 in all. Each combination is
+//! beckmann/ggx in the modern convention only, `schlick-smith` isotropic); and `merl
+//! nearest`, `merl linear`: measured materials over two analytic materials exported to MERL
+//! in memory, read by each lookup. 316 in all. Each combination is
 //! one batch over a table of [`MATERIALS_PER_COMBINATION`] materials with seeded random
 //! parameters (one always at the sharpest lobe allowed: roughness 0.01 or exponent 20000).
 //!
@@ -374,8 +376,89 @@ fn shapes() -> Vec<Shape> {
     v
 }
 
-/// Every legal combination (see the module docs), with materials drawn from `seed`.
-/// The materials go through the TOML parser, so "legal" means what validation accepts.
+/// The analytic materials the measured combinations export to MERL (in memory, through
+/// the reference): a glossy coloured conductor over a diffuse base, and a rough dielectric.
+const MEASURED_SOURCES: &str = r#"
+[[material]]
+name = "glossy"
+model = "cook-torrance"
+distribution = "ggx"
+roughness = 0.25
+geometry = "smith-correlated"
+fresnel = "schlick"
+f0 = [0.95, 0.64, 0.27]
+diffuse = [0.3, 0.2, 0.1]
+diffuse_weight = 0.5
+
+[[material]]
+name = "rough"
+model = "cook-torrance"
+distribution = "beckmann"
+roughness = 0.6
+geometry = "smith"
+fresnel = "dielectric"
+ior = 1.5
+diffuse = [0.1, 0.4, 0.2]
+diffuse_weight = 0.8
+"#;
+
+/// The two MERL tables of the measured combinations, exported once per process.
+fn measured_tables() -> Result<Vec<std::sync::Arc<crate::material::merl::MeasuredMerl>>> {
+    use std::sync::{Arc, OnceLock};
+    static TABLES: OnceLock<Vec<Arc<crate::material::merl::MeasuredMerl>>> = OnceLock::new();
+    if let Some(t) = TABLES.get() {
+        return Ok(t.clone());
+    }
+    let mut reference = reference::CpuReference::new();
+    let mut runner = crate::table::Runner::new(&mut reference);
+    let mut tables = Vec::new();
+    for m in parse_materials(MEASURED_SOURCES, "the measured combinations' sources")? {
+        let values = crate::table::merl::compute(&mut runner, &m)?;
+        let source = std::path::PathBuf::from(format!("<{} exported to MERL>", m.name));
+        tables.push(Arc::new(crate::material::merl::MeasuredMerl::from_values(
+            values, &source,
+        )?));
+    }
+    Ok(TABLES.get_or_init(|| tables).clone())
+}
+
+/// `merl nearest` and `merl linear`: [`MATERIALS_PER_COMBINATION`] measured materials over
+/// the two exported tables (so a batch holds two), read by each lookup.
+fn measured_combinations() -> Result<Vec<Combination>> {
+    use crate::material::{merl::Lookup, Measured, Model};
+    let tables = measured_tables()?;
+    Ok([Lookup::Nearest, Lookup::Linear]
+        .into_iter()
+        .map(|lookup| {
+            let name = format!("merl {}", lookup.toml_name());
+            let materials = (0..MATERIALS_PER_COMBINATION)
+                .map(|i| {
+                    let data = tables[i % tables.len()].clone();
+                    Material {
+                        name: format!("{name}#{i}"),
+                        model: Model::Measured(Measured {
+                            path: data.source().to_owned(),
+                            data,
+                            lookup,
+                        }),
+                        diffuse: [0.0; 3],
+                        specular: [1.0; 3],
+                        precision: crate::material::precision::Precision::Exact,
+                    }
+                })
+                .collect();
+            Combination {
+                name,
+                materials,
+                anisotropic: false,
+            }
+        })
+        .collect())
+}
+
+/// Every legal combination (see the module docs), with materials drawn from `seed`; the
+/// analytic ones go through the TOML parser, so "legal" means what validation accepts. Last
+/// come the two measured ones, `merl nearest` and `merl linear`.
 pub fn combinations(seed: u64) -> Result<Vec<Combination>> {
     let mut out = Vec::new();
     for shape in shapes() {
@@ -399,6 +482,7 @@ pub fn combinations(seed: u64) -> Result<Vec<Combination>> {
             anisotropic: shape.anisotropic,
         });
     }
+    out.extend(measured_combinations()?);
     Ok(out)
 }
 
@@ -711,13 +795,29 @@ pub fn check_combination(
 }
 
 /// Checks every combination of [`combinations`] (or those `options.only` selects) on
-/// `backend`, calling `progress` after each.
+/// `backend`, calling `progress` after each. A combination the backend does not support
+/// ([`run_with_skips`]) is left out.
 pub fn run(
     backend: &mut dyn Backend,
     options: &CheckOptions,
     progress: &mut dyn FnMut(&CombinationReport),
 ) -> Result<Vec<CombinationReport>> {
+    Ok(run_with_skips(backend, options, progress)?.0)
+}
+
+/// A combination left out of a run, and why (the backend's message).
+pub type Skipped = (String, String);
+
+/// [`run`], also returning the combinations skipped and why: the measured ones on a backend
+/// that refuses measured materials ([`crate::Error::Unsupported`], a Vulkan device without
+/// f64). Any other error, and an unsupported analytic combination, stops the run.
+pub fn run_with_skips(
+    backend: &mut dyn Backend,
+    options: &CheckOptions,
+    progress: &mut dyn FnMut(&CombinationReport),
+) -> Result<(Vec<CombinationReport>, Vec<Skipped>)> {
     let mut reports = Vec::new();
+    let mut skipped = Vec::new();
     for (i, c) in combinations(options.seed)?.iter().enumerate() {
         if options
             .only
@@ -726,16 +826,26 @@ pub fn run(
         {
             continue;
         }
-        let r = check_combination(
+        let measured = c
+            .materials
+            .iter()
+            .any(|m| matches!(m.model, crate::material::Model::Measured(_)));
+        let r = match check_combination(
             backend,
             c,
             options.tuples,
             options.seed.wrapping_add(i as u64),
-        )?;
+        ) {
+            Err(crate::Error::Unsupported(why)) if measured => {
+                skipped.push((c.name.clone(), why));
+                continue;
+            }
+            r => r?,
+        };
         progress(&r);
         reports.push(r);
     }
-    Ok(reports)
+    Ok((reports, skipped))
 }
 
 #[cfg(test)]
@@ -744,13 +854,16 @@ mod tests {
     use crate::reference::CpuReference;
 
     #[test]
-    fn there_are_314_legal_combinations_and_all_parse() {
+    fn there_are_316_legal_combinations_and_all_parse() {
         // Per convention, G per distribution (isotropic): gaussian, blinn and charlie 3
         // (none, cook-torrance, neubelt); beckmann 7 (those, smith, smith-correlated,
         // smith-fast, schlick-smith); ggx 6 (no smith-fast). Modern adds anisotropic
-        // beckmann 6 and ggx 5 (no schlick-smith). Times 4 Fresnel terms, plus 6 plain.
+        // beckmann 6 and ggx 5 (no schlick-smith). Times 4 Fresnel terms, plus 6 plain,
+        // plus the 2 measured lookups.
         let c = combinations(1).unwrap();
-        assert_eq!(c.len(), 6 + 4 * (2 * 22 + (22 + 11)));
+        assert_eq!(c.len(), 6 + 4 * (2 * 22 + (22 + 11)) + 2);
+        assert!(c.iter().any(|c| c.name == "merl nearest"));
+        assert!(c.iter().any(|c| c.name == "merl linear"));
         assert_eq!(c.iter().filter(|c| c.anisotropic).count(), 1 + 4 * 11);
         let has = |name: &str| c.iter().any(|c| c.name == name);
         assert!(has("cook-torrance seed charlie neubelt none"));

@@ -71,7 +71,7 @@ features! {
     LAMBDA_BECKMANN = 23, "HAS_LAMBDA_BECKMANN";
     /// Smith–GGX Λ.
     LAMBDA_GGX = 24, "HAS_LAMBDA_GGX";
-    /// A measured (MERL) material: evaluated by the CPU reference only.
+    /// A measured (MERL) material: the kernel looks its table up (BINDING_MERL).
     MEASURED = 25, "HAS_MEASURED";
     /// The kernel makes its own directions: the half/difference slice grid of
     /// `table slice`, from the push constants (no tuple is read).
@@ -98,8 +98,8 @@ impl FeatureSet {
     pub const EMPTY: FeatureSet = FeatureSet(0);
 
     /// Every kernel feature (the all-features kernel, the baseline of the specialisation
-    /// measurement). `MEASURED` is not a kernel feature: measured materials are evaluated
-    /// by the CPU reference; `GENERATED_SLICE`, `GENERATED_IMPORTANCE` and `BUCKETED` are input modes and `FAST_MATH` a precision
+    /// measurement). `MEASURED` is left out: a measured material needs its table bound,
+    /// which only a batch that has one uploads; `GENERATED_SLICE`, `GENERATED_IMPORTANCE` and `BUCKETED` are input modes and `FAST_MATH` a precision
     /// variant, not features.
     pub fn all() -> FeatureSet {
         FeatureSet::ALL_NAMED

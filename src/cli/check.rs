@@ -12,7 +12,9 @@ use vkbrdf::gpu::{DeviceSelector, VulkanBackend, VulkanOptions};
 #[derive(clap::Args, Debug, Clone)]
 #[command(after_help = "\
 Every legal combination of model, distribution, geometry, Fresnel term, convention and
-anisotropy (314) is evaluated on seeded random tuples (random lengths, cos_i and cos_o at
+anisotropy (314), and measured (MERL) materials with each lookup (merl nearest, merl
+linear: two analytic materials exported to MERL in memory; skipped, with the reason, on a
+device without 64-bit floats), is evaluated on seeded random tuples (random lengths, cos_i and cos_o at
 least 1e-3, roughness at least 0.01, exponents up to 20000) and compared with the f64 CPU
 reference, value by value: the RGB BRDF and the terms D, G, F_r, F_g, F_b, K.
 
@@ -65,6 +67,10 @@ pub struct Args {
     /// (also enabled by VKBRDF_VALIDATION=1).
     #[arg(long)]
     pub validation: bool,
+    /// Print the summary as JSON on standard output (every combination's figures, the
+    /// skipped ones, the totals); the table goes to standard error.
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// Runs `vkbrdf check`.
@@ -97,24 +103,37 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         seed: args.seed,
         only: args.filter.clone(),
     };
-    outln!("backend:   {}", gpu.name());
-    outln!("reference: cpu-reference (f64)");
-    outln!("tolerance: {}", check::tolerance());
-    outln!();
-    outln!("{}", CombinationReport::header());
+    // With --json the prose goes to standard error, the JSON alone to standard output.
+    let json = args.json;
+    let say = |line: String| {
+        if json {
+            eprintln!("{line}");
+        } else {
+            outln!("{line}");
+        }
+    };
+    let backend_name = gpu.name();
+    say(format!("backend:   {backend_name}"));
+    say("reference: cpu-reference (f64)".into());
+    say(format!("tolerance: {}", check::tolerance()));
+    say(String::new());
+    say(CombinationReport::header());
     let t0 = Instant::now();
     let verbose = args.verbose;
-    let reports = check::run(gpu.as_mut(), &check_options, &mut |r| {
-        outln!("{}", r.row());
+    let (reports, skipped) = check::run_with_skips(gpu.as_mut(), &check_options, &mut |r| {
+        say(r.row());
         if verbose || !r.pass() {
             if let Some(w) = &r.worst {
-                outln!("{w}");
+                say(w.to_string());
             }
         }
     })?;
     let elapsed = t0.elapsed().as_secs_f64();
     drop(gpu);
-    if reports.is_empty() {
+    for (name, why) in &skipped {
+        say(format!("{name:<54} skipped: {why}"));
+    }
+    if reports.is_empty() && skipped.is_empty() {
         anyhow::bail!("--filter {:?} matches no combination (names look like `cook-torrance modern ggx-aniso smith conductor`)", args.filter.as_deref().unwrap_or(""));
     }
     let failed = reports.iter().filter(|r| !r.pass()).count();
@@ -127,25 +146,79 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         .iter()
         .map(|r| r.max_rel_well_conditioned)
         .fold(0.0, f64::max);
-    outln!();
-    outln!(
-        "{} combinations × {} tuples in {elapsed:.1} s: {} pass, {failed} fail; most tolerance used {max_used:.3}",
+    say(String::new());
+    let skipped_note = if skipped.is_empty() {
+        String::new()
+    } else {
+        format!(", {} skipped", skipped.len())
+    };
+    say(format!(
+        "{} combinations × {} tuples in {elapsed:.1} s: {} pass, {failed} fail{skipped_note}; most tolerance used {max_used:.3}",
         reports.len(),
         args.tuples,
         reports.len() - failed
-    );
-    outln!(
+    ));
+    say(format!(
         "saturated tuples (an output beyond f32::MAX, stored as f32::MAX): {} (reference {})",
-        saturated.0,
-        saturated.1
-    );
-    outln!("largest relative error {max_rel:.2e} overall, {well:.2e} where f32 inputs determine the value well");
+        saturated.0, saturated.1
+    ));
+    say(format!("largest relative error {max_rel:.2e} overall, {well:.2e} where f32 inputs determine the value well"));
     let messages = counter.as_ref().map_or(0, |c| c.count());
     if let Some(counter) = counter.as_ref().filter(|_| messages > 0) {
-        outln!(
+        say(format!(
             "validation layer: {messages} warning(s)/error(s); the first:\n{}",
             counter.messages().join("\n")
-        );
+        ));
+    }
+    if json {
+        let combinations: Vec<serde_json::Value> = reports
+            .iter()
+            .map(|r| {
+                serde_json::json!({
+                    "name": r.combination,
+                    "tuples": r.tuples,
+                    "pass": r.pass(),
+                    "max_rel": r.max_rel,
+                    "p99_rel": r.p99_rel,
+                    "column_max_rel": check::COLUMNS.iter().zip(r.column_max)
+                        .map(|(c, x)| (c.to_string(), serde_json::json!(x)))
+                        .collect::<serde_json::Map<_, _>>(),
+                    "tolerance_used": r.max_used,
+                    "max_rel_well_conditioned": r.max_rel_well_conditioned,
+                    "counts_match": r.counts_match,
+                    "saturated": {"backend": r.saturated.0, "reference": r.saturated.1},
+                    "worst": r.worst.as_ref().map(|w| serde_json::json!({
+                        "row": w.row,
+                        "column": w.column,
+                        "value": w.value,
+                        "reference": w.reference,
+                        "allowed": w.allowed,
+                        "material": w.material.name,
+                    })),
+                })
+            })
+            .collect();
+        let doc = serde_json::json!({
+            "backend": backend_name,
+            "reference": "cpu-reference (f64)",
+            "tolerance": check::tolerance(),
+            "tuples_per_combination": args.tuples,
+            "seed": args.seed,
+            "seconds": elapsed,
+            "combinations": combinations,
+            "skipped": skipped.iter().map(|(name, why)| serde_json::json!({
+                "name": name, "reason": why,
+            })).collect::<Vec<_>>(),
+            "passed": reports.len() - failed,
+            "failed": failed,
+            "saturated": {"backend": saturated.0, "reference": saturated.1},
+            "max_rel": max_rel,
+            "max_rel_well_conditioned": well,
+            "most_tolerance_used": max_used,
+            "validation_messages": messages,
+            "ok": failed == 0 && messages == 0,
+        });
+        outln!("{}", serde_json::to_string_pretty(&doc)?);
     }
     Ok(if failed == 0 && messages == 0 {
         ExitCode::SUCCESS

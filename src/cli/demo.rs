@@ -151,6 +151,10 @@ fn tables(backend: &mut dyn vkbrdf::backend::Backend, dir: &std::path::Path) -> 
         spec: ggx,
         grid,
         samples: albedo::DEFAULT_SAMPLES,
+        axes: dfg::Axes::DEFAULT,
+        layout: dfg::Layout::ScaleBias,
+        sampler: albedo::Sampler::Visible,
+        style: None,
         half: false,
         output: dir.join("dfg.exr"),
     };
@@ -158,6 +162,7 @@ fn tables(backend: &mut dyn vkbrdf::backend::Backend, dir: &std::path::Path) -> 
         spec: ggx,
         grid,
         samples: albedo::DEFAULT_SAMPLES,
+        axes: dfg::Axes::DEFAULT,
         half: false,
         output: dir.join("albedo.exr"),
         average: Some(dir.join("albedo-average.exr")),
@@ -202,10 +207,10 @@ fn tables(backend: &mut dyn vkbrdf::backend::Backend, dir: &std::path::Path) -> 
         t.elapsed().as_secs_f64()
     );
     let t = Instant::now();
-    slice::write(&mut runner, &slice_job)?;
+    slice::write_with_png(&mut runner, &slice_job, Some(&dir.join("slice-gold.png")))?;
     outln!(
-        "  {:<32} {:>6.2} s  gold, f(θ_h, θ_d) at φ_d = 90°, 90×90, with terms",
-        "slice-gold.exr",
+        "  {:<32} {:>6.2} s  gold, f(θ_h, θ_d) at φ_d = 90°, 90×90, with terms, and as a picture",
+        "slice-gold.exr, slice-gold.png",
         t.elapsed().as_secs_f64()
     );
     let t = Instant::now();

@@ -130,17 +130,9 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         .chain(sidecar.as_deref())
         .collect();
     vkbrdf::atomic::check_outputs(&outputs, &inputs)?;
-    let measured = materials
-        .iter()
-        .any(|m| matches!(m.model, vkbrdf::material::Model::Measured(_)));
-    let mut backend = if measured && args.backend.backend.is_none() {
-        eprintln!("note: measured (MERL) materials are evaluated by the CPU reference");
-        let mut reference = Box::new(vkbrdf::reference::CpuReference::new());
-        vkbrdf::backend::Backend::set_cancel(reference.as_mut(), cancel.clone());
-        reference
-    } else {
-        backend_choice::open(&args.backend)?
-    };
+    // Measured (MERL) materials run on every backend: the Vulkan kernel looks their
+    // tables up on the device.
+    let mut backend = backend_choice::open(&args.backend)?;
     let job = stream::StreamJob {
         input: &args.input,
         material: args.material.as_deref(),

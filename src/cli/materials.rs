@@ -32,8 +32,9 @@ use vkbrdf::material::{self, Distribution, Fresnel, Material, Model, Roughness};
 
   [[material]]
   name = "measured"
-  model = "merl"              # measured data (CPU reference only)
+  model = "merl"              # measured data (every backend)
   file = "gold.binary"        # a MERL binary, relative to this file
+  lookup = "nearest"          # nearest (default: MERL's own bin lookup) | linear
 
 Keys a model does not read are errors, as are negative colours or weights, roughness <= 0,
 smith* or schlick-smith with gaussian/blinn/charlie, smith-fast with anything but beckmann,

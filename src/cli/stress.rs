@@ -52,6 +52,10 @@ pub struct Args {
     pub precision: super::eval::PrecisionArg,
     #[command(flatten)]
     pub device: DeviceArgs,
+    /// Print the summary as JSON on standard output (per backend: the counts, the policy,
+    /// the error per quantity and regime); the Markdown goes to standard error.
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// Runs `vkbrdf stress`.
@@ -87,6 +91,7 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
     };
     let mut md = String::from("## Stress report\n\n");
     let mut ok = true;
+    let mut json = Vec::new();
     for mut backend in backends {
         let bar = ProgressBar::new(args.tuples as u64).with_style(
             ProgressStyle::with_template(
@@ -105,7 +110,12 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         )?;
         bar.finish_and_clear();
         let section = report.to_markdown(args.target);
-        outln!("{section}");
+        if args.json {
+            eprintln!("{section}");
+            json.push(report_json(&report, args.target));
+        } else {
+            outln!("{section}");
+        }
         md += &section;
         md += "\n";
         if !report.policy_holds() {
@@ -116,9 +126,54 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
     if let Some(path) = &args.report {
         vkbrdf::atomic::write(path, |w| std::io::Write::write_all(w, md.as_bytes()))?;
     }
+    if args.json {
+        let doc = serde_json::json!({
+            "tuples": args.tuples,
+            "seed": args.seed,
+            "precision": format!("{:?}", args.precision).to_lowercase(),
+            "target": args.target,
+            "backends": json,
+            "ok": ok,
+        });
+        outln!("{}", serde_json::to_string_pretty(&doc)?);
+    }
     Ok(if ok {
         ExitCode::SUCCESS
     } else {
         ExitCode::from(1)
+    })
+}
+
+/// One backend's stress report as JSON: the counts beside the reference's, the policy, and
+/// the relative error (max, p99, count, and whether within `target`) per quantity and
+/// regime.
+fn report_json(r: &vkbrdf::stress::StressReport, target: f64) -> serde_json::Value {
+    let pair = |(backend, reference): (u64, u64)| serde_json::json!({"backend": backend, "reference": reference});
+    let errors: Vec<serde_json::Value> = r
+        .errors
+        .iter()
+        .map(|((quantity, regime), e)| {
+            serde_json::json!({
+                "quantity": quantity,
+                "regime": regime.label(),
+                "values": e.count,
+                "max_rel": e.max,
+                "p99_rel": e.p99(),
+                "within_target": e.max <= target,
+            })
+        })
+        .collect();
+    serde_json::json!({
+        "backend": r.backend,
+        "tuples": r.tuples,
+        "non_finite": r.non_finite,
+        "invalid": pair(r.invalid),
+        "below_horizon": pair(r.below_horizon),
+        "saturated": pair(r.saturated),
+        "exact": r.exact,
+        "nonzero_rejects": r.nonzero_rejects,
+        "ambiguous_horizon": r.ambiguous_horizon,
+        "policy_holds": r.policy_holds(),
+        "errors": errors,
     })
 }

@@ -6,8 +6,9 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
 use vkbrdf::material::{DistributionKind, Geometry, Material};
+use vkbrdf::table::albedo::Sampler;
 use vkbrdf::table::albedo::{self, AlbedoJob, Lobe, Microfacet};
-use vkbrdf::table::dfg::{self, DfgJob};
+use vkbrdf::table::dfg::{self, Axes, DfgJob, Layout, LutStyle, RoughnessAxis, Sampling};
 use vkbrdf::table::preview::{self, PreviewJob};
 use vkbrdf::table::slice::{self, SliceJob, Spacing};
 use vkbrdf::table::{merl, Grid, Runner};
@@ -67,13 +68,16 @@ pub struct MaterialArgs {
 #[command(after_help = "\
 Columns: theta_h = x^2 * 90° (MERL's square-root spacing; --linear: x * 90°); rows:
 theta_d = y * 90°; phi_d = 90°, phi_h = 0, n = +z, t = +x. Layer `brdf` holds R, G, B = f
-in 1/sr; --terms adds layer `terms` with D, G, F.R, F.G, F.B, K. On Vulkan the kernel
+in 1/sr; --terms adds layer `terms` with D, G, F.R, F.G, F.B, K. --png writes the same
+texels as a picture (theta_h across, theta_d down from 0 at the top), pi * f in display
+sRGB: a white Lambertian is white, brighter values are scaled to keep their hue. On Vulkan the kernel
 makes the directions itself (nothing but the material is uploaded; up to 2^24 texels);
 --backend cpu (the native CPU engine) and --backend reference (the f64 reference)
 evaluate host-made directions.
 
 Example:
-  vkbrdf table slice --materials m.toml --material plastic --output plastic.exr --terms")]
+  vkbrdf table slice --materials m.toml --material plastic --output plastic.exr --terms
+  vkbrdf table slice --material gold --output gold.exr --png gold-slice.png")]
 pub struct SliceArgs {
     #[command(flatten)]
     material: MaterialArgs,
@@ -90,6 +94,10 @@ pub struct SliceArgs {
     /// Add the layer `terms` (D, G, F.R, F.G, F.B, K).
     #[arg(long)]
     terms: bool,
+    /// Also write the slice as a PNG: pixel (i, j) = texel (i, j), showing π·f in display
+    /// sRGB (a white Lambertian is white; brighter values keep their hue).
+    #[arg(long, value_name = "S.png")]
+    png: Option<PathBuf>,
     /// Write float16 instead of float32.
     #[arg(long)]
     half: bool,
@@ -103,19 +111,29 @@ pub struct ModelArgs {
     /// Microfacet distribution (the integrators importance-sample ggx and beckmann only).
     #[arg(long, default_value = "ggx", value_parser = distribution_parser())]
     distribution: DistributionKind,
-    /// Geometric attenuation (smith-fast needs beckmann).
+    /// Geometric attenuation (smith-fast needs beckmann; schlick-smith uses k = α/2 with
+    /// ggx, k = m·sqrt(2/π) with beckmann).
     #[arg(long, default_value = "smith-correlated", value_parser = geometry_parser())]
     geometry: Geometry,
-    /// Table size WxH (or N): x = μ = cos_o, y = α, at texel centres.
-    #[arg(long, value_name = "WxH", default_value = "32x32", value_parser = parse_grid,
-          allow_negative_numbers = true)]
-    size: Grid,
-    /// Quasi-Monte Carlo samples per texel, 1 to 2^26 (accuracy ≤ 1e-4 at the default;
-    /// see --help).
-    #[arg(long, value_name = "N", default_value_t = albedo::DEFAULT_SAMPLES,
-          allow_negative_numbers = true,
+    /// What the y axis holds: alpha (y = α) or perceptual roughness r (α = r², as UE4
+    /// and Filament index their LUTs).
+    #[arg(long, value_name = "AXIS", default_value = "alpha",
+          value_parser = clap::builder::PossibleValuesParser::new(["alpha", "perceptual"]))]
+    roughness_axis: String,
+    /// Where texels sit: centres (x = (i + 0.5)/W) or endpoints (x = i/(W - 1), both 0
+    /// and 1 included; the 0 ends hold the limits, evaluated at 2^-10).
+    #[arg(long, value_name = "WHERE", default_value = "centres",
+          value_parser = clap::builder::PossibleValuesParser::new(["centres", "endpoints"]))]
+    sampling: String,
+    /// Table size WxH (or N): x = μ = cos_o, y = roughness [default: 32x32; Filament's
+    /// 128x128 with --lut-style filament].
+    #[arg(long, value_name = "WxH", value_parser = parse_grid, allow_negative_numbers = true)]
+    size: Option<Grid>,
+    /// Quasi-Monte Carlo samples per texel, 1 to 2^26 [default: 65536, accuracy ≤ 1e-4
+    /// (see --help); 1024 with --lut-style, the engines' count].
+    #[arg(long, value_name = "N", allow_negative_numbers = true,
           value_parser = super::ranges::integer::<u32>(1, 1 << 26))]
-    samples: u32,
+    samples: Option<u32>,
     /// Write float16 instead of float32.
     #[arg(long)]
     half: bool,
@@ -150,14 +168,34 @@ pub struct AlbedoArgs {
 #[derive(clap::Args, Debug)]
 #[command(after_help = "\
 A = integral of f/F (1 - (1 - c)^5) cos_i, B = integral of f/F (1 - c)^5 cos_i, c = v.h,
-so that E = F0 * A + B under Schlick's Fresnel; channel R = A, G = B; x = mu, y = alpha.
-Same integrator and accuracy as `table albedo`.
+so that E = F0 * A + B under Schlick's Fresnel; channel R = A, G = B; x = mu, y = alpha
+(or r with --roughness-axis perceptual). Same integrator and accuracy as `table albedo`.
 
-Example:
-  vkbrdf table dfg --size 64x64 --output dfg.exr --half")]
+--lut-style ENGINE writes the engine's own LUT, with its published choices and its own
+estimator (GGX sampled by D cos_h from the Hammersley points (k/N, radical inverse), as
+its generator does, so the table matches the engine's texel for texel, its 1024-sample
+noise included; give --samples for more):
+  ue4       Karis 2013 `IntegrateBRDF`: x = NoV, y = Roughness (alpha = r^2), texel
+            centres, schlick-smith (k = alpha/2), R = A, G = B, 1024 samples.
+  filament  CubemapIBL::DFG, multiscatter layout: x = NoV at centres, row j <-> r =
+            min(1, (H - j + 0.5)/H) (row 0 roughest, Filament's rows), smith-correlated,
+            R = B, G = A + B (E = mix(R, G, F0)), 1024 samples, 128x128.
+tests/lut_reference.py re-implements both generators; tests/lut_styles.rs holds the
+tables to them within 1e-3 per texel.
+
+Examples:
+  vkbrdf table dfg --size 64x64 --output dfg.exr --half
+  vkbrdf table dfg --lut-style ue4 --size 128x32 --output ue4-dfg.exr
+  vkbrdf table dfg --roughness-axis perceptual --sampling endpoints --geometry schlick-smith \\
+      --output dfg.exr")]
 pub struct DfgArgs {
     #[command(flatten)]
     model: ModelArgs,
+    /// An engine's LUT conventions (axes, geometry, channels, samples, estimator).
+    #[arg(long, value_name = "ENGINE",
+          value_parser = clap::builder::PossibleValuesParser::new(["ue4", "filament"]),
+          conflicts_with_all = ["distribution", "geometry", "roughness_axis", "sampling"])]
+    lut_style: Option<String>,
     /// Output EXR (channels R = A, G = B).
     #[arg(long, short = 'o', value_name = "DFG.exr")]
     output: PathBuf,
@@ -188,9 +226,12 @@ pub struct MerlArgs {
 #[command(group(clap::ArgGroup::new("pictures").required(true).multiple(true)))]
 #[command(after_help = "\
 The sphere: orthographic, lit by one directional light from the upper left (irradiance
-pi * exposure: a white Lambertian facing it shows 1), Reinhard tone mapping, sRGB. The
-polar plot: f in the plane of incidence for light at --incidence degrees (solid yellow),
-mirror direction dashed, radius scaled to the largest value; one white curve, or R, G, B.
+pi * exposure), shown in display-referred sRGB: at exposure 1 a white Lambertian's peak is
+1 = white (255), and a brighter pixel is scaled as a whole to keep its hue (a gold highlight
+stays gold). The polar plot: f in the plane of incidence for light at --incidence degrees
+(solid yellow), mirror direction dashed, radius scaled to the largest value (stated in
+1/sr), one white curve or R, G, B; titled with the material and labelled with the view
+angle.
 
 Example:
   vkbrdf table preview --material shiny-plastic --sphere plastic.png \\
@@ -248,6 +289,30 @@ impl ModelArgs {
             geometry: self.geometry,
         })
     }
+
+    fn axes(&self) -> Axes {
+        Axes {
+            roughness: match self.roughness_axis.as_str() {
+                "perceptual" => RoughnessAxis::Perceptual,
+                _ => RoughnessAxis::Alpha,
+            },
+            sampling: match self.sampling.as_str() {
+                "endpoints" => Sampling::Endpoints,
+                _ => Sampling::Centres,
+            },
+        }
+    }
+
+    fn size(&self) -> Grid {
+        self.size.unwrap_or(Grid {
+            width: 32,
+            height: 32,
+        })
+    }
+
+    fn samples(&self) -> u32 {
+        self.samples.unwrap_or(albedo::DEFAULT_SAMPLES)
+    }
 }
 
 impl MaterialArgs {
@@ -261,7 +326,7 @@ impl MaterialArgs {
 
 /// A checked job of any kind.
 enum Job {
-    Slice(SliceJob),
+    Slice(SliceJob, Option<PathBuf>),
     Albedo(AlbedoJob),
     Dfg(DfgJob),
     Merl(Material, PathBuf),
@@ -279,7 +344,7 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         .with_progress(true)
         .with_cancel(super::cancel());
     match &job {
-        Job::Slice(j) => slice::write(&mut runner, j)?,
+        Job::Slice(j, png) => slice::write_with_png(&mut runner, j, png.as_deref())?,
         Job::Albedo(j) => albedo::write(&mut runner, j)?,
         Job::Dfg(j) => dfg::write(&mut runner, j)?,
         Job::Merl(m, path) => merl::write(&mut runner, m, path)?,
@@ -301,7 +366,7 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
 /// The material a job evaluates, for the jobs that have one.
 fn material_of(job: &Job) -> Option<&Material> {
     match job {
-        Job::Slice(j) => Some(&j.material),
+        Job::Slice(j, _) => Some(&j.material),
         Job::Merl(m, _) => Some(m),
         Job::Preview(j) => Some(&j.material),
         Job::Albedo(_) | Job::Dfg(_) => None,
@@ -325,13 +390,17 @@ fn prepare(kind: &Kind) -> anyhow::Result<(Job, &BackendArgs, Vec<PathBuf>)> {
                 output: a.output.clone(),
             };
             job.check()?;
-            (Job::Slice(job), &a.backend)
+            if let Some(p) = &a.png {
+                vkbrdf::table::check_output(p)?;
+            }
+            (Job::Slice(job, a.png.clone()), &a.backend)
         }
         Kind::Albedo(a) => {
             let job = AlbedoJob {
                 spec: a.model.spec()?,
-                grid: a.model.size,
-                samples: a.model.samples,
+                grid: a.model.size(),
+                samples: a.model.samples(),
+                axes: a.model.axes(),
                 half: a.model.half,
                 output: a.output.clone(),
                 average: a.average.clone(),
@@ -340,12 +409,36 @@ fn prepare(kind: &Kind) -> anyhow::Result<(Job, &BackendArgs, Vec<PathBuf>)> {
             (Job::Albedo(job), &a.model.backend)
         }
         Kind::Dfg(a) => {
-            let job = DfgJob {
-                spec: a.model.spec()?,
-                grid: a.model.size,
-                samples: a.model.samples,
-                half: a.model.half,
-                output: a.output.clone(),
+            let style = a.lut_style.as_deref().map(|s| match s {
+                "filament" => LutStyle::Filament,
+                _ => LutStyle::Ue4,
+            });
+            let job = match style {
+                None => DfgJob {
+                    spec: a.model.spec()?,
+                    grid: a.model.size(),
+                    samples: a.model.samples(),
+                    axes: a.model.axes(),
+                    layout: Layout::ScaleBias,
+                    sampler: Sampler::Visible,
+                    style: None,
+                    half: a.model.half,
+                    output: a.output.clone(),
+                },
+                Some(style) => DfgJob {
+                    spec: Microfacet {
+                        lobe: Lobe::Ggx,
+                        geometry: style.geometry(),
+                    },
+                    grid: a.model.size.or(style.size()).unwrap_or(a.model.size()),
+                    samples: a.model.samples.unwrap_or(style.samples()),
+                    axes: style.axes(),
+                    layout: style.layout(),
+                    sampler: Sampler::Engine,
+                    style: Some(style),
+                    half: a.model.half,
+                    output: a.output.clone(),
+                },
             };
             job.check()?;
             (Job::Dfg(job), &a.model.backend)
@@ -369,7 +462,9 @@ fn prepare(kind: &Kind) -> anyhow::Result<(Job, &BackendArgs, Vec<PathBuf>)> {
         }
     };
     let outputs = match &job {
-        Job::Slice(j) => vec![j.output.clone()],
+        Job::Slice(j, png) => std::iter::once(j.output.clone())
+            .chain(png.clone())
+            .collect(),
         Job::Albedo(j) => std::iter::once(j.output.clone())
             .chain(j.average.clone())
             .collect(),

@@ -13,8 +13,8 @@ pub use timing::{KernelClock, KernelTiming};
 use super::context::{Device, DeviceSelector, ValidationCounter};
 use super::kernel::{Kernels, WORKGROUP_SIZE};
 use super::layout::{
-    descriptor_type, gpu_materials, GpuCounts, GpuMaterial, PushConstants, BINDING_COUNT,
-    BINDING_TUPLE_TEXELS,
+    descriptor_type, gpu_materials, measured_tables, GpuCounts, GpuMaterial, PushConstants,
+    BINDING_COUNT, BINDING_TUPLE_TEXELS,
 };
 use super::memory::{Buffer, MemoryUse, TexelView};
 use super::sync::{CommandPool, DescriptorPool, Fence};
@@ -224,6 +224,13 @@ pub struct VulkanBackend {
     // last the device (Drop waits idle before any of them goes).
     slots: Vec<Slot>,
     materials: Option<Buffer>,
+    /// The MERL tables of the last measured batch ([`BINDING_MERL`](super::layout::BINDING_MERL)),
+    /// uploaded once and kept while the next batch uses the same tables.
+    merl: Option<Buffer>,
+    /// The tables `merl` holds, in order (kept alive, so a pointer match is a table match).
+    merl_tables: Vec<std::sync::Arc<crate::material::merl::MeasuredMerl>>,
+    /// MERL tables uploaded so far ([`VulkanBackend::measured_uploads`]).
+    merl_uploads: u64,
     dummy: Buffer,
     /// Owns the slots' descriptor sets (freed with the pool).
     _descriptors: DescriptorPool,
@@ -284,6 +291,9 @@ impl VulkanBackend {
         Ok(VulkanBackend {
             slots,
             materials: None,
+            merl: None,
+            merl_tables: Vec::new(),
+            merl_uploads: 0,
             dummy,
             _descriptors: descriptors,
             _commands: commands,
@@ -304,6 +314,12 @@ impl VulkanBackend {
     /// Starts the [`HostStages`] sums again from zero.
     pub fn reset_host_stages(&mut self) {
         self.stages = HostStages::default();
+    }
+
+    /// How many MERL tables this backend has uploaded: each once while consecutive batches
+    /// use the same tables.
+    pub fn measured_uploads(&self) -> u64 {
+        self.merl_uploads
     }
 
     /// The device's name (e.g. `llvmpipe (LLVM 15.0.6, 256 bits)`).
@@ -491,11 +507,6 @@ impl VulkanBackend {
         materials: &[Material],
         features: FeatureSet,
     ) -> Result<Output> {
-        if features.contains(FeatureSet::MEASURED) {
-            return Err(Error::Unsupported(
-                "the batch uses a measured (MERL) material, which the Vulkan kernel does not evaluate; use --backend cpu".into(),
-            ));
-        }
         let n = batch.len();
         let terms = features.contains(FeatureSet::TERMS);
         let mut out = Output::zeroed(n, terms);
@@ -504,6 +515,8 @@ impl VulkanBackend {
             return Ok(out);
         }
         let chunk = self.chunk_tuples(materials.len())?;
+        // Before the pipeline: a device without f64 refuses measured materials here.
+        self.upload_measured(materials)?;
         let pipeline = self.kernels.pipeline(features)?.raw();
         self.upload_materials(&gpu_materials(materials))?;
         let bucketed = features.contains(FeatureSet::BUCKETED);
@@ -631,6 +644,68 @@ impl VulkanBackend {
         Ok(())
     }
 
+    /// Uploads the MERL tables of `materials` ([`measured_tables`]) unless the buffer holds
+    /// exactly these already: a measured material costs one 17.5 MB upload per table, not
+    /// one per batch. Precondition: nothing is pending.
+    fn upload_measured(&mut self, materials: &[Material]) -> Result<()> {
+        debug_assert!(self.slots.iter().all(|s| s.pending.is_none()));
+        let tables = measured_tables(materials);
+        if !tables.is_empty() && !self.float64_frame() {
+            return Err(Error::Unsupported(format!(
+                "measured (MERL) materials need a device with 64-bit floats in shaders \
+                 (shaderFloat64): the bin lookup takes the reference's angles in f64, and \
+                 an f32 atan2 picks the neighbouring bin for about 1 tuple in 10^4; {} runs \
+                 the f32 frame; use --backend cpu",
+                self.device_name()
+            )));
+        }
+        let same = tables.len() == self.merl_tables.len()
+            && tables
+                .iter()
+                .zip(&self.merl_tables)
+                .all(|(a, b)| std::sync::Arc::ptr_eq(a, b));
+        if tables.is_empty() || same {
+            return Ok(());
+        }
+        let per_table = 3 * crate::material::merl::SAMPLES;
+        let bytes = (4 * per_table * tables.len()) as u64;
+        // Device-local (VRAM on a discrete GPU), filled once through a staging buffer: every
+        // lookup reads it, up to 24 reads per tuple with the linear lookup.
+        self.merl = None;
+        self.merl_tables.clear();
+        let merl = Buffer::new(&self.device, bytes, MemoryUse::Resident)?;
+        let mut staging = Buffer::new(&self.device, bytes, MemoryUse::Upload)?;
+        for (t, table) in tables.iter().enumerate() {
+            // SAFETY: a fresh host-visible buffer no submitted work uses.
+            unsafe { staging.write((4 * per_table * t) as u64, &table.values_f32()) };
+        }
+        self.one_shot(|d, cmd| {
+            let region = [vk::BufferCopy::default().size(bytes)];
+            // The copy's writes made visible to the kernels' reads (later submissions).
+            let barrier = [vk::MemoryBarrier::default()
+                .src_access_mask(vk::AccessFlags::TRANSFER_WRITE)
+                .dst_access_mask(vk::AccessFlags::SHADER_READ)];
+            // SAFETY: recording into slot 0's command buffer (begun by `one_shot`); the
+            // region lies inside both buffers (same size).
+            unsafe {
+                d.cmd_copy_buffer(cmd, staging.raw(), merl.raw(), &region);
+                d.cmd_pipeline_barrier(
+                    cmd,
+                    vk::PipelineStageFlags::TRANSFER,
+                    vk::PipelineStageFlags::COMPUTE_SHADER,
+                    vk::DependencyFlags::empty(),
+                    &barrier,
+                    &[],
+                    &[],
+                );
+            }
+        })?;
+        self.merl = Some(merl);
+        self.merl_uploads += tables.len() as u64;
+        self.merl_tables = tables;
+        Ok(())
+    }
+
     /// Grows slot `s`'s buffers to the given float counts and points its descriptor set at
     /// the current buffers. Precondition: slot `s` is not pending.
     fn prepare(
@@ -705,6 +780,7 @@ impl VulkanBackend {
             // BINDING_TUPLE_TEXELS: the input again, through its view (written below).
             slot.input.as_ref().expect("ensured"),
             slot.order.as_ref().unwrap_or(&self.dummy),
+            self.merl.as_ref().unwrap_or(&self.dummy),
         ];
         let ids = wanted.map(Buffer::id);
         if ids != slot.bound {

@@ -28,6 +28,7 @@ pub const SOURCES: &[(&str, &str)] = &[
     ("ff.glsl", include_str!("../../glsl/ff.glsl")),
     ("terms.glsl", include_str!("../../glsl/terms.glsl")),
     ("models.glsl", include_str!("../../glsl/models.glsl")),
+    ("measured.glsl", include_str!("../../glsl/measured.glsl")),
 ];
 
 /// The kernel's entry file in [`SOURCES`].

@@ -25,6 +25,13 @@ pub const MODEL_RTR: u32 = 3;
 pub const MODEL_WARD: u32 = 4;
 /// `kind.x`: `cook-torrance`.
 pub const MODEL_COOK_TORRANCE: u32 = 5;
+/// `kind.x`: measured (MERL); `kind.y` is the table's index in the batch's MERL buffer
+/// ([`measured_tables`]), `kind.z` the lookup ([`LOOKUP_NEAREST`], [`LOOKUP_LINEAR`]).
+pub const MODEL_MEASURED: u32 = 6;
+/// `kind.z` of a measured material: MERL's nearest-bin lookup.
+pub const LOOKUP_NEAREST: u32 = 0;
+/// `kind.z` of a measured material: trilinear between sample points.
+pub const LOOKUP_LINEAR: u32 = 1;
 
 /// `kind.y`: no distribution (not a microfacet model).
 pub const DIST_NONE: u32 = 0;
@@ -92,8 +99,11 @@ pub const BINDING_TUPLE_TEXELS: u32 = 5;
 /// Descriptor binding of a chunk's evaluation order (`BUCKETED` kernels): invocation `i`
 /// evaluates chunk row `order[i]`, so that rows of one material run side by side.
 pub const BINDING_ORDER: u32 = 6;
+/// Descriptor binding of the batch's measured tables (`HAS_MEASURED` kernels): for each
+/// table of [`measured_tables`], its R, G, B blocks of f in 1/sr (f32, MERL's bin order).
+pub const BINDING_MERL: u32 = 7;
 /// Number of descriptor bindings (all storage buffers but [`BINDING_TUPLE_TEXELS`]).
-pub const BINDING_COUNT: u32 = 7;
+pub const BINDING_COUNT: u32 = 8;
 
 /// The integer codes the GLSL compares against, injected as `#define NAME <value>u`.
 pub const SHADER_CODES: &[(&str, u32)] = &[
@@ -103,6 +113,9 @@ pub const SHADER_CODES: &[(&str, u32)] = &[
     ("MODEL_RTR", MODEL_RTR),
     ("MODEL_WARD", MODEL_WARD),
     ("MODEL_COOK_TORRANCE", MODEL_COOK_TORRANCE),
+    ("MODEL_MEASURED", MODEL_MEASURED),
+    ("LOOKUP_NEAREST", LOOKUP_NEAREST),
+    ("LOOKUP_LINEAR", LOOKUP_LINEAR),
     ("DIST_NONE", DIST_NONE),
     ("DIST_GAUSSIAN", DIST_GAUSSIAN),
     ("DIST_BECKMANN", DIST_BECKMANN),
@@ -146,6 +159,7 @@ pub const SHADER_BINDINGS: &[(&str, u32)] = &[
     ("BINDING_COUNTS", BINDING_COUNTS),
     ("BINDING_TUPLE_TEXELS", BINDING_TUPLE_TEXELS),
     ("BINDING_ORDER", BINDING_ORDER),
+    ("BINDING_MERL", BINDING_MERL),
 ];
 
 /// One material as the kernel reads it (`struct GpuMaterial` in `glsl/layout.glsl`; the
@@ -274,11 +288,13 @@ pub fn gpu_material(m: &Material) -> GpuMaterial {
     let scale = |s: f64| [s as f32, 0.0, 0.0, 0.0];
     match &m.model {
         Model::Lambert => g.kind = [MODEL_LAMBERT, DIST_NONE, GEOM_NONE, FRESNEL_NONE],
-        // Never dispatched: `VulkanBackend` refuses batches that use a measured material
-        // (FeatureSet::MEASURED) before building the table; a black Lambert keeps the row
-        // well formed.
-        Model::Measured(_) => {
-            g.kind = [MODEL_LAMBERT, DIST_NONE, GEOM_NONE, FRESNEL_NONE];
+        // The table index (kind.y) is the batch's: set by `gpu_materials`.
+        Model::Measured(d) => {
+            let lookup = match d.lookup {
+                crate::material::merl::Lookup::Nearest => LOOKUP_NEAREST,
+                crate::material::merl::Lookup::Linear => LOOKUP_LINEAR,
+            };
+            g.kind = [MODEL_MEASURED, 0, lookup, FRESNEL_NONE];
             g.diffuse = [0.0; 4];
         }
         Model::Phong { exponent } => {
@@ -399,9 +415,39 @@ pub fn gpu_material(m: &Material) -> GpuMaterial {
     g
 }
 
-/// The kernel's material table for `materials` (same order, so batch indices carry over).
+/// The kernel's material table for `materials` (same order, so batch indices carry over);
+/// a measured material's `kind.y` is its table's index in [`measured_tables`].
 pub fn gpu_materials(materials: &[Material]) -> Vec<GpuMaterial> {
-    materials.iter().map(gpu_material).collect()
+    let tables = measured_tables(materials);
+    materials
+        .iter()
+        .map(|m| {
+            let mut g = gpu_material(m);
+            if let Model::Measured(d) = &m.model {
+                g.kind[1] = tables
+                    .iter()
+                    .position(|t| std::sync::Arc::ptr_eq(t, &d.data))
+                    .expect("listed") as u32;
+            }
+            g
+        })
+        .collect()
+}
+
+/// The distinct MERL tables of `materials`, in order of first use (one upload each, however
+/// many materials share a file).
+pub fn measured_tables(
+    materials: &[Material],
+) -> Vec<std::sync::Arc<crate::material::merl::MeasuredMerl>> {
+    let mut tables: Vec<std::sync::Arc<crate::material::merl::MeasuredMerl>> = Vec::new();
+    for m in materials {
+        if let Model::Measured(d) = &m.model {
+            if !tables.iter().any(|t| std::sync::Arc::ptr_eq(t, &d.data)) {
+                tables.push(d.data.clone());
+            }
+        }
+    }
+    tables
 }
 
 #[cfg(test)]

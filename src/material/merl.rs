@@ -59,6 +59,29 @@ pub fn bin_angles(i: usize, j: usize, k: usize) -> (f64, f64, f64) {
     )
 }
 
+/// How a measured material reads its table between the bins' sample points
+/// (FORMULAS.md §7, "MERL lookup").
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash)]
+pub enum Lookup {
+    /// MERL's own (`BRDFRead.cpp`): the bin's sample point, by truncation (the default).
+    #[default]
+    Nearest,
+    /// Trilinear between the sample points around the point, in the bins' index
+    /// coordinates (θ_h through the square root); φ_d wraps (π ≡ 0), θ_h and θ_d hold the
+    /// last sample beyond index 89.
+    Linear,
+}
+
+impl Lookup {
+    /// `nearest` or `linear` (the materials-file value).
+    pub fn toml_name(self) -> &'static str {
+        match self {
+            Lookup::Nearest => "nearest",
+            Lookup::Linear => "linear",
+        }
+    }
+}
+
 /// A measured isotropic BRDF in MERL's tabulation.
 #[derive(Debug, Clone, PartialEq)]
 pub struct MeasuredMerl {
@@ -148,6 +171,38 @@ pub fn read_from(mut reader: impl Read, source: &Path) -> Result<MeasuredMerl> {
 }
 
 impl MeasuredMerl {
+    /// A table from its stored values (R, G, B blocks of [`SAMPLES`], `f / scale` or
+    /// negative), e.g. an analytic material exported in memory; `source` names it.
+    pub fn from_values(values: Vec<f64>, source: &Path) -> Result<MeasuredMerl> {
+        if values.len() != 3 * SAMPLES {
+            return Err(Error::Table(format!(
+                "{}: {} values given, a MERL table holds {}",
+                source.display(),
+                values.len(),
+                3 * SAMPLES
+            )));
+        }
+        Ok(MeasuredMerl {
+            values,
+            source: source.to_owned(),
+        })
+    }
+
+    /// f (1/sr) of channel `c` at bin `(i, j, k)`: the stored value times its scale, 0 for
+    /// a negative (invalid) sample. The table the kernel reads holds these, in f32.
+    pub fn value(&self, c: usize, i: usize, j: usize, k: usize) -> f64 {
+        self.stored(c, i, j, k).max(0.0) * SCALES[c]
+    }
+
+    /// Every [`MeasuredMerl::value`], R, G, B blocks in file order, rounded to f32.
+    pub fn values_f32(&self) -> Vec<f32> {
+        self.values
+            .iter()
+            .enumerate()
+            .map(|(x, v)| (v.max(0.0) * SCALES[x / SAMPLES]) as f32)
+            .collect()
+    }
+
     /// The file it was read from.
     pub fn source(&self) -> &Path {
         &self.source
@@ -165,11 +220,43 @@ impl MeasuredMerl {
         std::array::from_fn(|c| self.stored(c, i, j, k).max(0.0) * SCALES[c])
     }
 
-    /// f (RGB, 1/sr) at `(l, v, n)` (any lengths): 0 for invalid vectors and below the
-    /// horizon, as for analytic materials (FORMULAS.md §1).
+    /// f (RGB, 1/sr) at half/difference angles by trilinear interpolation between the
+    /// sample points ([`Lookup::Linear`]).
+    pub fn linear_half_diff(&self, theta_h: f64, theta_d: f64, phi_d: f64) -> [f64; 3] {
+        let ((i0, i1, wi), (j0, j1, wj), (k0, k1, wk)) = linear_corners(theta_h, theta_d, phi_d);
+        std::array::from_fn(|c| {
+            let at = |i, j, k| self.value(c, i, j, k);
+            let along_k = |i, j| at(i, j, k0) * (1.0 - wk) + at(i, j, k1) * wk;
+            let along_j = |i| along_k(i, j0) * (1.0 - wj) + along_k(i, j1) * wj;
+            along_j(i0) * (1.0 - wi) + along_j(i1) * wi
+        })
+    }
+
+    /// f (RGB, 1/sr) at half/difference angles by `mode`.
+    pub fn lookup_half_diff_with(
+        &self,
+        mode: Lookup,
+        theta_h: f64,
+        theta_d: f64,
+        phi_d: f64,
+    ) -> [f64; 3] {
+        match mode {
+            Lookup::Nearest => self.lookup_half_diff(theta_h, theta_d, phi_d),
+            Lookup::Linear => self.linear_half_diff(theta_h, theta_d, phi_d),
+        }
+    }
+
+    /// f (RGB, 1/sr) at `(l, v, n)` (any lengths) by the standard nearest-bin lookup: 0
+    /// for invalid vectors and below the horizon, as for analytic materials
+    /// (FORMULAS.md §1).
     pub fn lookup(&self, l: [f64; 3], v: [f64; 3], n: [f64; 3]) -> [f64; 3] {
+        self.lookup_with(Lookup::Nearest, l, v, n)
+    }
+
+    /// [`MeasuredMerl::lookup`] by `mode`.
+    pub fn lookup_with(&self, mode: Lookup, l: [f64; 3], v: [f64; 3], n: [f64; 3]) -> [f64; 3] {
         match half_diff(l, v, n) {
-            Some((th, td, pd)) => self.lookup_half_diff(th, td, pd),
+            Some((th, td, pd)) => self.lookup_half_diff_with(mode, th, td, pd),
             None => [0.0; 3],
         }
     }
@@ -194,6 +281,45 @@ pub fn half_diff(l: [f64; 3], v: [f64; 3], n: [f64; 3]) -> Option<(f64, f64, f64
     let d = [dot(l, t), dot(l, b), dot(l, h)];
     let theta_d = (d[0] * d[0] + d[1] * d[1]).sqrt().atan2(d[2]);
     Some((theta_h, theta_d, d[1].atan2(d[0])))
+}
+
+/// The continuous bin coordinates of `(θ_h, θ_d, φ_d)`: `(√(θ_h/(π/2))·90, θ_d/(π/2)·90,
+/// (φ_d mod π)/π·180)`, sample points at the integers.
+pub fn bin_coordinates(theta_h: f64, theta_d: f64, phi_d: f64) -> (f64, f64, f64) {
+    (
+        (theta_h.max(0.0) / FRAC_PI_2).sqrt() * THETA_H_BINS as f64,
+        theta_d.max(0.0) / FRAC_PI_2 * THETA_D_BINS as f64,
+        phi_d.rem_euclid(PI) / PI * PHI_D_BINS as f64,
+    )
+}
+
+/// The corners and weights of [`Lookup::Linear`]: per axis `(lower, upper, weight of
+/// upper)`; θ_h and θ_d clamp to their last sample (index 89), φ_d wraps (180 ≡ 0).
+#[allow(clippy::type_complexity)]
+pub fn linear_corners(
+    theta_h: f64,
+    theta_d: f64,
+    phi_d: f64,
+) -> (
+    (usize, usize, f64),
+    (usize, usize, f64),
+    (usize, usize, f64),
+) {
+    let (x, y, z) = bin_coordinates(theta_h, theta_d, phi_d);
+    let clamped = |x: f64, bins: usize| {
+        let last = (bins - 1) as f64;
+        let x = x.min(last);
+        let lo = x.floor();
+        let i = lo as usize;
+        (i, (i + 1).min(bins - 1), x - lo)
+    };
+    let lo = z.floor();
+    let k = lo as usize % PHI_D_BINS;
+    (
+        clamped(x, THETA_H_BINS),
+        clamped(y, THETA_D_BINS),
+        (k, (k + 1) % PHI_D_BINS, z - lo),
+    )
 }
 
 /// The bin `(i, j, k)` holding `(θ_h, θ_d, φ_d)`: MERL's truncating lookup (θ_h index

@@ -58,7 +58,7 @@ pub enum Model {
     /// Cook–Torrance microfacet model `d·c_diff/π + s·c_spec ⊗ D·G·F·K`.
     CookTorrance(CookTorrance),
     /// Measured data: a MERL binary (Matusik et al. 2003), looked up by half/difference
-    /// angles (FORMULAS.md §7). Evaluated by the CPU reference only.
+    /// angles (FORMULAS.md §7), nearest-bin or linear.
     Measured(Measured),
 }
 
@@ -69,17 +69,26 @@ pub struct Measured {
     pub path: std::path::PathBuf,
     /// The table (shared: a 17 MB file is read once per materials file).
     pub data: std::sync::Arc<merl::MeasuredMerl>,
+    /// How the table is read between sample points (`lookup = "nearest" | "linear"`).
+    pub lookup: merl::Lookup,
 }
 
 impl PartialEq for Measured {
     fn eq(&self, other: &Measured) -> bool {
-        self.path == other.path && std::sync::Arc::ptr_eq(&self.data, &other.data)
+        self.path == other.path
+            && std::sync::Arc::ptr_eq(&self.data, &other.data)
+            && self.lookup == other.lookup
     }
 }
 
 impl std::fmt::Debug for Measured {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "Measured({})", self.path.display())
+        write!(
+            f,
+            "Measured({}, {})",
+            self.path.display(),
+            self.lookup.toml_name()
+        )
     }
 }
 

@@ -27,6 +27,7 @@ const KEYS: &[&str] = &[
     "specular_weight",
     "diffuse_weight",
     "file",
+    "lookup",
     "precision",
 ];
 
@@ -511,9 +512,14 @@ impl Fields<'_, '_> {
             }
             self.err("file", format!("cannot use `{file}`: {why}"))
         })?;
+        let lookup = match self.string("lookup", &["nearest", "linear"])?.as_deref() {
+            Some("linear") => super::merl::Lookup::Linear,
+            _ => super::merl::Lookup::Nearest,
+        };
         Ok(Measured {
             path,
             data: std::sync::Arc::new(data),
+            lookup,
         })
     }
 

@@ -51,7 +51,7 @@ pub fn evaluate_model(fr: &Frame, m: &Material) -> Evaluation {
 pub fn measured(fr: &Frame, m: &crate::material::Measured) -> Evaluation {
     Evaluation {
         status: Status::Valid,
-        brdf: m.data.lookup(fr.l, fr.v, fr.n),
+        brdf: m.data.lookup_with(m.lookup, fr.l, fr.v, fr.n),
         d: 0.0,
         g: 1.0,
         f: [1.0; 3],

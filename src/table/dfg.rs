@@ -7,12 +7,225 @@
 //! `c = v·h`. `f/F` is f of the same model with F = 1, evaluated by the backend; the
 //! `(1 − c)⁵` weights come from `c` computed on the host for each sample direction. The
 //! integrator, sample count and accuracy are [`super::albedo`]'s.
+//!
+//! Engines index their LUTs their own way ([`Axes`], [`Layout`], [`LutStyle`]): by
+//! perceptual roughness `r` with `α = r²`, over texel centres or both endpoints, with R = A,
+//! G = B (UE4) or R = B, G = A + B (Filament).
 
-use super::albedo::{self, grid_points, Microfacet};
+use super::albedo::{self, Microfacet, Sampler};
 use super::exr_out::{self, Channel, Layer, Provenance};
-use super::{Grid, Runner};
-use crate::error::Result;
+use super::{texel_centre, Grid, Runner};
+use crate::error::{Error, Result};
+use crate::material::Geometry;
 use std::path::PathBuf;
+
+/// What a table's roughness coordinate `y` means.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RoughnessAxis {
+    /// `y = α` (GGX α, Beckmann m).
+    Alpha,
+    /// `y = r`, perceptual roughness, `α = r²` (UE4, Filament).
+    Perceptual,
+}
+
+impl RoughnessAxis {
+    /// The α of coordinate `y`.
+    pub fn alpha(self, y: f64) -> f64 {
+        match self {
+            RoughnessAxis::Alpha => y,
+            RoughnessAxis::Perceptual => y * y,
+        }
+    }
+
+    /// `alpha` or `perceptual` (the option's value).
+    pub fn name(self) -> &'static str {
+        match self {
+            RoughnessAxis::Alpha => "alpha",
+            RoughnessAxis::Perceptual => "perceptual",
+        }
+    }
+}
+
+/// Where a table's texels sit on its axes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Sampling {
+    /// Texel centres: column `i` ↔ `x = (i + ½)/W`, row `j` ↔ `y = (j + ½)/H`.
+    Centres,
+    /// Both ends included: `x = i/(W − 1)`, `y = j/(H − 1)` (needs W, H ≥ 2).
+    Endpoints,
+    /// Filament's `DFG()` (libs/ibl/src/CubemapIBL.cpp): `x = (i + ½)/W`, and row `j` ↔
+    /// `y = min(1, (H − j + ½)/H)` — rows top-down from rough to smooth, shifted by one
+    /// texel from the centres, the first row clamped to 1.
+    Filament,
+}
+
+impl Sampling {
+    /// The `(x, y)` of texel `(i, j)` of `grid`.
+    pub fn coords(self, grid: Grid, i: usize, j: usize) -> (f64, f64) {
+        let end = |k: usize, n: usize| k as f64 / (n - 1) as f64;
+        match self {
+            Sampling::Centres => (texel_centre(i, grid.width), texel_centre(j, grid.height)),
+            Sampling::Endpoints => (end(i, grid.width), end(j, grid.height)),
+            Sampling::Filament => {
+                let h = grid.height as f64;
+                (
+                    texel_centre(i, grid.width),
+                    ((h - j as f64 + 0.5) / h).min(1.0),
+                )
+            }
+        }
+    }
+
+    /// How the provenance states it.
+    pub fn describe(self) -> &'static str {
+        match self {
+            Sampling::Centres => "texel centres: x = (i + 0.5)/W, y = (j + 0.5)/H",
+            Sampling::Endpoints => "endpoints included: x = i/(W - 1), y = j/(H - 1)",
+            Sampling::Filament => {
+                "Filament's DFG(): x = (i + 0.5)/W, y = min(1, (H - j + 0.5)/H) (row 0 roughest)"
+            }
+        }
+    }
+}
+
+/// The smallest μ and α an endpoint table evaluates: `f` is 0 at μ = 0 (below the horizon,
+/// FORMULAS.md §1) and α = 0 is no microfacet material, so the first column and row hold the
+/// limits μ → 0 and α → 0, evaluated at 2⁻¹⁰ (within the integrator's measured accuracy
+/// range, α ≥ 1/1024).
+pub const ENDPOINT_FLOOR: f64 = 1.0 / 1024.0;
+
+/// A table's two axes: x = μ = cos_o, y = roughness.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Axes {
+    /// What `y` means.
+    pub roughness: RoughnessAxis,
+    /// Where the texels sit.
+    pub sampling: Sampling,
+}
+
+impl Axes {
+    /// The project's default: `y = α` at texel centres.
+    pub const DEFAULT: Axes = Axes {
+        roughness: RoughnessAxis::Alpha,
+        sampling: Sampling::Centres,
+    };
+
+    /// Refuses a grid the sampling cannot place (endpoints need two texels per side).
+    pub fn check(&self, grid: Grid) -> Result<()> {
+        if self.sampling == Sampling::Endpoints && (grid.width < 2 || grid.height < 2) {
+            return Err(Error::Table(format!(
+                "--sampling endpoints needs at least 2 texels per side (x = i/(W - 1)); \
+                 --size {}x{} has one",
+                grid.width, grid.height
+            )));
+        }
+        Ok(())
+    }
+
+    /// The `(μ, α)` of every texel, row-major (row j ↔ roughness, column i ↔ μ), the
+    /// endpoint zeros at [`ENDPOINT_FLOOR`].
+    pub fn points(&self, grid: Grid) -> Vec<(f64, f64)> {
+        (0..grid.height)
+            .flat_map(|j| (0..grid.width).map(move |i| (i, j)))
+            .map(|(i, j)| {
+                let (x, y) = self.sampling.coords(grid, i, j);
+                // Only the exact zeros of the endpoint sampling move.
+                let floor = |t: f64| if t == 0.0 { ENDPOINT_FLOOR } else { t };
+                (floor(x), floor(self.roughness.alpha(y)))
+            })
+            .collect()
+    }
+
+    /// How the provenance states them.
+    pub fn describe(&self) -> String {
+        let y = match self.roughness {
+            RoughnessAxis::Alpha => "y = alpha",
+            RoughnessAxis::Perceptual => "y = r (perceptual roughness), alpha = r^2",
+        };
+        let floor = match self.sampling {
+            Sampling::Endpoints => "; mu = 0 and alpha = 0 evaluated at 2^-10 (the limits)",
+            _ => "",
+        };
+        format!("x = mu = cos_o, {y}; {}{floor}", self.sampling.describe())
+    }
+}
+
+/// Which integral goes in which channel.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Layout {
+    /// R = A (scale), G = B (bias): `E = F0·R + G` (Karis 2013, UE4).
+    ScaleBias,
+    /// R = B, G = A + B: `E = (1 − F0)·R + F0·G = mix(R, G, F0)` (Filament's
+    /// multiple-scattering layout, `DFV_Multiscatter`).
+    Filament,
+}
+
+/// An engine's published LUT choices.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LutStyle {
+    /// UE4 (Karis 2013, "Real Shading in Unreal Engine 4", `IntegrateBRDF`): x = NoV,
+    /// y = Roughness (α = r²) at texel centres, Schlick–Smith G with k = α/2, R = A,
+    /// G = B, 1024 samples.
+    Ue4,
+    /// Filament (`CubemapIBL::DFG` with `--ibl-dfg-multiscatter`, as its CMakeLists
+    /// builds the engine's LUT): x = NoV at centres, rows per [`Sampling::Filament`]
+    /// (α = r²), height-correlated Smith–GGX, R = B, G = A + B, 1024 samples, 128×128.
+    Filament,
+}
+
+impl LutStyle {
+    /// `ue4` or `filament`.
+    pub fn name(self) -> &'static str {
+        match self {
+            LutStyle::Ue4 => "ue4",
+            LutStyle::Filament => "filament",
+        }
+    }
+
+    /// The engine's samples per texel (both: 1024).
+    pub fn samples(self) -> u32 {
+        1024
+    }
+
+    /// The engine's geometry term.
+    pub fn geometry(self) -> Geometry {
+        match self {
+            LutStyle::Ue4 => Geometry::SchlickSmith,
+            LutStyle::Filament => Geometry::SmithCorrelated,
+        }
+    }
+
+    /// The engine's axes.
+    pub fn axes(self) -> Axes {
+        Axes {
+            roughness: RoughnessAxis::Perceptual,
+            sampling: match self {
+                LutStyle::Ue4 => Sampling::Centres,
+                LutStyle::Filament => Sampling::Filament,
+            },
+        }
+    }
+
+    /// The engine's channel layout.
+    pub fn layout(self) -> Layout {
+        match self {
+            LutStyle::Ue4 => Layout::ScaleBias,
+            LutStyle::Filament => Layout::Filament,
+        }
+    }
+
+    /// The table size the engine ships, where it publishes one (Filament: 128×128 on
+    /// desktop, `DFG_LUT_SIZE`); UE4's course notes name none.
+    pub fn size(self) -> Option<Grid> {
+        match self {
+            LutStyle::Ue4 => None,
+            LutStyle::Filament => Some(Grid {
+                width: 128,
+                height: 128,
+            }),
+        }
+    }
+}
 
 /// `(1 − c)⁵`: Schlick's weight of `1 − F0` (Schlick 1994).
 pub fn schlick_weight(c: f64) -> f64 {
@@ -26,11 +239,25 @@ pub fn split_sum(
     points: &[(f64, f64)],
     samples: u32,
 ) -> Result<Vec<[f64; 2]>> {
-    if let Some(sums) = albedo::backend_sums(runner, spec, points, samples, "dfg") {
-        // A = Σ x (1 − w) = Σ x − Σ x w, B = Σ x w.
-        return Ok(sums?.into_iter().map(|[x, xw]| [x - xw, xw]).collect());
+    split_sum_with(runner, spec, Sampler::Visible, points, samples)
+}
+
+/// [`split_sum`] drawing the normals with `sampler` ([`Sampler::Engine`]: host-made
+/// directions, evaluated by the backend).
+pub fn split_sum_with(
+    runner: &mut Runner,
+    spec: &Microfacet,
+    sampler: Sampler,
+    points: &[(f64, f64)],
+    samples: u32,
+) -> Result<Vec<[f64; 2]>> {
+    if sampler == Sampler::Visible {
+        if let Some(sums) = albedo::backend_sums(runner, spec, points, samples, "dfg") {
+            // A = Σ x (1 − w) = Σ x − Σ x w, B = Σ x w.
+            return Ok(sums?.into_iter().map(|[x, xw]| [x - xw, xw]).collect());
+        }
     }
-    albedo::integrate(runner, spec, points, samples, "dfg", |c| {
+    albedo::integrate_with(runner, spec, sampler, points, samples, "dfg", |c| {
         let w = schlick_weight(c);
         [1.0 - w, w]
     })
@@ -45,6 +272,15 @@ pub struct DfgJob {
     pub grid: Grid,
     /// Samples per texel.
     pub samples: u32,
+    /// The axes (default [`Axes::DEFAULT`]).
+    pub axes: Axes,
+    /// The channel layout (default [`Layout::ScaleBias`]).
+    pub layout: Layout,
+    /// The integrator (default [`Sampler::Visible`]; [`LutStyle`] tables use
+    /// [`Sampler::Engine`]).
+    pub sampler: Sampler,
+    /// The engine style the table follows, for provenance.
+    pub style: Option<LutStyle>,
     /// Write float16.
     pub half: bool,
     /// The DFG table.
@@ -56,6 +292,13 @@ impl DfgJob {
     /// fits in memory, the output can be written.
     pub fn check(&self) -> Result<()> {
         self.spec.material(0.5)?;
+        self.axes.check(self.grid)?;
+        if self.sampler == Sampler::Engine && self.spec.lobe != albedo::Lobe::Ggx {
+            return Err(Error::Table(format!(
+                "--distribution {}: the engines' LUT integrator samples GGX only",
+                self.spec.lobe.name()
+            )));
+        }
         let bytes = super::table_bytes(self.grid, albedo::BYTES_PER_TEXEL + 16);
         super::check_memory(bytes, "the DFG table")?;
         super::check_output(&self.output)
@@ -65,26 +308,49 @@ impl DfgJob {
 /// Integrates and writes the DFG table, after [`DfgJob::check`].
 pub fn write(runner: &mut Runner, job: &DfgJob) -> Result<()> {
     job.check()?;
-    let ab = split_sum(runner, &job.spec, &grid_points(job.grid), job.samples)?;
-    let channel = |name: &str, k: usize| Channel {
+    let points = job.axes.points(job.grid);
+    let ab = split_sum_with(runner, &job.spec, job.sampler, &points, job.samples)?;
+    let channel = |name: &str, value: fn(&[f64; 2]) -> f64| Channel {
         name: name.into(),
-        values: ab.iter().map(|v| v[k] as f32).collect(),
+        values: ab.iter().map(|v| value(v) as f32).collect(),
     };
+    let (channels, layout) = match job.layout {
+        Layout::ScaleBias => (
+            [channel("R", |v| v[0]), channel("G", |v| v[1])],
+            "R = A = integral of f/F (1 - (1-c)^5) cos_i, G = B = integral of f/F (1-c)^5 cos_i, c = v.h, so E = F0 A + B under Schlick",
+        ),
+        Layout::Filament => (
+            [channel("R", |v| v[1]), channel("G", |v| v[0] + v[1])],
+            "R = B = integral of f/F (1-c)^5 cos_i, G = A + B = integral of f/F cos_i, c = v.h, so E = (1 - F0) R + F0 G = mix(R, G, F0) under Schlick (Filament's layout)",
+        ),
+    };
+    let style = job
+        .style
+        .map_or(String::new(), |s| format!("--lut-style {}: ", s.name()));
     let provenance = Provenance {
         table: "dfg".into(),
         material: job.spec.describe(),
         convention: "modern".into(),
-        parameterisation: "split sum (Karis 2013): R = A = integral of f/F (1 - (1-c)^5) cos_i, G = B = integral of f/F (1-c)^5 cos_i, c = v.h, so E = F0 A + B under Schlick; x = mu = cos_o, y = alpha, n = +z".into(),
-        samples: format!(
-            "{} per texel: Hammersley points, {}; f evaluated by the backend",
-            job.samples,
-            albedo::sampling(job.spec.lobe)
+        parameterisation: format!(
+            "{style}split sum (Karis 2013): {layout}; {}, n = +z",
+            job.axes.describe()
         ),
+        samples: match job.sampler {
+            Sampler::Visible => format!(
+                "{} per texel: Hammersley points, {}; f evaluated by the backend",
+                job.samples,
+                albedo::sampling(job.spec.lobe)
+            ),
+            Sampler::Engine => format!(
+                "{} per texel: the engines' estimator, Hammersley (k/N, radical inverse), GGX D cos_h; f evaluated by the backend",
+                job.samples
+            ),
+        },
         backend: runner.backend_name(),
     };
     let layer = Layer {
         name: "dfg".into(),
-        channels: vec![channel("R", 0), channel("G", 1)],
+        channels: channels.into(),
     };
     let clamped = exr_out::write(
         &job.output,

@@ -19,6 +19,7 @@
 pub mod albedo;
 pub mod dfg;
 pub mod exr_out;
+pub mod font;
 pub mod merl;
 pub mod preview;
 pub mod slice;

@@ -142,13 +142,9 @@ impl Canvas {
     }
 }
 
-/// Linear → sRGB8 after Reinhard tone mapping `x / (1 + x)`.
-pub fn tone_srgb8(x: f64) -> u8 {
-    let t = if x.is_finite() {
-        x.max(0.0) / (1.0 + x.max(0.0))
-    } else {
-        1.0
-    };
+/// The sRGB transfer function (IEC 61966-2-1) of a linear value in [0, 1], as 8 bits.
+pub fn srgb8(t: f64) -> u8 {
+    let t = t.clamp(0.0, 1.0);
     let s = if t <= 0.003_130_8 {
         12.92 * t
     } else {
@@ -157,9 +153,26 @@ pub fn tone_srgb8(x: f64) -> u8 {
     (s * 255.0).round().clamp(0.0, 255.0) as u8
 }
 
+/// Linear scene RGB → display-referred sRGB8: 1.0 is display white, and a pixel whose
+/// largest channel exceeds 1 is scaled down as a whole until it is 1, so its hue and
+/// saturation are kept (a gold highlight stays gold; clipping each channel, or tone-mapping
+/// each channel on its own, turns it toward white and khaki). Non-finite or negative
+/// channels count as 0, except +∞, which counts as the brightest.
+pub fn display_srgb8(rgb: [f64; 3]) -> [u8; 3] {
+    let rgb = rgb.map(|x| if x.is_nan() { 0.0 } else { x.max(0.0) });
+    let max = rgb.iter().fold(0.0f64, |m, &x| m.max(x));
+    if max.is_infinite() {
+        return rgb.map(|x| srgb8(if x.is_infinite() { 1.0 } else { 0.0 }));
+    }
+    let scale = if max > 1.0 { 1.0 / max } else { 1.0 };
+    rgb.map(|x| srgb8(x * scale))
+}
+
 /// The lit sphere: orthographic view along −z of a unit sphere, one directional light of
-/// irradiance π·`exposure` at normal incidence toward [`SPHERE_LIGHT`] (so a white
-/// Lambertian facing it shows 1 before tone mapping); pixel = f·cos_i·π·exposure.
+/// irradiance π·`exposure` at normal incidence toward [`SPHERE_LIGHT`]; pixel =
+/// f·cos_i·π·exposure, shown by [`display_srgb8`]. At exposure 1 a white Lambertian's
+/// peak (where n faces the light) is 1, display white (255), and a brighter highlight keeps
+/// its hue.
 /// Anisotropic materials use the tangent `ŷ × n` (along the lines of latitude).
 pub fn sphere(
     runner: &mut Runner,
@@ -191,9 +204,8 @@ pub fn sphere(
     runner.finish();
     let mut canvas = Canvas::new(size, size, [24, 24, 24]);
     for (r, &(px, py, cos_i)) in pixels.iter().enumerate() {
-        let c: [u8; 3] = std::array::from_fn(|ch| {
-            tone_srgb8(f64::from(out[3 * r + ch]) * cos_i.max(0.0) * PI * exposure)
-        });
+        let scale = cos_i.max(0.0) * PI * exposure;
+        let c = display_srgb8(std::array::from_fn(|ch| f64::from(out[3 * r + ch]) * scale));
         canvas.put(px as i64, py as i64, c);
     }
     Ok(canvas)
@@ -223,7 +235,9 @@ fn evaluate_chunked(
 /// normal, 0.1° apart), with `l` at `incidence_deg` on the left, drawn as a radius scaled
 /// so the largest value of the curve reaches the plot's edge. Channels that differ are
 /// drawn in red, green and blue, otherwise one white curve; the light direction is solid
-/// yellow, the mirror direction dashed yellow, the largest radius a grey semicircle.
+/// yellow, the mirror direction dashed yellow, the largest radius a grey semicircle. The
+/// title names the material, the quantity and its unit and the light's angle; the
+/// baseline is labelled with the view angle (−90°, 0°, 90°), and the edge's value in 1/sr.
 pub fn polar(runner: &mut Runner, material: &Material, incidence_deg: f64) -> Result<Canvas> {
     check_incidence(incidence_deg)?;
     let materials = std::slice::from_ref(material);
@@ -240,15 +254,50 @@ pub fn polar(runner: &mut Runner, material: &Material, incidence_deg: f64) -> Re
     runner.start("polar", angles.len() as u64);
     let f = evaluate_chunked(runner, rows, materials, angles.len())?;
     runner.finish();
-    Ok(draw_polar(&angles, &f, ti))
+    let mut canvas = draw_polar(&angles, &f, ti);
+    label_polar(&mut canvas, &material.name, incidence_deg, &f);
+    Ok(canvas)
+}
+
+/// The polar plot's title and axis labels.
+fn label_polar(canvas: &mut Canvas, name: &str, incidence_deg: f64, f: &[f32]) {
+    use super::font;
+    let (w, h) = (canvas.width as i64, canvas.height as i64);
+    let text = [200, 200, 200];
+    let max = f.iter().fold(0.0f32, |m, &x| m.max(x));
+    font::draw(
+        canvas,
+        6,
+        4,
+        &format!("{name}: f (1/sr) in the plane of incidence, light at {incidence_deg}°"),
+        text,
+    );
+    font::draw(
+        canvas,
+        6,
+        14,
+        &format!("radius = f, edge = {max:.3e} 1/sr; angle = view from the normal"),
+        [150, 150, 150],
+    );
+    let base = h - 16;
+    font::draw(canvas, 4, base + 4, "-90°", text);
+    font::draw(canvas, w / 2 - 6, base + 4, "0°", text);
+    font::draw(
+        canvas,
+        w - 4 - font::width("90°") as i64,
+        base + 4,
+        "90°",
+        text,
+    );
 }
 
 /// Draws the polar plot of `f` (n × 3) at `angles` for incidence `ti` (radians).
 fn draw_polar(angles: &[f64], f: &[f32], ti: f64) -> Canvas {
     let (w, h) = POLAR_SIZE;
     let mut canvas = Canvas::new(w, h, [16, 16, 16]);
+    // Room for two title lines above and the angle labels below.
     let origin = (w as f64 / 2.0, h as f64 - 20.0);
-    let radius = (h as f64 - 40.0).min(w as f64 / 2.0 - 10.0);
+    let radius = (h as f64 - 48.0).min(w as f64 / 2.0 - 10.0);
     let at = |a: f64, r: f64| (origin.0 + r * a.sin(), origin.1 - r * a.cos());
     let max = f.iter().fold(0.0f32, |m, &x| m.max(x));
     canvas.line(

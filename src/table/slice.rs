@@ -13,7 +13,7 @@ use crate::directions::SliceGrid;
 use crate::error::Result;
 use crate::material::Material;
 use std::f64::consts::FRAC_PI_2;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Default slice size, 90 × 90 (MERL's θ_h and θ_d resolution).
 pub const DEFAULT_SIZE: usize = 90;
@@ -149,7 +149,18 @@ impl SliceJob {
 
 /// Evaluates and writes the slice, after [`SliceJob::check`].
 pub fn write(runner: &mut Runner, job: &SliceJob) -> Result<()> {
+    write_with_png(runner, job, None)
+}
+
+/// [`write()`], and the slice as a PNG at `png` too when given: pixel `(i, j)` is texel
+/// `(i, j)` (θ_h across, θ_d down, row 0 at θ_d = 0), showing `π·f` through
+/// [`super::preview::display_srgb8`] (a white Lambertian, f = 1/π, is display white; values
+/// above 1 keep their hue). The EXR and the PNG appear together or not at all.
+pub fn write_with_png(runner: &mut Runner, job: &SliceJob, png: Option<&Path>) -> Result<()> {
     job.check()?;
+    if let Some(p) = png {
+        super::check_output(p)?;
+    }
     let (brdf, terms) = compute(runner, &job.material, job.grid, job.spacing, job.terms)?;
     let mut layers = vec![interleaved("brdf", &brdf, &["R", "G", "B"])];
     if let Some(t) = &terms {
@@ -174,7 +185,7 @@ pub fn write(runner: &mut Runner, job: &SliceJob) -> Result<()> {
         samples: "1 point sample at each texel centre".into(),
         backend: runner.backend_name(),
     };
-    let clamped = exr_out::write(
+    let (staged, clamped) = exr_out::stage(
         &job.output,
         job.grid,
         layers,
@@ -183,7 +194,30 @@ pub fn write(runner: &mut Runner, job: &SliceJob) -> Result<()> {
         runner.cancel(),
     )?;
     runner.warn_clamped(&job.output, &clamped);
-    Ok(())
+    let mut staged = vec![staged];
+    if let Some(p) = png {
+        let mut canvas = super::preview::Canvas::new(job.grid.width, job.grid.height, [0, 0, 0]);
+        for (t, rgb) in brdf.chunks_exact(3).enumerate() {
+            let c = super::preview::display_srgb8(std::array::from_fn(|k| {
+                f64::from(rgb[k]) * std::f64::consts::PI
+            }));
+            canvas.put((t % job.grid.width) as i64, (t / job.grid.width) as i64, c);
+        }
+        let mut text = super::preview::provenance(&job.material, "slice", &provenance.backend);
+        text.push((
+            "vkbrdf.parameterisation",
+            format!(
+                "pixel = pi * f (1/sr) in display sRGB (1 = white, brighter pixels scaled to keep their hue); column i: {spacing} at x = (i + 0.5)/W; row j: theta_d = (j + 0.5)/H * pi/2, row 0 at the top; phi_d = pi/2"
+            ),
+        ));
+        staged.push(super::preview::stage_png(
+            p,
+            &canvas,
+            &text,
+            runner.cancel(),
+        )?);
+    }
+    crate::atomic::commit(staged)
 }
 
 /// A layer from `n × k` interleaved values, one channel per name.

@@ -29,11 +29,6 @@ impl VulkanBackend {
     /// The features of the generated slice of `material`.
     fn slice_features(material: &Material, request: &Request) -> Result<FeatureSet> {
         let mut f = FeatureSet::of_material(material) | FeatureSet::GENERATED_SLICE;
-        if f.contains(FeatureSet::MEASURED) {
-            return Err(Error::Unsupported(
-                "a measured (MERL) material has no Vulkan kernel; use --backend cpu".into(),
-            ));
-        }
         if material.is_anisotropic() {
             f |= FeatureSet::TANGENTS; // the generated tangent is +x
         }
@@ -74,6 +69,7 @@ impl VulkanBackend {
         let mut out = Output::zeroed(n, terms);
         self.last_features = Some(features);
         let chunk = self.chunk_tuples(1)?;
+        self.upload_measured(std::slice::from_ref(material))?;
         let pipeline = self.kernels.pipeline(features)?.raw();
         self.upload_materials(&gpu_materials(std::slice::from_ref(material)))?;
         let result = (|| {
@@ -117,6 +113,7 @@ impl VulkanBackend {
         let n = Self::check_grid(&grid)?;
         let features = Self::slice_features(material, &Request::default())?;
         let chunk = self.chunk_tuples(1)?;
+        self.upload_measured(std::slice::from_ref(material))?;
         let pipeline = self.kernels.pipeline(features)?.raw();
         self.upload_materials(&gpu_materials(std::slice::from_ref(material)))?;
         let mut scratch = Output::default();

@@ -281,6 +281,7 @@ impl VulkanBackend {
                 &self.slots[0].counts,
                 &input,
                 order.as_ref().unwrap_or(&self.dummy),
+                self.merl.as_ref().unwrap_or(&self.dummy),
             ];
             let ids = wanted.map(Buffer::id);
             // Slot 0 has no work in flight between calls, and `one_shot` waited for its own
@@ -430,7 +431,10 @@ impl VulkanBackend {
 
     /// Records `record` into slot 0's command buffer, submits it and waits for it.
     /// Precondition: slot 0 has no work in flight.
-    fn one_shot(&self, record: impl FnOnce(&ash::Device, vk::CommandBuffer)) -> Result<()> {
+    pub(super) fn one_shot(
+        &self,
+        record: impl FnOnce(&ash::Device, vk::CommandBuffer),
+    ) -> Result<()> {
         let d = &self.device.raw;
         let slot = &self.slots[0];
         debug_assert!(slot.pending.is_none());
