@@ -8,6 +8,7 @@ pub use rows::NpyRows;
 use crate::cancel::Cancel;
 use crate::error::{Error, Result};
 use crate::material::Material;
+use std::borrow::Cow;
 use std::fs::File;
 use std::io::{BufReader, Read};
 use std::path::{Path, PathBuf};
@@ -17,14 +18,16 @@ pub const COLUMNS_PLAIN: usize = 10;
 /// Columns of a batch with tangents.
 pub const COLUMNS_TANGENT: usize = 13;
 
-/// A validated batch of tuples, stored row-major as `f32`.
+/// A validated batch of tuples, stored row-major as `f32`: owned (`Batch<'static>`, what
+/// [`Batch::new`] and the readers make) or borrowed from the caller's buffer
+/// ([`Batch::borrowed`]: a NumPy array evaluated without a copy).
 ///
 /// Construction checks the shape and that every material value is an integer index into
 /// the material table; direction problems (zero, NaN) are not batch errors but invalid
 /// tuples, counted at evaluation (FORMULAS.md §1).
 #[derive(Debug, Clone, PartialEq)]
-pub struct Batch {
-    data: Vec<f32>,
+pub struct Batch<'a> {
+    data: Cow<'a, [f32]>,
     columns: usize,
 }
 
@@ -43,7 +46,7 @@ pub struct Tuple {
     pub t: Option<[f32; 3]>,
 }
 
-impl Batch {
+impl Batch<'static> {
     /// Wraps row-major data with `columns` (10 or 13) per row. `source` names the origin
     /// in errors; `material_count` is the size of the material table.
     pub fn new(
@@ -51,7 +54,7 @@ impl Batch {
         columns: usize,
         material_count: usize,
         source: &Path,
-    ) -> Result<Batch> {
+    ) -> Result<Batch<'static>> {
         Batch::new_at(data, columns, material_count, source, 0)
     }
 
@@ -63,7 +66,35 @@ impl Batch {
         material_count: usize,
         source: &Path,
         first_row: u64,
-    ) -> Result<Batch> {
+    ) -> Result<Batch<'static>> {
+        Batch::checked(Cow::Owned(data), columns, material_count, source, first_row)
+    }
+}
+
+impl<'a> Batch<'a> {
+    /// [`Batch::new`] on the caller's row-major data, without copying it (the Python
+    /// binding evaluates a C-contiguous float32 array in place).
+    pub fn borrowed(
+        data: &'a [f32],
+        columns: usize,
+        material_count: usize,
+        source: &Path,
+    ) -> Result<Batch<'a>> {
+        Batch::checked(Cow::Borrowed(data), columns, material_count, source, 0)
+    }
+
+    /// Whether the batch borrows its data ([`Batch::borrowed`]) rather than owning a copy.
+    pub fn is_borrowed(&self) -> bool {
+        matches!(self.data, Cow::Borrowed(_))
+    }
+
+    fn checked(
+        data: Cow<'a, [f32]>,
+        columns: usize,
+        material_count: usize,
+        source: &Path,
+        first_row: u64,
+    ) -> Result<Batch<'a>> {
         let err = |message: String| Error::Batch {
             path: source.to_owned(),
             message,
@@ -148,10 +179,12 @@ impl Batch {
             t: (self.columns == COLUMNS_TANGENT).then(|| [r[10], r[11], r[12]]),
         }
     }
+}
 
+impl Batch<'static> {
     /// Reads a batch from a `.npy` file: float32 or float64 (float64 is rounded to float32,
     /// the precision every backend evaluates from), C order, shape `(n, 10)` or `(n, 13)`.
-    pub fn read_npy(path: &Path, material_count: usize) -> Result<Batch> {
+    pub fn read_npy(path: &Path, material_count: usize) -> Result<Batch<'static>> {
         let (file, len) = open_sized(path)?;
         Batch::read_npy_from(file, len, material_count, path)
     }
@@ -163,7 +196,7 @@ impl Batch {
         len: Option<u64>,
         material_count: usize,
         source: &Path,
-    ) -> Result<Batch> {
+    ) -> Result<Batch<'static>> {
         let (data, shape) = read_npy_f32_from(reader, len, source)?;
         let err = |message: String| Error::Batch {
             path: source.to_owned(),

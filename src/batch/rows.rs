@@ -116,7 +116,7 @@ impl NpyRows {
     /// The next at most `max_rows` rows as a [`Batch`] (materials checked, row numbers in
     /// errors counted from the file's start) with the index of its first row; `None` at the
     /// end. The byte buffer is reused between calls.
-    pub fn next_chunk(&mut self, max_rows: usize) -> Result<Option<(u64, Batch)>> {
+    pub fn next_chunk(&mut self, max_rows: usize) -> Result<Option<(u64, Batch<'static>)>> {
         let left = self.end_row - self.next_row;
         if left == 0 {
             return Ok(None);

@@ -116,7 +116,7 @@ struct Work<'a> {
 /// The lanes over one chunk, inside the instruction set pulp chose.
 struct ChunkOp<'a, 'b> {
     plan: &'a Plan,
-    batch: &'a Batch,
+    batch: &'a Batch<'a>,
     order: Option<&'a [usize]>,
     work: &'a mut Work<'b>,
     material: &'a Material,
