@@ -43,6 +43,19 @@ const TUPLES: &str = "tuples";
 pub struct Materials {
     list: Arc<Vec<Material>>,
     source: String,
+    origin: Origin,
+}
+
+/// Where a [`Materials`] came from: what pickling sends to another process (a Dask or Ray
+/// worker), which parses it again there.
+#[derive(Clone)]
+enum Origin {
+    /// TOML text.
+    Text(String),
+    /// A file (read again by the process that unpickles: it must see the same path).
+    File(PathBuf),
+    /// The presets.
+    Presets,
 }
 
 fn model_name(m: &Material) -> &'static str {
@@ -99,6 +112,18 @@ impl Materials {
                 ),
             )
         })
+    }
+
+    /// Pickling: `vkbrdf._rebuild_materials(kind, payload, source)` parses the text, reads
+    /// the file or takes the presets again in the receiving process.
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, (&'static str, String, String))> {
+        let rebuild = py.import("vkbrdf")?.getattr("_rebuild_materials")?;
+        let (kind, payload) = match &self.origin {
+            Origin::Text(t) => ("text", t.clone()),
+            Origin::File(p) => ("file", p.display().to_string()),
+            Origin::Presets => ("presets", String::new()),
+        };
+        Ok((rebuild, (kind, payload, self.source.clone())))
     }
 
     fn __len__(&self) -> usize {
@@ -356,6 +381,7 @@ fn load_materials(py: Python<'_>, path: PathBuf) -> PyResult<Materials> {
     Ok(Materials {
         list: Arc::new(list),
         source: path.display().to_string(),
+        origin: Origin::File(path),
     })
 }
 
@@ -368,6 +394,7 @@ fn parse_materials(py: Python<'_>, text: &str, source: &str) -> PyResult<Materia
     Ok(Materials {
         list: Arc::new(list),
         source: source.to_string(),
+        origin: Origin::Text(text.to_string()),
     })
 }
 
@@ -377,6 +404,7 @@ fn presets() -> Materials {
     Materials {
         list: Arc::new(vkbrdf::material::presets::all()),
         source: "the presets".to_string(),
+        origin: Origin::Presets,
     }
 }
 

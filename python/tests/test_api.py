@@ -66,6 +66,16 @@ def test_c_contiguous_float32_is_not_copied(mats):
     assert peak >= 200_000 * 10 * 4
 
 
+def test_misaligned_float32_is_evaluated(mats):
+    # A float32 array one byte off alignment (as unpickled buffers can be) is copied first.
+    t = make_tuples(100).astype(np.float32)
+    raw = bytearray(t.nbytes + 1)
+    mis = np.frombuffer(raw, dtype=np.float32, offset=1, count=t.size).reshape(t.shape)
+    mis[...] = t
+    assert not mis.flags.aligned and mis.flags.c_contiguous
+    assert np.array_equal(vkbrdf.evaluate(mats, mis, backend="cpu"), vkbrdf.evaluate(mats, t, backend="cpu"))
+
+
 def test_native_reads_in_place(mats):
     t = make_tuples(10).astype(np.float32)
     *_, in_place = vkbrdf._native.evaluate(mats, t, "cpu", False, "exact", False)

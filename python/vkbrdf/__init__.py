@@ -66,6 +66,15 @@ def parse_materials(text, source="<string>"):
     return _native.parse_materials(text, source)
 
 
+def _rebuild_materials(kind, payload, source):
+    """Unpickles a Materials (see ``Materials.__reduce__``)."""
+    if kind == "text":
+        return _native.parse_materials(payload, source)
+    if kind == "file":
+        return _native.load_materials(payload)
+    return _native.presets()
+
+
 _FLOATS = (_np.dtype(_np.float32), _np.dtype(_np.float64))
 
 
@@ -80,9 +89,11 @@ def _tuples_array(tuples):
         raise BatchError(
             f"tuples: expected a 2-D array of shape (n, 10) or (n, 13), found shape {a.shape}"
         )
-    # No copy when the array already is C-contiguous float32: the engine reads it in place.
-    # float64 is rounded to float32 (nearest even), as `vkbrdf eval` rounds a float64 file.
-    return _np.ascontiguousarray(a, dtype=_np.float32)
+    # No copy when the array already is C-contiguous, aligned float32: the engine reads it in
+    # place. (Arrays unpickled from a byte stream, as Dask workers receive them, may be
+    # misaligned: those are copied.) float64 is rounded to float32 (nearest even), as
+    # `vkbrdf eval` rounds a float64 file.
+    return _np.require(a, dtype=_np.float32, requirements=["C_CONTIGUOUS", "ALIGNED"])
 
 
 def _vectors(name, x):
