@@ -59,6 +59,8 @@ def test_agrees_with_mitsuba_roughconductor(tmp_path, distribution):
     assert r.returncode == 0, r.stderr
     theirs = np.load(tmp_path / "f.npy")
     ours = vkbrdf.evaluate(material(distribution), t, backend="reference")
-    # Mitsuba evaluates in float32 throughout; the reference is f64 rounded once.
-    assert np.allclose(ours, theirs, rtol=2e-3, atol=1e-6), np.max(
+    # Mitsuba evaluates in float32 throughout; the reference is f64 rounded once. Measured
+    # (mitsuba 3.9.1, 20 000 tuples): max relative difference 1.2e-6 (ggx), 6.8e-6
+    # (beckmann with Walter's G1).
+    assert np.allclose(ours, theirs, rtol=5e-5, atol=1e-6), np.max(
         np.abs(ours - theirs) / np.maximum(np.abs(ours), 1e-6))
