@@ -108,7 +108,7 @@ fn the_common_groups_run_in_the_lanes_and_the_rest_falls_back() {
 }
 
 /// Rows over several materials in an interleaved order, with invalid and below-horizon rows.
-fn mixed_batch(n: usize) -> (Batch, Vec<Material>) {
+fn mixed_batch(n: usize) -> (Batch<'static>, Vec<Material>) {
     let mats = materials(
         r#"
         [[material]]

@@ -8,7 +8,7 @@
 //! built-in a Python user catches: `ValueError`, `RuntimeError`, `OSError`).
 //!
 //! Ctrl-C: while the engine runs, the calling thread waits for it and checks for pending
-//! signals (`Python::check_signals`) every [`SIGNAL_POLL`]; on `KeyboardInterrupt` it sets
+//! signals (`Python::check_signals`) every 20 ms; on `KeyboardInterrupt` it sets
 //! the engine's [`Cancel`] token, waits for the engine to stop at its next chunk, and
 //! raises the interrupt.
 
@@ -45,6 +45,10 @@ pub struct Materials {
     source: String,
     origin: Origin,
 }
+
+/// What `Materials.__reduce__` returns: the rebuilding function and its arguments
+/// (kind, payload, source).
+type Reduced<'py> = (Bound<'py, PyAny>, (&'static str, String, String));
 
 /// Where a [`Materials`] came from: what pickling sends to another process (a Dask or Ray
 /// worker), which parses it again there.
@@ -100,23 +104,26 @@ impl Materials {
     /// The index of the material called `name`; a `MaterialError` naming the defined
     /// ones when there is none.
     fn index(&self, py: Python<'_>, name: &str) -> PyResult<usize> {
-        self.list.iter().position(|m| m.name == name).ok_or_else(|| {
-            let names: Vec<&str> = self.list.iter().map(|m| m.name.as_str()).collect();
-            raise(
-                py,
-                "MaterialError",
-                format!(
-                    "material `{name}` is not defined in {}; it defines: {}",
-                    self.source,
-                    names.join(", ")
-                ),
-            )
-        })
+        self.list
+            .iter()
+            .position(|m| m.name == name)
+            .ok_or_else(|| {
+                let names: Vec<&str> = self.list.iter().map(|m| m.name.as_str()).collect();
+                raise(
+                    py,
+                    "MaterialError",
+                    format!(
+                        "material `{name}` is not defined in {}; it defines: {}",
+                        self.source,
+                        names.join(", ")
+                    ),
+                )
+            })
     }
 
     /// Pickling: `vkbrdf._rebuild_materials(kind, payload, source)` parses the text, reads
     /// the file or takes the presets again in the receiving process.
-    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, (&'static str, String, String))> {
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<Reduced<'py>> {
         let rebuild = py.import("vkbrdf")?.getattr("_rebuild_materials")?;
         let (kind, payload) = match &self.origin {
             Origin::Text(t) => ("text", t.clone()),
@@ -136,7 +143,11 @@ impl Materials {
             .iter()
             .map(|m| format!("{}: {}", m.name, model_name(m)))
             .collect();
-        format!("<vkbrdf.Materials from {}: {}>", self.source, items.join(", "))
+        format!(
+            "<vkbrdf.Materials from {}: {}>",
+            self.source,
+            items.join(", ")
+        )
     }
 }
 
@@ -175,10 +186,32 @@ fn to_py(py: Python<'_>, e: Error) -> PyErr {
             "MaterialError",
             e.to_string(),
             &[
-                ("source", m.source_name.clone().into_pyobject(py).unwrap().into_any().unbind()),
-                ("line", m.line.into_pyobject(py).unwrap().into_any().unbind()),
-                ("material", m.material.clone().into_pyobject(py).unwrap().into_any().unbind()),
-                ("key", m.key.clone().into_pyobject(py).unwrap().into_any().unbind()),
+                (
+                    "source",
+                    m.source_name
+                        .clone()
+                        .into_pyobject(py)
+                        .unwrap()
+                        .into_any()
+                        .unbind(),
+                ),
+                (
+                    "line",
+                    m.line.into_pyobject(py).unwrap().into_any().unbind(),
+                ),
+                (
+                    "material",
+                    m.material
+                        .clone()
+                        .into_pyobject(py)
+                        .unwrap()
+                        .into_any()
+                        .unbind(),
+                ),
+                (
+                    "key",
+                    m.key.clone().into_pyobject(py).unwrap().into_any().unbind(),
+                ),
             ],
         ),
         Error::Batch { .. } => error_instance(py, "BatchError", e.to_string(), &[]),
@@ -191,9 +224,18 @@ fn to_py(py: Python<'_>, e: Error) -> PyErr {
             "BatchError",
             format!("{TUPLES}: {e} (strict=True)"),
             &[
-                ("invalid", invalid.into_pyobject(py).unwrap().into_any().unbind()),
-                ("total", total.into_pyobject(py).unwrap().into_any().unbind()),
-                ("first_invalid", first_row.into_pyobject(py).unwrap().into_any().unbind()),
+                (
+                    "invalid",
+                    invalid.into_pyobject(py).unwrap().into_any().unbind(),
+                ),
+                (
+                    "total",
+                    total.into_pyobject(py).unwrap().into_any().unbind(),
+                ),
+                (
+                    "first_invalid",
+                    first_row.into_pyobject(py).unwrap().into_any().unbind(),
+                ),
             ],
         ),
         Error::Io { path, source } => {
@@ -216,10 +258,11 @@ fn to_py(py: Python<'_>, e: Error) -> PyErr {
 /// subclass), so `.errno`, `.strerror` and `.filename` are set as on any OSError; `message`
 /// is used when the problem is not an OS error.
 fn file_error(py: Python<'_>, errno: Option<i32>, message: String, path: &Path) -> PyResult<PyErr> {
-    let value = py
-        .import("vkbrdf._errors")?
-        .getattr("file_error")?
-        .call1((errno, message, path.display().to_string()))?;
+    let value = py.import("vkbrdf._errors")?.getattr("file_error")?.call1((
+        errno,
+        message,
+        path.display().to_string(),
+    ))?;
     Ok(PyErr::from_value(value))
 }
 
@@ -255,12 +298,11 @@ fn run_engine<T: Send>(
             let (tx, rx) = mpsc::channel();
             let token = cancel.clone();
             scope.spawn(move || {
-                let result = choice::open(kind, None, VulkanOptions::default()).and_then(
-                    |mut backend| {
+                let result =
+                    choice::open(kind, None, VulkanOptions::default()).and_then(|mut backend| {
                         backend.set_cancel(token.clone());
                         work(backend.as_mut(), &token)
-                    },
-                );
+                    });
                 // The receiver waits for this message; it cannot have gone.
                 let _ = tx.send(result);
             });
@@ -278,7 +320,9 @@ fn run_engine<T: Send>(
                     }
                     Err(RecvTimeoutError::Disconnected) => {
                         return (
-                            Err(Error::Unsupported("the engine thread stopped without a result".into())),
+                            Err(Error::Unsupported(
+                                "the engine thread stopped without a result".into(),
+                            )),
                             interrupt,
                         )
                     }
@@ -329,9 +373,7 @@ fn evaluate<'py>(
     let list = precision::apply_all(&materials.list, precision);
     // As `vkbrdf eval` does: measured materials go to the reference unless a backend is
     // named (only it evaluates them).
-    if kind == Kind::Auto
-        && list.iter().any(|m| matches!(m.model, Model::Measured(_)))
-    {
+    if kind == Kind::Auto && list.iter().any(|m| matches!(m.model, Model::Measured(_))) {
         kind = Kind::Reference;
     }
     let source = Path::new(TUPLES);
@@ -341,7 +383,9 @@ fn evaluate<'py>(
         .map_err(|e| to_py(py, e))?;
     let in_place = batch.is_borrowed();
     let request = Request { terms };
-    let out = run_engine(py, kind, |backend, _| backend.evaluate(&batch, &list, &request))?;
+    let out = run_engine(py, kind, |backend, _| {
+        backend.evaluate(&batch, &list, &request)
+    })?;
     let c: Counts = out.counts;
     if strict && c.invalid > 0 {
         return Err(to_py(
@@ -368,7 +412,12 @@ fn evaluate<'py>(
 }
 
 /// `values` as an `(n, columns)` array, without a copy.
-fn rows(py: Python<'_>, values: Vec<f32>, n: usize, columns: usize) -> PyResult<Bound<'_, PyArray2<f32>>> {
+fn rows(
+    py: Python<'_>,
+    values: Vec<f32>,
+    n: usize,
+    columns: usize,
+) -> PyResult<Bound<'_, PyArray2<f32>>> {
     let a = Array2::from_shape_vec((n, columns), values)
         .map_err(|e| raise(py, "Error", format!("internal: output shape: {e}")))?;
     Ok(a.into_pyarray(py))
@@ -429,11 +478,16 @@ fn table_slice<'py>(
 ) -> PyResult<(Bound<'py, PyArray3<f32>>, Option<Bound<'py, PyArray3<f32>>>)> {
     let kind = parse_backend(py, backend)?;
     let g = grid(py, width, height)?;
-    let material = materials
-        .list
-        .get(index)
-        .cloned()
-        .ok_or_else(|| raise(py, "UsageError", format!("material index {index} is out of range 0..{}", materials.list.len())))?;
+    let material = materials.list.get(index).cloned().ok_or_else(|| {
+        raise(
+            py,
+            "UsageError",
+            format!(
+                "material index {index} is out of range 0..{}",
+                materials.list.len()
+            ),
+        )
+    })?;
     let spacing = if linear {
         slice::Spacing::Linear
     } else {
@@ -457,11 +511,17 @@ fn table_slice<'py>(
 
 fn microfacet(py: Python<'_>, distribution: &str, geometry: &str) -> PyResult<Microfacet> {
     let d = DistributionKind::from_toml_name(distribution).ok_or_else(|| {
-        let names: Vec<&str> = DistributionKind::ALL.iter().map(|d| d.toml_name()).collect();
+        let names: Vec<&str> = DistributionKind::ALL
+            .iter()
+            .map(|d| d.toml_name())
+            .collect();
         raise(
             py,
             "UsageError",
-            format!("distribution: unknown `{distribution}`; expected one of: {}", names.join(", ")),
+            format!(
+                "distribution: unknown `{distribution}`; expected one of: {}",
+                names.join(", ")
+            ),
         )
     })?;
     let g = Geometry::from_toml_name(geometry).ok_or_else(|| {
@@ -469,7 +529,10 @@ fn microfacet(py: Python<'_>, distribution: &str, geometry: &str) -> PyResult<Mi
         raise(
             py,
             "UsageError",
-            format!("geometry: unknown `{geometry}`; expected one of: {}", names.join(", ")),
+            format!(
+                "geometry: unknown `{geometry}`; expected one of: {}",
+                names.join(", ")
+            ),
         )
     })?;
     let spec = Microfacet {
@@ -504,7 +567,12 @@ fn table_albedo<'py>(
         let e = albedo::directional_albedo(&mut runner, &spec, &albedo::grid_points(g), samples)?;
         let avg = if average {
             let alphas: Vec<f64> = (0..g.height).map(|j| texel_centre(j, g.height)).collect();
-            Some(albedo::average_albedo(&mut runner, &spec, &alphas, samples)?)
+            Some(albedo::average_albedo(
+                &mut runner,
+                &spec,
+                &alphas,
+                samples,
+            )?)
         } else {
             None
         };

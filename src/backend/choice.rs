@@ -79,7 +79,10 @@ pub fn auto_choice(device: Option<&DeviceSelector>) -> (bool, String) {
 
 /// Opens the Vulkan backend on `device`, else the `VKBRDF_DEVICE` environment variable's
 /// device, else the best one.
-pub fn open_vulkan(device: Option<DeviceSelector>, options: VulkanOptions) -> Result<VulkanBackend> {
+pub fn open_vulkan(
+    device: Option<DeviceSelector>,
+    options: VulkanOptions,
+) -> Result<VulkanBackend> {
     VulkanBackend::new(device.or_else(DeviceSelector::from_env), options)
 }
 

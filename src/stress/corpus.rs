@@ -382,7 +382,10 @@ pub fn corpus(n: usize, seed: u64) -> (Vec<Material>, Batch<'static>, Vec<Case>)
 
 /// Rows `range` of the corpus of seed `seed`: each row has its own RNG stream, so a chunk
 /// is identical to the same rows of the whole corpus (long runs go chunk by chunk).
-pub fn corpus_rows(range: std::ops::Range<usize>, seed: u64) -> (Vec<Material>, Batch<'static>, Vec<Case>) {
+pub fn corpus_rows(
+    range: std::ops::Range<usize>,
+    seed: u64,
+) -> (Vec<Material>, Batch<'static>, Vec<Case>) {
     let materials = materials();
     let m = materials.len();
     let mut data = Vec::with_capacity(range.len() * COLUMNS_TANGENT);
