@@ -19,13 +19,13 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 use std::path::{Path, PathBuf};
 use std::sync::mpsc::{self, RecvTimeoutError};
-use std::sync::Arc;
+use std::sync::{Arc, Mutex, OnceLock};
 use std::time::Duration;
 use vkbrdf::backend::choice::{self, Kind};
 use vkbrdf::backend::{Backend, Counts, Request};
 use vkbrdf::batch::Batch;
 use vkbrdf::cancel::Cancel;
-use vkbrdf::gpu::VulkanOptions;
+use vkbrdf::gpu::{VulkanBackend, VulkanOptions};
 use vkbrdf::material::{DistributionKind, Geometry, Material, Model};
 use vkbrdf::precision::{self, Precision};
 use vkbrdf::table::albedo::{self, Lobe, Microfacet};
@@ -284,9 +284,83 @@ fn parse_precision(py: Python<'_>, name: &str) -> PyResult<Precision> {
     }
 }
 
-/// Runs `work` on an engine of `kind` opened on a worker thread, with the GIL released;
-/// Ctrl-C (a pending `KeyboardInterrupt`) cancels it. The engine is opened per call, so
-/// calls from several threads share nothing but the immutable inputs.
+/// Vulkan engines that earlier calls opened, kept for later calls (opening one, the device
+/// and its pipelines, takes about 0.3 s on lavapipe), keyed by the `VKBRDF_DEVICE` value
+/// they were opened under. A call takes one out, so no two calls share an engine; an
+/// engine whose call failed is dropped, not returned.
+static VULKAN_POOL: Mutex<Vec<(Option<String>, VulkanBackend)>> = Mutex::new(Vec::new());
+
+/// Engines kept in [`VULKAN_POOL`] at most (more calls at once open more engines).
+const VULKAN_POOL_SIZE: usize = 4;
+
+/// Whether `auto` picks Vulkan when `VKBRDF_DEVICE` is unset: asked once per process
+/// (enumerating the devices takes tens of milliseconds).
+static AUTO_IS_VULKAN: OnceLock<bool> = OnceLock::new();
+
+fn device_env() -> Option<String> {
+    std::env::var("VKBRDF_DEVICE")
+        .ok()
+        .filter(|s| !s.trim().is_empty())
+}
+
+/// `kind` with `auto` resolved to `vulkan` or `cpu` as the CLI resolves it.
+fn resolve(kind: Kind) -> Kind {
+    if kind != Kind::Auto {
+        return kind;
+    }
+    let vulkan =
+        device_env().is_some() || *AUTO_IS_VULKAN.get_or_init(|| choice::auto_choice(None).0);
+    if vulkan {
+        Kind::Vulkan
+    } else {
+        Kind::Cpu
+    }
+}
+
+/// Runs `work` on a fresh engine of `kind`, or a pooled Vulkan one, with `cancel` set.
+fn with_engine<T>(
+    kind: Kind,
+    cancel: &Cancel,
+    work: impl FnOnce(&mut dyn Backend, &Cancel) -> vkbrdf::Result<T>,
+) -> vkbrdf::Result<T> {
+    let lock = || {
+        VULKAN_POOL
+            .lock()
+            .unwrap_or_else(|poisoned| poisoned.into_inner())
+    };
+    match resolve(kind) {
+        Kind::Vulkan => {
+            let key = device_env();
+            let pooled = {
+                let mut pool = lock();
+                let at = pool.iter().position(|(k, _)| *k == key);
+                at.map(|i| pool.swap_remove(i).1)
+            };
+            let mut backend = match pooled {
+                Some(b) => b,
+                None => choice::open_vulkan(None, VulkanOptions::default())?,
+            };
+            backend.set_cancel(cancel.clone());
+            let result = work(&mut backend, cancel);
+            if result.is_ok() {
+                let mut pool = lock();
+                if pool.len() < VULKAN_POOL_SIZE {
+                    pool.push((key, backend));
+                }
+            }
+            result
+        }
+        other => {
+            let mut backend = choice::open(other, None, VulkanOptions::default())?;
+            backend.set_cancel(cancel.clone());
+            work(backend.as_mut(), cancel)
+        }
+    }
+}
+
+/// Runs `work` on an engine of `kind` on a worker thread, with the GIL released; Ctrl-C
+/// (a pending `KeyboardInterrupt`) cancels it. Calls from several threads share nothing
+/// but the immutable inputs (a pooled Vulkan engine serves one call at a time).
 fn run_engine<T: Send>(
     py: Python<'_>,
     kind: Kind,
@@ -298,11 +372,7 @@ fn run_engine<T: Send>(
             let (tx, rx) = mpsc::channel();
             let token = cancel.clone();
             scope.spawn(move || {
-                let result =
-                    choice::open(kind, None, VulkanOptions::default()).and_then(|mut backend| {
-                        backend.set_cancel(token.clone());
-                        work(backend.as_mut(), &token)
-                    });
+                let result = with_engine(kind, &token, work);
                 // The receiver waits for this message; it cannot have gone.
                 let _ = tx.send(result);
             });

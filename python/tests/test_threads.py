@@ -63,19 +63,20 @@ def test_gil_released_during_evaluation(mats, tiny_switch_interval):
 
 def test_concurrent_calls_from_threads_agree(mats):
     t = make_tuples(20_000, seed=11)
-    expected = {b: vkbrdf.evaluate(mats, t, backend=b, terms=True) for b in ("cpu", "reference")}
+    backends = ("cpu", "reference", "vulkan")
+    expected = {b: vkbrdf.evaluate(mats, t, backend=b, terms=True) for b in backends}
     results = {}
 
     def work(i):
-        b = ("cpu", "reference")[i % 2]
+        b = backends[i % 3]
         results[i] = (b, vkbrdf.evaluate(mats, t, backend=b, terms=True))
 
-    threads = [threading.Thread(target=work, args=(i,)) for i in range(8)]
+    threads = [threading.Thread(target=work, args=(i,)) for i in range(9)]
     for th in threads:
         th.start()
     for th in threads:
         th.join()
-    assert len(results) == 8
+    assert len(results) == 9
     for b, (f, terms) in results.values():
         assert np.array_equal(f, expected[b][0]) and np.array_equal(terms, expected[b][1])
 
@@ -110,3 +111,16 @@ def test_ctrl_c_cancels_a_long_evaluation(mats):
     assert not returned
     # The module is usable afterwards.
     assert vkbrdf.evaluate(mats, t[:10], backend="reference").shape == (10, 3)
+
+
+def test_pooled_vulkan_engine_serves_another_table(mats):
+    # Vulkan engines are kept between calls; one that served one table must give for the
+    # next table what a fresh process gives (the CLI, in test_cli_agreement, for `mats`).
+    t = make_tuples(2000, seed=4)
+    first = vkbrdf.evaluate(mats, t, backend="vulkan")
+    p = vkbrdf.presets()
+    tp = make_tuples(2000, seed=4, tangents=False, material_count=len(p))
+    other = vkbrdf.evaluate(p, tp, backend="vulkan")
+    assert np.allclose(other, vkbrdf.evaluate(p, tp, backend="reference"), rtol=1e-4, atol=1e-6)
+    again = vkbrdf.evaluate(mats, t, backend="vulkan")
+    assert np.array_equal(first, again)
