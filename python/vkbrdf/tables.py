@@ -49,6 +49,8 @@ def slice(material, materials=None, *, size="90x90", linear=False, terms=False, 
     ``vkbrdf table slice`` computes it; see the stub for the layout."""
     table = _materials(materials)
     index = table.index(material) if isinstance(material, str) else int(material)
+    if not 0 <= index < len(table):
+        raise _UsageError(f"material index {index} is out of range 0..{len(table)}")
     w, h = _checked_size(size)
     f, t = _native.table_slice(table, index, w, h, bool(linear), bool(terms), str(backend))
     return (f, t) if terms else f
