@@ -1,8 +1,6 @@
 //! The one evaluation interface: the CPU reference and the Vulkan evaluator both implement
 //! [`Backend`], so tests, tables and benchmarks take any backend.
 
-pub mod choice;
-
 use crate::batch::Batch;
 use crate::directions::{ImportanceJob, SliceGrid};
 use crate::error::Result;

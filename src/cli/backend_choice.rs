@@ -1,6 +1,7 @@
 //! `--backend`, `--device` and `--max-gpu-memory`: which evaluator a command runs on.
 
-use vkbrdf::backend::{choice, Backend};
+use vkbrdf::backend::Backend;
+use vkbrdf::backend_choice as choice;
 use vkbrdf::gpu::{DeviceSelector, VulkanBackend, VulkanOptions};
 
 /// The evaluators a command can run on.

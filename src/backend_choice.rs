@@ -1,7 +1,7 @@
 //! Which engine evaluates: the names `auto`, `vulkan`, `cpu` and `reference` that the CLI's
 //! `--backend` and the Python package's `backend=` accept, and the rule `auto` follows.
 
-use super::Backend;
+use crate::backend::Backend;
 use crate::cpu::CpuEngine;
 use crate::error::{Error, Result};
 use crate::gpu::{DeviceSelector, VulkanBackend, VulkanOptions};
