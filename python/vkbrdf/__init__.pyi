@@ -163,38 +163,7 @@ def evaluate(
     precision: str = ...,
     strict: bool = ...,
     return_counts: bool = ...,
-) -> Any: ...
-@overload
-def evaluate(
-    materials: Materials,
-    tuples: None = ...,
-    *,
-    l: _ArrayLike,
-    v: _ArrayLike,
-    n: _ArrayLike,
-    t: Optional[_ArrayLike] = ...,
-    material: Union[int, str, _ArrayLike] = ...,
-    backend: str = ...,
-    terms: bool = ...,
-    precision: str = ...,
-    strict: bool = ...,
-    return_counts: bool = ...,
-) -> Any: ...
-def evaluate(
-    materials: Materials,
-    tuples: Optional[_ArrayLike] = None,
-    *,
-    l: Optional[_ArrayLike] = None,
-    v: Optional[_ArrayLike] = None,
-    n: Optional[_ArrayLike] = None,
-    t: Optional[_ArrayLike] = None,
-    material: Union[int, str, _ArrayLike] = 0,
-    backend: str = "auto",
-    terms: bool = False,
-    precision: str = "exact",
-    strict: bool = False,
-    return_counts: bool = False,
-) -> Union[_F32, Tuple[_F32, _F32], Tuple[_F32, Counts], Tuple[_F32, _F32, Counts]]:
+) -> Any:
     """Evaluates the BRDF f (1/sr, RGB, without the cosine) of each tuple.
 
     Two forms:
@@ -239,6 +208,22 @@ def evaluate(
     >>> terms.shape, counts.invalid
     ((4, 6), 0)
     """
+@overload
+def evaluate(
+    materials: Materials,
+    tuples: None = ...,
+    *,
+    l: _ArrayLike,
+    v: _ArrayLike,
+    n: _ArrayLike,
+    t: Optional[_ArrayLike] = ...,
+    material: Union[int, str, _ArrayLike] = ...,
+    backend: str = ...,
+    terms: bool = ...,
+    precision: str = ...,
+    strict: bool = ...,
+    return_counts: bool = ...,
+) -> Any: ...
 
 def check(
     *, backend: str = "vulkan", tuples: int = 2000, seed: int = 1, only: Optional[str] = None

@@ -23,18 +23,7 @@ def slice(
     linear: bool = ...,
     terms: Literal[False] = ...,
     backend: str = ...,
-) -> npt.NDArray[np.float32]: ...
-@overload
-def slice(
-    material: Union[str, int],
-    materials: Union[None, Materials, str, "os.PathLike[str]"] = ...,
-    *,
-    size: _Size = ...,
-    linear: bool = ...,
-    terms: Literal[True],
-    backend: str = ...,
-) -> Tuple[npt.NDArray[np.float32], npt.NDArray[np.float32]]: ...
-def slice(material, materials=None, *, size="90x90", linear=False, terms=False, backend="auto"):
+) -> npt.NDArray[np.float32]:
     """f over half/difference angles at phi_d = 90 degrees (``vkbrdf table slice``).
 
     Returns f of shape ``(H, W, 3)`` (and with ``terms=True`` also the terms
@@ -47,6 +36,16 @@ def slice(material, materials=None, *, size="90x90", linear=False, terms=False, 
     >>> s.shape
     (90, 90, 3)
     """
+@overload
+def slice(
+    material: Union[str, int],
+    materials: Union[None, Materials, str, "os.PathLike[str]"] = ...,
+    *,
+    size: _Size = ...,
+    linear: bool = ...,
+    terms: Literal[True],
+    backend: str = ...,
+) -> Tuple[npt.NDArray[np.float32], npt.NDArray[np.float32]]: ...
 
 @overload
 def albedo(
@@ -57,7 +56,16 @@ def albedo(
     samples: int = ...,
     average: Literal[False] = ...,
     backend: str = ...,
-) -> npt.NDArray[np.float64]: ...
+) -> npt.NDArray[np.float64]:
+    """Directional albedo E(mu = cos_o, alpha) of Cook-Torrance with F = 1 (``vkbrdf table
+    albedo``): shape ``(H, W)``, x = mu, y = alpha, float64 (the CLI's EXR rounds it to
+    float32). ``average=True`` also returns E_avg(alpha) = 2 * integral of E(mu) mu dmu,
+    shape ``(H,)``. ``samples``: quasi-Monte Carlo points per texel, 1 to 2^26.
+
+    >>> E = vkbrdf.tables.albedo(size=(32, 32), samples=4096)
+    >>> E.shape
+    (32, 32)
+    """
 @overload
 def albedo(
     *,
@@ -68,16 +76,6 @@ def albedo(
     average: Literal[True],
     backend: str = ...,
 ) -> Tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]: ...
-def albedo(*, distribution="ggx", geometry="smith-correlated", size="32x32", samples=65536, average=False, backend="auto"):
-    """Directional albedo E(mu = cos_o, alpha) of Cook-Torrance with F = 1 (``vkbrdf table
-    albedo``): shape ``(H, W)``, x = mu, y = alpha, float64 (the CLI's EXR rounds it to
-    float32). ``average=True`` also returns E_avg(alpha) = 2 * integral of E(mu) mu dmu,
-    shape ``(H,)``. ``samples``: quasi-Monte Carlo points per texel, 1 to 2^26.
-
-    >>> E = vkbrdf.tables.albedo(size=(32, 32), samples=4096)
-    >>> E.shape
-    (32, 32)
-    """
 
 def dfg(*, distribution: str = "ggx", geometry: str = "smith-correlated", size: _Size = "32x32", samples: int = 65536, backend: str = "auto") -> npt.NDArray[np.float64]:
     """The split-sum DFG table (Karis 2013; ``vkbrdf table dfg``): shape ``(H, W, 2)``,
