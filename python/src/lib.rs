@@ -285,10 +285,14 @@ fn parse_precision(py: Python<'_>, name: &str) -> PyResult<Precision> {
 }
 
 /// Vulkan engines that earlier calls opened, kept for later calls (opening one, the device
-/// and its pipelines, takes about 0.3 s on lavapipe), keyed by the `VKBRDF_DEVICE` value
-/// they were opened under. A call takes one out, so no two calls share an engine; an
-/// engine whose call failed is dropped, not returned.
-static VULKAN_POOL: Mutex<Vec<(Option<String>, VulkanBackend)>> = Mutex::new(Vec::new());
+/// and its pipelines, takes about 0.6 s on lavapipe), keyed by the process that opened
+/// them and the `VKBRDF_DEVICE` value they were opened under. A call takes one out, so no
+/// two calls share an engine; an engine whose call failed is dropped, not returned.
+static VULKAN_POOL: Mutex<Vec<Pooled>> = Mutex::new(Vec::new());
+
+/// A pooled engine: the id of the process that opened it, the `VKBRDF_DEVICE` value, the
+/// engine.
+type Pooled = (u32, Option<String>, VulkanBackend);
 
 /// Engines kept in [`VULKAN_POOL`] at most (more calls at once open more engines).
 const VULKAN_POOL_SIZE: usize = 4;
@@ -331,10 +335,22 @@ fn with_engine<T>(
     match resolve(kind) {
         Kind::Vulkan => {
             let key = device_env();
+            let pid = std::process::id();
             let pooled = {
                 let mut pool = lock();
-                let at = pool.iter().position(|(k, _)| *k == key);
-                at.map(|i| pool.swap_remove(i).1)
+                // A child made by fork() inherits the parent's engines but not its Vulkan
+                // device: it must neither use nor destroy them (destroying would call into
+                // the driver with the parent's handles), so they are forgotten.
+                let mut i = 0;
+                while i < pool.len() {
+                    if pool[i].0 == pid {
+                        i += 1;
+                    } else {
+                        std::mem::forget(pool.swap_remove(i));
+                    }
+                }
+                let at = pool.iter().position(|(_, k, _)| *k == key);
+                at.map(|i| pool.swap_remove(i).2)
             };
             let mut backend = match pooled {
                 Some(b) => b,
@@ -345,7 +361,7 @@ fn with_engine<T>(
             if result.is_ok() {
                 let mut pool = lock();
                 if pool.len() < VULKAN_POOL_SIZE {
-                    pool.push((key, backend));
+                    pool.push((pid, key, backend));
                 }
             }
             result

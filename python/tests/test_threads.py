@@ -124,3 +124,30 @@ def test_pooled_vulkan_engine_serves_another_table(mats):
     assert np.allclose(other, vkbrdf.evaluate(p, tp, backend="reference"), rtol=1e-4, atol=1e-6)
     again = vkbrdf.evaluate(mats, t, backend="vulkan")
     assert np.array_equal(first, again)
+
+
+def _evaluate_in_child(queue, mats_text, tuples):
+    m = vkbrdf.parse_materials(mats_text, "m.toml")
+    queue.put(vkbrdf.evaluate(m, tuples, backend="vulkan"))
+
+
+def test_forked_child_opens_its_own_vulkan_engine(mats):
+    # The parent's pooled engine is not usable in a child made by fork(); the child
+    # opens its own and gets the same values.
+    import multiprocessing
+
+    t = make_tuples(500, seed=9)
+    parent = vkbrdf.evaluate(mats, t, backend="vulkan")  # leaves an engine in the pool
+    ctx = multiprocessing.get_context("fork")
+    queue = ctx.Queue()
+    child = ctx.Process(target=_evaluate_in_child, args=(queue, MATERIALS_TOML, t))
+    child.start()
+    try:
+        # Reusing the parent's engine hangs the child: a bounded wait, then the failure.
+        got = queue.get(timeout=60)
+        child.join(timeout=60)
+    finally:
+        if child.is_alive():
+            child.kill()
+    assert child.exitcode == 0
+    assert np.array_equal(got, parent)
