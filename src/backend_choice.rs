@@ -105,3 +105,21 @@ pub fn open(
         }
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_round_trip_and_an_unknown_name_lists_the_known_ones() {
+        for k in Kind::ALL {
+            assert_eq!(k.name().parse::<Kind>().unwrap(), k);
+        }
+        let e = "gpu".parse::<Kind>().unwrap_err().to_string();
+        assert_eq!(
+            e,
+            "unknown backend `gpu`; expected one of: auto, vulkan, cpu, reference"
+        );
+        assert!("Vulkan".parse::<Kind>().is_err());
+    }
+}

@@ -503,3 +503,34 @@ pub fn stage_npy_f32(
 pub fn memory_source() -> PathBuf {
     PathBuf::from("<memory>")
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_borrowed_batch_reads_the_callers_rows_in_place_and_is_checked_alike() {
+        let rows = vec![0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 1.0];
+        let b = Batch::borrowed(&rows, COLUMNS_PLAIN, 2, Path::new("tuples")).unwrap();
+        assert!(b.is_borrowed());
+        assert!(std::ptr::eq(b.as_slice(), rows.as_slice()));
+        assert_eq!(b.tuple(0).material, 1);
+        let owned = Batch::new(rows.clone(), COLUMNS_PLAIN, 2, Path::new("tuples")).unwrap();
+        assert!(!owned.is_borrowed());
+        assert_eq!(b, owned);
+        // The same checks, the same messages, as an owned batch.
+        let borrowed_err = Batch::borrowed(&rows, COLUMNS_PLAIN, 1, Path::new("tuples"))
+            .unwrap_err()
+            .to_string();
+        let owned_err = Batch::new(rows.clone(), COLUMNS_PLAIN, 1, Path::new("tuples"))
+            .unwrap_err()
+            .to_string();
+        assert_eq!(borrowed_err, owned_err);
+        assert!(
+            borrowed_err.contains("row 0: material value 1"),
+            "{borrowed_err}"
+        );
+        let cols = Batch::borrowed(&rows[..9], 9, 2, Path::new("tuples")).unwrap_err();
+        assert!(cols.to_string().contains("found 9"), "{cols}");
+    }
+}
