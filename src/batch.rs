@@ -9,6 +9,7 @@ pub use rows::NpyRows;
 use crate::cancel::Cancel;
 use crate::error::{Error, Result};
 use crate::material::Material;
+use std::borrow::Cow;
 use std::fs::File;
 use std::io::{BufReader, Read};
 use std::path::{Path, PathBuf};
@@ -20,14 +21,16 @@ pub const COLUMNS_TANGENT: usize = 13;
 /// Columns of a local-frame batch ([`LocalBatch`]): `Lx Ly Lz Vx Vy Vz`, N = +z.
 pub const COLUMNS_LOCAL: usize = 6;
 
-/// A validated batch of tuples, stored row-major as `f32`.
+/// A validated batch of tuples, stored row-major as `f32`: owned (`Batch<'static>`, what
+/// [`Batch::new`] and the readers make) or borrowed from the caller's buffer
+/// ([`Batch::borrowed`]: a NumPy array evaluated without a copy).
 ///
 /// Construction checks the shape and that every material value is an integer index into
 /// the material table; direction problems (zero, NaN) are not batch errors but invalid
 /// tuples, counted at evaluation (FORMULAS.md §1).
 #[derive(Debug, Clone, PartialEq)]
-pub struct Batch {
-    data: Vec<f32>,
+pub struct Batch<'a> {
+    data: Cow<'a, [f32]>,
     columns: usize,
 }
 
@@ -46,7 +49,7 @@ pub struct Tuple {
     pub t: Option<[f32; 3]>,
 }
 
-impl Batch {
+impl Batch<'static> {
     /// Wraps row-major data with `columns` (10 or 13) per row. `source` names the origin
     /// in errors; `material_count` is the size of the material table.
     pub fn new(
@@ -54,7 +57,7 @@ impl Batch {
         columns: usize,
         material_count: usize,
         source: &Path,
-    ) -> Result<Batch> {
+    ) -> Result<Batch<'static>> {
         Batch::new_at(data, columns, material_count, source, 0)
     }
 
@@ -66,7 +69,35 @@ impl Batch {
         material_count: usize,
         source: &Path,
         first_row: u64,
-    ) -> Result<Batch> {
+    ) -> Result<Batch<'static>> {
+        Batch::checked(Cow::Owned(data), columns, material_count, source, first_row)
+    }
+}
+
+impl<'a> Batch<'a> {
+    /// [`Batch::new`] on the caller's row-major data, without copying it (the Python
+    /// binding evaluates a C-contiguous float32 array in place).
+    pub fn borrowed(
+        data: &'a [f32],
+        columns: usize,
+        material_count: usize,
+        source: &Path,
+    ) -> Result<Batch<'a>> {
+        Batch::checked(Cow::Borrowed(data), columns, material_count, source, 0)
+    }
+
+    /// Whether the batch borrows its data ([`Batch::borrowed`]) rather than owning a copy.
+    pub fn is_borrowed(&self) -> bool {
+        matches!(self.data, Cow::Borrowed(_))
+    }
+
+    fn checked(
+        data: Cow<'a, [f32]>,
+        columns: usize,
+        material_count: usize,
+        source: &Path,
+        first_row: u64,
+    ) -> Result<Batch<'a>> {
         let err = |message: String| Error::Batch {
             path: source.to_owned(),
             message,
@@ -93,8 +124,9 @@ impl Batch {
     }
 
     /// The row-major data, for reuse (see [`NpyRows::next_chunk_reusing`]).
+    /// (A borrowed batch gives a copy.)
     pub fn into_data(self) -> Vec<f32> {
-        self.data
+        self.data.into_owned()
     }
 
     fn first_bad_material(&self, material_count: usize) -> Option<(usize, f32)> {
@@ -156,10 +188,12 @@ impl Batch {
             t: (self.columns == COLUMNS_TANGENT).then(|| [r[10], r[11], r[12]]),
         }
     }
+}
 
+impl Batch<'static> {
     /// Reads a batch from a `.npy` file: float32 or float64 (float64 is rounded to float32,
     /// the precision every backend evaluates from), C order, shape `(n, 10)` or `(n, 13)`.
-    pub fn read_npy(path: &Path, material_count: usize) -> Result<Batch> {
+    pub fn read_npy(path: &Path, material_count: usize) -> Result<Batch<'static>> {
         let (file, len) = open_sized(path)?;
         Batch::read_npy_from(file, len, material_count, path)
     }
@@ -171,7 +205,7 @@ impl Batch {
         len: Option<u64>,
         material_count: usize,
         source: &Path,
-    ) -> Result<Batch> {
+    ) -> Result<Batch<'static>> {
         let (data, shape) = read_npy_f32_from(reader, len, source)?;
         let err = |message: String| Error::Batch {
             path: source.to_owned(),
@@ -257,7 +291,7 @@ impl LocalBatch {
 
     /// Rows `range` as an ordinary 10-column [`Batch`] (N = (0, 0, 1), the material column
     /// filled in), for engines that read rows.
-    pub fn rows(&self, range: std::ops::Range<usize>) -> Batch {
+    pub fn rows(&self, range: std::ops::Range<usize>) -> Batch<'static> {
         let mut data = Vec::with_capacity(range.len() * COLUMNS_PLAIN);
         let m = self.material as f32;
         for r in self.data[range.start * COLUMNS_LOCAL..range.end * COLUMNS_LOCAL]
@@ -267,7 +301,7 @@ impl LocalBatch {
             data.extend_from_slice(&[0.0, 0.0, 1.0, m]);
         }
         Batch {
-            data,
+            data: data.into(),
             columns: COLUMNS_PLAIN,
         }
     }
@@ -632,4 +666,35 @@ pub fn stage_npy_f32(
 /// The path as a `PathBuf` for in-memory batches in errors.
 pub fn memory_source() -> PathBuf {
     PathBuf::from("<memory>")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_borrowed_batch_reads_the_callers_rows_in_place_and_is_checked_alike() {
+        let rows = vec![0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 1.0];
+        let b = Batch::borrowed(&rows, COLUMNS_PLAIN, 2, Path::new("tuples")).unwrap();
+        assert!(b.is_borrowed());
+        assert!(std::ptr::eq(b.as_slice(), rows.as_slice()));
+        assert_eq!(b.tuple(0).material, 1);
+        let owned = Batch::new(rows.clone(), COLUMNS_PLAIN, 2, Path::new("tuples")).unwrap();
+        assert!(!owned.is_borrowed());
+        assert_eq!(b, owned);
+        // The same checks, the same messages, as an owned batch.
+        let borrowed_err = Batch::borrowed(&rows, COLUMNS_PLAIN, 1, Path::new("tuples"))
+            .unwrap_err()
+            .to_string();
+        let owned_err = Batch::new(rows.clone(), COLUMNS_PLAIN, 1, Path::new("tuples"))
+            .unwrap_err()
+            .to_string();
+        assert_eq!(borrowed_err, owned_err);
+        assert!(
+            borrowed_err.contains("row 0: material value 1"),
+            "{borrowed_err}"
+        );
+        let cols = Batch::borrowed(&rows[..9], 9, 2, Path::new("tuples")).unwrap_err();
+        assert!(cols.to_string().contains("found 9"), "{cols}");
+    }
 }

@@ -531,7 +531,7 @@ fn lobe_width(m: &Material) -> f64 {
 }
 
 /// `tuples` rows for `c` (material `i % MATERIALS_PER_COMBINATION` on row `i`), seeded.
-pub fn generate(c: &Combination, tuples: usize, seed: u64) -> Result<Batch> {
+pub fn generate(c: &Combination, tuples: usize, seed: u64) -> Result<Batch<'static>> {
     let mut rng = Pcg64Mcg::seed_from_u64(seed.wrapping_add(0x5851_f42d_4c95_7f2d));
     let cols = if c.anisotropic {
         COLUMNS_TANGENT

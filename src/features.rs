@@ -266,7 +266,7 @@ mod tests {
     use crate::precision::apply;
     use std::path::Path;
 
-    fn batch(materials: &[usize], count: usize) -> Batch {
+    fn batch(materials: &[usize], count: usize) -> Batch<'static> {
         let data = materials
             .iter()
             .flat_map(|&m| [0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0, m as f32])

@@ -30,6 +30,7 @@
 
 pub mod atomic;
 pub mod backend;
+pub mod backend_choice;
 pub mod batch;
 pub mod bench;
 pub mod cancel;

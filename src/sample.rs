@@ -18,7 +18,7 @@ pub fn unit_vector(rng: &mut impl Rng) -> [f64; 3] {
 /// L and V are uniform on the hemisphere of a random normal N (so almost every tuple is
 /// above the horizon), with random lengths in [0.5, 2) to exercise normalisation; with
 /// `tangents`, a random T not parallel to N is appended.
-pub fn sample_batch(n: usize, material_count: usize, seed: u64, tangents: bool) -> Batch {
+pub fn sample_batch(n: usize, material_count: usize, seed: u64, tangents: bool) -> Batch<'static> {
     let mut rng = Pcg64Mcg::seed_from_u64(seed);
     let cols = if tangents {
         COLUMNS_TANGENT

@@ -280,7 +280,7 @@ pub fn write_chunks(
 
 /// One chunk as read: rows, or the local-frame form.
 enum Chunk {
-    Rows(Batch),
+    Rows(Batch<'static>),
     Local(LocalBatch),
 }
 

@@ -36,7 +36,7 @@ exponent = 60
 
 /// A batch of `n` rows cycling through the 4 materials in a scrambled order, with invalid
 /// rows at 7 (material 3, last in the upload order) and from 100 on (material 0, first).
-fn batch(n: usize) -> Batch {
+fn batch(n: usize) -> Batch<'static> {
     let sampled = vkbrdf::sample::sample_batch(n, 4, 11, true);
     let cols = sampled.columns();
     let mut data = sampled.as_slice().to_vec();

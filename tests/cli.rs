@@ -63,7 +63,7 @@ fn text(o: &Output) -> String {
     )
 }
 
-fn setup(dir: &Path) -> (String, String, Batch) {
+fn setup(dir: &Path) -> (String, String, Batch<'static>) {
     let m = dir.join("m.toml");
     std::fs::write(&m, MATERIALS).unwrap();
     let t = dir.join("t.npy");

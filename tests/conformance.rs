@@ -441,7 +441,7 @@ diffuse = 0.2
 /// Rows of every kind: valid, invalid (zero, NaN, inf in L, V, N; missing, zero or
 /// parallel tangents for the anisotropic materials), below the horizon, and valid rows
 /// whose vectors are 1e-20 or 1e20 long. The first invalid row is `first_invalid`.
-fn mixed_batch(n: usize, first_invalid: usize) -> Batch {
+fn mixed_batch(n: usize, first_invalid: usize) -> Batch<'static> {
     use rand::{Rng, SeedableRng};
     let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(9);
     let mut data = Vec::with_capacity(n * 13);

@@ -108,7 +108,7 @@ fn the_common_groups_run_in_the_lanes_and_the_rest_falls_back() {
 }
 
 /// Rows over several materials in an interleaved order, with invalid and below-horizon rows.
-fn mixed_batch(n: usize) -> (Batch, Vec<Material>) {
+fn mixed_batch(n: usize) -> (Batch<'static>, Vec<Material>) {
     let mats = materials(
         r#"
         [[material]]
@@ -431,7 +431,7 @@ fn local_rows(n: usize) -> Vec<f32> {
 }
 
 /// The same tuples as 10-column rows with N = (0, 0, 1) and material `m`.
-fn as_rows(local: &[f32], m: usize, count: usize) -> Batch {
+fn as_rows(local: &[f32], m: usize, count: usize) -> Batch<'static> {
     let mut rows = Vec::with_capacity(local.len() / 6 * 10);
     for r in local.chunks_exact(6) {
         rows.extend_from_slice(r);

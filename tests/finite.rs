@@ -14,7 +14,7 @@ fn materials(toml: &str) -> Vec<Material> {
 }
 
 /// Rows `L V N material` (10 columns).
-fn batch(rows: &[[f32; 10]], materials: usize) -> Batch {
+fn batch(rows: &[[f32; 10]], materials: usize) -> Batch<'static> {
     Batch::new(rows.concat(), 10, materials, &memory_source()).expect("valid batch")
 }
 

@@ -24,6 +24,8 @@ const PACKAGES: &[&str] = &[
     "glslang-dev",
     "spirv-tools",
     "glslc",
+    "python3",
+    "python3-venv",
 ];
 
 /// A fixture system: bookworm's os-release, the given apt files (path under `etc/apt`,

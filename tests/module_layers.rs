@@ -14,7 +14,14 @@ const LAYERS: &[&[&str]] = &[
     &["backend", "precision", "sample"],
     &["reference", "features"],
     &["gpu", "cpu"],
-    &["table", "check", "stress", "bench", "stream"],
+    &[
+        "table",
+        "check",
+        "stress",
+        "bench",
+        "stream",
+        "backend_choice",
+    ],
 ];
 
 fn layer_of(module: &str) -> usize {

@@ -71,7 +71,12 @@ fn a_batch_larger_than_its_budget_streams_to_the_same_output() {
     // A budget of 1 GiB would hold the batch at once; chunks stop at MAX_CHUNK_ROWS so the
     // stages overlap.
     let biggest = 600_000u64.div_ceil(vkbrdf::stream::MAX_CHUNK_ROWS as u64);
-    assert_eq!(figure(&stderr(&whole), "chunk(s)"), biggest, "{}", stderr(&whole));
+    assert_eq!(
+        figure(&stderr(&whole), "chunk(s)"),
+        biggest,
+        "{}",
+        stderr(&whole)
+    );
     assert!(figure(&text, "chunk(s)") > 10, "{text}");
     assert_eq!(
         std::fs::read(&a).unwrap(),

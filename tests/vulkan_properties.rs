@@ -103,7 +103,7 @@ type Row = ([f64; 3], [f64; 3], [f64; 3], usize, [f64; 3]);
 
 /// Builds a batch of rows `(L, V, N, material[, T])` from f64 values rounded to f32, as
 /// every backend evaluates them; 13 columns when `tangents` (else T is dropped).
-fn batch(rows: &[Row], tangents: bool, materials: usize) -> Batch {
+fn batch(rows: &[Row], tangents: bool, materials: usize) -> Batch<'static> {
     let columns = if tangents {
         COLUMNS_TANGENT
     } else {
@@ -321,7 +321,7 @@ fn random_case() -> impl Strategy<Value = RandomCase> {
 impl RandomCase {
     /// The material table (one material) and the batch: the tuples `(L, V)` in rows
     /// `0..n`, then the same tuples swapped, `(V, L)`, in rows `n..2n`.
-    fn build(&self) -> (Vec<Material>, Batch) {
+    fn build(&self) -> (Vec<Material>, Batch<'static>) {
         let m = material(&self.body);
         let tangents = self.tangents || m.is_anisotropic();
         let forward: Vec<_> = self.rows.iter().map(RowRecipe::inputs).collect();

@@ -120,7 +120,7 @@ impl NpyRows {
     /// The next at most `max_rows` rows as a [`Batch`] (materials checked, row numbers in
     /// errors counted from the file's start) with the index of its first row; `None` at the
     /// end. A local-frame file (6 columns) is read with [`NpyRows::next_local`] instead.
-    pub fn next_chunk(&mut self, max_rows: usize) -> Result<Option<(u64, Batch)>> {
+    pub fn next_chunk(&mut self, max_rows: usize) -> Result<Option<(u64, Batch<'static>)>> {
         self.next_chunk_reusing(max_rows, Vec::new())
     }
 
@@ -131,7 +131,7 @@ impl NpyRows {
         &mut self,
         max_rows: usize,
         buffer: Vec<f32>,
-    ) -> Result<Option<(u64, Batch)>> {
+    ) -> Result<Option<(u64, Batch<'static>)>> {
         let Some((first, data)) = self.next_floats(max_rows, buffer)? else {
             return Ok(None);
         };

@@ -167,7 +167,7 @@ pub fn by_name(name: &str) -> Option<Scenario> {
 
 /// `n` seeded tuples for `scenario`: N = +z, L and V unit and uniform (in solid angle) over
 /// the upper hemisphere, rows cycling through the materials, T = +x when needed.
-pub fn batch(scenario: &Scenario, n: usize, seed: u64) -> Batch {
+pub fn batch(scenario: &Scenario, n: usize, seed: u64) -> Batch<'static> {
     let mut rng = Pcg64Mcg::seed_from_u64(seed);
     let cols = if scenario.tangents {
         COLUMNS_TANGENT

@@ -176,7 +176,7 @@ pub fn measure(
 }
 
 /// The whole file as chunks of `chunk` rows, read and checked as `eval` reads it.
-fn read_all(path: &Path, material_count: usize, chunk: usize) -> Result<Vec<Batch>> {
+fn read_all(path: &Path, material_count: usize, chunk: usize) -> Result<Vec<Batch<'static>>> {
     let mut rows = NpyRows::open(path, material_count)?;
     let mut chunks = Vec::new();
     while let Some((_, b)) = rows.next_chunk(chunk)? {

@@ -1,9 +1,8 @@
 //! `--backend`, `--device` and `--max-gpu-memory`: which evaluator a command runs on.
 
 use vkbrdf::backend::Backend;
-use vkbrdf::cpu::CpuEngine;
+use vkbrdf::backend_choice as choice;
 use vkbrdf::gpu::{DeviceSelector, VulkanBackend, VulkanOptions};
-use vkbrdf::reference::CpuReference;
 
 /// The evaluators a command can run on.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -48,36 +47,17 @@ pub struct DeviceArgs {
 
 /// Opens the Vulkan backend on the selected device.
 pub fn open_vulkan(args: &DeviceArgs) -> anyhow::Result<VulkanBackend> {
-    let selector = args.device.clone().or_else(DeviceSelector::from_env);
     let options = VulkanOptions {
         max_gpu_memory: args.max_gpu_memory,
         ..VulkanOptions::default()
     };
-    Ok(VulkanBackend::new(selector, options)?)
+    Ok(choice::open_vulkan(args.device.clone(), options)?)
 }
 
 /// What `auto` picks on this machine, and why: `(true, why)` for the Vulkan kernel,
 /// `(false, why)` for the native CPU engine.
 pub fn auto_choice(args: &DeviceArgs) -> (bool, String) {
-    if args.device.is_some() {
-        return (true, "--device names a Vulkan device".into());
-    }
-    if DeviceSelector::from_env().is_some() {
-        return (true, "VKBRDF_DEVICE names a Vulkan device".into());
-    }
-    match vkbrdf::gpu::list_devices() {
-        Ok(list) => match list
-            .iter()
-            .find(|d| d.device_type == "discrete GPU" || d.device_type == "integrated GPU")
-        {
-            Some(d) => (true, format!("{} is a {}", d.name, d.device_type)),
-            None => (
-                false,
-                "no discrete or integrated GPU (a CPU Vulkan device such as lavapipe is slower than the native engine; --backend vulkan uses it)".into(),
-            ),
-        },
-        Err(e) => (false, format!("no Vulkan driver ({e})")),
-    }
+    choice::auto_choice(args.device.as_ref())
 }
 
 /// Opens the requested backend (`auto` when none is named).
@@ -88,16 +68,15 @@ pub fn open(args: &BackendArgs) -> anyhow::Result<Box<dyn Backend>> {
 }
 
 fn open_uncancellable(args: &BackendArgs) -> anyhow::Result<Box<dyn Backend>> {
-    match args.backend.unwrap_or(BackendKind::Auto) {
-        BackendKind::Reference => Ok(Box::new(CpuReference::new())),
-        BackendKind::Cpu => Ok(Box::new(CpuEngine::new())),
-        BackendKind::Vulkan => Ok(Box::new(open_vulkan(&args.device)?)),
-        BackendKind::Auto => {
-            if auto_choice(&args.device).0 {
-                Ok(Box::new(open_vulkan(&args.device)?))
-            } else {
-                Ok(Box::new(CpuEngine::new()))
-            }
-        }
-    }
+    let kind = match args.backend.unwrap_or(BackendKind::Auto) {
+        BackendKind::Auto => choice::Kind::Auto,
+        BackendKind::Vulkan => choice::Kind::Vulkan,
+        BackendKind::Cpu => choice::Kind::Cpu,
+        BackendKind::Reference => choice::Kind::Reference,
+    };
+    let options = VulkanOptions {
+        max_gpu_memory: args.device.max_gpu_memory,
+        ..VulkanOptions::default()
+    };
+    Ok(choice::open(kind, args.device.device.clone(), options)?)
 }

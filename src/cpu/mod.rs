@@ -116,7 +116,7 @@ impl CpuEngine {
 /// What the engine reads: ordinary rows, or the local-frame form.
 #[derive(Clone, Copy)]
 enum Source<'a> {
-    Rows(&'a Batch),
+    Rows(&'a Batch<'a>),
     Local(&'a LocalBatch),
 }
 

@@ -376,13 +376,16 @@ fn tuple(rng: &mut Pcg64Mcg, case: Case, material: usize) -> [f32; 13] {
 
 /// The corpus: `n` tuples with tangents over [`materials`]; row `i` uses material
 /// `i % M` and case `CASES[(i / M) % 10]`. Returns the batch and each row's case.
-pub fn corpus(n: usize, seed: u64) -> (Vec<Material>, Batch, Vec<Case>) {
+pub fn corpus(n: usize, seed: u64) -> (Vec<Material>, Batch<'static>, Vec<Case>) {
     corpus_rows(0..n, seed)
 }
 
 /// Rows `range` of the corpus of seed `seed`: each row has its own RNG stream, so a chunk
 /// is identical to the same rows of the whole corpus (long runs go chunk by chunk).
-pub fn corpus_rows(range: std::ops::Range<usize>, seed: u64) -> (Vec<Material>, Batch, Vec<Case>) {
+pub fn corpus_rows(
+    range: std::ops::Range<usize>,
+    seed: u64,
+) -> (Vec<Material>, Batch<'static>, Vec<Case>) {
     let materials = materials();
     let m = materials.len();
     let mut data = Vec::with_capacity(range.len() * COLUMNS_TANGENT);

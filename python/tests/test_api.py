@@ -1,0 +1,165 @@
+"""The NumPy conventions: dtypes, layouts, broadcasting, return forms, materials, tables."""
+
+import tracemalloc
+
+import numpy as np
+import pytest
+
+import vkbrdf
+from conftest import MATERIALS_TOML, make_tuples
+
+
+@pytest.fixture(scope="module")
+def mats():
+    return vkbrdf.parse_materials(MATERIALS_TOML, "m.toml")
+
+
+def test_materials_object(mats):
+    assert len(mats) == 4
+    assert mats.names == ["rough-gold", "seed-plastic", "brushed", "matte"]
+    assert mats.models == ["cook-torrance", "cook-torrance", "cook-torrance", "lambert"]
+    assert mats.anisotropic == [False, False, True, False]
+    assert mats.index("matte") == 3
+    assert "brushed: cook-torrance" in repr(mats) and "m.toml" in repr(mats)
+    p = vkbrdf.presets()
+    assert "gold" in p.names and len(p) == len(p.models) >= 5
+
+
+def test_float32_float64_and_non_contiguous_agree(mats):
+    t64 = make_tuples(500)
+    t32 = t64.astype(np.float32)
+    f32 = vkbrdf.evaluate(mats, t32, backend="cpu")
+    # float64 is rounded to float32 exactly as a float64 .npy is by `vkbrdf eval`.
+    assert np.array_equal(vkbrdf.evaluate(mats, t64, backend="cpu"), f32)
+    # Fortran order, a strided view and a reversed view: same rows, same values.
+    assert np.array_equal(vkbrdf.evaluate(mats, np.asfortranarray(t32), backend="cpu"), f32)
+    wide = np.zeros((500, 26), np.float32)
+    wide[:, ::2] = t32
+    assert not wide[:, ::2].flags.c_contiguous
+    assert np.array_equal(vkbrdf.evaluate(mats, wide[:, ::2], backend="cpu"), f32)
+    assert np.array_equal(vkbrdf.evaluate(mats, t32[::-1], backend="cpu"), f32[::-1])
+
+
+def test_c_contiguous_float32_is_not_copied(mats):
+    # 2M rows of 10 float32 = 80 MB: a copy would show in NumPy's traced allocations
+    # (the engine's outputs are allocated by Rust and handed over, not traced).
+    t = np.zeros((2_000_000, 10), np.float32)
+    t[:, 2] = t[:, 5] = t[:, 8] = 1.0
+    tracemalloc.start()
+    try:
+        tracemalloc.reset_peak()
+        f = vkbrdf.evaluate(mats, t, backend="cpu")
+        _, peak = tracemalloc.get_traced_memory()
+    finally:
+        tracemalloc.stop()
+    assert f.shape == (2_000_000, 3)
+    assert peak < 8_000_000, f"{peak} bytes traced: the tuples were copied"
+    # The same check does see a copy (float64 input is converted to float32).
+    tracemalloc.start()
+    try:
+        t64 = t[:200_000].astype(np.float64)
+        tracemalloc.reset_peak()
+        vkbrdf.evaluate(mats, t64, backend="cpu")
+        _, peak = tracemalloc.get_traced_memory()
+    finally:
+        tracemalloc.stop()
+    assert peak >= 200_000 * 10 * 4
+
+
+def test_misaligned_float32_is_evaluated(mats):
+    # A float32 array one byte off alignment (as unpickled buffers can be) is copied first.
+    t = make_tuples(100).astype(np.float32)
+    raw = bytearray(t.nbytes + 1)
+    mis = np.frombuffer(raw, dtype=np.float32, offset=1, count=t.size).reshape(t.shape)
+    mis[...] = t
+    assert not mis.flags.aligned and mis.flags.c_contiguous
+    assert np.array_equal(vkbrdf.evaluate(mats, mis, backend="cpu"), vkbrdf.evaluate(mats, t, backend="cpu"))
+
+
+def test_native_reads_in_place(mats):
+    t = make_tuples(10).astype(np.float32)
+    *_, in_place = vkbrdf._native.evaluate(mats, t, "cpu", False, "exact", False)
+    assert in_place is True
+
+
+def test_return_forms(mats):
+    t = make_tuples(64)
+    f = vkbrdf.evaluate(mats, t, backend="reference")
+    assert isinstance(f, np.ndarray) and f.shape == (64, 3)
+    f2, terms = vkbrdf.evaluate(mats, t, backend="reference", terms=True)
+    assert np.array_equal(f, f2) and terms.shape == (64, 6)
+    f3, counts = vkbrdf.evaluate(mats, t, backend="reference", return_counts=True)
+    assert np.array_equal(f, f3)
+    assert isinstance(counts, vkbrdf.Counts) and counts._fields == (
+        "invalid", "below_horizon", "saturated", "first_invalid")
+    assert counts.invalid == 2 and counts.first_invalid == 3
+    f4, terms4, counts4 = vkbrdf.evaluate(mats, t, backend="reference", terms=True, return_counts=True)
+    assert np.array_equal(terms, terms4) and counts4 == counts
+    # Invalid tuples give 0.
+    assert np.all(f[[3, 5]] == 0)
+    # An empty batch is fine.
+    assert vkbrdf.evaluate(mats, np.zeros((0, 10), np.float32)).shape == (0, 3)
+
+
+def test_broadcasting_equals_explicit_tuples(mats):
+    # A grid of light directions against one view direction and one normal.
+    th = np.linspace(0.0, 1.5, 7)
+    ph = np.linspace(0.0, 6.0, 5)
+    TH, PH = np.meshgrid(th, ph, indexing="ij")
+    L = np.stack([np.sin(TH) * np.cos(PH), np.sin(TH) * np.sin(PH), np.cos(TH)], -1)
+    V = np.array([0.3, 0.0, 0.95])
+    N = [0, 0, 1]
+    f = vkbrdf.evaluate(mats, l=L, v=V, n=N, material="rough-gold", backend="cpu")
+    assert f.shape == (7, 5, 3)
+    rows = np.zeros((35, 10))
+    rows[:, 0:3] = L.reshape(-1, 3)
+    rows[:, 3:6] = V
+    rows[:, 6:9] = N
+    rows[:, 9] = 0
+    assert np.array_equal(f.reshape(-1, 3), vkbrdf.evaluate(mats, rows, backend="cpu"))
+    # material as an integer array broadcasting with the directions (one per phi column),
+    # and as an array of names.
+    per_col = np.array([0, 1, 3, 0, 1])
+    g, c = vkbrdf.evaluate(mats, l=L, v=V, n=N, material=per_col, backend="cpu", return_counts=True)
+    rows[:, 9] = np.broadcast_to(per_col, (7, 5)).reshape(-1)
+    assert np.array_equal(g.reshape(-1, 3), vkbrdf.evaluate(mats, rows, backend="cpu"))
+    names = np.array(mats.names)[per_col]
+    assert np.array_equal(vkbrdf.evaluate(mats, l=L, v=V, n=N, material=names, backend="cpu"), g)
+    # with a tangent and terms
+    f_t, terms = vkbrdf.evaluate(mats, l=L, v=V, n=N, t=[1, 0, 0], material="brushed",
+                                 backend="cpu", terms=True)
+    assert f_t.shape == (7, 5, 3) and terms.shape == (7, 5, 6)
+    rows13 = np.zeros((35, 13))
+    rows13[:, :9] = rows[:, :9]
+    rows13[:, 9] = 2
+    rows13[:, 10:13] = [1, 0, 0]
+    assert np.array_equal(f_t.reshape(-1, 3), vkbrdf.evaluate(mats, rows13, backend="cpu"))
+
+
+def test_tables():
+    s, t = vkbrdf.tables.slice("gold", size="8x4", terms=True, backend="reference")
+    assert s.shape == (4, 8, 3) and t.shape == (4, 8, 6) and s.dtype == np.float32
+    s_cpu = vkbrdf.tables.slice("gold", size=(8, 4), backend="cpu")
+    assert np.allclose(s, s_cpu, rtol=1e-4, atol=1e-7)
+    # The specular peak: small theta_h (first column) is brighter than grazing theta_h.
+    assert np.all(s[:, 0, 0] > s[:, -1, 0])
+    e = vkbrdf.tables.albedo(size=(4, 3), samples=4096, backend="cpu")
+    ab = vkbrdf.tables.dfg(size=(4, 3), samples=4096, backend="cpu")
+    assert e.shape == (3, 4) and ab.shape == (3, 4, 2)
+    # E = A + B: the two tables integrate the same f with F = 1.
+    assert np.allclose(ab[..., 0] + ab[..., 1], e, rtol=1e-9)
+    assert np.all((e > 0) & (e <= 1.0 + 1e-3))
+    e2, avg = vkbrdf.tables.albedo(size=(4, 3), samples=4096, average=True, backend="cpu")
+    assert np.array_equal(e2, e) and avg.shape == (3,)
+    # Smooth GGX with height-correlated Smith at normal incidence loses almost nothing.
+    smooth = vkbrdf.tables.albedo(size=(64, 64), samples=1024, backend="cpu")
+    assert abs(smooth[0, -1] - 1.0) < 2e-3
+
+
+def test_check_report_is_data():
+    report = vkbrdf.check(backend="cpu", tuples=50, only="lambert")
+    assert report and all(r["pass"] for r in report)
+    r = report[0]
+    assert "lambert" in r["combination"] and r["tuples"] == 50 and r["counts_match"]
+    assert set(r["column_max_rel"]) == {"brdf_r", "brdf_g", "brdf_b", "D", "G", "F_r", "F_g", "F_b", "K"}
+    assert r["max_used"] <= 1.0

@@ -1,0 +1,196 @@
+"""vkbrdf: bulk BRDF evaluation -- NumPy arrays in, NumPy arrays out, on the same engines
+as the ``vkbrdf`` command (the Vulkan kernel, the native CPU engine, the f64 reference).
+
+See ``docs/PYTHON.md`` and the stubs (``__init__.pyi``) for the API with examples.
+"""
+
+import collections as _collections
+import os as _os
+
+import numpy as _np
+
+from . import _native
+from ._errors import (
+    BatchError,
+    DeviceError,
+    Error,
+    FileError,
+    FileMissingError,
+    FilePermissionError,
+    MaterialError,
+    TableError,
+    UsageError,
+)
+from ._native import Materials, presets
+from . import tables
+
+__version__ = _native.__version__
+
+__all__ = [
+    "BatchError",
+    "Counts",
+    "DeviceError",
+    "Error",
+    "FileError",
+    "FileMissingError",
+    "FilePermissionError",
+    "MaterialError",
+    "Materials",
+    "TableError",
+    "UsageError",
+    "check",
+    "evaluate",
+    "load_materials",
+    "parse_materials",
+    "presets",
+    "tables",
+]
+
+Counts = _collections.namedtuple(
+    "Counts", ["invalid", "below_horizon", "saturated", "first_invalid"]
+)
+Counts.__doc__ = """Tuple counts of one evaluation (``return_counts=True``): invalid tuples (zero or
+non-finite L, V, N, or a bad tangent; their f is 0), valid tuples below the horizon (f is
+0), tuples with an output beyond float32's range (saturated to its largest value), and the
+row of the first invalid tuple (``None`` when there is none; in the broadcasting form an
+index into the flattened broadcast shape)."""
+
+
+def load_materials(path):
+    """Reads a materials file (TOML, ``[[material]]`` tables) into a :class:`Materials`."""
+    return _native.load_materials(_os.fspath(path))
+
+
+def parse_materials(text, source="<string>"):
+    """Parses materials from TOML text; ``source`` names it in error messages."""
+    return _native.parse_materials(text, source)
+
+
+def _rebuild_materials(kind, payload, source):
+    """Unpickles a Materials (see ``Materials.__reduce__``)."""
+    if kind == "text":
+        return _native.parse_materials(payload, source)
+    if kind == "file":
+        return _native.load_materials(payload)
+    return _native.presets()
+
+
+_FLOATS = (_np.dtype(_np.float32), _np.dtype(_np.float64))
+
+
+def _tuples_array(tuples):
+    a = _np.asarray(tuples)
+    if a.dtype not in _FLOATS:
+        raise BatchError(
+            f"tuples: dtype {a.dtype} is not supported; expected float32 or float64 "
+            "(as `vkbrdf eval` reads)"
+        )
+    if a.ndim != 2:
+        raise BatchError(
+            f"tuples: expected a 2-D array of shape (n, 10) or (n, 13), found shape {a.shape}"
+        )
+    # No copy when the array already is C-contiguous, aligned float32: the engine reads it in
+    # place. (Arrays unpickled from a byte stream, as Dask workers receive them, may be
+    # misaligned: those are copied.) float64 is rounded to float32 (nearest even), as
+    # `vkbrdf eval` rounds a float64 file.
+    return _np.require(a, dtype=_np.float32, requirements=["C_CONTIGUOUS", "ALIGNED"])
+
+
+def _vectors(name, x):
+    a = _np.asarray(x)
+    if a.dtype.kind not in "fiu":
+        raise BatchError(f"{name}: dtype {a.dtype} is not a real number type")
+    if a.ndim == 0 or a.shape[-1] != 3:
+        raise BatchError(f"{name}: expected an array of shape (..., 3), found shape {a.shape}")
+    return a
+
+
+def _material_indices(materials, material):
+    if isinstance(material, str):
+        return materials.index(material)
+    m = _np.asarray(material)
+    if m.dtype.kind == "U":
+        lookup = {name: i for i, name in enumerate(materials.names)}
+        missing = sorted({str(x) for x in m.ravel() if str(x) not in lookup})
+        if missing:
+            raise MaterialError(
+                f"material `{missing[0]}` is not defined in {materials.source}; "
+                f"it defines: {', '.join(materials.names)}"
+            )
+        return _np.vectorize(lookup.__getitem__, otypes=[_np.int64])(m)
+    if m.dtype.kind not in "iu":
+        raise BatchError(f"material: expected an index, a name or an integer array, found dtype {m.dtype}")
+    return m
+
+
+def _broadcast_rows(materials, l, v, n, t, material):
+    vecs = [_vectors("l", l), _vectors("v", v), _vectors("n", n)]
+    if t is not None:
+        vecs.append(_vectors("t", t))
+    m = _material_indices(materials, material)
+    try:
+        shape = _np.broadcast_shapes(*(a.shape[:-1] for a in vecs), _np.shape(m))
+    except ValueError as e:
+        shapes = ", ".join(str(a.shape) for a in vecs)
+        raise BatchError(
+            f"l, v, n{', t' if t is not None else ''}, material: shapes {shapes}, {_np.shape(m)} "
+            f"do not broadcast ({e})"
+        ) from None
+    cols = 13 if t is not None else 10
+    rows = _np.empty(shape + (cols,), dtype=_np.float32)
+    for k, a in enumerate(vecs[:3]):
+        rows[..., 3 * k : 3 * k + 3] = a
+    rows[..., 9] = m
+    if t is not None:
+        rows[..., 10:13] = vecs[3]
+    return rows.reshape(-1, cols), shape
+
+
+def evaluate(
+    materials,
+    tuples=None,
+    *,
+    l=None,
+    v=None,
+    n=None,
+    t=None,
+    material=0,
+    backend="auto",
+    terms=False,
+    precision="exact",
+    strict=False,
+    return_counts=False,
+):
+    """Evaluates the BRDF; see the stub (``vkbrdf/__init__.pyi``) for the full description."""
+    if not isinstance(materials, Materials):
+        raise UsageError(
+            f"materials: expected a vkbrdf.Materials (load_materials, parse_materials, presets), "
+            f"found {type(materials).__name__}"
+        )
+    if tuples is not None:
+        if any(x is not None for x in (l, v, n, t)):
+            raise UsageError("give either tuples or l=, v=, n= (and t=), not both")
+        rows, shape = _tuples_array(tuples), None
+    else:
+        if l is None or v is None or n is None:
+            raise UsageError("give tuples, or the directions l=, v= and n=")
+        rows, shape = _broadcast_rows(materials, l, v, n, t, material)
+    f, term_values, counts, _in_place = _native.evaluate(
+        materials, rows, str(backend), bool(terms), str(precision), bool(strict)
+    )
+    if shape is not None:
+        f = f.reshape(shape + (3,))
+        if term_values is not None:
+            term_values = term_values.reshape(shape + (6,))
+    result = [f]
+    if terms:
+        result.append(term_values)
+    if return_counts:
+        result.append(Counts(*counts))
+    return result[0] if len(result) == 1 else tuple(result)
+
+
+def check(*, backend="vulkan", tuples=2000, seed=1, only=None):
+    """Runs ``vkbrdf check`` (every legal model combination against the f64 reference) and
+    returns its report as a list of dicts, one per combination."""
+    return _native.check(str(backend), int(tuples), int(seed), only)
