@@ -251,7 +251,20 @@ pub fn split_sum_with(
     points: &[(f64, f64)],
     samples: u32,
 ) -> Result<Vec<[f64; 2]>> {
-    if sampler == Sampler::Visible {
+    split_sum_of(runner, spec, sampler, points, points.len(), samples)
+}
+
+/// [`split_sum_with`] of `points`, a band of a table of `whole` points, each computed as
+/// the whole table computes it ([`albedo::device_takes`]).
+pub fn split_sum_of(
+    runner: &mut Runner,
+    spec: &Microfacet,
+    sampler: Sampler,
+    points: &[(f64, f64)],
+    whole: usize,
+    samples: u32,
+) -> Result<Vec<[f64; 2]>> {
+    if sampler == Sampler::Visible && albedo::device_takes(whole, samples) {
         if let Some(sums) = albedo::backend_sums(runner, spec, points, samples, "dfg") {
             // A = Σ x (1 − w) = Σ x − Σ x w, B = Σ x w.
             return Ok(sums?.into_iter().map(|[x, xw]| [x - xw, xw]).collect());
@@ -307,9 +320,35 @@ impl DfgJob {
 
 /// Integrates and writes the DFG table, after [`DfgJob::check`].
 pub fn write(runner: &mut Runner, job: &DfgJob) -> Result<()> {
+    write_band(runner, job, None)
+}
+
+/// Integrates the band of roughness rows `part` names and writes it as a table part at
+/// `job.output` (a `.npy` band and its sidecar: [`super::shard`]), after [`DfgJob::check`].
+pub fn write_part(runner: &mut Runner, job: &DfgJob, part: &super::shard::PartSpec) -> Result<()> {
+    write_band(runner, job, Some(part))
+}
+
+fn write_band(
+    runner: &mut Runner,
+    job: &DfgJob,
+    part: Option<&super::shard::PartSpec>,
+) -> Result<()> {
     job.check()?;
-    let points = job.axes.points(job.grid);
-    let ab = split_sum_with(runner, &job.spec, job.sampler, &points, job.samples)?;
+    if part.is_some() {
+        super::shard::check_part_name(&job.output)?;
+    }
+    let all = job.axes.points(job.grid);
+    let band = part.map_or(0..job.grid.height, |p| p.band());
+    let points = &all[band.start * job.grid.width..band.end * job.grid.width];
+    let ab = split_sum_of(
+        runner,
+        &job.spec,
+        job.sampler,
+        points,
+        all.len(),
+        job.samples,
+    )?;
     let channel = |name: &str, value: fn(&[f64; 2]) -> f64| Channel {
         name: name.into(),
         values: ab.iter().map(|v| value(v) as f32).collect(),
@@ -352,6 +391,19 @@ pub fn write(runner: &mut Runner, job: &DfgJob) -> Result<()> {
         name: "dfg".into(),
         channels: channels.into(),
     };
+    if let Some(part) = part {
+        let staged = super::shard::stage_exr_part(
+            &job.output,
+            part,
+            job.grid.width,
+            job.grid,
+            &[layer],
+            &provenance,
+            job.half,
+            runner.cancel(),
+        )?;
+        return crate::atomic::commit(staged);
+    }
     let clamped = exr_out::write(
         &job.output,
         job.grid,
