@@ -455,14 +455,12 @@ fn prepare(kind: &Kind) -> anyhow::Result<(Job, &BackendArgs, Vec<PathBuf>)> {
                 half: a.half,
                 output: a.output.clone(),
             };
-            job.check()?;
             if let Some(p) = &a.png {
                 vkbrdf::table::check_output(p)?;
             }
             let part = a
                 .shard
                 .map(|shard| {
-                    vkbrdf::table::shard::check_part_name(&a.output)?;
                     let mut options = a.material.options()?;
                     options.insert("size".into(), grid_name(a.size));
                     options.insert("spacing".into(), format!("{:?}", job.spacing));
@@ -475,6 +473,10 @@ fn prepare(kind: &Kind) -> anyhow::Result<(Job, &BackendArgs, Vec<PathBuf>)> {
                     })
                 })
                 .transpose()?;
+            match &part {
+                Some(part) => job.check_part(part)?,
+                None => job.check()?,
+            }
             (Job::Slice(job, a.png.clone(), part), &a.backend)
         }
         Kind::Albedo(a) => {
@@ -487,7 +489,6 @@ fn prepare(kind: &Kind) -> anyhow::Result<(Job, &BackendArgs, Vec<PathBuf>)> {
                 output: a.output.clone(),
                 average: a.average.clone(),
             };
-            job.check()?;
             let part = a.model.part(job.grid, || {
                 vec![
                     ("model", format!("{:?}", job.spec)),
@@ -495,11 +496,9 @@ fn prepare(kind: &Kind) -> anyhow::Result<(Job, &BackendArgs, Vec<PathBuf>)> {
                     ("axes", format!("{:?}", job.axes)),
                 ]
             })?;
-            if part.is_some() {
-                vkbrdf::table::shard::check_part_name(&job.output)?;
-                if let Some(avg) = &job.average {
-                    vkbrdf::table::shard::check_part_name(avg)?;
-                }
+            match &part {
+                Some(part) => job.check_part(part)?,
+                None => job.check()?,
             }
             (Job::Albedo(job, part), &a.model.backend)
         }
@@ -535,7 +534,6 @@ fn prepare(kind: &Kind) -> anyhow::Result<(Job, &BackendArgs, Vec<PathBuf>)> {
                     output: a.output.clone(),
                 },
             };
-            job.check()?;
             let part = a.model.part(job.grid, || {
                 vec![
                     ("model", format!("{:?}", job.spec)),
@@ -546,8 +544,9 @@ fn prepare(kind: &Kind) -> anyhow::Result<(Job, &BackendArgs, Vec<PathBuf>)> {
                     ("lut-style", format!("{:?}", job.style)),
                 ]
             })?;
-            if part.is_some() {
-                vkbrdf::table::shard::check_part_name(&job.output)?;
+            match &part {
+                Some(part) => job.check_part(part)?,
+                None => job.check()?,
             }
             (Job::Dfg(job, part), &a.model.backend)
         }

@@ -668,6 +668,28 @@ impl AlbedoJob {
         super::check_output(&self.output)?;
         self.average.as_deref().map_or(Ok(()), super::check_output)
     }
+
+    /// [`AlbedoJob::check`] for the band `part` names: memory for its rows only, and .npy
+    /// part names.
+    pub fn check_part(&self, part: &super::shard::PartSpec) -> Result<()> {
+        self.spec.material(0.5)?;
+        self.axes.check(self.grid)?;
+        let band = Grid {
+            width: self.grid.width,
+            height: part.band().len().max(1),
+        };
+        super::check_memory(
+            super::table_bytes(band, BYTES_PER_TEXEL),
+            "the albedo table's band",
+        )?;
+        super::shard::check_part_name(&self.output)?;
+        super::check_output(&self.output)?;
+        if let Some(avg) = &self.average {
+            super::shard::check_part_name(avg)?;
+            super::check_output(avg)?;
+        }
+        Ok(())
+    }
 }
 
 /// Integrates and writes the albedo table (and E_avg), after [`AlbedoJob::check`].
@@ -691,17 +713,13 @@ fn write_band(
     job: &AlbedoJob,
     part: Option<&super::shard::PartSpec>,
 ) -> Result<()> {
-    job.check()?;
-    if part.is_some() {
-        super::shard::check_part_name(&job.output)?;
-        job.average
-            .as_deref()
-            .map_or(Ok(()), super::shard::check_part_name)?;
+    match part {
+        Some(part) => job.check_part(part)?,
+        None => job.check()?,
     }
-    let all = job.axes.points(job.grid);
     let band = part.map_or(0..job.grid.height, |p| p.band());
-    let points = &all[band.start * job.grid.width..band.end * job.grid.width];
-    let e = directional_albedo_of(runner, &job.spec, points, all.len(), job.samples)?;
+    let points = &job.axes.points_of_rows(job.grid, band);
+    let e = directional_albedo_of(runner, &job.spec, points, job.grid.texels(), job.samples)?;
     let backend = runner.backend_name();
     let provenance = |table: &str, parameterisation: &str, samples: String| Provenance {
         table: table.into(),

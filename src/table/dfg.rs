@@ -125,8 +125,12 @@ impl Axes {
     /// The `(μ, α)` of every texel, row-major (row j ↔ roughness, column i ↔ μ), the
     /// endpoint zeros at [`ENDPOINT_FLOOR`].
     pub fn points(&self, grid: Grid) -> Vec<(f64, f64)> {
-        (0..grid.height)
-            .flat_map(|j| (0..grid.width).map(move |i| (i, j)))
+        self.points_of_rows(grid, 0..grid.height)
+    }
+
+    /// [`Axes::points`] of the rows `rows` only (a shard's band).
+    pub fn points_of_rows(&self, grid: Grid, rows: std::ops::Range<usize>) -> Vec<(f64, f64)> {
+        rows.flat_map(|j| (0..grid.width).map(move |i| (i, j)))
             .map(|(i, j)| {
                 let (x, y) = self.sampling.coords(grid, i, j);
                 // Only the exact zeros of the endpoint sampling move.
@@ -304,6 +308,30 @@ impl DfgJob {
     /// Everything that can be checked before evaluating: the model is legal, the table
     /// fits in memory, the output can be written.
     pub fn check(&self) -> Result<()> {
+        self.check_model()?;
+        let bytes = super::table_bytes(self.grid, albedo::BYTES_PER_TEXEL + 16);
+        super::check_memory(bytes, "the DFG table")?;
+        super::check_output(&self.output)
+    }
+
+    /// [`DfgJob::check`] for the band `part` names: memory for its rows only, and a .npy
+    /// part name.
+    pub fn check_part(&self, part: &super::shard::PartSpec) -> Result<()> {
+        self.check_model()?;
+        let band = Grid {
+            width: self.grid.width,
+            height: part.band().len().max(1),
+        };
+        super::check_memory(
+            super::table_bytes(band, albedo::BYTES_PER_TEXEL + 16),
+            "the DFG table's band",
+        )?;
+        super::shard::check_part_name(&self.output)?;
+        super::check_output(&self.output)
+    }
+
+    /// The model is legal, the sampler can draw it, the axes can place the grid.
+    fn check_model(&self) -> Result<()> {
         self.spec.material(0.5)?;
         self.axes.check(self.grid)?;
         if self.sampler == Sampler::Engine && self.spec.lobe != albedo::Lobe::Ggx {
@@ -312,9 +340,7 @@ impl DfgJob {
                 self.spec.lobe.name()
             )));
         }
-        let bytes = super::table_bytes(self.grid, albedo::BYTES_PER_TEXEL + 16);
-        super::check_memory(bytes, "the DFG table")?;
-        super::check_output(&self.output)
+        Ok(())
     }
 }
 
@@ -334,19 +360,18 @@ fn write_band(
     job: &DfgJob,
     part: Option<&super::shard::PartSpec>,
 ) -> Result<()> {
-    job.check()?;
-    if part.is_some() {
-        super::shard::check_part_name(&job.output)?;
+    match part {
+        Some(part) => job.check_part(part)?,
+        None => job.check()?,
     }
-    let all = job.axes.points(job.grid);
     let band = part.map_or(0..job.grid.height, |p| p.band());
-    let points = &all[band.start * job.grid.width..band.end * job.grid.width];
+    let points = &job.axes.points_of_rows(job.grid, band);
     let ab = split_sum_of(
         runner,
         &job.spec,
         job.sampler,
         points,
-        all.len(),
+        job.grid.texels(),
         job.samples,
     )?;
     let channel = |name: &str, value: fn(&[f64; 2]) -> f64| Channel {

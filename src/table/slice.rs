@@ -195,6 +195,27 @@ impl SliceJob {
         )?;
         super::check_output(&self.output)
     }
+
+    /// [`SliceJob::check`] for the band `part` names: memory for its rows (and for the
+    /// whole slice's f32 results where the backend may make the whole slice itself,
+    /// [`compute_band`]; up to 2²⁴ texels), and that the part can be written.
+    pub fn check_part(&self, part: &super::shard::PartSpec) -> Result<()> {
+        let channels = (if self.terms { 3 + TERM_COLUMNS } else { 3 }) as u64;
+        let band = Grid {
+            width: self.grid.width,
+            height: part.band().len().max(1),
+        };
+        let whole = self.grid.width as u128 * self.grid.height as u128;
+        let generated = if whole <= 1 << 24 {
+            whole * 4 * channels as u128
+        } else {
+            0
+        };
+        let bytes = super::table_bytes(band, 12 * channels).map(|b| b + generated);
+        super::check_memory(bytes, "the slice's band")?;
+        super::shard::check_part_name(&self.output)?;
+        super::check_output(&self.output)
+    }
 }
 
 /// Evaluates and writes the slice, after [`SliceJob::check`].
@@ -257,8 +278,7 @@ pub fn write_part(
     job: &SliceJob,
     part: &super::shard::PartSpec,
 ) -> Result<()> {
-    job.check()?;
-    super::shard::check_part_name(&job.output)?;
+    job.check_part(part)?;
     let (brdf, terms) = compute_band(
         runner,
         &job.material,
