@@ -653,3 +653,44 @@ fn table_shard_options_are_checked_before_any_work() {
         assert!(!exr.exists() && !npy.exists(), "{a:?} wrote a part");
     }
 }
+
+/// A table too large for memory is refused before any work with the figure it would need
+/// (issue 13 item 5); a shard of it checks the memory of its own band only, so the work
+/// can be split until each band fits.
+#[test]
+fn a_shard_needs_memory_for_its_band_only() {
+    let dir = tempfile::tempdir().unwrap();
+    let whole = dir.path().join("whole.exr");
+    let part = dir.path().join("part.npy");
+    let size = ["--size", "200000x200000", "--samples", "1", "--backend", "cpu"];
+    let mut a = vec!["table", "dfg", "-o", path(&whole)];
+    a.extend_from_slice(&size);
+    let r = vkbrdf(&a);
+    assert_eq!(r.status.code(), Some(2), "{}", stderr(&r));
+    assert!(
+        stderr(&r).contains("the DFG table would need 10132.8 GiB"),
+        "{}",
+        stderr(&r)
+    );
+    let mut a = vec!["table", "dfg", "-o", path(&part), "--shard", "1/2"];
+    a.extend_from_slice(&size);
+    let r = vkbrdf(&a);
+    assert_eq!(r.status.code(), Some(2), "{}", stderr(&r));
+    assert!(
+        stderr(&r).contains("the DFG table's band would need 5066.4 GiB"),
+        "{}",
+        stderr(&r)
+    );
+    // 5 rows of 200000 texels.
+    let mut a = vec!["table", "dfg", "-o", path(&part), "--shard", "1/40000"];
+    a.extend_from_slice(&size);
+    let r = vkbrdf(&a);
+    assert!(r.status.success(), "{}", stderr(&r));
+    let car = vkbrdf::table::shard::TableSidecar::read(&part).unwrap();
+    assert_eq!((car.rows, car.total_rows), ([0, 5], 200000));
+    assert_eq!(
+        std::fs::metadata(&part).unwrap().len(),
+        128 + 5 * 200000 * 2 * 4
+    );
+    assert!(!whole.exists());
+}
