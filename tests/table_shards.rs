@@ -558,7 +558,7 @@ fn merge_refuses_table_parts_that_do_not_belong_together() {
         .attributes
         .other
         .iter()
-        .find(|(k, _)| k.to_string() == "vkbrdf.backend")
+        .find(|(k, _)| *k == "vkbrdf.backend")
         .map(|(_, v)| format!("{v:?}"))
         .unwrap();
     assert!(
@@ -662,7 +662,14 @@ fn a_shard_needs_memory_for_its_band_only() {
     let dir = tempfile::tempdir().unwrap();
     let whole = dir.path().join("whole.exr");
     let part = dir.path().join("part.npy");
-    let size = ["--size", "200000x200000", "--samples", "1", "--backend", "cpu"];
+    let size = [
+        "--size",
+        "200000x200000",
+        "--samples",
+        "1",
+        "--backend",
+        "cpu",
+    ];
     let mut a = vec!["table", "dfg", "-o", path(&whole)];
     a.extend_from_slice(&size);
     let r = vkbrdf(&a);
