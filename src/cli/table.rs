@@ -6,10 +6,12 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
 use vkbrdf::material::{DistributionKind, Geometry, Material};
+use vkbrdf::stream::shard::Shard;
 use vkbrdf::table::albedo::Sampler;
 use vkbrdf::table::albedo::{self, AlbedoJob, Lobe, Microfacet};
 use vkbrdf::table::dfg::{self, Axes, DfgJob, Layout, LutStyle, RoughnessAxis, Sampling};
 use vkbrdf::table::preview::{self, PreviewJob};
+use vkbrdf::table::shard::PartSpec;
 use vkbrdf::table::slice::{self, SliceJob, Spacing};
 use vkbrdf::table::{merl, Grid, Runner};
 
@@ -96,8 +98,13 @@ pub struct SliceArgs {
     terms: bool,
     /// Also write the slice as a PNG: pixel (i, j) = texel (i, j), showing π·f in display
     /// sRGB (a white Lambertian is white; brighter values keep their hue).
-    #[arg(long, value_name = "S.png")]
+    #[arg(long, value_name = "S.png", conflicts_with = "shard")]
     png: Option<PathBuf>,
+    /// Evaluate only band K of N of the θ_d rows (1-based, e.g. 2/8: rows [(K−1)H/N, KH/N)),
+    /// writing it as a .npy part (OUTPUT must end in .npy) with its sidecar
+    /// OUTPUT.shard.json; `vkbrdf merge -o S.exr PART…` writes the EXR.
+    #[arg(long, value_name = "K/N")]
+    shard: Option<Shard>,
     /// Write float16 instead of float32.
     #[arg(long)]
     half: bool,
@@ -137,6 +144,11 @@ pub struct ModelArgs {
     /// Write float16 instead of float32.
     #[arg(long)]
     half: bool,
+    /// Evaluate only band K of N of the roughness rows (1-based, e.g. 2/8: rows
+    /// [(K−1)H/N, KH/N)), writing it as a .npy part (OUTPUT, and --average, must end in
+    /// .npy) with its sidecar OUTPUT.shard.json; `vkbrdf merge -o T.exr PART…` writes the EXR.
+    #[arg(long, value_name = "K/N")]
+    shard: Option<Shard>,
     #[command(flatten)]
     backend: BackendArgs,
 }
@@ -217,6 +229,11 @@ pub struct MerlArgs {
     /// Output MERL binary.
     #[arg(long, short = 'o', value_name = "F.binary")]
     output: PathBuf,
+    /// Evaluate only band K of N of the 90 θ_h bins (1-based, e.g. 2/8), writing it as a
+    /// MERL binary of those bins (dimensions rows 90 180) with its sidecar
+    /// OUTPUT.shard.json; `vkbrdf merge -o F.binary PART…` writes the whole file.
+    #[arg(long, value_name = "K/N")]
+    shard: Option<Shard>,
     #[command(flatten)]
     backend: BackendArgs,
 }
@@ -315,7 +332,52 @@ impl ModelArgs {
     }
 }
 
+/// `WxH`, as `--size` spells it.
+fn grid_name(g: Grid) -> String {
+    format!("{}x{}", g.width, g.height)
+}
+
+impl ModelArgs {
+    /// The part of `--shard` over the roughness rows of `grid`, recording `options` and
+    /// the common ones (size, --half).
+    fn part(
+        &self,
+        grid: Grid,
+        options: impl FnOnce() -> Vec<(&'static str, String)>,
+    ) -> anyhow::Result<Option<PartSpec>> {
+        Ok(self.shard.map(|shard| {
+            let mut map: std::collections::BTreeMap<String, String> = options()
+                .into_iter()
+                .map(|(k, v)| (k.to_string(), v))
+                .collect();
+            map.insert("size".into(), grid_name(grid));
+            map.insert("half".into(), self.half.to_string());
+            PartSpec {
+                shard,
+                total_rows: grid.height,
+                options: map,
+            }
+        }))
+    }
+}
+
 impl MaterialArgs {
+    /// The options that name the material in a part's sidecar: its name, and the
+    /// materials file's size and sampled hash (or the presets).
+    fn options(&self) -> anyhow::Result<std::collections::BTreeMap<String, String>> {
+        let mut map = std::collections::BTreeMap::new();
+        map.insert("material".to_string(), self.material.clone());
+        let source = match &self.materials {
+            Some(path) => {
+                let print = vkbrdf::stream::shard::fingerprint(path)?;
+                format!("file of {} bytes, hash {}", print.size, print.hash)
+            }
+            None => "the presets".to_string(),
+        };
+        map.insert("materials".to_string(), source);
+        Ok(map)
+    }
+
     fn load(&self) -> anyhow::Result<Material> {
         Ok(vkbrdf::table::load_material(
             self.materials.as_deref(),
@@ -326,10 +388,10 @@ impl MaterialArgs {
 
 /// A checked job of any kind.
 enum Job {
-    Slice(SliceJob, Option<PathBuf>),
-    Albedo(AlbedoJob),
-    Dfg(DfgJob),
-    Merl(Material, PathBuf),
+    Slice(SliceJob, Option<PathBuf>, Option<PartSpec>),
+    Albedo(AlbedoJob, Option<PartSpec>),
+    Dfg(DfgJob, Option<PartSpec>),
+    Merl(Material, PathBuf, Option<PartSpec>),
     Preview(PreviewJob),
 }
 
@@ -344,10 +406,14 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         .with_progress(true)
         .with_cancel(super::cancel());
     match &job {
-        Job::Slice(j, png) => slice::write_with_png(&mut runner, j, png.as_deref())?,
-        Job::Albedo(j) => albedo::write(&mut runner, j)?,
-        Job::Dfg(j) => dfg::write(&mut runner, j)?,
-        Job::Merl(m, path) => merl::write(&mut runner, m, path)?,
+        Job::Slice(j, _, Some(part)) => slice::write_part(&mut runner, j, part)?,
+        Job::Slice(j, png, None) => slice::write_with_png(&mut runner, j, png.as_deref())?,
+        Job::Albedo(j, Some(part)) => albedo::write_part(&mut runner, j, part)?,
+        Job::Albedo(j, None) => albedo::write(&mut runner, j)?,
+        Job::Dfg(j, Some(part)) => dfg::write_part(&mut runner, j, part)?,
+        Job::Dfg(j, None) => dfg::write(&mut runner, j)?,
+        Job::Merl(m, path, Some(part)) => merl::write_part(&mut runner, m, path, part)?,
+        Job::Merl(m, path, None) => merl::write(&mut runner, m, path)?,
         Job::Preview(j) => preview::write(&mut runner, j)?,
     }
     for w in runner.take_warnings() {
@@ -366,10 +432,10 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
 /// The material a job evaluates, for the jobs that have one.
 fn material_of(job: &Job) -> Option<&Material> {
     match job {
-        Job::Slice(j, _) => Some(&j.material),
-        Job::Merl(m, _) => Some(m),
+        Job::Slice(j, _, _) => Some(&j.material),
+        Job::Merl(m, _, _) => Some(m),
         Job::Preview(j) => Some(&j.material),
-        Job::Albedo(_) | Job::Dfg(_) => None,
+        Job::Albedo(..) | Job::Dfg(..) => None,
     }
 }
 
@@ -389,11 +455,29 @@ fn prepare(kind: &Kind) -> anyhow::Result<(Job, &BackendArgs, Vec<PathBuf>)> {
                 half: a.half,
                 output: a.output.clone(),
             };
-            job.check()?;
             if let Some(p) = &a.png {
                 vkbrdf::table::check_output(p)?;
             }
-            (Job::Slice(job, a.png.clone()), &a.backend)
+            let part = a
+                .shard
+                .map(|shard| {
+                    let mut options = a.material.options()?;
+                    options.insert("size".into(), grid_name(a.size));
+                    options.insert("spacing".into(), format!("{:?}", job.spacing));
+                    options.insert("terms".into(), a.terms.to_string());
+                    options.insert("half".into(), a.half.to_string());
+                    anyhow::Ok(PartSpec {
+                        shard,
+                        total_rows: a.size.height,
+                        options,
+                    })
+                })
+                .transpose()?;
+            match &part {
+                Some(part) => job.check_part(part)?,
+                None => job.check()?,
+            }
+            (Job::Slice(job, a.png.clone(), part), &a.backend)
         }
         Kind::Albedo(a) => {
             let job = AlbedoJob {
@@ -405,8 +489,18 @@ fn prepare(kind: &Kind) -> anyhow::Result<(Job, &BackendArgs, Vec<PathBuf>)> {
                 output: a.output.clone(),
                 average: a.average.clone(),
             };
-            job.check()?;
-            (Job::Albedo(job), &a.model.backend)
+            let part = a.model.part(job.grid, || {
+                vec![
+                    ("model", format!("{:?}", job.spec)),
+                    ("samples", job.samples.to_string()),
+                    ("axes", format!("{:?}", job.axes)),
+                ]
+            })?;
+            match &part {
+                Some(part) => job.check_part(part)?,
+                None => job.check()?,
+            }
+            (Job::Albedo(job, part), &a.model.backend)
         }
         Kind::Dfg(a) => {
             let style = a.lut_style.as_deref().map(|s| match s {
@@ -440,13 +534,36 @@ fn prepare(kind: &Kind) -> anyhow::Result<(Job, &BackendArgs, Vec<PathBuf>)> {
                     output: a.output.clone(),
                 },
             };
-            job.check()?;
-            (Job::Dfg(job), &a.model.backend)
+            let part = a.model.part(job.grid, || {
+                vec![
+                    ("model", format!("{:?}", job.spec)),
+                    ("samples", job.samples.to_string()),
+                    ("axes", format!("{:?}", job.axes)),
+                    ("layout", format!("{:?}", job.layout)),
+                    ("sampler", format!("{:?}", job.sampler)),
+                    ("lut-style", format!("{:?}", job.style)),
+                ]
+            })?;
+            match &part {
+                Some(part) => job.check_part(part)?,
+                None => job.check()?,
+            }
+            (Job::Dfg(job, part), &a.model.backend)
         }
         Kind::Merl(a) => {
             let material = a.material.load()?;
             merl::check(&a.output)?;
-            (Job::Merl(material, a.output.clone()), &a.backend)
+            let part = a
+                .shard
+                .map(|shard| {
+                    anyhow::Ok(PartSpec {
+                        shard,
+                        total_rows: merl::THETA_H_BINS,
+                        options: a.material.options()?,
+                    })
+                })
+                .transpose()?;
+            (Job::Merl(material, a.output.clone(), part), &a.backend)
         }
         Kind::Preview(a) => {
             let job = PreviewJob {
@@ -462,14 +579,14 @@ fn prepare(kind: &Kind) -> anyhow::Result<(Job, &BackendArgs, Vec<PathBuf>)> {
         }
     };
     let outputs = match &job {
-        Job::Slice(j, png) => std::iter::once(j.output.clone())
+        Job::Slice(j, png, _) => std::iter::once(j.output.clone())
             .chain(png.clone())
             .collect(),
-        Job::Albedo(j) => std::iter::once(j.output.clone())
+        Job::Albedo(j, _) => std::iter::once(j.output.clone())
             .chain(j.average.clone())
             .collect(),
-        Job::Dfg(j) => vec![j.output.clone()],
-        Job::Merl(_, path) => vec![path.clone()],
+        Job::Dfg(j, _) => vec![j.output.clone()],
+        Job::Merl(_, path, _) => vec![path.clone()],
         Job::Preview(j) => j.sphere.iter().chain(&j.polar).cloned().collect(),
     };
     // No output may be an input (the materials file, a measured material's MERL file) or
@@ -484,7 +601,26 @@ fn prepare(kind: &Kind) -> anyhow::Result<(Job, &BackendArgs, Vec<PathBuf>)> {
     if let Some(vkbrdf::material::Model::Measured(d)) = material.map(|m| &m.model) {
         inputs.push(d.path.as_path());
     }
-    let refs: Vec<&std::path::Path> = outputs.iter().map(PathBuf::as_path).collect();
+    // A part's sidecar is an output too.
+    let sharded = match &job {
+        Job::Slice(_, _, p) | Job::Albedo(_, p) | Job::Dfg(_, p) | Job::Merl(_, _, p) => {
+            p.is_some()
+        }
+        Job::Preview(_) => false,
+    };
+    let sidecars: Vec<PathBuf> = if sharded {
+        outputs
+            .iter()
+            .map(|p| vkbrdf::stream::shard::sidecar_path(p))
+            .collect()
+    } else {
+        Vec::new()
+    };
+    let refs: Vec<&std::path::Path> = outputs
+        .iter()
+        .chain(&sidecars)
+        .map(PathBuf::as_path)
+        .collect();
     vkbrdf::atomic::check_outputs(&refs, &inputs)?;
     Ok((job, backend, outputs))
 }

@@ -508,6 +508,21 @@ fn materials_for(spec: &Microfacet, points: &[(f64, f64)]) -> Result<(Vec<Materi
     Ok((materials, index))
 }
 
+/// Samples per block of the Vulkan importance kernel and the most blocks it takes in one
+/// job (`SAMPLES_PER_BLOCK` and `MAX_GENERATED_TEXELS` of `src/gpu/evaluator/generated.rs`,
+/// whose `importance_sums` sends larger jobs back to the host's tuples). A shard asks
+/// [`device_takes`] about the whole table: without it, a band small enough for the device
+/// would sum on the device while the whole table summed on the host, and the parts would
+/// differ from the unsharded run in their last bits.
+const KERNEL_BLOCK_SAMPLES: u32 = 256;
+const KERNEL_MAX_BLOCKS: u64 = 1 << 24;
+
+/// Whether an engine that makes its own importance samples takes a job of `points` points
+/// of `samples` samples (else the samples go to it as host-made tuples).
+pub fn device_takes(points: usize, samples: u32) -> bool {
+    points as u64 * u64::from(samples.div_ceil(KERNEL_BLOCK_SAMPLES)) <= KERNEL_MAX_BLOCKS
+}
+
 /// `E(μ, α)` at each `(μ, α)` point.
 pub fn directional_albedo(
     runner: &mut Runner,
@@ -515,8 +530,22 @@ pub fn directional_albedo(
     points: &[(f64, f64)],
     samples: u32,
 ) -> Result<Vec<f64>> {
-    if let Some(sums) = backend_sums(runner, spec, points, samples, "albedo") {
-        return Ok(sums?.into_iter().map(|[x, _]| x).collect());
+    directional_albedo_of(runner, spec, points, points.len(), samples)
+}
+
+/// [`directional_albedo`] of `points`, a band of a table of `whole` points, each
+/// computed as the whole table computes it ([`device_takes`]).
+pub fn directional_albedo_of(
+    runner: &mut Runner,
+    spec: &Microfacet,
+    points: &[(f64, f64)],
+    whole: usize,
+    samples: u32,
+) -> Result<Vec<f64>> {
+    if device_takes(whole, samples) {
+        if let Some(sums) = backend_sums(runner, spec, points, samples, "albedo") {
+            return Ok(sums?.into_iter().map(|[x, _]| x).collect());
+        }
     }
     let e = integrate(runner, spec, points, samples, "albedo", |_| [1.0])?;
     Ok(e.into_iter().map(|[x]| x).collect())
@@ -530,12 +559,30 @@ pub fn average_albedo(
     alphas: &[f64],
     samples: u32,
 ) -> Result<Vec<f64>> {
+    average_albedo_of(runner, spec, alphas, alphas.len(), samples)
+}
+
+/// [`average_albedo`] of `alphas`, a band of a table of `whole` α values, each computed as
+/// the whole table computes it ([`device_takes`]).
+pub fn average_albedo_of(
+    runner: &mut Runner,
+    spec: &Microfacet,
+    alphas: &[f64],
+    whole: usize,
+    samples: u32,
+) -> Result<Vec<f64>> {
     let nodes = gauss_legendre(AVERAGE_NODES);
     let points: Vec<(f64, f64)> = alphas
         .iter()
         .flat_map(|&a| nodes.iter().map(move |&(mu, _)| (mu, a)))
         .collect();
-    let e: Vec<[f64; 1]> = match backend_sums(runner, spec, &points, samples, "E_avg") {
+    let device = device_takes(whole * nodes.len(), samples);
+    let sums = if device {
+        backend_sums(runner, spec, &points, samples, "E_avg")
+    } else {
+        None
+    };
+    let e: Vec<[f64; 1]> = match sums {
         Some(sums) => sums?.into_iter().map(|[x, _]| [x]).collect(),
         None => integrate(runner, spec, &points, samples, "E_avg", |_| [1.0])?,
     };
@@ -621,13 +668,58 @@ impl AlbedoJob {
         super::check_output(&self.output)?;
         self.average.as_deref().map_or(Ok(()), super::check_output)
     }
+
+    /// [`AlbedoJob::check`] for the band `part` names: memory for its rows only, and .npy
+    /// part names.
+    pub fn check_part(&self, part: &super::shard::PartSpec) -> Result<()> {
+        self.spec.material(0.5)?;
+        self.axes.check(self.grid)?;
+        let band = Grid {
+            width: self.grid.width,
+            height: part.band().len().max(1),
+        };
+        super::check_memory(
+            super::table_bytes(band, BYTES_PER_TEXEL),
+            "the albedo table's band",
+        )?;
+        super::shard::check_part_name(&self.output)?;
+        super::check_output(&self.output)?;
+        if let Some(avg) = &self.average {
+            super::shard::check_part_name(avg)?;
+            super::check_output(avg)?;
+        }
+        Ok(())
+    }
 }
 
 /// Integrates and writes the albedo table (and E_avg), after [`AlbedoJob::check`].
 pub fn write(runner: &mut Runner, job: &AlbedoJob) -> Result<()> {
-    job.check()?;
-    let points = job.axes.points(job.grid);
-    let e = directional_albedo(runner, &job.spec, &points, job.samples)?;
+    write_band(runner, job, None)
+}
+
+/// Integrates the band of roughness rows `part` names and writes it as a table part at
+/// `job.output` (and E_avg's band, the same α, at `job.average`): `.npy` bands with
+/// their sidecars ([`super::shard`]), after [`AlbedoJob::check`].
+pub fn write_part(
+    runner: &mut Runner,
+    job: &AlbedoJob,
+    part: &super::shard::PartSpec,
+) -> Result<()> {
+    write_band(runner, job, Some(part))
+}
+
+fn write_band(
+    runner: &mut Runner,
+    job: &AlbedoJob,
+    part: Option<&super::shard::PartSpec>,
+) -> Result<()> {
+    match part {
+        Some(part) => job.check_part(part)?,
+        None => job.check()?,
+    }
+    let band = part.map_or(0..job.grid.height, |p| p.band());
+    let points = &job.axes.points_of_rows(job.grid, band);
+    let e = directional_albedo_of(runner, &job.spec, points, job.grid.texels(), job.samples)?;
     let backend = runner.backend_name();
     let provenance = |table: &str, parameterisation: &str, samples: String| Provenance {
         table: table.into(),
@@ -642,23 +734,39 @@ pub fn write(runner: &mut Runner, job: &AlbedoJob) -> Result<()> {
         job.samples,
         sampling(job.spec.lobe)
     );
-    let (table, clamped) = exr_out::stage(
-        &job.output,
-        job.grid,
-        vec![single("albedo", "Y", &e)],
-        &provenance(
-            "albedo",
-            &format!(
-                "Y = E(mu, alpha) = integral of f cos_i over the hemisphere (F = 1); {} (GGX alpha / Beckmann m), n = +z",
-                job.axes.describe()
-            ),
-            per_texel.clone(),
+    let e_provenance = provenance(
+        "albedo",
+        &format!(
+            "Y = E(mu, alpha) = integral of f cos_i over the hemisphere (F = 1); {} (GGX alpha / Beckmann m), n = +z",
+            job.axes.describe()
         ),
-        job.half,
-        runner.cancel(),
-    )?;
-    runner.warn_clamped(&job.output, &clamped);
-    let mut staged = vec![table];
+        per_texel.clone(),
+    );
+    let e_layers = vec![single("albedo", "Y", &e)];
+    let mut staged = match part {
+        Some(part) => super::shard::stage_exr_part(
+            &job.output,
+            part,
+            job.grid.width,
+            job.grid,
+            &e_layers,
+            &e_provenance,
+            job.half,
+            runner.cancel(),
+        )?,
+        None => {
+            let (table, clamped) = exr_out::stage(
+                &job.output,
+                job.grid,
+                e_layers,
+                &e_provenance,
+                job.half,
+                runner.cancel(),
+            )?;
+            runner.warn_clamped(&job.output, &clamped);
+            vec![table]
+        }
+    };
     if let Some(path) = &job.average {
         // Each row's α, in the table's own axes.
         let alphas: Vec<f64> = points
@@ -666,24 +774,42 @@ pub fn write(runner: &mut Runner, job: &AlbedoJob) -> Result<()> {
             .step_by(job.grid.width)
             .map(|&(_, alpha)| alpha)
             .collect();
-        let avg = average_albedo(runner, &job.spec, &alphas, job.samples)?;
-        let (average, clamped) = exr_out::stage(
-            path,
-            Grid::new(job.grid.height, 1)?,
-            vec![single("albedo-average", "Y", &avg)],
-            &provenance(
-                "albedo-average",
-                &format!(
-                    "Y = E_avg(alpha) = 2 * integral of E(mu) mu dmu (Kulla-Conty); one row, column i = row i of the E table ({})",
-                    job.axes.describe()
-                ),
-                format!("{AVERAGE_NODES}-point Gauss-Legendre in mu, each E with {per_texel}"),
+        let avg = average_albedo_of(runner, &job.spec, &alphas, job.grid.height, job.samples)?;
+        let avg_grid = Grid::new(job.grid.height, 1)?;
+        let avg_layers = vec![single("albedo-average", "Y", &avg)];
+        let avg_provenance = provenance(
+            "albedo-average",
+            &format!(
+                "Y = E_avg(alpha) = 2 * integral of E(mu) mu dmu (Kulla-Conty); one row, column i = row i of the E table ({})",
+                job.axes.describe()
             ),
-            job.half,
-            runner.cancel(),
-        )?;
-        runner.warn_clamped(path, &clamped);
-        staged.push(average);
+            format!("{AVERAGE_NODES}-point Gauss-Legendre in mu, each E with {per_texel}"),
+        );
+        match part {
+            // E_avg's column i is row i of E: its band is the same α, one texel per row.
+            Some(part) => staged.extend(super::shard::stage_exr_part(
+                path,
+                part,
+                1,
+                avg_grid,
+                &avg_layers,
+                &avg_provenance,
+                job.half,
+                runner.cancel(),
+            )?),
+            None => {
+                let (average, clamped) = exr_out::stage(
+                    path,
+                    avg_grid,
+                    avg_layers,
+                    &avg_provenance,
+                    job.half,
+                    runner.cancel(),
+                )?;
+                runner.warn_clamped(path, &clamped);
+                staged.push(average);
+            }
+        }
     }
     // The table and its average appear together or not at all.
     crate::atomic::commit(staged)

@@ -125,8 +125,12 @@ impl Axes {
     /// The `(μ, α)` of every texel, row-major (row j ↔ roughness, column i ↔ μ), the
     /// endpoint zeros at [`ENDPOINT_FLOOR`].
     pub fn points(&self, grid: Grid) -> Vec<(f64, f64)> {
-        (0..grid.height)
-            .flat_map(|j| (0..grid.width).map(move |i| (i, j)))
+        self.points_of_rows(grid, 0..grid.height)
+    }
+
+    /// [`Axes::points`] of the rows `rows` only (a shard's band).
+    pub fn points_of_rows(&self, grid: Grid, rows: std::ops::Range<usize>) -> Vec<(f64, f64)> {
+        rows.flat_map(|j| (0..grid.width).map(move |i| (i, j)))
             .map(|(i, j)| {
                 let (x, y) = self.sampling.coords(grid, i, j);
                 // Only the exact zeros of the endpoint sampling move.
@@ -251,7 +255,20 @@ pub fn split_sum_with(
     points: &[(f64, f64)],
     samples: u32,
 ) -> Result<Vec<[f64; 2]>> {
-    if sampler == Sampler::Visible {
+    split_sum_of(runner, spec, sampler, points, points.len(), samples)
+}
+
+/// [`split_sum_with`] of `points`, a band of a table of `whole` points, each computed as
+/// the whole table computes it ([`albedo::device_takes`]).
+pub fn split_sum_of(
+    runner: &mut Runner,
+    spec: &Microfacet,
+    sampler: Sampler,
+    points: &[(f64, f64)],
+    whole: usize,
+    samples: u32,
+) -> Result<Vec<[f64; 2]>> {
+    if sampler == Sampler::Visible && albedo::device_takes(whole, samples) {
         if let Some(sums) = albedo::backend_sums(runner, spec, points, samples, "dfg") {
             // A = Σ x (1 − w) = Σ x − Σ x w, B = Σ x w.
             return Ok(sums?.into_iter().map(|[x, xw]| [x - xw, xw]).collect());
@@ -291,6 +308,30 @@ impl DfgJob {
     /// Everything that can be checked before evaluating: the model is legal, the table
     /// fits in memory, the output can be written.
     pub fn check(&self) -> Result<()> {
+        self.check_model()?;
+        let bytes = super::table_bytes(self.grid, albedo::BYTES_PER_TEXEL + 16);
+        super::check_memory(bytes, "the DFG table")?;
+        super::check_output(&self.output)
+    }
+
+    /// [`DfgJob::check`] for the band `part` names: memory for its rows only, and a .npy
+    /// part name.
+    pub fn check_part(&self, part: &super::shard::PartSpec) -> Result<()> {
+        self.check_model()?;
+        let band = Grid {
+            width: self.grid.width,
+            height: part.band().len().max(1),
+        };
+        super::check_memory(
+            super::table_bytes(band, albedo::BYTES_PER_TEXEL + 16),
+            "the DFG table's band",
+        )?;
+        super::shard::check_part_name(&self.output)?;
+        super::check_output(&self.output)
+    }
+
+    /// The model is legal, the sampler can draw it, the axes can place the grid.
+    fn check_model(&self) -> Result<()> {
         self.spec.material(0.5)?;
         self.axes.check(self.grid)?;
         if self.sampler == Sampler::Engine && self.spec.lobe != albedo::Lobe::Ggx {
@@ -299,17 +340,40 @@ impl DfgJob {
                 self.spec.lobe.name()
             )));
         }
-        let bytes = super::table_bytes(self.grid, albedo::BYTES_PER_TEXEL + 16);
-        super::check_memory(bytes, "the DFG table")?;
-        super::check_output(&self.output)
+        Ok(())
     }
 }
 
 /// Integrates and writes the DFG table, after [`DfgJob::check`].
 pub fn write(runner: &mut Runner, job: &DfgJob) -> Result<()> {
-    job.check()?;
-    let points = job.axes.points(job.grid);
-    let ab = split_sum_with(runner, &job.spec, job.sampler, &points, job.samples)?;
+    write_band(runner, job, None)
+}
+
+/// Integrates the band of roughness rows `part` names and writes it as a table part at
+/// `job.output` (a `.npy` band and its sidecar: [`super::shard`]), after [`DfgJob::check`].
+pub fn write_part(runner: &mut Runner, job: &DfgJob, part: &super::shard::PartSpec) -> Result<()> {
+    write_band(runner, job, Some(part))
+}
+
+fn write_band(
+    runner: &mut Runner,
+    job: &DfgJob,
+    part: Option<&super::shard::PartSpec>,
+) -> Result<()> {
+    match part {
+        Some(part) => job.check_part(part)?,
+        None => job.check()?,
+    }
+    let band = part.map_or(0..job.grid.height, |p| p.band());
+    let points = &job.axes.points_of_rows(job.grid, band);
+    let ab = split_sum_of(
+        runner,
+        &job.spec,
+        job.sampler,
+        points,
+        job.grid.texels(),
+        job.samples,
+    )?;
     let channel = |name: &str, value: fn(&[f64; 2]) -> f64| Channel {
         name: name.into(),
         values: ab.iter().map(|v| value(v) as f32).collect(),
@@ -352,6 +416,19 @@ pub fn write(runner: &mut Runner, job: &DfgJob) -> Result<()> {
         name: "dfg".into(),
         channels: channels.into(),
     };
+    if let Some(part) = part {
+        let staged = super::shard::stage_exr_part(
+            &job.output,
+            part,
+            job.grid.width,
+            job.grid,
+            &[layer],
+            &provenance,
+            job.half,
+            runner.cancel(),
+        )?;
+        return crate::atomic::commit(staged);
+    }
     let clamped = exr_out::write(
         &job.output,
         job.grid,

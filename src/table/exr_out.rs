@@ -13,6 +13,7 @@ use exr::prelude::{
     f16, AnyChannel, AnyChannels, AttributeValue, Encoding, FlatSamples, Image, ImageAttributes,
     IntegerBounds, Layer as ExrLayer, LayerAttributes, SmallVec, Text, WritableImage,
 };
+use std::io::Write;
 use std::path::Path;
 
 /// One channel of a table: a name (`R`, `Y`, `F.R`, …) and `W·H` values, row-major.
@@ -163,13 +164,72 @@ pub fn stage(
         ImageAttributes::new(IntegerBounds::from_dimensions(size)),
         exr_layers,
     );
-    let staged = crate::atomic::stage(path, cancel, |w| {
-        image.write().to_unbuffered(w).map_err(|e| match e {
-            exr::error::Error::Io(io) => io,
-            other => std::io::Error::other(format!("OpenEXR encoding: {other}")),
-        })
+    let mut encoded = std::io::Cursor::new(Vec::new());
+    image
+        .write()
+        .to_buffered(&mut encoded)
+        .map_err(|e| Error::Table(format!("{}: OpenEXR encoding: {e}", path.display())))?;
+    let mut encoded = encoded.into_inner();
+    sort_provenance(&mut encoded).ok_or_else(|| {
+        Error::Table(format!(
+            "{}: the OpenEXR encoder wrote a header this writer cannot read (a bug)",
+            path.display()
+        ))
     })?;
+    let staged = crate::atomic::stage(path, cancel, |w| w.write_all(&encoded))?;
     Ok((staged, clamped))
+}
+
+/// Puts the `vkbrdf.*` attributes of every header of the encoded file `bytes` in name
+/// order, in place. The `exr` crate keeps them in a `HashMap` and writes them in its
+/// randomly seeded order, so without this the same table written twice differs in its
+/// header bytes (and a merged table would differ from the unsharded one). Each header keeps
+/// its length, so the offset tables after the headers stay valid. `None` when the bytes
+/// are not a header this function can walk.
+fn sort_provenance(bytes: &mut [u8]) -> Option<()> {
+    // The version field's bit 12: several headers, ended by an empty one.
+    let multi = u32::from_le_bytes(bytes.get(4..8)?.try_into().ok()?) & 0x1000 != 0;
+    let nul =
+        |bytes: &[u8], from: usize| Some(from + bytes.get(from..)?.iter().position(|&b| b == 0)?);
+    let mut at = 8;
+    loop {
+        let start = at;
+        // (name, byte range) of each attribute: name\0 type\0 size:i32 value.
+        let mut attributes: Vec<(Vec<u8>, std::ops::Range<usize>)> = Vec::new();
+        loop {
+            let name_end = nul(bytes, at)?;
+            if name_end == at {
+                at += 1; // the header's closing \0
+                break;
+            }
+            let type_end = nul(bytes, name_end + 1)?;
+            let size = i32::from_le_bytes(bytes.get(type_end + 1..type_end + 5)?.try_into().ok()?);
+            let end = type_end + 5 + usize::try_from(size).ok()?;
+            if end > bytes.len() {
+                return None;
+            }
+            attributes.push((bytes[at..name_end].to_vec(), at..end));
+            at = end;
+        }
+        let ours = |name: &[u8]| name.starts_with(b"vkbrdf.");
+        let mut sorted: Vec<&(Vec<u8>, std::ops::Range<usize>)> =
+            attributes.iter().filter(|(n, _)| ours(n)).collect();
+        sorted.sort_by(|a, b| a.0.cmp(&b.0));
+        let mut sorted = sorted.into_iter();
+        let mut header = Vec::with_capacity(at - start);
+        for attribute in &attributes {
+            let (_, range) = if ours(&attribute.0) {
+                sorted.next()?
+            } else {
+                attribute
+            };
+            header.extend_from_slice(&bytes[range.clone()]);
+        }
+        bytes[start..at - 1].copy_from_slice(&header);
+        if !multi || *bytes.get(at)? == 0 {
+            return Some(());
+        }
+    }
 }
 
 /// Clamps `layer`'s finite values to ±[`HALF_MAX`] (which float16 would round to ±inf

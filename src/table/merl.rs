@@ -34,6 +34,16 @@ pub fn bin_directions(i: usize, j: usize, k: usize) -> ([f64; 3], [f64; 3]) {
 /// evaluated on the runner. MERL is isotropic: anisotropic materials are sampled at
 /// `φ_h = 0` with `t = +x`.
 pub fn compute(runner: &mut Runner, material: &Material) -> Result<Vec<f64>> {
+    compute_band(runner, material, 0..THETA_H_BINS)
+}
+
+/// [`compute`] for the θ_h bins `band` only: the R, G and B blocks of those bins
+/// (`3 · |band| · 90 · 180` values), each bin evaluated as in the whole table.
+pub fn compute_band(
+    runner: &mut Runner,
+    material: &Material,
+    band: std::ops::Range<usize>,
+) -> Result<Vec<f64>> {
     let materials = std::slice::from_ref(material);
     let tangent = needs_tangents(materials).then_some(TANGENT);
     if tangent.is_some() {
@@ -42,11 +52,14 @@ pub fn compute(runner: &mut Runner, material: &Material) -> Result<Vec<f64>> {
             material.name
         ));
     }
-    let mut values = vec![INVALID; 3 * SAMPLES];
-    runner.start("merl", SAMPLES as u64);
-    let mut next = 0;
-    while next < SAMPLES {
-        let end = SAMPLES.min(next + runner.chunk_tuples());
+    let row = PHI_D_BINS * THETA_D_BINS;
+    let (first, last) = (band.start * row, band.end * row);
+    let n = last - first;
+    let mut values = vec![INVALID; 3 * n];
+    runner.start("merl", n as u64);
+    let mut next = first;
+    while next < last {
+        let end = last.min(next + runner.chunk_tuples());
         let mut rows = Vec::with_capacity((end - next) * 13);
         let mut bins = Vec::with_capacity(end - next);
         for b in next..end {
@@ -66,7 +79,7 @@ pub fn compute(runner: &mut Runner, material: &Material) -> Result<Vec<f64>> {
             let out = runner.evaluate(rows, materials, false)?;
             for (r, &b) in bins.iter().enumerate() {
                 for c in 0..3 {
-                    values[c * SAMPLES + b] = f64::from(out.brdf[3 * r + c]) / SCALES[c];
+                    values[c * n + b - first] = f64::from(out.brdf[3 * r + c]) / SCALES[c];
                 }
             }
         }
@@ -90,6 +103,21 @@ pub fn write(runner: &mut Runner, material: &Material, path: &Path) -> Result<()
     check(path)?;
     let values = compute(runner, material)?;
     write_values_cancellable(path, &values, runner.cancel())
+}
+
+/// Evaluates the θ_h bins `part` names and writes them as a MERL part at `path` (a MERL
+/// binary of the band, dimensions `rows 90 180`, and its sidecar: [`super::shard`]), after
+/// [`check`].
+pub fn write_part(
+    runner: &mut Runner,
+    material: &Material,
+    path: &Path,
+    part: &super::shard::PartSpec,
+) -> Result<()> {
+    check(path)?;
+    let values = compute_band(runner, material, part.band())?;
+    let engine = runner.backend_name();
+    super::shard::write_merl_part(path, part, &values, &engine, runner.cancel())
 }
 
 /// Writes stored values (R, G, B blocks) as a MERL binary, atomically.

@@ -22,6 +22,7 @@ pub mod exr_out;
 pub mod font;
 pub mod merl;
 pub mod preview;
+pub mod shard;
 pub mod slice;
 
 use crate::backend::{Backend, Output, Request};

@@ -87,13 +87,25 @@ pub fn compute_from_tuples(
     spacing: Spacing,
     terms: bool,
 ) -> Result<(Vec<f32>, Option<Vec<f32>>)> {
+    texels_from_tuples(runner, material, grid, spacing, terms, 0..grid.texels())
+}
+
+/// [`compute_from_tuples`] for the row-major texels `texels` only.
+fn texels_from_tuples(
+    runner: &mut Runner,
+    material: &Material,
+    grid: Grid,
+    spacing: Spacing,
+    terms: bool,
+    texels: std::ops::Range<usize>,
+) -> Result<(Vec<f32>, Option<Vec<f32>>)> {
     let materials = std::slice::from_ref(material);
     let tangent = needs_tangents(materials).then_some(TANGENT);
-    let n = grid.texels();
+    let n = texels.len();
     let mut brdf = Vec::with_capacity(n * 3);
     let mut term_values = Vec::with_capacity(if terms { n * TERM_COLUMNS } else { 0 });
     runner.start("slice", n as u64);
-    let mut next = 0;
+    let (mut next, n) = (texels.start, texels.end);
     while next < n {
         let end = n.min(next + runner.chunk_tuples());
         let mut rows = Vec::with_capacity((end - next) * 13);
@@ -114,6 +126,44 @@ pub fn compute_from_tuples(
     }
     runner.finish();
     Ok((brdf, terms.then_some(term_values)))
+}
+
+/// [`compute`] for the θ_d rows `rows` only (a shard's band), each texel computed as the
+/// whole slice computes it: where the backend makes the directions itself for the whole
+/// grid, it makes the whole slice and the band is cut from it (the device's directions
+/// differ from the host's in their last bits, so a band must not switch paths); else the
+/// band's tuples alone are built and evaluated.
+pub fn compute_band(
+    runner: &mut Runner,
+    material: &Material,
+    grid: Grid,
+    spacing: Spacing,
+    terms: bool,
+    rows: std::ops::Range<usize>,
+) -> Result<(Vec<f32>, Option<Vec<f32>>)> {
+    if rows.is_empty() {
+        return Ok((Vec::new(), terms.then(Vec::new)));
+    }
+    let texels = rows.start * grid.width..rows.end * grid.width;
+    if let (Ok(width), Ok(height)) = (u32::try_from(grid.width), u32::try_from(grid.height)) {
+        let slice = SliceGrid {
+            width,
+            height,
+            linear: spacing == Spacing::Linear,
+        };
+        runner.start("slice", slice.texels());
+        if let Some(out) = runner.half_diff_slice(material, slice, terms) {
+            let out = out?;
+            runner.advance(slice.texels());
+            runner.finish();
+            let brdf = out.brdf[texels.start * 3..texels.end * 3].to_vec();
+            let terms = out
+                .terms
+                .map(|t| t[texels.start * TERM_COLUMNS..texels.end * TERM_COLUMNS].to_vec());
+            return Ok((brdf, terms));
+        }
+    }
+    texels_from_tuples(runner, material, grid, spacing, terms, texels)
 }
 
 /// What `vkbrdf table slice` writes.
@@ -145,6 +195,27 @@ impl SliceJob {
         )?;
         super::check_output(&self.output)
     }
+
+    /// [`SliceJob::check`] for the band `part` names: memory for its rows (and for the
+    /// whole slice's f32 results where the backend may make the whole slice itself,
+    /// [`compute_band`]; up to 2²⁴ texels), and that the part can be written.
+    pub fn check_part(&self, part: &super::shard::PartSpec) -> Result<()> {
+        let channels = (if self.terms { 3 + TERM_COLUMNS } else { 3 }) as u64;
+        let band = Grid {
+            width: self.grid.width,
+            height: part.band().len().max(1),
+        };
+        let whole = self.grid.width as u128 * self.grid.height as u128;
+        let generated = if whole <= 1 << 24 {
+            whole * 4 * channels as u128
+        } else {
+            0
+        };
+        let bytes = super::table_bytes(band, 12 * channels).map(|b| b + generated);
+        super::check_memory(bytes, "the slice's band")?;
+        super::shard::check_part_name(&self.output)?;
+        super::check_output(&self.output)
+    }
 }
 
 /// Evaluates and writes the slice, after [`SliceJob::check`].
@@ -162,29 +233,8 @@ pub fn write_with_png(runner: &mut Runner, job: &SliceJob, png: Option<&Path>) -
         super::check_output(p)?;
     }
     let (brdf, terms) = compute(runner, &job.material, job.grid, job.spacing, job.terms)?;
-    let mut layers = vec![interleaved("brdf", &brdf, &["R", "G", "B"])];
-    if let Some(t) = &terms {
-        layers.push(interleaved(
-            "terms",
-            t,
-            &["D", "G", "F.R", "F.G", "F.B", "K"],
-        ));
-    }
-    let spacing = match job.spacing {
-        Spacing::Sqrt => "theta_h = x^2 * pi/2 (MERL square-root spacing)",
-        Spacing::Linear => "theta_h = x * pi/2 (linear)",
-    };
-    let provenance = Provenance {
-        table: "slice".into(),
-        material: job.material.name.clone(),
-        convention: super::convention_name(&job.material).into(),
-        parameterisation: format!(
-            "f (1/sr, no cosine) over half/difference angles (Rusinkiewicz 1998): {spacing}, theta_d = y * pi/2, phi_d = pi/2, phi_h = 0; n = +z, t = +x{}",
-            if job.terms { "; layer terms: D, G, F.R, F.G, F.B, K" } else { "" }
-        ),
-        samples: "1 point sample at each texel centre".into(),
-        backend: runner.backend_name(),
-    };
+    let layers = layers(&brdf, terms.as_deref());
+    let (provenance, spacing) = provenance(runner, job);
     let (staged, clamped) = exr_out::stage(
         &job.output,
         job.grid,
@@ -218,6 +268,71 @@ pub fn write_with_png(runner: &mut Runner, job: &SliceJob, png: Option<&Path>) -
         )?);
     }
     crate::atomic::commit(staged)
+}
+
+/// Evaluates the band of θ_d rows `part` names and writes it as a table part at
+/// `job.output` (a `.npy` band and its sidecar: [`super::shard`]), after
+/// [`SliceJob::check`].
+pub fn write_part(
+    runner: &mut Runner,
+    job: &SliceJob,
+    part: &super::shard::PartSpec,
+) -> Result<()> {
+    job.check_part(part)?;
+    let (brdf, terms) = compute_band(
+        runner,
+        &job.material,
+        job.grid,
+        job.spacing,
+        job.terms,
+        part.band(),
+    )?;
+    let layers = layers(&brdf, terms.as_deref());
+    let (provenance, _) = provenance(runner, job);
+    let staged = super::shard::stage_exr_part(
+        &job.output,
+        part,
+        job.grid.width,
+        job.grid,
+        &layers,
+        &provenance,
+        job.half,
+        runner.cancel(),
+    )?;
+    crate::atomic::commit(staged)
+}
+
+/// The slice's layers: `brdf` (R, G, B) and, with terms, `terms`.
+fn layers(brdf: &[f32], terms: Option<&[f32]>) -> Vec<Layer> {
+    let mut layers = vec![interleaved("brdf", brdf, &["R", "G", "B"])];
+    if let Some(t) = terms {
+        layers.push(interleaved(
+            "terms",
+            t,
+            &["D", "G", "F.R", "F.G", "F.B", "K"],
+        ));
+    }
+    layers
+}
+
+/// The slice's provenance, and its θ_h spacing in words.
+fn provenance(runner: &Runner, job: &SliceJob) -> (Provenance, &'static str) {
+    let spacing = match job.spacing {
+        Spacing::Sqrt => "theta_h = x^2 * pi/2 (MERL square-root spacing)",
+        Spacing::Linear => "theta_h = x * pi/2 (linear)",
+    };
+    let provenance = Provenance {
+        table: "slice".into(),
+        material: job.material.name.clone(),
+        convention: super::convention_name(&job.material).into(),
+        parameterisation: format!(
+            "f (1/sr, no cosine) over half/difference angles (Rusinkiewicz 1998): {spacing}, theta_d = y * pi/2, phi_d = pi/2, phi_h = 0; n = +z, t = +x{}",
+            if job.terms { "; layer terms: D, G, F.R, F.G, F.B, K" } else { "" }
+        ),
+        samples: "1 point sample at each texel centre".into(),
+        backend: runner.backend_name(),
+    };
+    (provenance, spacing)
 }
 
 /// A layer from `n × k` interleaved values, one channel per name.
