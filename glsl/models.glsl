@@ -6,7 +6,7 @@
 #ifndef VKBRDF_MODELS_GLSL
 #define VKBRDF_MODELS_GLSL
 
-#include "layout.glsl"
+#include "material.glsl"
 #include "terms.glsl"
 
 // One tuple's result: the BRDF and the term columns D, G, F_rgb, K.
@@ -93,10 +93,6 @@ Eval eval_lobe_xf(GpuMaterial m, vec2 lobe) {
     return e;
 }
 #endif
-
-bool is_anisotropic(GpuMaterial m) {
-    return (m.kind.w & FLAG_ANISOTROPIC) != 0u;
-}
 
 // ln cos_h for the lobes cos_h^e. Where the f32 cos_h is not a normal number (cosines of
 // 1e-45 make it ~1e-45, and GPUs flush that to 0: make_frame's f32_of), from the f64

@@ -29,6 +29,15 @@ pub const SOURCES: &[(&str, &str)] = &[
     ("terms.glsl", include_str!("../../glsl/terms.glsl")),
     ("models.glsl", include_str!("../../glsl/models.glsl")),
     ("measured.glsl", include_str!("../../glsl/measured.glsl")),
+    ("material.glsl", include_str!("../../glsl/material.glsl")),
+    ("bindings.glsl", include_str!("../../glsl/bindings.glsl")),
+    ("input.glsl", include_str!("../../glsl/input.glsl")),
+    ("generators.glsl", include_str!("../../glsl/generators.glsl")),
+    ("frame.glsl", include_str!("../../glsl/frame.glsl")),
+    ("frame64.glsl", include_str!("../../glsl/frame64.glsl")),
+    ("frame32.glsl", include_str!("../../glsl/frame32.glsl")),
+    ("integrators.glsl", include_str!("../../glsl/integrators.glsl")),
+    ("counts.glsl", include_str!("../../glsl/counts.glsl")),
 ];
 
 /// The kernel's entry file in [`SOURCES`].
