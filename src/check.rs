@@ -32,7 +32,7 @@ use crate::backend::{Backend, Request, TERM_COLUMNS};
 use crate::batch::{Batch, Tuple, COLUMNS_PLAIN, COLUMNS_TANGENT};
 use crate::error::Result;
 use crate::material::{
-    legality, parse_materials, Convention, DistributionKind, Geometry, Material,
+    legality, parse_materials, Convention, DistributionKind, FresnelKind, Geometry, Material,
 };
 use crate::reference::{self, Status};
 use crate::stats::{relative_error, ErrorStats};
@@ -359,7 +359,7 @@ fn shapes() -> Vec<Shape> {
                     if legality(convention, distribution, anisotropic, geometry).is_err() {
                         continue;
                     }
-                    for fresnel in ["none", "dielectric", "conductor", "schlick"] {
+                    for fresnel in FresnelKind::ALL.map(FresnelKind::toml_name) {
                         v.push(Shape {
                             model: "cook-torrance",
                             convention: convention.toml_name(),
