@@ -136,6 +136,14 @@ impl Roughness {
     pub fn is_anisotropic(self) -> bool {
         matches!(self, Roughness::Anisotropic(..))
     }
+
+    /// As `vkbrdf materials` lists it: `m=0.3` or `m=[0.1, 0.4]`.
+    pub fn describe(self) -> String {
+        match self {
+            Roughness::Isotropic(m) => format!("m={m}"),
+            Roughness::Anisotropic(x, y) => format!("m=[{x}, {y}]"),
+        }
+    }
 }
 
 impl Material {

@@ -2,7 +2,7 @@
 //! kernel code and feature. Their formulas: `reference::distribution` (f64) and
 //! `glsl/terms.glsl`; the rules that combine them with a geometry: [`super::legality`].
 
-use super::Term;
+use super::{Convention, Illegal, Term};
 use crate::material::Roughness;
 
 /// Microfacet distribution D (FORMULAS.md §2) with its parameter.
@@ -119,6 +119,38 @@ impl DistributionKind {
         }
     }
 
+    /// Whether it has Smith's Λ (and a Beckmann or GGX roughness), which the Smith and
+    /// Schlick–Smith geometry terms need ([`Geometry::legality`](super::Geometry::legality)).
+    pub fn has_lambda(self) -> bool {
+        matches!(self, DistributionKind::Beckmann | DistributionKind::Ggx)
+    }
+
+    /// Its own rule (FORMULAS.md §2), whatever the geometry: whether anisotropic roughness
+    /// (when `anisotropic`) is defined for it in `convention`.
+    pub fn legality(self, convention: Convention, anisotropic: bool) -> Result<(), Illegal> {
+        use DistributionKind as D;
+        let d = self.toml_name();
+        let illegal = |message: String| {
+            Err(Illegal {
+                key: "roughness",
+                message,
+            })
+        };
+        if !anisotropic {
+            return Ok(());
+        }
+        match self {
+            D::Beckmann | D::Ggx if convention != Convention::Modern => illegal(format!(
+                "anisotropic `{d}` exists in the `modern` convention only"
+            )),
+            D::Beckmann | D::Ggx => Ok(()),
+            D::Blinn => illegal("distribution `blinn` takes an `exponent`, not a roughness".into()),
+            D::Gaussian | D::Charlie => illegal(format!(
+                "distribution `{d}` is isotropic only; give one number"
+            )),
+        }
+    }
+
     /// The largest roughness the formula is defined for (FORMULAS.md §2): `charlie`'s m is
     /// the paper's α = r² ≤ 1; the others are bounded only by the parser's general range.
     pub fn max_roughness(self) -> Option<f64> {
@@ -137,4 +169,31 @@ impl Distribution {
             Distribution::Charlie { .. } => DistributionKind::Charlie,
         }
     }
+
+    /// Its name and parameter as `vkbrdf materials` lists them (`ggx m=0.3`, `blinn e=50`).
+    pub fn describe(&self) -> String {
+        match *self {
+            Distribution::Gaussian { m } => format!("gaussian m={m}"),
+            Distribution::Beckmann(r) => format!("beckmann {}", r.describe()),
+            Distribution::Ggx(r) => format!("ggx {}", r.describe()),
+            Distribution::Blinn { exponent } => format!("blinn e={exponent}"),
+            Distribution::Charlie { m } => format!("charlie m={m}"),
+        }
+    }
+
+    /// The angular width of its lobe (radians), where `vkbrdf check` aims half vectors.
+    pub fn lobe_width(&self) -> f64 {
+        match *self {
+            Distribution::Gaussian { m } => m,
+            Distribution::Beckmann(r) | Distribution::Ggx(r) => r.xy().0.max(r.xy().1),
+            Distribution::Blinn { exponent } => exponent_lobe_width(exponent),
+            // Sheen peaks at grazing h (sin_h = 1): aimed anywhere, i.e. uniformly.
+            Distribution::Charlie { .. } => 1.0,
+        }
+    }
+}
+
+/// The angular width (radians) of a lobe `cos^e`: `sqrt(2/(e + 2))`.
+pub fn exponent_lobe_width(e: f64) -> f64 {
+    (2.0 / (e + 2.0)).sqrt()
 }

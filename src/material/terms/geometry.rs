@@ -2,7 +2,7 @@
 //! feature. Their formulas: `reference::geometry` (f64) and `glsl/terms.glsl`; the rules
 //! that combine them with a distribution: [`super::legality`].
 
-use super::Term;
+use super::{DistributionKind, Illegal, Term};
 
 /// Geometric attenuation G (FORMULAS.md §3).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -65,6 +65,41 @@ impl Geometry {
                 feature: Some((32, "HAS_G_NEUBELT")),
             },
         }
+    }
+
+    /// Its rules with `distribution` (FORMULAS.md §3): whether this geometry term is
+    /// defined for `distribution` (with anisotropic roughness, when `anisotropic`).
+    pub fn legality(
+        self,
+        distribution: DistributionKind,
+        anisotropic: bool,
+    ) -> Result<(), Illegal> {
+        let d = distribution.toml_name();
+        let g = self.toml_name();
+        let illegal = |message: String| {
+            Err(Illegal {
+                key: "geometry",
+                message,
+            })
+        };
+        let smith = matches!(
+            self,
+            Geometry::Smith | Geometry::SmithCorrelated | Geometry::SmithFast
+        );
+        let without_lambda = !distribution.has_lambda();
+        if smith && without_lambda {
+            return illegal(format!("Smith G needs a Λ for the distribution, and `{d}` has none; use `cook-torrance`, `neubelt` or `none`, or distribution `beckmann`/`ggx`"));
+        }
+        if self == Geometry::SchlickSmith && without_lambda {
+            return illegal(format!("`schlick-smith` takes its k from a Beckmann or GGX roughness, and `{d}` has none; use `cook-torrance`, `neubelt` or `none`, or distribution `beckmann`/`ggx`"));
+        }
+        if self == Geometry::SmithFast && distribution != DistributionKind::Beckmann {
+            return illegal("`smith-fast` is a fit of Smith–Beckmann (Beckmann only); use `smith` or `smith-correlated` with ggx".into());
+        }
+        if self == Geometry::SchlickSmith && anisotropic {
+            return illegal(format!("`{g}` is defined for isotropic roughness only; give one roughness, or use `smith` or `smith-correlated`"));
+        }
+        Ok(())
     }
 
     /// The spelling in a materials file (`geometry = "..."`).

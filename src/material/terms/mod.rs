@@ -51,61 +51,20 @@ pub struct Illegal {
     pub message: String,
 }
 
-/// The legality rules of FORMULAS.md §2–§3, written once: whether `distribution` with
-/// `geometry` (and anisotropic roughness, when `anisotropic`) in `convention` is a
-/// material the contract defines. The parser, the check matrix (`check::combinations`) and
-/// the test strategies all ask this function, so a new term adds its rule here only.
+/// The legality rules of FORMULAS.md §2–§3, written once, each in its term's file: whether
+/// `distribution` with `geometry` (and anisotropic roughness, when `anisotropic`) in
+/// `convention` is a material the contract defines. The distribution's own rules first
+/// ([`DistributionKind::legality`]), then the geometry's with it ([`Geometry::legality`]).
+/// The parser, the check matrix (`check::combinations`) and the test strategies all ask
+/// this function, so a new term adds its rule in its own file only.
 pub fn legality(
     convention: Convention,
     distribution: DistributionKind,
     anisotropic: bool,
     geometry: Geometry,
 ) -> Result<(), Illegal> {
-    use DistributionKind as D;
-    let d = distribution.toml_name();
-    let g = geometry.toml_name();
-    let illegal = |key, message: String| Err(Illegal { key, message });
-    if anisotropic {
-        match distribution {
-            D::Beckmann | D::Ggx if convention != Convention::Modern => {
-                return illegal(
-                    "roughness",
-                    format!("anisotropic `{d}` exists in the `modern` convention only"),
-                )
-            }
-            D::Beckmann | D::Ggx => {}
-            D::Blinn => {
-                return illegal(
-                    "roughness",
-                    "distribution `blinn` takes an `exponent`, not a roughness".into(),
-                )
-            }
-            D::Gaussian | D::Charlie => {
-                return illegal(
-                    "roughness",
-                    format!("distribution `{d}` is isotropic only; give one number"),
-                )
-            }
-        }
-    }
-    let smith = matches!(
-        geometry,
-        Geometry::Smith | Geometry::SmithCorrelated | Geometry::SmithFast
-    );
-    let without_lambda = matches!(distribution, D::Gaussian | D::Blinn | D::Charlie);
-    if smith && without_lambda {
-        return illegal("geometry", format!("Smith G needs a Λ for the distribution, and `{d}` has none; use `cook-torrance`, `neubelt` or `none`, or distribution `beckmann`/`ggx`"));
-    }
-    if geometry == Geometry::SchlickSmith && without_lambda {
-        return illegal("geometry", format!("`schlick-smith` takes its k from a Beckmann or GGX roughness, and `{d}` has none; use `cook-torrance`, `neubelt` or `none`, or distribution `beckmann`/`ggx`"));
-    }
-    if geometry == Geometry::SmithFast && distribution != D::Beckmann {
-        return illegal("geometry", "`smith-fast` is a fit of Smith–Beckmann (Beckmann only); use `smith` or `smith-correlated` with ggx".into());
-    }
-    if geometry == Geometry::SchlickSmith && anisotropic {
-        return illegal("geometry", format!("`{g}` is defined for isotropic roughness only; give one roughness, or use `smith` or `smith-correlated`"));
-    }
-    Ok(())
+    distribution.legality(convention, anisotropic)?;
+    geometry.legality(distribution, anisotropic)
 }
 
 #[cfg(test)]
