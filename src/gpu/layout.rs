@@ -134,7 +134,7 @@ pub struct GpuMaterial {
     pub kind: [u32; 4],
 }
 
-/// The per-chunk counters the kernel accumulates (`buffer Counts` in `glsl/eval.comp`).
+/// The per-chunk counters the kernel accumulates (`buffer Counts` in `glsl/bindings.glsl`).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Pod, Zeroable)]
 pub struct GpuCounts {
@@ -158,7 +158,7 @@ impl GpuCounts {
     };
 }
 
-/// Push constants of the kernel (`uniform Params` in `glsl/eval.comp`).
+/// Push constants of the kernel (`uniform Params` in `glsl/bindings.glsl`).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Pod, Zeroable)]
 pub struct PushConstants {
