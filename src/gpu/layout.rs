@@ -1,6 +1,8 @@
-//! The GPU data structures, mirrored field for field from `glsl/layout.glsl`, and the
-//! integer codes and binding numbers the kernel reads, which are said once here and
-//! injected into the GLSL as macros ([`SHADER_CODES`], [`SHADER_BINDINGS`]).
+//! The GPU data structures, mirrored field for field from `glsl/layout.glsl` (whose
+//! `material.glsl` reads `GpuMaterial`'s packed slots by name), and the integer codes and
+//! binding numbers the kernel reads, each said once (a term's code by its `Term` in
+//! `material::terms`, the others here) and injected into the GLSL as macros
+//! ([`shader_codes`], [`SHADER_BINDINGS`]).
 //!
 //! Every GPU struct is `#[repr(C)]` + [`Pod`] built only from `[f32; 4]` and `[u32; 4]`, so
 //! its std430 layout equals its Rust layout with no padding rules to remember (a `vec3`
