@@ -103,9 +103,9 @@ dvec3 merl_coordinates(Row r) {
 // FORMULAS.md §7: f of a measured material; D = 0, G = F = K = 1 (no decomposition).
 Eval model_measured(Row r, GpuMaterial m) {
     dvec3 x = merl_coordinates(r);
-    uint table = m.kind.y;
+    uint table = material_merl_table(m);
     vec3 rgb;
-    if (m.kind.z == LOOKUP_LINEAR) {
+    if (material_merl_lookup(m) == LOOKUP_LINEAR) {
         // Trilinear between sample points; theta_h, theta_d hold index 89 beyond it,
         // phi_d wraps (180 = 0).
         dvec3 c = dvec3(min(x.x, double(89.0)), min(x.y, double(89.0)), x.z);

@@ -6,7 +6,7 @@
 #ifndef VKBRDF_MODELS_GLSL
 #define VKBRDF_MODELS_GLSL
 
-#include "layout.glsl"
+#include "material.glsl"
 #include "terms.glsl"
 
 // One tuple's result: the BRDF and the term columns D, G, F_rgb, K.
@@ -94,10 +94,6 @@ Eval eval_lobe_xf(GpuMaterial m, vec2 lobe) {
 }
 #endif
 
-bool is_anisotropic(GpuMaterial m) {
-    return (m.kind.w & FLAG_ANISOTROPIC) != 0u;
-}
-
 // ln cos_h for the lobes cos_h^e. Where the f32 cos_h is not a normal number (cosines of
 // 1e-45 make it ~1e-45, and GPUs flush that to 0: make_frame's f32_of), from the f64
 // cos_h: ln of 0 would give cos_h^1 = 1 instead of 1e-45 (RTR at e = 1, stress corpus).
@@ -120,10 +116,11 @@ float ln_cos_h(Frame f) {
 float slope2_h(Frame f, GpuMaterial m) {
 #if defined(HAS_ANISOTROPIC)
     if (is_anisotropic(m)) {
-        return f.hx * f.hx * m.lobe.x + f.hy * f.hy * m.lobe.y;
+        vec2 inv = material_inv_roughness2(m);
+        return f.hx * f.hx * inv.x + f.hy * f.hy * inv.y;
     }
 #endif
-    return f.sin2_h * m.lobe.x;
+    return f.sin2_h * material_inv_roughness2(m).x;
 }
 
 #if defined(HAS_G_SMITH) || defined(HAS_G_SMITH_CORRELATED) || defined(HAS_G_SMITH_FAST)
@@ -135,11 +132,12 @@ float smith_q2(GpuMaterial m, vec2 w_tb, float sin2_w, float cos_w) {
     float num;
 #if defined(HAS_ANISOTROPIC)
     if (is_anisotropic(m)) {
-        num = m.lobe.z * w_tb.x * w_tb.x + m.lobe.w * w_tb.y * w_tb.y;
+        vec2 m2 = material_roughness2(m);
+        num = m2.x * w_tb.x * w_tb.x + m2.y * w_tb.y * w_tb.y;
     } else
 #endif
     {
-        num = m.lobe.z * sin2_w;
+        num = material_roughness2(m).x * sin2_w;
     }
     return num / (cos_w * cos_w);
 }
@@ -150,7 +148,7 @@ float smith_q2(GpuMaterial m, vec2 w_tb, float sin2_w, float cos_w) {
 // rejects smith* with gaussian or blinn).
 float smith_lambda(GpuMaterial m, float q2) {
 #if defined(HAS_LAMBDA_BECKMANN)
-    if (m.kind.y == DIST_BECKMANN) {
+    if (material_distribution(m) == DIST_BECKMANN) {
         return Lambda_Beckmann(q2);
     }
 #endif
@@ -177,18 +175,18 @@ Eval model_lambert(GpuMaterial m) {
 // |r x v|^2 come from make_frame (in f64 where the device has it: in f32, r.v in the lobe's
 // tail, where it is small, was 7e-4 off relative).
 Eval model_phong(Frame f, GpuMaterial m) {
-    float e = m.lobe.x;
+    float e = material_exponent(m);
     // pow(0, e): 0, or 1 for e = 0 (GLSL leaves pow(0, y) undefined).
     float p = f.rv > 0.0 ? exp_acc(e * log_cos(f.rv, f.sin2_rv)) : (e == 0.0 ? 1.0 : 0.0);
-    return eval_lobe(m, m.scale.x * p);
+    return eval_lobe(m, material_norm(m) * p);
 }
 #endif
 
 #if defined(HAS_BLINN_PHONG)
 // Blinn 1977 as written in the seed lecture: c_diff/pi + c_spec cos_h^e / (pi cos_i)
-// (not reciprocal; the 1/pi is in m.scale.x).
+// (not reciprocal; the 1/pi is in material_norm(m)).
 Eval model_blinn_phong(Frame f, GpuMaterial m) {
-    float p = exp_acc(m.lobe.x * ln_cos_h(f));
+    float p = exp_acc(material_exponent(m) * ln_cos_h(f));
 #if defined(HAS_FLOAT64)
     // 1/cos_i overflows float32 (or cos_i rounded to 0, and 0/0 = NaN) below TINY_COS.
     if (f.cos_i_exact < TINY_COS) {
@@ -197,63 +195,64 @@ Eval model_blinn_phong(Frame f, GpuMaterial m) {
         // cos_h = 7e-39, f = 1.6e6 at e = 1), or cos_h^e below it (e = 100, cos_h = 0.36).
         // The quotient is then formed in the log domain, ln cos_h from the f64 cosine where
         // the f32 one is not a normal number.
-        if (p < 1.1754944e-38 && m.lobe.x > 0.0) {
+        if (p < 1.1754944e-38 && material_exponent(m) > 0.0) {
             double ln_cos = f.cos_h >= FLT_MIN ? double(log_cos(f.cos_h, f.sin2_h))
                                                : log_f64(f.cos_h_exact);
-            double ln_q = double(m.lobe.x) * ln_cos - log_f64(f.cos_i_exact);
-            return eval_lobe_f64(m, double(m.scale.x) * exp_f64(ln_q));
+            double ln_q = double(material_exponent(m)) * ln_cos - log_f64(f.cos_i_exact);
+            return eval_lobe_f64(m, double(material_norm(m)) * exp_f64(ln_q));
         }
         // The product in f64: scale p in f32 is subnormal, flushed on GPUs, for p ~ 1e-38.
-        return eval_lobe_f64(m, double(m.scale.x) * double(p) / f.cos_i_exact);
+        return eval_lobe_f64(m, double(material_norm(m)) * double(p) / f.cos_i_exact);
     }
 #else
     // The same two cases in m 2^e form (the f32 frame).
     if (f.cos_i < TINY_COS) {
-        if (p < 1.1754944e-38 && m.lobe.x > 0.0) {
+        if (p < 1.1754944e-38 && material_exponent(m) > 0.0) {
             vec2 ln_cos_h = f.cos_h >= 1.1754944e-38 ? vec2(log_cos(f.cos_h, f.sin2_h), 0.0)
                                                      : xf_log_pair(f.cos_h_xf);
-            vec2 ln_q = ff_add(ff_mul_f(ln_cos_h, m.lobe.x), -xf_log_pair(f.cos_i_xf));
-            return eval_lobe_xf(m, xf_mul(xf(m.scale.x), xf_exp(ln_q)));
+            vec2 ln_q = ff_add(ff_mul_f(ln_cos_h, material_exponent(m)), -xf_log_pair(f.cos_i_xf));
+            return eval_lobe_xf(m, xf_mul(xf(material_norm(m)), xf_exp(ln_q)));
         }
         // scale p as m 2^e: the float product is below FLT_MIN where p is just above it
         // (cos_h = 1.4e-38 at cosines of 1e-38), and a GPU flushes it to 0.
-        return eval_lobe_xf(m, xf_div(xf_mul(xf(m.scale.x), xf(p)), f.cos_i_xf));
+        return eval_lobe_xf(m, xf_div(xf_mul(xf(material_norm(m)), xf(p)), f.cos_i_xf));
     }
 #endif
-    return eval_lobe(m, m.scale.x * p / f.cos_i);
+    return eval_lobe(m, material_norm(m) * p / f.cos_i);
 }
 #endif
 
 #if defined(HAS_RTR)
 // Akenine-Möller, Haines & Hoffman 2008, "Real-Time Rendering", 3rd ed., §5.5 (the seed's
-// shading equation): c_diff/pi + c_spec (e+8)/(8 pi) cos_h^e, the (e+8)/(8 pi) in m.scale.x.
+// shading equation): c_diff/pi + c_spec (e+8)/(8 pi) cos_h^e, the (e+8)/(8 pi) in
+// material_norm(m).
 Eval model_rtr(Frame f, GpuMaterial m) {
-    return eval_lobe(m, m.scale.x * exp_acc(m.lobe.x * ln_cos_h(f)));
+    return eval_lobe(m, material_norm(m) * exp_acc(material_exponent(m) * ln_cos_h(f)));
 }
 #endif
 
 #if defined(HAS_WARD)
 // Ward 1992, "Measuring and Modeling Anisotropic Reflection":
 // c_diff/pi + c_spec exp(-((hx/mx)^2 + (hy/my)^2)/hz^2) / (4 pi mx my sqrt(cos_i cos_o));
-// 1/(4 pi mx my) is m.scale.x.
+// 1/(4 pi mx my) is material_norm(m).
 Eval model_ward(Frame f, GpuMaterial m) {
     float x = exp_acc(-slope2_h(f, m) / (f.cos_h * f.cos_h));
 #if defined(HAS_FLOAT64)
     // 1/sqrt(cos_i cos_o) overflows float32 below TINY_COS, or a cosine rounded to 0 gives
     // inversesqrt(0) = inf; in f64 the product of two cosines >= 1.4e-45 is normal.
     if (min(f.cos_i_exact, f.cos_o_exact) < TINY_COS) {
-        return eval_lobe_f64(m, double(m.scale.x) * double(x) / sqrt(f.cos_i_exact * f.cos_o_exact));
+        return eval_lobe_f64(m, double(material_norm(m)) * double(x) / sqrt(f.cos_i_exact * f.cos_o_exact));
     }
 #else
     if (min(f.cos_i, f.cos_o) < TINY_COS) {
         // scale x as m 2^e, as in model_blinn_phong (the scale is ~1e-9 at roughness 1e4).
-        return eval_lobe_xf(m, xf_div(xf_mul(xf(m.scale.x), xf(x)),
+        return eval_lobe_xf(m, xf_div(xf_mul(xf(material_norm(m)), xf(x)),
                                       xf_sqrt(xf_mul(f.cos_i_xf, f.cos_o_xf))));
     }
 #endif
     // Where exp underflows to 0 the lobe is 0; the guard keeps 0 * inf (cos_i, cos_o both
     // ~1e-38) from becoming NaN. One inversesqrt per cosine: their product cannot overflow.
-    float lobe = x == 0.0 ? 0.0 : m.scale.x * x * inversesqrt(f.cos_i) * inversesqrt(f.cos_o);
+    float lobe = x == 0.0 ? 0.0 : material_norm(m) * x * inversesqrt(f.cos_i) * inversesqrt(f.cos_o);
     return eval_lobe(m, lobe);
 }
 #endif
@@ -276,7 +275,7 @@ double smith_lambda_f64(GpuMaterial m, vec2 w_tb, float sin2_w, double cos_w) {
     double q2 = 0.0;
 #endif
 #if defined(HAS_LAMBDA_BECKMANN)
-    if (m.kind.y == DIST_BECKMANN) {
+    if (material_distribution(m) == DIST_BECKMANN) {
         // a = 1/(m tan) < TINY_COS/(1e-7 sin) ~ 1e-8 (roughness >= 1e-7): exp(-a^2) = 1
         // and erfc(a) = 1 - 2a/sqrt(pi) to O(a^2) < 1e-16 relative, so Lambda =
         // (exp(-a^2)/(a sqrt(pi)) - erfc(a))/2 = 1/(2 a sqrt(pi)) - 1/2 + a/sqrt(pi).
@@ -308,22 +307,22 @@ double smith_fast_g1_f64(GpuMaterial m, vec2 w_tb, float sin2_w, double cos_w) {
 // an H200). The slope and angle come from the f32 frame; only the range is f64's.
 double d_f64(Frame f, GpuMaterial m) {
     double ln_cos = f.cos_h >= FLT_MIN ? double(log_cos(f.cos_h, f.sin2_h)) : log_f64(f.cos_h_exact);
-    switch (m.kind.y) {
+    switch (material_distribution(m)) {
 #if defined(HAS_D_GAUSSIAN)
     case DIST_GAUSSIAN: {
         double delta = double(atan2_positive(sqrt(f.sin2_h), f.cos_h));
-        return exp_f64(-delta * delta * double(m.lobe.x));
+        return exp_f64(-delta * delta * double(material_inv_roughness2(m).x));
     }
 #endif
 #if defined(HAS_D_BECKMANN)
     case DIST_BECKMANN: {
         double c2 = f.cos_h_exact * f.cos_h_exact;
-        return exp_f64(log_f64(double(m.scale.x)) - double(slope2_h(f, m)) / c2 - 4.0 * ln_cos);
+        return exp_f64(log_f64(double(material_norm(m))) - double(slope2_h(f, m)) / c2 - 4.0 * ln_cos);
     }
 #endif
 #if defined(HAS_D_BLINN)
     case DIST_BLINN:
-        return exp_f64(log_f64(double(m.scale.x)) + double(m.lobe.x) * ln_cos);
+        return exp_f64(log_f64(double(material_norm(m))) + double(material_exponent(m)) * ln_cos);
 #endif
 #if defined(HAS_D_CHARLIE)
     case DIST_CHARLIE: {
@@ -332,7 +331,7 @@ double d_f64(Frame f, GpuMaterial m) {
             return 0.0;
         }
         double ln_sin = double(log_cos(sqrt(f.sin2_h), f.cos_h * f.cos_h));
-        return exp_f64(log_f64(double(m.scale.x)) + double(m.lobe.x) * ln_sin);
+        return exp_f64(log_f64(double(material_norm(m))) + double(material_exponent(m)) * ln_sin);
     }
 #endif
     default: // GGX: D >= 1/(pi m^2 (1/m^2)^2) > 1e-15 for roughness in [1e-7, 1e4]
@@ -345,7 +344,7 @@ double d_f64(Frame f, GpuMaterial m) {
 void cook_torrance_gk_f64(Frame f, GpuMaterial m, uint convention, out double g, out double k) {
     double ci = f.cos_i_exact, co = f.cos_o_exact;
     g = 1.0;
-    switch (m.kind.z) {
+    switch (material_geometry(m)) {
     case GEOM_COOK_TORRANCE: {
         double t = 2.0 * f.cos_h_exact / f.c_exact; // the f32 cos_h may be flushed to 0
         g = min(1.0, min(t * co, t * ci));
@@ -363,7 +362,7 @@ void cook_torrance_gk_f64(Frame f, GpuMaterial m, uint convention, out double g,
         g = smith_fast_g1_f64(m, f.v_tb, f.sin2_o, co) * smith_fast_g1_f64(m, f.l_tb, f.sin2_i, ci);
         break;
     case GEOM_SCHLICK_SMITH: { // schlick_smith_g1 per direction, in f64
-        double k = double(m.lobe.w);
+        double k = double(material_schlick_k(m));
         double omc_o = double(f.sin2_o) / (1.0 + co), omc_i = double(f.sin2_i) / (1.0 + ci);
         g = co / (co + k * omc_o) * (ci / (ci + k * omc_i));
         break;
@@ -395,7 +394,7 @@ vec2 smith_one_plus_lambda_xf(GpuMaterial m, vec2 w_tb, float sin2_w, vec2 cos_w
     vec2 sq = vec2(0.0);
 #endif
 #if defined(HAS_LAMBDA_BECKMANN)
-    if (m.kind.y == DIST_BECKMANN) {
+    if (material_distribution(m) == DIST_BECKMANN) {
         return xf_add(xf_mul(sq, xf(0.5 * INV_SQRT_PI)), xf(0.5));
     }
 #endif
@@ -433,31 +432,31 @@ vec2 d_xf(Frame f, GpuMaterial m) {
     vec2 ln_cos = f.cos_h >= FLT_MIN ? vec2(log_cos(f.cos_h, f.sin2_h), 0.0)
                                      : xf_log_pair(f.cos_h_xf);
     vec2 ln_d = vec2(-1e30, 0.0);
-    switch (m.kind.y) {
+    switch (material_distribution(m)) {
 #if defined(HAS_D_GAUSSIAN)
     case DIST_GAUSSIAN: {
         float delta = atan2_positive(sqrt(f.sin2_h), f.cos_h);
-        ln_d = vec2(-delta * delta * m.lobe.x, 0.0);
+        ln_d = vec2(-delta * delta * material_inv_roughness2(m).x, 0.0);
         break;
     }
 #endif
 #if defined(HAS_D_BECKMANN)
     case DIST_BECKMANN: {
         float x = xf_float(xf_div(xf(slope2_h(f, m)), xf_mul(f.cos_h_xf, f.cos_h_xf)));
-        ln_d = ff_add(vec2(log_acc(m.scale.x) - min(x, 1e30), 0.0), ff_mul_f(ln_cos, -4.0));
+        ln_d = ff_add(vec2(log_acc(material_norm(m)) - min(x, 1e30), 0.0), ff_mul_f(ln_cos, -4.0));
         break;
     }
 #endif
 #if defined(HAS_D_BLINN)
     case DIST_BLINN:
-        ln_d = ff_add(vec2(log_acc(m.scale.x), 0.0), ff_mul_f(ln_cos, m.lobe.x));
+        ln_d = ff_add(vec2(log_acc(material_norm(m)), 0.0), ff_mul_f(ln_cos, material_exponent(m)));
         break;
 #endif
 #if defined(HAS_D_CHARLIE)
     case DIST_CHARLIE:
         if (f.sin2_h > 0.0) { // sin_h = 0 is D = 0 (ln_d stays -1e30)
             vec2 ln_sin = vec2(log_cos(sqrt(f.sin2_h), f.cos_h * f.cos_h), 0.0);
-            ln_d = ff_add(vec2(log_acc(m.scale.x), 0.0), ff_mul_f(ln_sin, m.lobe.x));
+            ln_d = ff_add(vec2(log_acc(material_norm(m)), 0.0), ff_mul_f(ln_sin, material_exponent(m)));
         }
         break;
 #endif
@@ -473,7 +472,7 @@ vec2 d_xf(Frame f, GpuMaterial m) {
 void cook_torrance_gk_xf(Frame f, GpuMaterial m, uint convention, out vec2 g, out vec2 k) {
     vec2 ci = f.cos_i_xf, co = f.cos_o_xf;
     g = xf(1.0);
-    switch (m.kind.z) {
+    switch (material_geometry(m)) {
     case GEOM_COOK_TORRANCE: {
         // cos_h from its m 2^e form: the float one is subnormal (few bits) or flushed here.
         vec2 t = xf_div(xf_mul(xf(2.0), f.cos_h_xf), f.c_xf);
@@ -496,7 +495,7 @@ void cook_torrance_gk_xf(Frame f, GpuMaterial m, uint convention, out vec2 g, ou
                    smith_fast_g1_xf(m, f.l_tb, f.sin2_i, f.cos_i, ci));
         break;
     case GEOM_SCHLICK_SMITH: { // schlick_smith_g1 per direction, in m 2^e form
-        float k = m.lobe.w;
+        float k = material_schlick_k(m);
         g = xf_mul(xf_div(co, xf_add(co, xf(k * (f.sin2_o / (1.0 + f.cos_o))))),
                    xf_div(ci, xf_add(ci, xf(k * (f.sin2_i / (1.0 + f.cos_i))))));
         break;
@@ -520,32 +519,32 @@ void cook_torrance_gk_xf(Frame f, GpuMaterial m, uint convention, out vec2 g, ou
 // Cook & Torrance 1982, "A Reflectance Model for Computer Graphics":
 // d c_diff/pi + s c_spec (x) D G F K (d c_diff/pi is m.diffuse, s c_spec is m.specular).
 Eval model_cook_torrance(Frame f, GpuMaterial m) {
-    uint fresnel = m.kind.w & 0xffu;
-    uint convention = (m.kind.w >> 8) & 0xffu;
+    uint fresnel = material_fresnel(m);
+    uint convention = material_convention(m);
     Eval e;
 
     e.d = 0.0;
-    switch (m.kind.y) {
+    switch (material_distribution(m)) {
 #if defined(HAS_D_GAUSSIAN)
-    case DIST_GAUSSIAN: e.d = D_Gaussian(f.cos_h, f.sin2_h, m.lobe.x); break;
+    case DIST_GAUSSIAN: e.d = D_Gaussian(f.cos_h, f.sin2_h, material_inv_roughness2(m).x); break;
 #endif
 #if defined(HAS_D_BECKMANN)
-    case DIST_BECKMANN: e.d = D_Beckmann(slope2_h(f, m), f.cos_h, f.sin2_h, m.scale.x); break;
+    case DIST_BECKMANN: e.d = D_Beckmann(slope2_h(f, m), f.cos_h, f.sin2_h, material_norm(m)); break;
 #endif
 #if defined(HAS_D_GGX)
-    case DIST_GGX: e.d = D_GGX(slope2_h(f, m), f.cos_h, m.scale.x); break;
+    case DIST_GGX: e.d = D_GGX(slope2_h(f, m), f.cos_h, material_norm(m)); break;
 #endif
 #if defined(HAS_D_BLINN)
-    case DIST_BLINN: e.d = D_Blinn(f.cos_h, f.sin2_h, m.lobe.x, m.scale.x); break;
+    case DIST_BLINN: e.d = D_Blinn(f.cos_h, f.sin2_h, material_exponent(m), material_norm(m)); break;
 #endif
 #if defined(HAS_D_CHARLIE)
-    case DIST_CHARLIE: e.d = charlie_d(f.cos_h, f.sin2_h, m.lobe.x, m.scale.x); break;
+    case DIST_CHARLIE: e.d = charlie_d(f.cos_h, f.sin2_h, material_exponent(m), material_norm(m)); break;
 #endif
     default: break;
     }
 
     e.g = 1.0;
-    switch (m.kind.z) {
+    switch (material_geometry(m)) {
 #if defined(HAS_G_COOK_TORRANCE)
     case GEOM_COOK_TORRANCE: e.g = G_CookTorrance(f.cos_i, f.cos_o, f.cos_h, f.c); break;
 #endif
@@ -572,7 +571,7 @@ Eval model_cook_torrance(Frame f, GpuMaterial m) {
         // make_frame's sin2 (accurate in both frames): 1 - f.cos_i in f32 is off by up to
         // 6e-8 absolute near normal incidence, an error k (up to 8e3) multiplies.
         float omc_o = f.sin2_o / (1.0 + f.cos_o), omc_i = f.sin2_i / (1.0 + f.cos_i);
-        e.g = schlick_smith_g1(f.cos_o, omc_o, m.lobe.w) * schlick_smith_g1(f.cos_i, omc_i, m.lobe.w);
+        e.g = schlick_smith_g1(f.cos_o, omc_o, material_schlick_k(m)) * schlick_smith_g1(f.cos_i, omc_i, material_schlick_k(m));
         break;
     }
 #endif
@@ -585,22 +584,22 @@ Eval model_cook_torrance(Frame f, GpuMaterial m) {
     e.f = vec3(1.0);
     switch (fresnel) {
 #if defined(HAS_F_DIELECTRIC)
-    case FRESNEL_DIELECTRIC: e.f = F_Dielectric(f.c, m.fresnel0.rgb, m.scale.yzw, f.c_exact); break;
+    case FRESNEL_DIELECTRIC: e.f = F_Dielectric(f.c, m.fresnel0.rgb, material_fresnel_lo(m), f.c_exact); break;
 #endif
 #if defined(HAS_F_CONDUCTOR)
     case FRESNEL_CONDUCTOR:
 #if defined(HAS_FLOAT64)
         if (f.c_exact < 1e-12) {
-            e.f = F_Conductor_f64(f.c_exact, m.fresnel0.rgb, m.fresnel1.rgb, m.scale.yzw);
+            e.f = F_Conductor_f64(f.c_exact, m.fresnel0.rgb, m.fresnel1.rgb, material_fresnel_lo(m));
             break;
         }
 #else
         if (xf_less(f.c_xf, xf(1e-12))) {
-            e.f = F_Conductor_tiny(f.c_xf, m.fresnel0.rgb, m.fresnel1.rgb, m.scale.yzw);
+            e.f = F_Conductor_tiny(f.c_xf, m.fresnel0.rgb, m.fresnel1.rgb, material_fresnel_lo(m));
             break;
         }
 #endif
-        e.f = F_Conductor(f.c, m.fresnel0.rgb, m.fresnel1.rgb, m.scale.yzw);
+        e.f = F_Conductor(f.c, m.fresnel0.rgb, m.fresnel1.rgb, material_fresnel_lo(m));
         break;
 #endif
 #if defined(HAS_F_SCHLICK)
@@ -641,7 +640,7 @@ Eval model_cook_torrance(Frame f, GpuMaterial m) {
             cook_torrance_gk_f64(f, m, convention, g64, k64);
             e.g = float(g64);
             e.k = float_or_inf(k64);
-            if (e.d < FLT_MIN && m.kind.y != DIST_GGX) {
+            if (e.d < FLT_MIN && material_distribution(m) != DIST_GGX) {
                 d64 = d_f64(f, m);
             }
         }
@@ -659,7 +658,7 @@ Eval model_cook_torrance(Frame f, GpuMaterial m) {
             e.g = xf_float(gx);
             e.k = xf_float(kx);
         }
-        vec2 dx = tiny && e.d < FLT_MIN && m.kind.y != DIST_GGX ? d_xf(f, m) : xf(e.d);
+        vec2 dx = tiny && e.d < FLT_MIN && material_distribution(m) != DIST_GGX ? d_xf(f, m) : xf(e.d);
         vec2 dgk = xf_mul(xf_mul(dx, gx), kx);
         for (int ch = 0; ch < 3; ch++) {
             e.brdf[ch] = m.diffuse[ch] + xf_float(xf_mul(xf(m.specular[ch]), xf_mul(dgk, xf(e.f[ch]))));

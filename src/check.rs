@@ -32,7 +32,7 @@ use crate::backend::{Backend, Request, TERM_COLUMNS};
 use crate::batch::{Batch, Tuple, COLUMNS_PLAIN, COLUMNS_TANGENT};
 use crate::error::Result;
 use crate::material::{
-    legality, parse_materials, Convention, DistributionKind, Geometry, Material,
+    legality, parse_materials, Convention, DistributionKind, FresnelKind, Geometry, Material,
 };
 use crate::reference::{self, Status};
 use crate::stats::{relative_error, ErrorStats};
@@ -359,7 +359,7 @@ fn shapes() -> Vec<Shape> {
                     if legality(convention, distribution, anisotropic, geometry).is_err() {
                         continue;
                     }
-                    for fresnel in ["none", "dielectric", "conductor", "schlick"] {
+                    for fresnel in FresnelKind::ALL.map(FresnelKind::toml_name) {
                         v.push(Shape {
                             model: "cook-torrance",
                             convention: convention.toml_name(),
@@ -512,21 +512,15 @@ fn hemisphere(rng: &mut Pcg64Mcg, t: [f64; 3], b: [f64; 3], n: [f64; 3]) -> [f64
 
 /// The angular width of a material's specular lobe (radians), used to aim half vectors.
 fn lobe_width(m: &Material) -> f64 {
-    use crate::material::{Distribution, Model};
-    let from_exponent = |e: f64| (2.0 / (e + 2.0)).sqrt();
+    use crate::material::terms::distribution::exponent_lobe_width;
+    use crate::material::Model;
     match &m.model {
         Model::Lambert | Model::Measured(_) => 1.0,
         Model::Phong { exponent } | Model::BlinnPhong { exponent } | Model::Rtr { exponent } => {
-            from_exponent(*exponent)
+            exponent_lobe_width(*exponent)
         }
         Model::Ward { roughness } => roughness.xy().0.max(roughness.xy().1),
-        Model::CookTorrance(ct) => match ct.distribution {
-            Distribution::Gaussian { m } => m,
-            Distribution::Beckmann(r) | Distribution::Ggx(r) => r.xy().0.max(r.xy().1),
-            Distribution::Blinn { exponent } => from_exponent(exponent),
-            // Sheen peaks at grazing h (sin_h = 1): aimed anywhere, i.e. uniformly.
-            Distribution::Charlie { .. } => 1.0,
-        },
+        Model::CookTorrance(ct) => ct.distribution.lobe_width(),
     }
 }
 

@@ -4,7 +4,7 @@
 
 use crate::backend::Request;
 use crate::batch::Batch;
-use crate::material::{Convention, Distribution, Fresnel, Geometry, Material, Model};
+use crate::material::{Convention, DistributionKind, FresnelKind, Geometry, Material, Model, Term};
 use crate::precision::Precision;
 
 macro_rules! features {
@@ -14,8 +14,9 @@ macro_rules! features {
         pub struct FeatureSet(u64);
         impl FeatureSet {
             $($(#[$doc])* pub const $name: FeatureSet = FeatureSet(1 << $bit);)*
-            /// Every feature with the preprocessor name the kernel tests (`#if HAS_...`).
-            pub const ALL_NAMED: &'static [(FeatureSet, &'static str)] = &[$((FeatureSet::$name, $define)),*];
+            /// The features that are not a term's (a term's comes from its
+            /// `material::Term`), with the preprocessor name the kernel tests.
+            const OTHERS_NAMED: &'static [(FeatureSet, &'static str)] = &[$((FeatureSet::$name, $define)),*];
         }
     };
 }
@@ -33,34 +34,6 @@ features! {
     WARD = 4, "HAS_WARD";
     /// A `cook-torrance` material.
     COOK_TORRANCE = 5, "HAS_COOK_TORRANCE";
-    /// Gaussian D.
-    D_GAUSSIAN = 6, "HAS_D_GAUSSIAN";
-    /// Beckmann D.
-    D_BECKMANN = 7, "HAS_D_BECKMANN";
-    /// GGX D.
-    D_GGX = 8, "HAS_D_GGX";
-    /// Blinn D.
-    D_BLINN = 9, "HAS_D_BLINN";
-    /// V-cavity G.
-    G_COOK_TORRANCE = 10, "HAS_G_COOK_TORRANCE";
-    /// Separable Smith G.
-    G_SMITH = 11, "HAS_G_SMITH";
-    /// Height-correlated Smith G.
-    G_SMITH_CORRELATED = 12, "HAS_G_SMITH_CORRELATED";
-    /// Walter's rational Smith–Beckmann fit.
-    G_SMITH_FAST = 13, "HAS_G_SMITH_FAST";
-    /// Exact dielectric Fresnel.
-    F_DIELECTRIC = 14, "HAS_F_DIELECTRIC";
-    /// Exact conductor Fresnel (complex arithmetic).
-    F_CONDUCTOR = 15, "HAS_F_CONDUCTOR";
-    /// Schlick Fresnel.
-    F_SCHLICK = 16, "HAS_F_SCHLICK";
-    /// The `seed` convention.
-    CONV_SEED = 17, "HAS_CONV_SEED";
-    /// The `cook-torrance-1982` convention.
-    CONV_CT1982 = 18, "HAS_CONV_CT1982";
-    /// The `modern` convention.
-    CONV_MODERN = 19, "HAS_CONV_MODERN";
     /// Some material has anisotropic roughness (needs tangents).
     ANISOTROPIC = 20, "HAS_ANISOTROPIC";
     /// The batch carries tangents (13 columns).
@@ -85,25 +58,88 @@ features! {
     BUCKETED = 29, "BUCKETED";
     /// Every material is the fast precision variant: the device's own exp/log/atan2.
     FAST_MATH = 27, "FAST_MATH";
+}
+
+/// The feature of a term (`material::terms` says its bit and name), under the name the
+/// code uses for it.
+macro_rules! term_features {
+    ($($(#[$doc:meta])* $name:ident = $term:expr;)*) => {
+        impl FeatureSet {
+            $($(#[$doc])* pub const $name: FeatureSet = FeatureSet::of_term($term);)*
+        }
+    };
+}
+
+term_features! {
+    /// Gaussian D.
+    D_GAUSSIAN = DistributionKind::Gaussian.term();
+    /// Beckmann D.
+    D_BECKMANN = DistributionKind::Beckmann.term();
+    /// GGX D.
+    D_GGX = DistributionKind::Ggx.term();
+    /// Blinn D.
+    D_BLINN = DistributionKind::Blinn.term();
     /// Charlie (Estevez & Kulla 2017 sheen) D.
-    D_CHARLIE = 30, "HAS_D_CHARLIE";
+    D_CHARLIE = DistributionKind::Charlie.term();
+    /// V-cavity G.
+    G_COOK_TORRANCE = Geometry::CookTorrance.term();
+    /// Separable Smith G.
+    G_SMITH = Geometry::Smith.term();
+    /// Height-correlated Smith G.
+    G_SMITH_CORRELATED = Geometry::SmithCorrelated.term();
+    /// Walter's rational Smith–Beckmann fit.
+    G_SMITH_FAST = Geometry::SmithFast.term();
     /// Schlick–Smith G (Schlick 1994, Karis 2013's k).
-    G_SCHLICK_SMITH = 31, "HAS_G_SCHLICK_SMITH";
+    G_SCHLICK_SMITH = Geometry::SchlickSmith.term();
     /// Neubelt & Pettineo 2013 cloth G.
-    G_NEUBELT = 32, "HAS_G_NEUBELT";
+    G_NEUBELT = Geometry::Neubelt.term();
+    /// Exact dielectric Fresnel.
+    F_DIELECTRIC = FresnelKind::Dielectric.term();
+    /// Exact conductor Fresnel (complex arithmetic).
+    F_CONDUCTOR = FresnelKind::Conductor.term();
+    /// Schlick Fresnel.
+    F_SCHLICK = FresnelKind::Schlick.term();
+    /// The `seed` convention.
+    CONV_SEED = Convention::Seed.term();
+    /// The `cook-torrance-1982` convention.
+    CONV_CT1982 = Convention::CookTorrance1982.term();
+    /// The `modern` convention.
+    CONV_MODERN = Convention::Modern.term();
 }
 
 impl FeatureSet {
     /// The empty set.
     pub const EMPTY: FeatureSet = FeatureSet(0);
 
+    /// The feature that compiles `term`'s kernel code (empty for a term without code).
+    pub const fn of_term(term: Term) -> FeatureSet {
+        match term.feature {
+            Some((bit, _)) => FeatureSet(1 << bit),
+            None => FeatureSet(0),
+        }
+    }
+
+    /// Every feature with the preprocessor name the kernel tests (`#if HAS_...`), by bit:
+    /// the terms' (from `material::terms`) and the others.
+    pub fn all_named() -> Vec<(FeatureSet, &'static str)> {
+        let mut named: Vec<(FeatureSet, &'static str)> = crate::material::terms::all_terms()
+            .filter_map(|t| {
+                t.feature
+                    .map(|(_, define)| (FeatureSet::of_term(t), define))
+            })
+            .chain(FeatureSet::OTHERS_NAMED.iter().copied())
+            .collect();
+        named.sort_by_key(|(f, _)| f.0);
+        named
+    }
+
     /// Every kernel feature (the all-features kernel, the baseline of the specialisation
     /// measurement). `MEASURED` is left out: a measured material needs its table bound,
     /// which only a batch that has one uploads; `GENERATED_SLICE`, `GENERATED_IMPORTANCE` and `BUCKETED` are input modes and `FAST_MATH` a precision
     /// variant, not features.
     pub fn all() -> FeatureSet {
-        FeatureSet::ALL_NAMED
-            .iter()
+        FeatureSet::all_named()
+            .into_iter()
             .filter(|(f, _)| {
                 *f != FeatureSet::MEASURED
                     && *f != FeatureSet::GENERATED_SLICE
@@ -111,7 +147,7 @@ impl FeatureSet {
                     && *f != FeatureSet::GENERATED_IMPORTANCE
                     && *f != FeatureSet::BUCKETED
             })
-            .fold(FeatureSet::EMPTY, |a, (f, _)| a | *f)
+            .fold(FeatureSet::EMPTY, |a, (f, _)| a | f)
     }
 
     /// `self` less the features of `other`.
@@ -140,39 +176,16 @@ impl FeatureSet {
             Model::Measured(_) => FeatureSet::MEASURED,
             Model::CookTorrance(ct) => {
                 let mut f = FeatureSet::COOK_TORRANCE;
-                f |= match ct.distribution {
-                    Distribution::Gaussian { .. } => FeatureSet::D_GAUSSIAN,
-                    Distribution::Beckmann(_) => FeatureSet::D_BECKMANN,
-                    Distribution::Ggx(_) => FeatureSet::D_GGX,
-                    Distribution::Blinn { .. } => FeatureSet::D_BLINN,
-                    Distribution::Charlie { .. } => FeatureSet::D_CHARLIE,
-                };
-                f |= match ct.geometry {
-                    Geometry::None => FeatureSet::EMPTY,
-                    Geometry::CookTorrance => FeatureSet::G_COOK_TORRANCE,
-                    Geometry::Smith => FeatureSet::G_SMITH,
-                    Geometry::SmithCorrelated => FeatureSet::G_SMITH_CORRELATED,
-                    Geometry::SmithFast => FeatureSet::G_SMITH_FAST,
-                    Geometry::SchlickSmith => FeatureSet::G_SCHLICK_SMITH,
-                    Geometry::Neubelt => FeatureSet::G_NEUBELT,
-                };
+                f |= FeatureSet::of_term(ct.distribution.kind().term());
+                f |= FeatureSet::of_term(ct.geometry.term());
                 if matches!(ct.geometry, Geometry::Smith | Geometry::SmithCorrelated) {
-                    f |= match ct.distribution {
-                        Distribution::Beckmann(_) => FeatureSet::LAMBDA_BECKMANN,
+                    f |= match ct.distribution.kind() {
+                        DistributionKind::Beckmann => FeatureSet::LAMBDA_BECKMANN,
                         _ => FeatureSet::LAMBDA_GGX,
                     };
                 }
-                f |= match ct.fresnel {
-                    Fresnel::None => FeatureSet::EMPTY,
-                    Fresnel::Dielectric { .. } => FeatureSet::F_DIELECTRIC,
-                    Fresnel::Conductor { .. } => FeatureSet::F_CONDUCTOR,
-                    Fresnel::Schlick { .. } => FeatureSet::F_SCHLICK,
-                };
-                f | match ct.convention {
-                    Convention::Seed => FeatureSet::CONV_SEED,
-                    Convention::CookTorrance1982 => FeatureSet::CONV_CT1982,
-                    Convention::Modern => FeatureSet::CONV_MODERN,
-                }
+                f |= FeatureSet::of_term(ct.fresnel.kind().term());
+                f | FeatureSet::of_term(ct.convention.term())
             }
         };
         if m.is_anisotropic() {
@@ -221,10 +234,10 @@ impl FeatureSet {
 
     /// The preprocessor names of the features in this set.
     pub fn defines(self) -> impl Iterator<Item = &'static str> {
-        FeatureSet::ALL_NAMED
-            .iter()
+        FeatureSet::all_named()
+            .into_iter()
             .filter(move |(f, _)| self.contains(*f))
-            .map(|(_, n)| *n)
+            .map(|(_, n)| n)
     }
 }
 
@@ -286,5 +299,21 @@ mod tests {
         assert!(!of(&[0]).contains(FeatureSet::FAST_MATH));
         assert!(!of(&[]).contains(FeatureSet::FAST_MATH));
         assert!(!FeatureSet::all().contains(FeatureSet::FAST_MATH));
+    }
+
+    #[test]
+    fn every_feature_has_its_own_bit_and_name() {
+        // The terms say their bits in material::terms, the others here: a new term that
+        // reused a bit would compile another term's code under its name.
+        let named = FeatureSet::all_named();
+        for (i, (a, an)) in named.iter().enumerate() {
+            assert_eq!(a.bits().count_ones(), 1, "{an}");
+            for (b, bn) in &named[i + 1..] {
+                assert_ne!(a, b, "{an} and {bn} share a bit");
+                assert_ne!(an, bn);
+            }
+        }
+        assert_eq!(FeatureSet::D_GGX.bits(), 1 << 8);
+        assert!(FeatureSet::all().contains(FeatureSet::G_NEUBELT));
     }
 }

@@ -924,7 +924,7 @@ fn max_rel_diff(got: &[f32], want: &[f32], floor: f64) -> f64 {
 }
 
 /// The Vulkan kernel makes the slice's directions on the device (`half_diff_row` in
-/// glsl/eval.comp, f32 polynomials for sin/cos); the host makes them in f64
+/// glsl/generators.glsl, f32 polynomials for sin/cos); the host makes them in f64
 /// (`from_half_diff`). Both, over whole 90×90 slices of sharp, rough, anisotropic and
 /// exponent-based materials, must agree with the f64 reference at the host's directions.
 /// f32 directions move a value by ~1e-7 × its angular slope (≤ 1e-5 relative even at

@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 use std::process::ExitCode;
-use vkbrdf::material::{self, Distribution, Fresnel, Material, Model, Roughness};
+use vkbrdf::material::{self, Fresnel, Material, Model};
 
 /// Arguments of `vkbrdf materials`.
 #[derive(clap::Args, Debug)]
@@ -72,13 +72,6 @@ fn rgb(c: [f64; 3]) -> String {
     }
 }
 
-fn rough(r: Roughness) -> String {
-    match r {
-        Roughness::Isotropic(m) => format!("m={m}"),
-        Roughness::Anisotropic(x, y) => format!("m=[{x}, {y}]"),
-    }
-}
-
 /// A one-line description of a material.
 pub fn summary(m: &Material) -> String {
     let body = match &m.model {
@@ -86,16 +79,10 @@ pub fn summary(m: &Material) -> String {
         Model::Phong { exponent } => format!("phong e={exponent}"),
         Model::BlinnPhong { exponent } => format!("blinn-phong e={exponent}"),
         Model::Rtr { exponent } => format!("rtr e={exponent}"),
-        Model::Ward { roughness } => format!("ward {}", rough(*roughness)),
+        Model::Ward { roughness } => format!("ward {}", roughness.describe()),
         Model::Measured(m) => format!("merl {}", m.path.display()),
         Model::CookTorrance(ct) => {
-            let d = match ct.distribution {
-                Distribution::Gaussian { m } => format!("gaussian m={m}"),
-                Distribution::Beckmann(r) => format!("beckmann {}", rough(r)),
-                Distribution::Ggx(r) => format!("ggx {}", rough(r)),
-                Distribution::Blinn { exponent } => format!("blinn e={exponent}"),
-                Distribution::Charlie { m } => format!("charlie m={m}"),
-            };
+            let d = ct.distribution.describe();
             let f = match ct.fresnel {
                 Fresnel::None => "F=none".to_string(),
                 Fresnel::Dielectric { ior } => format!("dielectric ior={}", rgb(ior)),

@@ -317,7 +317,7 @@ pub(crate) struct PhysicalInfo {
     /// Whether compute shaders can use subgroup arithmetic (subgroupAdd, subgroupMin).
     pub subgroup_arithmetic: bool,
     /// Whether the kernel uses f64 (`shaderFloat64`, unless `VKBRDF_DISABLE_FLOAT64=1`): it
-    /// then computes the frame in f64 (see `frame_from` in eval.comp), else in f32.
+    /// then computes the frame in f64 (see `make_frame` in glsl/frame.glsl), else in f32.
     pub shader_float64: bool,
     /// Whether the device has `shaderFloat64` (even where `VKBRDF_DISABLE_FLOAT64` turns
     /// its use off).

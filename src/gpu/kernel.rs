@@ -8,7 +8,7 @@
 //! constant 0: each is said once, in Rust.
 
 use super::context::{Device, PhysicalInfo};
-use super::layout::{descriptor_type, PushConstants, BINDING_COUNT, SHADER_BINDINGS, SHADER_CODES};
+use super::layout::{descriptor_type, shader_codes, PushConstants, BINDING_COUNT, SHADER_BINDINGS};
 use super::vk_error;
 use crate::error::{Error, Result};
 use crate::features::FeatureSet;
@@ -29,6 +29,21 @@ pub const SOURCES: &[(&str, &str)] = &[
     ("terms.glsl", include_str!("../../glsl/terms.glsl")),
     ("models.glsl", include_str!("../../glsl/models.glsl")),
     ("measured.glsl", include_str!("../../glsl/measured.glsl")),
+    ("material.glsl", include_str!("../../glsl/material.glsl")),
+    ("bindings.glsl", include_str!("../../glsl/bindings.glsl")),
+    ("input.glsl", include_str!("../../glsl/input.glsl")),
+    (
+        "generators.glsl",
+        include_str!("../../glsl/generators.glsl"),
+    ),
+    ("frame.glsl", include_str!("../../glsl/frame.glsl")),
+    ("frame64.glsl", include_str!("../../glsl/frame64.glsl")),
+    ("frame32.glsl", include_str!("../../glsl/frame32.glsl")),
+    (
+        "integrators.glsl",
+        include_str!("../../glsl/integrators.glsl"),
+    ),
+    ("counts.glsl", include_str!("../../glsl/counts.glsl")),
 ];
 
 /// The kernel's entry file in [`SOURCES`].
@@ -52,7 +67,7 @@ pub fn kernel_defines(features: FeatureSet, subgroup_arithmetic: bool) -> Vec<(S
         .map(|n| (n.to_string(), "1".to_string()))
         .collect();
     d.extend(
-        SHADER_CODES
+        shader_codes()
             .iter()
             .map(|(n, v)| (n.to_string(), format!("{v}u"))),
     );
@@ -386,8 +401,8 @@ mod tests {
 
     #[test]
     fn every_feature_set_of_one_feature_compiles() {
-        for (f, _) in FeatureSet::ALL_NAMED {
-            compile_kernel(*f, true).unwrap_or_else(|e| panic!("{f}: {e}"));
+        for (f, _) in FeatureSet::all_named() {
+            compile_kernel(f, true).unwrap_or_else(|e| panic!("{f}: {e}"));
         }
         compile_kernel(FeatureSet::all(), false).unwrap();
     }

@@ -1,6 +1,8 @@
-//! The GPU data structures, mirrored field for field from `glsl/layout.glsl`, and the
-//! integer codes and binding numbers the kernel reads, which are said once here and
-//! injected into the GLSL as macros ([`SHADER_CODES`], [`SHADER_BINDINGS`]).
+//! The GPU data structures, mirrored field for field from `glsl/layout.glsl` (whose
+//! `material.glsl` reads `GpuMaterial`'s packed slots by name), and the integer codes and
+//! binding numbers the kernel reads, each said once (a term's code by its `Term` in
+//! `material::terms`, the others here) and injected into the GLSL as macros
+//! ([`shader_codes`], [`SHADER_BINDINGS`]).
 //!
 //! Every GPU struct is `#[repr(C)]` + [`Pod`] built only from `[f32; 4]` and `[u32; 4]`, so
 //! its std430 layout equals its Rust layout with no padding rules to remember (a `vec3`
@@ -8,7 +10,9 @@
 //! asserted at compile time below; `tests/conformance.rs` has a kernel copy every field
 //! back (`gpu_material_layout_round_trips`).
 
-use crate::material::{Convention, Distribution, Fresnel, Geometry, Material, Model, Roughness};
+use crate::material::{
+    Convention, Distribution, Fresnel, FresnelKind, Geometry, Material, Model, Roughness, Term,
+};
 use bytemuck::{Pod, Zeroable};
 use std::f64::consts::PI;
 use std::mem::{offset_of, size_of};
@@ -35,50 +39,12 @@ pub const LOOKUP_LINEAR: u32 = 1;
 
 /// `kind.y`: no distribution (not a microfacet model).
 pub const DIST_NONE: u32 = 0;
-/// `kind.y`: Gaussian D.
-pub const DIST_GAUSSIAN: u32 = 1;
-/// `kind.y`: Beckmann D.
-pub const DIST_BECKMANN: u32 = 2;
-/// `kind.y`: GGX D.
-pub const DIST_GGX: u32 = 3;
-/// `kind.y`: Blinn D.
-pub const DIST_BLINN: u32 = 4;
-/// `kind.y`: Charlie (sheen) D.
-pub const DIST_CHARLIE: u32 = 5;
-
-/// `kind.z`: G = 1.
-pub const GEOM_NONE: u32 = 0;
-/// `kind.z`: V-cavity G.
-pub const GEOM_COOK_TORRANCE: u32 = 1;
-/// `kind.z`: separable Smith.
-pub const GEOM_SMITH: u32 = 2;
-/// `kind.z`: height-correlated Smith.
-pub const GEOM_SMITH_CORRELATED: u32 = 3;
-/// `kind.z`: Walter's rational Smith–Beckmann fit.
-pub const GEOM_SMITH_FAST: u32 = 4;
-/// `kind.z`: Schlick–Smith (k in `lobe.w`).
-pub const GEOM_SCHLICK_SMITH: u32 = 5;
-/// `kind.z`: Neubelt & Pettineo's cloth G.
-pub const GEOM_NEUBELT: u32 = 6;
-
-/// `kind.w & 0xff`: F = 1.
-pub const FRESNEL_NONE: u32 = 0;
-/// `kind.w & 0xff`: exact dielectric.
-pub const FRESNEL_DIELECTRIC: u32 = 1;
-/// `kind.w & 0xff`: exact conductor.
-pub const FRESNEL_CONDUCTOR: u32 = 2;
-/// `kind.w & 0xff`: Schlick.
-pub const FRESNEL_SCHLICK: u32 = 3;
-
 /// `(kind.w >> 8) & 0xff`: no convention (not a microfacet model).
 pub const CONV_NONE: u32 = 0;
-/// `(kind.w >> 8) & 0xff`: the seed convention.
-pub const CONV_SEED: u32 = 1;
-/// `(kind.w >> 8) & 0xff`: Cook & Torrance 1982.
-pub const CONV_CT1982: u32 = 2;
-/// `(kind.w >> 8) & 0xff`: modern (Walter et al. 2007).
-pub const CONV_MODERN: u32 = 3;
 
+// The terms' codes (DIST_* in `kind.y`, GEOM_* `kind.z`, FRESNEL_* `kind.w & 0xff`, CONV_*
+// `(kind.w >> 8) & 0xff`) are said by each term in `material::terms` (`Term::gpu_code`)
+// and injected from there ([`shader_codes`]).
 /// `kind.w` bit: the material has anisotropic roughness (needs the tangent frame).
 pub const FLAG_ANISOTROPIC: u32 = 1 << 16;
 
@@ -105,40 +71,27 @@ pub const BINDING_MERL: u32 = 7;
 /// Number of descriptor bindings (all storage buffers but [`BINDING_TUPLE_TEXELS`]).
 pub const BINDING_COUNT: u32 = 8;
 
-/// The integer codes the GLSL compares against, injected as `#define NAME <value>u`.
-pub const SHADER_CODES: &[(&str, u32)] = &[
-    ("MODEL_LAMBERT", MODEL_LAMBERT),
-    ("MODEL_PHONG", MODEL_PHONG),
-    ("MODEL_BLINN_PHONG", MODEL_BLINN_PHONG),
-    ("MODEL_RTR", MODEL_RTR),
-    ("MODEL_WARD", MODEL_WARD),
-    ("MODEL_COOK_TORRANCE", MODEL_COOK_TORRANCE),
-    ("MODEL_MEASURED", MODEL_MEASURED),
-    ("LOOKUP_NEAREST", LOOKUP_NEAREST),
-    ("LOOKUP_LINEAR", LOOKUP_LINEAR),
-    ("DIST_NONE", DIST_NONE),
-    ("DIST_GAUSSIAN", DIST_GAUSSIAN),
-    ("DIST_BECKMANN", DIST_BECKMANN),
-    ("DIST_GGX", DIST_GGX),
-    ("DIST_BLINN", DIST_BLINN),
-    ("DIST_CHARLIE", DIST_CHARLIE),
-    ("GEOM_NONE", GEOM_NONE),
-    ("GEOM_COOK_TORRANCE", GEOM_COOK_TORRANCE),
-    ("GEOM_SMITH", GEOM_SMITH),
-    ("GEOM_SMITH_CORRELATED", GEOM_SMITH_CORRELATED),
-    ("GEOM_SMITH_FAST", GEOM_SMITH_FAST),
-    ("GEOM_SCHLICK_SMITH", GEOM_SCHLICK_SMITH),
-    ("GEOM_NEUBELT", GEOM_NEUBELT),
-    ("FRESNEL_NONE", FRESNEL_NONE),
-    ("FRESNEL_DIELECTRIC", FRESNEL_DIELECTRIC),
-    ("FRESNEL_CONDUCTOR", FRESNEL_CONDUCTOR),
-    ("FRESNEL_SCHLICK", FRESNEL_SCHLICK),
-    ("CONV_NONE", CONV_NONE),
-    ("CONV_SEED", CONV_SEED),
-    ("CONV_CT1982", CONV_CT1982),
-    ("CONV_MODERN", CONV_MODERN),
-    ("FLAG_ANISOTROPIC", FLAG_ANISOTROPIC),
-];
+/// The integer codes the GLSL compares against, injected as `#define NAME <value>u`: the
+/// models', lookups' and flags' (here) and every term's (`material::terms`).
+pub fn shader_codes() -> Vec<(&'static str, u32)> {
+    let own = [
+        ("MODEL_LAMBERT", MODEL_LAMBERT),
+        ("MODEL_PHONG", MODEL_PHONG),
+        ("MODEL_BLINN_PHONG", MODEL_BLINN_PHONG),
+        ("MODEL_RTR", MODEL_RTR),
+        ("MODEL_WARD", MODEL_WARD),
+        ("MODEL_COOK_TORRANCE", MODEL_COOK_TORRANCE),
+        ("MODEL_MEASURED", MODEL_MEASURED),
+        ("LOOKUP_NEAREST", LOOKUP_NEAREST),
+        ("LOOKUP_LINEAR", LOOKUP_LINEAR),
+        ("DIST_NONE", DIST_NONE),
+        ("CONV_NONE", CONV_NONE),
+        ("FLAG_ANISOTROPIC", FLAG_ANISOTROPIC),
+    ];
+    own.into_iter()
+        .chain(crate::material::terms::all_terms().map(|t| t.gpu_code))
+        .collect()
+}
 
 /// The descriptor type of `binding` (said once, for the set layout, the pool and the writes).
 pub fn descriptor_type(binding: u32) -> ash::vk::DescriptorType {
@@ -183,7 +136,7 @@ pub struct GpuMaterial {
     pub kind: [u32; 4],
 }
 
-/// The per-chunk counters the kernel accumulates (`buffer Counts` in `glsl/eval.comp`).
+/// The per-chunk counters the kernel accumulates (`buffer Counts` in `glsl/bindings.glsl`).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Pod, Zeroable)]
 pub struct GpuCounts {
@@ -207,7 +160,7 @@ impl GpuCounts {
     };
 }
 
-/// Push constants of the kernel (`uniform Params` in `glsl/eval.comp`).
+/// Push constants of the kernel (`uniform Params` in `glsl/bindings.glsl`).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Pod, Zeroable)]
 pub struct PushConstants {
@@ -257,6 +210,11 @@ const _: () = {
     assert!(size_of::<PushConstants>() == 24);
 };
 
+/// A term's kernel code (`material::terms`).
+fn code(term: Term) -> u32 {
+    term.gpu_code.1
+}
+
 fn v4(x: [f64; 3]) -> [f32; 4] {
     [x[0] as f32, x[1] as f32, x[2] as f32, 0.0]
 }
@@ -287,14 +245,21 @@ pub fn gpu_material(m: &Material) -> GpuMaterial {
     let exponent_lobe = |e: f64| [e as f32, 0.0, 0.0, 0.0];
     let scale = |s: f64| [s as f32, 0.0, 0.0, 0.0];
     match &m.model {
-        Model::Lambert => g.kind = [MODEL_LAMBERT, DIST_NONE, GEOM_NONE, FRESNEL_NONE],
+        Model::Lambert => {
+            g.kind = [
+                MODEL_LAMBERT,
+                DIST_NONE,
+                code(Geometry::None.term()),
+                code(FresnelKind::None.term()),
+            ]
+        }
         // The table index (kind.y) is the batch's: set by `gpu_materials`.
         Model::Measured(d) => {
             let lookup = match d.lookup {
                 crate::material::merl::Lookup::Nearest => LOOKUP_NEAREST,
                 crate::material::merl::Lookup::Linear => LOOKUP_LINEAR,
             };
-            g.kind = [MODEL_MEASURED, 0, lookup, FRESNEL_NONE];
+            g.kind = [MODEL_MEASURED, 0, lookup, code(FresnelKind::None.term())];
             g.diffuse = [0.0; 4];
         }
         Model::Phong { exponent } => {
@@ -322,57 +287,45 @@ pub fn gpu_material(m: &Material) -> GpuMaterial {
             g.kind[0] = MODEL_COOK_TORRANCE;
             g.diffuse = v4(diffuse_over_pi.map(|c| c * ct.diffuse_weight));
             g.specular = v4(m.specular.map(|c| c * ct.specular_weight));
+            g.kind[1] = code(ct.distribution.kind().term());
             match ct.distribution {
                 Distribution::Gaussian { m } => {
-                    g.kind[1] = DIST_GAUSSIAN;
                     g.lobe = roughness_lobe(Roughness::Isotropic(m));
                     g.scale = scale(1.0);
                 }
                 Distribution::Beckmann(r) => {
                     let (mx, my) = r.xy();
-                    g.kind[1] = DIST_BECKMANN;
                     g.lobe = roughness_lobe(r);
                     g.scale = scale(1.0 / (beckmann_k(ct.convention) * mx * my));
                 }
                 Distribution::Ggx(r) => {
                     let (mx, my) = r.xy();
-                    g.kind[1] = DIST_GGX;
                     g.lobe = roughness_lobe(r);
                     g.scale = scale(1.0 / (PI * mx * my));
                 }
                 Distribution::Blinn { exponent } => {
-                    g.kind[1] = DIST_BLINN;
                     g.lobe = exponent_lobe(exponent);
                     g.scale = scale((exponent + 2.0) / (2.0 * PI));
                 }
                 Distribution::Charlie { m } => {
                     // lobe.x: the exponent 1/m; scale.x: (2 + 1/m)/(2π), both in f64.
-                    g.kind[1] = DIST_CHARLIE;
                     g.lobe = exponent_lobe(1.0 / m);
                     g.scale = scale((2.0 + 1.0 / m) / (2.0 * PI));
                 }
             }
-            g.kind[2] = match ct.geometry {
-                Geometry::None => GEOM_NONE,
-                Geometry::CookTorrance => GEOM_COOK_TORRANCE,
-                Geometry::Smith => GEOM_SMITH,
-                Geometry::SmithCorrelated => GEOM_SMITH_CORRELATED,
-                Geometry::SmithFast => GEOM_SMITH_FAST,
-                Geometry::SchlickSmith => {
-                    // Isotropic only (validated), so lobe.w (my², read by anisotropic
-                    // materials only) is free for k.
-                    let (ggx, r) = match ct.distribution {
-                        Distribution::Ggx(r) => (true, r),
-                        Distribution::Beckmann(r) => (false, r),
-                        _ => unreachable!("schlick-smith needs beckmann/ggx (validated)"),
-                    };
-                    g.lobe[3] = crate::reference::geometry::schlick_smith_k(ggx, r.xy().0) as f32;
-                    GEOM_SCHLICK_SMITH
-                }
-                Geometry::Neubelt => GEOM_NEUBELT,
-            };
-            let fresnel = match ct.fresnel {
-                Fresnel::None => FRESNEL_NONE,
+            g.kind[2] = code(ct.geometry.term());
+            if ct.geometry == Geometry::SchlickSmith {
+                // Isotropic only (validated), so lobe.w (my², read by anisotropic
+                // materials only) is free for k.
+                let (ggx, r) = match ct.distribution {
+                    Distribution::Ggx(r) => (true, r),
+                    Distribution::Beckmann(r) => (false, r),
+                    _ => unreachable!("schlick-smith needs beckmann/ggx (validated)"),
+                };
+                g.lobe[3] = crate::reference::geometry::schlick_smith_k(ggx, r.xy().0) as f32;
+            }
+            match ct.fresnel {
+                Fresnel::None => {}
                 Fresnel::Dielectric { ior } => {
                     // μ² − 1 in f64: in f32 it cancels for μ near 1, where F ~ (μ−1)². Its
                     // f32 rounding error goes in scale.yzw: with f64, the kernel forms
@@ -383,7 +336,6 @@ pub fn gpu_material(m: &Material) -> GpuMaterial {
                     for (lo, hi) in g.scale[1..].iter_mut().zip(mu2m1) {
                         *lo = (hi - f64::from(hi as f32)) as f32;
                     }
-                    FRESNEL_DIELECTRIC
                 }
                 Fresnel::Conductor { ior, extinction } => {
                     g.fresnel0 = v4(ior);
@@ -394,18 +346,13 @@ pub fn gpu_material(m: &Material) -> GpuMaterial {
                         let (n, k) = (ior[ch], extinction[ch]);
                         g.scale[ch + 1] = (n * n - k * k - 1.0) as f32;
                     }
-                    FRESNEL_CONDUCTOR
                 }
                 Fresnel::Schlick { f0 } => {
                     g.fresnel0 = v4(f0);
-                    FRESNEL_SCHLICK
                 }
-            };
-            let convention = match ct.convention {
-                Convention::Seed => CONV_SEED,
-                Convention::CookTorrance1982 => CONV_CT1982,
-                Convention::Modern => CONV_MODERN,
-            };
+            }
+            let fresnel = code(ct.fresnel.kind().term());
+            let convention = code(ct.convention.term());
             g.kind[3] = fresnel | convention << 8;
         }
     }
@@ -480,9 +427,9 @@ mod tests {
             g.kind,
             [
                 MODEL_COOK_TORRANCE,
-                DIST_BECKMANN,
-                GEOM_SMITH,
-                FRESNEL_DIELECTRIC | CONV_SEED << 8
+                2,          // DIST_BECKMANN
+                2,          // GEOM_SMITH
+                1 | 1 << 8  // FRESNEL_DIELECTRIC | CONV_SEED << 8
             ]
         );
         assert_eq!(g.scale[0], (1.0 / (4.0 * 0.25)) as f32);

@@ -249,7 +249,7 @@ pub(crate) struct TexelView {
 
 impl TexelView {
     /// A view of all of `buffer` as RGBA32UI texels: the kernel reads the inputs' bits
-    /// (a float format's texel fetch could flush subnormals; eval.comp, `input_vector`).
+    /// (a float format's texel fetch could flush subnormals; glsl/input.glsl, `input_vector`).
     pub fn new(device: &Arc<Device>, buffer: &Buffer) -> Result<TexelView> {
         debug_assert_eq!(buffer.size() % 16, 0, "a texel view covers whole texels");
         let info = vk::BufferViewCreateInfo::default()

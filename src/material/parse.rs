@@ -524,13 +524,10 @@ impl Fields<'_, '_> {
     }
 
     fn cook_torrance(&mut self) -> Result<CookTorrance, MaterialError> {
-        let convention = match self
-            .string("convention", &["seed", "cook-torrance-1982", "modern"])?
-            .as_deref()
-        {
-            Some("seed") => Convention::Seed,
-            Some("cook-torrance-1982") => Convention::CookTorrance1982,
-            _ => Convention::Modern,
+        let names = Convention::ALL.map(Convention::toml_name);
+        let convention = match self.string("convention", &names)? {
+            Some(c) => Convention::from_toml_name(&c).expect("one of the names offered"),
+            None => Convention::Modern,
         };
         let why = "a cook-torrance material states its distribution, geometry and fresnel";
         let names = DistributionKind::ALL.map(DistributionKind::toml_name);
@@ -587,14 +584,13 @@ impl Fields<'_, '_> {
     }
 
     fn fresnel(&mut self) -> Result<Fresnel, MaterialError> {
-        let kind = self.required_string(
-            "fresnel",
-            &["none", "dielectric", "conductor", "schlick"],
-            "a cook-torrance material states its distribution, geometry and fresnel",
-        )?;
-        Ok(match kind.as_str() {
-            "none" => Fresnel::None,
-            "dielectric" => {
+        let names = FresnelKind::ALL.map(FresnelKind::toml_name);
+        let why = "a cook-torrance material states its distribution, geometry and fresnel";
+        let name = self.required_string("fresnel", &names, why)?;
+        let kind = FresnelKind::from_toml_name(&name).expect("one of the names offered");
+        Ok(match kind {
+            FresnelKind::None => Fresnel::None,
+            FresnelKind::Dielectric => {
                 if self.has("extinction") {
                     self.used.push("extinction");
                     return Err(self.err("extinction", "`dielectric` has a real IOR; for a complex IOR use fresnel = \"conductor\"".into()));
@@ -607,7 +603,7 @@ impl Fields<'_, '_> {
                 })?;
                 Fresnel::Dielectric { ior }
             }
-            "conductor" => {
+            FresnelKind::Conductor => {
                 let ior = self.rgb("ior", ior_range)?.ok_or_else(|| {
                     self.err(
                         "ior",
@@ -623,7 +619,7 @@ impl Fields<'_, '_> {
                 })?;
                 Fresnel::Conductor { ior, extinction }
             }
-            _ => {
+            FresnelKind::Schlick => {
                 let f0 = self.rgb("f0", unit_interval)?;
                 let ior = self.rgb("ior", ior_range)?;
                 let ext = self.rgb("extinction", extinction_range)?;

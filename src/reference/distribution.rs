@@ -1,6 +1,8 @@
 //! FORMULAS.md §2: microfacet distributions D. Each returns D in 1/sr (the normalised
 //! forms satisfy `∫ D cos_h dω_h = 1`); none includes G, F or the 1/(4 cos cos) factor.
 
+use super::frame::Frame;
+use crate::material::{CookTorrance, Distribution, Roughness};
 use std::f64::consts::PI;
 
 /// Torrance & Sparrow 1967, "Theory for off-specular reflection from roughened surfaces":
@@ -96,4 +98,30 @@ pub fn cos_pow(cos: f64, sin2: f64, e: f64) -> f64 {
         cos.ln()
     };
     (e * ln_cos).exp()
+}
+
+/// D of §2 for the material's distribution.
+pub fn microfacet_d(fr: &Frame, ct: &CookTorrance) -> f64 {
+    match ct.distribution {
+        Distribution::Gaussian { m } => gaussian_d(fr.cos_h, fr.sin2_h, m),
+        Distribution::Beckmann(Roughness::Isotropic(m)) => beckmann_d(
+            fr.cos_h,
+            fr.sin2_h,
+            m,
+            super::convention::beckmann_k(ct.convention),
+        ),
+        Distribution::Beckmann(Roughness::Anisotropic(mx, my)) => beckmann_aniso_d(
+            fr.h_local().expect("anisotropic frame has a tangent"),
+            mx,
+            my,
+        ),
+        Distribution::Ggx(Roughness::Isotropic(m)) => ggx_d(fr.cos_h, fr.sin2_h, m),
+        Distribution::Ggx(Roughness::Anisotropic(mx, my)) => ggx_aniso_d(
+            fr.h_local().expect("anisotropic frame has a tangent"),
+            mx,
+            my,
+        ),
+        Distribution::Blinn { exponent } => blinn_d(fr.cos_h, fr.sin2_h, exponent),
+        Distribution::Charlie { m } => charlie_d(fr.cos_h, fr.sin2_h, m),
+    }
 }

@@ -1,6 +1,8 @@
 //! FORMULAS.md §3: geometric attenuation G (shadowing and masking), dimensionless in [0, 1]
 //! (except `smith-fast`, whose published fit peaks at 1.0000613 per direction).
 
+use super::frame::{dot, Frame};
+use crate::material::{CookTorrance, Distribution, Geometry, Roughness};
 use std::f64::consts::PI;
 
 /// Blinn 1977 / Cook & Torrance 1982 V-cavity:
@@ -87,4 +89,62 @@ pub fn schlick_smith_k(ggx: bool, m: f64) -> f64 {
 /// `cos_i + cos_o (1 − cos_i)` (a sum of non-negative terms: no cancellation near 1).
 pub fn neubelt_g(cos_i: f64, cos_o: f64) -> f64 {
     cos_i * cos_o / (cos_i + cos_o * (1.0 - cos_i))
+}
+
+/// `m² tan²θ(w)` for direction `w` (§3), or for anisotropic roughness
+/// `(mx² (w·t)² + my² (w·b)²)/(n·w)²`. Uses `|n × w|²` for `sin²θ`.
+pub fn projected_roughness2(fr: &Frame, w: [f64; 3], cos_w: f64, roughness: Roughness) -> f64 {
+    match (roughness, fr.tb) {
+        (Roughness::Anisotropic(mx, my), Some((t, b))) => {
+            ((mx * dot(w, t)).powi(2) + (my * dot(w, b)).powi(2)) / (cos_w * cos_w)
+        }
+        _ => {
+            let (m, _) = roughness.xy();
+            m * m * super::frame::length_squared(super::frame::cross(fr.n, w)) / (cos_w * cos_w)
+        }
+    }
+}
+
+/// G of §3 for the material's geometry term.
+pub fn microfacet_g(fr: &Frame, ct: &CookTorrance) -> f64 {
+    let roughness = match ct.distribution {
+        Distribution::Beckmann(r) | Distribution::Ggx(r) => Some(r),
+        _ => None,
+    };
+    let x = |w, cos_w| {
+        projected_roughness2(
+            fr,
+            w,
+            cos_w,
+            roughness.expect("Smith needs beckmann/ggx (validated)"),
+        )
+    };
+    let lambda = |w, cos_w| match ct.distribution {
+        Distribution::Beckmann(_) => beckmann_lambda(x(w, cos_w)),
+        _ => ggx_lambda(x(w, cos_w)),
+    };
+    match ct.geometry {
+        Geometry::None => 1.0,
+        Geometry::CookTorrance => cook_torrance_g(fr.cos_h, fr.cos_i, fr.cos_o, fr.c),
+        Geometry::Smith => smith_g(lambda(fr.v, fr.cos_o), lambda(fr.l, fr.cos_i)),
+        Geometry::SmithCorrelated => {
+            smith_correlated_g(lambda(fr.v, fr.cos_o), lambda(fr.l, fr.cos_i))
+        }
+        Geometry::SmithFast => smith_fast_g1(x(fr.v, fr.cos_o)) * smith_fast_g1(x(fr.l, fr.cos_i)),
+        Geometry::SchlickSmith => {
+            let m = roughness
+                .expect("schlick-smith needs beckmann/ggx (validated)")
+                .xy()
+                .0;
+            // 1 − cos_w = |n × w|²/(1 + cos_w): the subtraction carries cos_w's absolute
+            // error (~1e-16), which k (up to 8e3) multiplies into G near normal incidence.
+            let one_minus = |w, cos_w: f64| {
+                super::frame::length_squared(super::frame::cross(fr.n, w)) / (1.0 + cos_w)
+            };
+            let k = schlick_smith_k(matches!(ct.distribution, Distribution::Ggx(_)), m);
+            schlick_smith_g1(fr.cos_o, one_minus(fr.v, fr.cos_o), k)
+                * schlick_smith_g1(fr.cos_i, one_minus(fr.l, fr.cos_i), k)
+        }
+        Geometry::Neubelt => neubelt_g(fr.cos_i, fr.cos_o),
+    }
 }

@@ -2,9 +2,11 @@
 //! and its terms. Non-microfacet models report D = the specular lobe per unit `c_spec`
 //! (0 for Lambert) and G = F = K = 1.
 
-use super::frame::{dot, Frame};
-use super::{convention, distribution, fresnel, geometry, Evaluation, Status};
-use crate::material::{CookTorrance, Distribution, Fresnel, Geometry, Material, Model, Roughness};
+pub use super::distribution::microfacet_d;
+use super::frame::Frame;
+pub use super::geometry::{microfacet_g, projected_roughness2};
+use super::{convention, distribution, fresnel, Evaluation, Status};
+use crate::material::{CookTorrance, Fresnel, Material, Model, Roughness};
 use std::f64::consts::PI;
 
 /// Evaluates `m` on a valid, above-horizon frame.
@@ -143,92 +145,6 @@ pub fn cook_torrance_terms(fr: &Frame, ct: &CookTorrance) -> Terms {
         g: microfacet_g(fr, ct),
         f: [0, 1, 2].map(|c| fresnel_f(fr.c, fr.sin2_d, &ct.fresnel, c)),
         k: convention::glare_k(ct.convention, fr.cos_i, fr.cos_o),
-    }
-}
-
-/// D of §2 for the material's distribution.
-pub fn microfacet_d(fr: &Frame, ct: &CookTorrance) -> f64 {
-    match ct.distribution {
-        Distribution::Gaussian { m } => distribution::gaussian_d(fr.cos_h, fr.sin2_h, m),
-        Distribution::Beckmann(Roughness::Isotropic(m)) => distribution::beckmann_d(
-            fr.cos_h,
-            fr.sin2_h,
-            m,
-            convention::beckmann_k(ct.convention),
-        ),
-        Distribution::Beckmann(Roughness::Anisotropic(mx, my)) => distribution::beckmann_aniso_d(
-            fr.h_local().expect("anisotropic frame has a tangent"),
-            mx,
-            my,
-        ),
-        Distribution::Ggx(Roughness::Isotropic(m)) => distribution::ggx_d(fr.cos_h, fr.sin2_h, m),
-        Distribution::Ggx(Roughness::Anisotropic(mx, my)) => distribution::ggx_aniso_d(
-            fr.h_local().expect("anisotropic frame has a tangent"),
-            mx,
-            my,
-        ),
-        Distribution::Blinn { exponent } => distribution::blinn_d(fr.cos_h, fr.sin2_h, exponent),
-        Distribution::Charlie { m } => distribution::charlie_d(fr.cos_h, fr.sin2_h, m),
-    }
-}
-
-/// `m² tan²θ(w)` for direction `w` (§3), or for anisotropic roughness
-/// `(mx² (w·t)² + my² (w·b)²)/(n·w)²`. Uses `|n × w|²` for `sin²θ`.
-pub fn projected_roughness2(fr: &Frame, w: [f64; 3], cos_w: f64, roughness: Roughness) -> f64 {
-    match (roughness, fr.tb) {
-        (Roughness::Anisotropic(mx, my), Some((t, b))) => {
-            ((mx * dot(w, t)).powi(2) + (my * dot(w, b)).powi(2)) / (cos_w * cos_w)
-        }
-        _ => {
-            let (m, _) = roughness.xy();
-            m * m * super::frame::length_squared(super::frame::cross(fr.n, w)) / (cos_w * cos_w)
-        }
-    }
-}
-
-/// G of §3 for the material's geometry term.
-pub fn microfacet_g(fr: &Frame, ct: &CookTorrance) -> f64 {
-    let roughness = match ct.distribution {
-        Distribution::Beckmann(r) | Distribution::Ggx(r) => Some(r),
-        _ => None,
-    };
-    let x = |w, cos_w| {
-        projected_roughness2(
-            fr,
-            w,
-            cos_w,
-            roughness.expect("Smith needs beckmann/ggx (validated)"),
-        )
-    };
-    let lambda = |w, cos_w| match ct.distribution {
-        Distribution::Beckmann(_) => geometry::beckmann_lambda(x(w, cos_w)),
-        _ => geometry::ggx_lambda(x(w, cos_w)),
-    };
-    match ct.geometry {
-        Geometry::None => 1.0,
-        Geometry::CookTorrance => geometry::cook_torrance_g(fr.cos_h, fr.cos_i, fr.cos_o, fr.c),
-        Geometry::Smith => geometry::smith_g(lambda(fr.v, fr.cos_o), lambda(fr.l, fr.cos_i)),
-        Geometry::SmithCorrelated => {
-            geometry::smith_correlated_g(lambda(fr.v, fr.cos_o), lambda(fr.l, fr.cos_i))
-        }
-        Geometry::SmithFast => {
-            geometry::smith_fast_g1(x(fr.v, fr.cos_o)) * geometry::smith_fast_g1(x(fr.l, fr.cos_i))
-        }
-        Geometry::SchlickSmith => {
-            let m = roughness
-                .expect("schlick-smith needs beckmann/ggx (validated)")
-                .xy()
-                .0;
-            // 1 − cos_w = |n × w|²/(1 + cos_w): the subtraction carries cos_w's absolute
-            // error (~1e-16), which k (up to 8e3) multiplies into G near normal incidence.
-            let one_minus = |w, cos_w: f64| {
-                super::frame::length_squared(super::frame::cross(fr.n, w)) / (1.0 + cos_w)
-            };
-            let k = geometry::schlick_smith_k(matches!(ct.distribution, Distribution::Ggx(_)), m);
-            geometry::schlick_smith_g1(fr.cos_o, one_minus(fr.v, fr.cos_o), k)
-                * geometry::schlick_smith_g1(fr.cos_i, one_minus(fr.l, fr.cos_i), k)
-        }
-        Geometry::Neubelt => geometry::neubelt_g(fr.cos_i, fr.cos_o),
     }
 }
 

@@ -1,6 +1,6 @@
 //! Kernels that make their own directions: the half/difference slice of `vkbrdf table
 //! slice`, computed from the invocation index and the push constants (`half_diff_row` in
-//! `glsl/eval.comp`). Nothing is uploaded but the material: on lavapipe the tuple loads are
+//! `glsl/generators.glsl`). Nothing is uploaded but the material: on lavapipe the tuple loads are
 //! about half of the kernel's time, and end to end the host no longer builds and copies
 //! 40 bytes per texel.
 
@@ -149,7 +149,7 @@ impl VulkanBackend {
 }
 
 /// Samples one invocation of the importance kernel sums (`SAMPLES_PER_BLOCK` in
-/// glsl/eval.comp): enough work per invocation to hide its set-up, enough invocations
+/// glsl/integrators.glsl): enough work per invocation to hide its set-up, enough invocations
 /// (1024 points × 256 blocks at 2¹⁶ samples) to fill a GPU.
 pub const SAMPLES_PER_BLOCK: u32 = 256;
 

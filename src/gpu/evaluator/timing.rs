@@ -79,9 +79,9 @@ impl VulkanBackend {
         forced: FeatureSet,
     ) -> FeatureSet {
         let mut features = FeatureSet::of_batch(batch, materials, request);
-        for (f, _) in FeatureSet::ALL_NAMED {
-            if forced.contains(*f) && *f != FeatureSet::TANGENTS && *f != FeatureSet::TERMS {
-                features |= *f;
+        for (f, _) in FeatureSet::all_named() {
+            if forced.contains(f) && f != FeatureSet::TANGENTS && f != FeatureSet::TERMS {
+                features |= f;
             }
         }
         features

@@ -1,0 +1,60 @@
+// bindings.glsl — the kernel's interface: its buffers and push constants. Binding numbers
+// come from src/gpu/layout.rs (BINDING_*, injected as macros); the structs there mirror
+// Counts (GpuCounts) and Params (PushConstants) field for field. The measured tables'
+// binding (BINDING_MERL) is declared in measured.glsl, with the code that reads it.
+
+#ifndef VKBRDF_BINDINGS_GLSL
+#define VKBRDF_BINDINGS_GLSL
+
+// Rows `Lx Ly Lz Vx Vy Vz Nx Ny Nz material [Tx Ty Tz]` (src/batch.rs), row-major f32,
+// read as RGBA32F texels of a uniform texel buffer over the same bytes (the storage-buffer
+// binding BINDING_TUPLES is not read by the kernel). On lavapipe a texelFetch of 4 floats
+// costs about what one scalar storage-buffer load does (bounds check and address per lane),
+// so 3 fetches instead of 10 loads per row (measured: src/gpu/mod.rs, "Input").
+// textureBuffer, not samplerBuffer: a sampled image of Dim Buffer draws a SPIR-V warning
+// from the validation layer, and texelFetch needs no sampler.
+// Read as RGBA32UI, the bits themselves: see input_vector.
+layout(set = 0, binding = BINDING_TUPLE_TEXELS) uniform utextureBuffer tuple_texels;
+layout(std430, set = 0, binding = BINDING_MATERIALS) readonly buffer Materials {
+    GpuMaterial materials[];
+};
+// n x 3: RGB BRDF.
+layout(std430, set = 0, binding = BINDING_BRDF) writeonly buffer Brdf {
+    float brdf_out[];
+};
+#if defined(WRITE_TERMS)
+// n x 6: D, G, F_r, F_g, F_b, K.
+layout(std430, set = 0, binding = BINDING_TERMS) writeonly buffer Terms {
+    float terms_out[];
+};
+#endif
+#if defined(BUCKETED)
+// The host uploads a chunk's rows grouped by material (src/gpu/evaluator.rs, bucket_order)
+// and puts the outputs back in place: llvmpipe runs a subgroup's lanes in SIMD, and a
+// subgroup mixing models executes every model's path (mixed 8-material batch: 3.3x). Row
+// i of the chunk as uploaded is row order[i] of the batch's chunk, which only the first
+// invalid row's report needs. (Reading the rows in place through order[] instead kept the
+// lanes coherent but scattered their loads: 1.5x, not 3.3x.)
+layout(std430, set = 0, binding = BINDING_ORDER) readonly buffer Order {
+    uint order[];
+};
+#endif
+// Chunk totals; the host sets them to (0, 0, 0xffffffff, 0) before each dispatch.
+layout(std430, set = 0, binding = BINDING_COUNTS) buffer Counts {
+    uint invalid_count;
+    uint below_horizon_count;
+    uint first_invalid; // chunk-relative row, 0xffffffff when none
+    uint saturated_count; // valid tuples with an output clamped to FLT_MAX
+};
+
+layout(push_constant) uniform Params {
+    uint tuple_count;    // rows in this chunk
+    uint material_count; // rows in the material table
+    uint first_row;      // global index of the chunk's first row
+    uint grid_width;     // GENERATE_HALF_DIFF: theta_h columns; GENERATE_IMPORTANCE: blocks per point
+    uint grid_height;    // GENERATE_HALF_DIFF: theta_d rows; GENERATE_IMPORTANCE: samples per point
+    uint spacing;        // GENERATE_HALF_DIFF: 0 theta_h = x^2 pi/2 (MERL), 1 x pi/2;
+                         // GENERATE_IMPORTANCE: 0 GGX, 1 Beckmann
+} params;
+
+#endif

@@ -1,0 +1,104 @@
+// frame64.glsl — the frame's scalars in f64, on a device with shaderFloat64 (HAS_FLOAT64):
+// cos_i, cos_o, h, cos_h, c, |n x h|^2 and the rest of FORMULAS.md §1 from the exact input
+// values, each rounded once to f32 (flushed below FLT_MIN, as a GPU flushes). The f32
+// frame of a device without f64 is frame32.glsl; make_frame (frame.glsl) calls one of them.
+
+#ifndef VKBRDF_FRAME64_GLSL
+#define VKBRDF_FRAME64_GLSL
+
+#if defined(HAS_FLOAT64)
+
+// An f64 value of the frame rounded to f32 as a GPU rounds it: below FLT_MIN, 0. GPUs
+// flush f32 subnormals (NVIDIA does, in conversions and arithmetic; lavapipe does not), so
+// the f32 copies of the frame's quantities are flushed on every device: the code that
+// reads them (and falls back to the f64 ones where they vanish) then behaves on lavapipe
+// as on a GPU, and the stress corpus tests it here (its cosines of 1e-45 made 0.1 M
+// non-finite outputs on an H200 before).
+float f32_of(double x) {
+    return abs(x) < double(FLT_MIN) ? 0.0 : float(x);
+}
+vec2 f32_of(dvec2 x) {
+    return vec2(f32_of(x.x), f32_of(x.y));
+}
+vec3 f32_of(dvec3 x) {
+    return vec3(f32_of(x.x), f32_of(x.y), f32_of(x.z));
+}
+
+// a/|a| in f64 from an input vector's f32 bits (finite and non-zero: checked before).
+dvec3 unit64(uvec3 b) {
+    dvec3 d = dvec3(exact64(b.x), exact64(b.y), exact64(b.z));
+    return d / sqrt(dot(d, d));
+}
+
+// The scalars of the frame for a tuple whose l, v, n (and tangent) make_frame has found
+// valid, and the horizon test: STATUS_VALID or STATUS_BELOW_HORIZON.
+uint frame_scalars_f64(Row r, GpuMaterial m, inout Frame f) {
+    // The frame's scalars in f64 from the raw f32 inputs (the products of f32 values are
+    // exact in f64; squares of f32 values, <= 1.2e77, and of subnormals stay in range):
+    // - cos_i, cos_o with full f32 relative precision even at grazing angles. In f32,
+    //   normalising l and n first leaves each cosine ~1e-7 off in absolute terms: K =
+    //   1/(4 cos_i cos_o) is then wrong by O(1) below cos ~1e-6 and the horizon test falls
+    //   on the wrong side (the stress corpus's grazing regime).
+    // - h, |l + v|, cos_h, c and |n x h|^2: in f32, l + v of two rounded unit vectors
+    //   carries ~u absolute error, which near l = -v (grazing mirror geometry) is a relative
+    //   error of u/|l + v| in |l + v| and in h's direction: D_GGX, which reads
+    //   cos_h^2 + slope2 rather than a logarithm, was 1e-4 off at |l + v| = 2e-3 even at
+    //   m = 1, where D is constant (found by tests/vulkan_properties.rs).
+    // Cost on lavapipe: 1.05-1.4x the f32 frame's time (examples/kernel_time.rs).
+    dvec3 dn = unit64(r.n_bits), dl = unit64(r.l_bits), dv = unit64(r.v_bits);
+    double cos_i = dot(dn, dl), cos_o = dot(dn, dv);
+    f.cos_i = f32_of(cos_i);
+    f.cos_o = f32_of(cos_o);
+    f.cos_i_exact = cos_i;
+    f.cos_o_exact = cos_o;
+    // The horizon test on the f64 cosines, as the reference decides it: a cosine below
+    // 7e-46 rounds to 0 in f32, and testing the f32 value put such tuples below the horizon
+    // while the reference evaluates them (FORMULAS.md §1: every representable cosine).
+    if (cos_i <= 0.0 || cos_o <= 0.0) {
+        return STATUS_BELOW_HORIZON;
+    }
+    // |l + v| >= cos_i + cos_o > 0 here, so h is well defined.
+    dvec3 lv = dl + dv;
+    double len = sqrt(dot(lv, lv));
+    dvec3 h = lv / len;
+    f.h = f32_of(h);
+    // cos_h = (cos_i + cos_o)/|l + v| and c = |l + v|/2: see frame32.glsl.
+    f.cos_h_exact = (cos_i + cos_o) / len;
+    f.cos_h = f32_of(f.cos_h_exact);
+    f.c = f32_of(0.5 * len);
+    f.c_exact = 0.5 * len;
+    dvec3 nxh = cross(dn, h);
+    f.sin2_h = f32_of(dot(nxh, nxh));
+#if defined(HAS_ANISOTROPIC) && defined(HAS_TANGENTS)
+    if (is_anisotropic(m)) {
+        // h in the tangent frame, built in f64 as in frame32.glsl: with roughness ratios
+        // up to 1e4, (h.b/m_y)^2 turns an f32 error of ~1e-7 in h.b into 3e-2 in D (Ward
+        // and Beckmann near the peak, stress corpus).
+        dvec3 nxt = cross(dn, unit64(r.t_bits));
+        dvec3 b = nxt / sqrt(dot(nxt, nxt));
+        dvec3 t = cross(b, dn);
+        f.hx = f32_of(dot(h, t));
+        f.hy = f32_of(dot(h, b));
+        f.l_tb = f32_of(dvec2(dot(dl, t), dot(dl, b)));
+        f.v_tb = f32_of(dvec2(dot(dv, t), dot(dv, b)));
+    }
+#endif
+#if defined(HAS_G_SMITH) || defined(HAS_G_SMITH_CORRELATED) || defined(HAS_G_SMITH_FAST) \
+    || defined(HAS_G_SCHLICK_SMITH)
+    dvec3 nxl = cross(dn, dl), nxv = cross(dn, dv); // Smith's tan^2, Schlick-Smith's 1 - cos
+    f.sin2_i = f32_of(dot(nxl, nxl));
+    f.sin2_o = f32_of(dot(nxv, nxv));
+#endif
+#if defined(HAS_PHONG)
+    if (material_model(m) == MODEL_PHONG) {
+        dvec3 rr = 2.0 * cos_i * dn - dl;
+        dvec3 rxv = cross(rr, dv);
+        f.rv = f32_of(dot(rr, dv));
+        f.sin2_rv = f32_of(dot(rxv, rxv));
+    }
+#endif
+    return STATUS_VALID;
+}
+#endif
+
+#endif
