@@ -194,13 +194,7 @@ pub fn merge(
     let base = cars[0].1.clone();
     for (p, c) in &cars {
         let differs = |what: &str, a: &dyn std::fmt::Debug, b: &dyn std::fmt::Debug| {
-            bad(
-                p,
-                format!(
-                    "{what} differs from {}'s: {a:?} against {b:?}",
-                    first.display()
-                ),
-            )
+            part_differs(p, first, what, a, b)
         };
         if c.schema != SIDECAR_SCHEMA {
             return Err(bad(
@@ -231,29 +225,7 @@ pub fn merge(
             return Err(bad(p, "this part has no terms part (eval --terms)".into()));
         }
     }
-    cars.sort_by_key(|(_, c)| c.shard.k);
-    for w in cars.windows(2) {
-        if w[0].1.shard.k == w[1].1.shard.k {
-            return Err(bad(
-                &w[1].0,
-                format!(
-                    "shard {}/{} given twice (also {})",
-                    w[1].1.shard.k,
-                    base.shard.n,
-                    w[0].0.display()
-                ),
-            ));
-        }
-    }
-    let missing: Vec<u64> = (1..=base.shard.n)
-        .filter(|k| !cars.iter().any(|(_, c)| c.shard.k == *k))
-        .collect();
-    if !missing.is_empty() {
-        return Err(bad(
-            output,
-            format!("shards {missing:?} of {} are missing", base.shard.n),
-        ));
-    }
+    check_complete(&mut cars, |c| c.shard, base.shard.n, output, "")?;
     let mut counts = Counts {
         tuples: base.total_rows,
         ..Counts::default()
@@ -336,4 +308,53 @@ fn join(
         }
     }
     w.finish()
+}
+
+/// The error of part `part` whose `what` differs from the first part's (`a` against `b`).
+pub fn part_differs(
+    part: &Path,
+    first: &Path,
+    what: &str,
+    a: &dyn std::fmt::Debug,
+    b: &dyn std::fmt::Debug,
+) -> Error {
+    Error::Batch {
+        path: part.to_owned(),
+        message: format!(
+            "{what} differs from {}'s: {a:?} against {b:?}",
+            first.display()
+        ),
+    }
+}
+
+/// Sorts `parts` by K and checks that each K of 1..=n is there exactly once: a part given
+/// twice is named with its twin, missing ones against `output` (`whole` names what they
+/// are parts of in that message, e.g. " of the dfg table"; "" for a batch).
+pub fn check_complete<T>(
+    parts: &mut [(PathBuf, T)],
+    shard: impl Fn(&T) -> Shard,
+    n: u64,
+    output: &Path,
+    whole: &str,
+) -> Result<()> {
+    parts.sort_by_key(|(_, c)| shard(c).k);
+    for w in parts.windows(2) {
+        let k = shard(&w[1].1).k;
+        if shard(&w[0].1).k == k {
+            return Err(Error::Batch {
+                path: w[1].0.clone(),
+                message: format!("shard {k}/{n} given twice (also {})", w[0].0.display()),
+            });
+        }
+    }
+    let missing: Vec<u64> = (1..=n)
+        .filter(|k| !parts.iter().any(|(_, c)| shard(c).k == *k))
+        .collect();
+    if !missing.is_empty() {
+        return Err(Error::Batch {
+            path: output.to_owned(),
+            message: format!("shards {missing:?} of {n}{whole} are missing"),
+        });
+    }
+    Ok(())
 }

@@ -349,13 +349,7 @@ pub fn merge(
     let base = cars[0].1.clone();
     for (p, c) in &cars {
         let differs = |what: &str, a: &dyn std::fmt::Debug, b: &dyn std::fmt::Debug| {
-            bad(
-                p,
-                format!(
-                    "{what} differs from {}'s: {a:?} against {b:?}",
-                    first.display()
-                ),
-            )
+            crate::stream::shard::part_differs(p, first, what, a, b)
         };
         if c.schema != TABLE_SIDECAR_SCHEMA {
             return Err(bad(
@@ -426,32 +420,8 @@ pub fn merge(
             ));
         }
     }
-    cars.sort_by_key(|(_, c)| c.shard.k);
-    for w in cars.windows(2) {
-        if w[0].1.shard.k == w[1].1.shard.k {
-            return Err(bad(
-                &w[1].0,
-                format!(
-                    "shard {}/{} given twice (also {})",
-                    w[1].1.shard.k,
-                    base.shard.n,
-                    w[0].0.display()
-                ),
-            ));
-        }
-    }
-    let missing: Vec<u64> = (1..=base.shard.n)
-        .filter(|k| !cars.iter().any(|(_, c)| c.shard.k == *k))
-        .collect();
-    if !missing.is_empty() {
-        return Err(bad(
-            output,
-            format!(
-                "shards {missing:?} of {} of the {} table are missing",
-                base.shard.n, base.table
-            ),
-        ));
-    }
+    let whole = format!(" of the {} table", base.table);
+    crate::stream::shard::check_complete(&mut cars, |c| c.shard, base.shard.n, output, &whole)?;
     let mut warnings = Vec::new();
     if base.table == "merl" {
         merge_merl(&cars, output, cancel)?;
