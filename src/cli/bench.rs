@@ -386,23 +386,20 @@ fn stage_rows(
     for sc in chosen {
         eprintln!("stages {} on {n} tuples …", sc.name);
         let batch = scenarios::batch(sc, n, 42);
+        let mut engines = Vec::new();
         if let Some(v) = vulkan.as_deref_mut() {
-            rows.push(stages::measure(
-                stages::Engine::Vulkan(v),
-                sc.name,
-                &batch,
-                &sc.materials,
-                dir.path(),
-                budget,
-                repeats,
-            )?);
+            engines.push(stages::Engine::Vulkan(v));
         }
         if !args.no_cpu {
+            engines.push(stages::Engine::Any(&mut *engine));
+        }
+        for e in engines {
+            let (b, m) = (&batch, &sc.materials);
             rows.push(stages::measure(
-                stages::Engine::Any(engine),
+                e,
                 sc.name,
-                &batch,
-                &sc.materials,
+                b,
+                m,
                 dir.path(),
                 budget,
                 repeats,
