@@ -184,13 +184,7 @@ pub fn merge(
         path: path.to_owned(),
         message,
     };
-    let Some(first) = parts.first() else {
-        return Err(bad(output, "no parts to merge".into()));
-    };
-    let mut cars: Vec<(PathBuf, Sidecar)> = parts
-        .iter()
-        .map(|p| Ok((p.clone(), Sidecar::read(p)?)))
-        .collect::<Result<_>>()?;
+    let (first, mut cars) = read_parts(parts, output, Sidecar::read)?;
     let base = cars[0].1.clone();
     for (p, c) in &cars {
         let differs = |what: &str, a: &dyn std::fmt::Debug, b: &dyn std::fmt::Debug| {
@@ -357,4 +351,24 @@ pub fn check_complete<T>(
         });
     }
     Ok(())
+}
+
+/// Each part with its sidecar (`read`), and the first part's path; an error when there is
+/// no part.
+pub fn read_parts<'a, T>(
+    parts: &'a [PathBuf],
+    output: &Path,
+    read: impl Fn(&Path) -> Result<T>,
+) -> Result<(&'a Path, Vec<(PathBuf, T)>)> {
+    let Some(first) = parts.first() else {
+        return Err(Error::Batch {
+            path: output.to_owned(),
+            message: "no parts to merge".into(),
+        });
+    };
+    let cars = parts
+        .iter()
+        .map(|p| Ok((p.clone(), read(p)?)))
+        .collect::<Result<_>>()?;
+    Ok((first, cars))
 }

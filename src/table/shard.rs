@@ -339,13 +339,7 @@ pub fn merge(
         path: path.to_owned(),
         message,
     };
-    let Some(first) = parts.first() else {
-        return Err(bad(output, "no parts to merge".into()));
-    };
-    let mut cars: Vec<(PathBuf, TableSidecar)> = parts
-        .iter()
-        .map(|p| Ok((p.clone(), TableSidecar::read(p)?)))
-        .collect::<Result<_>>()?;
+    let (first, mut cars) = crate::stream::shard::read_parts(parts, output, TableSidecar::read)?;
     let base = cars[0].1.clone();
     for (p, c) in &cars {
         let differs = |what: &str, a: &dyn std::fmt::Debug, b: &dyn std::fmt::Debug| {

@@ -61,21 +61,7 @@ pub fn compute(
     spacing: Spacing,
     terms: bool,
 ) -> Result<(Vec<f32>, Option<Vec<f32>>)> {
-    if let (Ok(width), Ok(height)) = (u32::try_from(grid.width), u32::try_from(grid.height)) {
-        let slice = SliceGrid {
-            width,
-            height,
-            linear: spacing == Spacing::Linear,
-        };
-        runner.start("slice", slice.texels());
-        if let Some(out) = runner.half_diff_slice(material, slice, terms) {
-            let out = out?;
-            runner.advance(slice.texels());
-            runner.finish();
-            return Ok((out.brdf, out.terms));
-        }
-    }
-    compute_from_tuples(runner, material, grid, spacing, terms)
+    compute_band(runner, material, grid, spacing, terms, 0..grid.height)
 }
 
 /// [`compute`] with the directions made on the host by [`from_half_diff`] and sent to the
@@ -156,11 +142,13 @@ pub fn compute_band(
             let out = out?;
             runner.advance(slice.texels());
             runner.finish();
-            let brdf = out.brdf[texels.start * 3..texels.end * 3].to_vec();
-            let terms = out
-                .terms
-                .map(|t| t[texels.start * TERM_COLUMNS..texels.end * TERM_COLUMNS].to_vec());
-            return Ok((brdf, terms));
+            // The band in place: the whole slice is returned without a copy.
+            let band = |mut v: Vec<f32>, per: usize| {
+                v.truncate(texels.end * per);
+                v.drain(..texels.start * per);
+                v
+            };
+            return Ok((band(out.brdf, 3), out.terms.map(|t| band(t, TERM_COLUMNS))));
         }
     }
     texels_from_tuples(runner, material, grid, spacing, terms, texels)
