@@ -51,8 +51,16 @@ pub const F_NONE: u8 = 0;
 pub const F_SCHLICK: u8 = 1;
 /// Fresnel: exact dielectric.
 pub const F_DIELECTRIC: u8 = 2;
-/// Fresnel: exact conductor.
+/// Fresnel: exact conductor, |η|² up to [`CONDUCTOR_DIRECT_MAX`]: the direct form.
 pub const F_CONDUCTOR: u8 = 3;
+/// Fresnel: exact conductor with |η|² beyond [`CONDUCTOR_DIRECT_MAX`]: the scaled form.
+pub const F_CONDUCTOR_SCALED: u8 = 4;
+
+/// Largest `|η|² = n² + k²` (every channel) for which the conductor takes the direct form
+/// ([`conductor`]): its `Re(η² − sin²)²` and `Im(η²)²` then stay below ~1e24, far inside
+/// f32's range; beyond it (k reaches 1e18) those squares overflow and the scaled form
+/// ([`conductor_scaled`]) divides η² through |η|² first.
+pub const CONDUCTOR_DIRECT_MAX: f64 = 1e12;
 
 /// The constants of one material, prepared once per batch (in f64 where the lanes use
 /// f64, then rounded once).
@@ -93,6 +101,10 @@ pub struct Params {
     pub c_iq: [f32; 3],
     /// Conductor `Im(η²)/|η|⁴`.
     pub c_bq: [f32; 3],
+    /// Conductor `Im(η²)/2 = n k` (the direct form).
+    pub nk: [f32; 3],
+    /// Conductor `Im(η²)² = 4 n² k²`, formed in f64 (the direct form).
+    pub e2i_sq: [f32; 3],
 }
 
 /// How a material group is evaluated.
@@ -190,7 +202,13 @@ impl Plan {
                 p.c_eb = f32x3(std::array::from_fn(|c| e2i[c] * e2i[c] / q[c]));
                 p.c_iq = f32x3(q.map(|q| 1.0 / q));
                 p.c_bq = f32x3(std::array::from_fn(|c| e2i[c] / q[c] / q[c]));
-                F_CONDUCTOR
+                p.nk = f32x3(std::array::from_fn(|c| n[c] * k[c]));
+                p.e2i_sq = f32x3(e2i.map(|x| x * x));
+                if q.iter().all(|&q| q <= CONDUCTOR_DIRECT_MAX) {
+                    F_CONDUCTOR
+                } else {
+                    F_CONDUCTOR_SCALED
+                }
             }
         };
         Plan::Microfacet { d, g, f, p }
@@ -217,6 +235,15 @@ pub struct Outputs {
     pub terms: [[f32; LANES]; TERM_COLUMNS],
     /// Lanes to re-evaluate with the reference.
     pub rescue: [bool; LANES],
+}
+
+impl Outputs {
+    /// Whether any lane is flagged for rescue: one 16-byte test instead of a branch a lane
+    /// (the per-lane loop cost about 5 % of a microfacet block).
+    #[inline(always)]
+    pub fn any_rescue(&self) -> bool {
+        u128::from_ne_bytes(self.rescue.map(u8::from)) != 0
+    }
 }
 
 impl Default for Outputs {
@@ -433,14 +460,14 @@ fn dielectric(c: f64, s2: f64, mu: f64, mu2m1: f64) -> f32 {
     }
 }
 
-/// Exact conductor Fresnel (FORMULAS.md §4) in f32, after the kernel's `F_Conductor`
+/// Exact conductor Fresnel (FORMULAS.md §4) in f32 for any |η|, after the kernel's `F_Conductor`
 /// (`glsl/terms.glsl`): `η²` divided through `|η|²` so that large extinctions do not
 /// overflow — here by the per-material constants `c_a`, `c_eb`, `c_iq`, `c_bq` (formed
 /// once in f64) — and the complex root taken by its larger component, whose square root
 /// both sign cases share: 4 divisions and 2 square roots a channel instead of 9 and 3
 /// (division is the lanes' most expensive instruction). η = 1 (zi = 0) stays exactly 0.
 #[inline(always)]
-fn conductor(c: f32, s2: f32, p: &Params, ch: usize) -> f32 {
+fn conductor_scaled(c: f32, s2: f32, p: &Params, ch: usize) -> f32 {
     let (n, k) = (p.cn[ch], p.ck[ch]);
     let ar = p.e2rm1[ch] + c * c;
     let zr = (ar * p.c_a[ch] + p.c_eb[ch]) * p.c_iq[ch];
@@ -474,6 +501,39 @@ fn conductor(c: f32, s2: f32, p: &Params, ch: usize) -> f32 {
     let (ur, wr) = (c - ecr2, c + ecr2);
     let r_perp = (ur * ur + eci2 * eci2) / (wr * wr + eci2 * eci2);
     0.5 * (r_par + r_perp)
+}
+
+/// Exact conductor Fresnel (FORMULAS.md §4) in f32 for |η|² ≤ [`CONDUCTOR_DIRECT_MAX`],
+/// in about two thirds of [`conductor_scaled`]'s operations. With `a + i b = √(η² − sin²θ)`
+/// (the principal root) the two polarisations are ratios of sums of squares,
+///
+/// `R_s = ((a − c)² + b²) / ((a + c)² + b²)`,
+/// `R_p = R_s · ((a c − sin²)² + (b c)²) / ((a c + sin²)² + (b c)²)`,
+///
+/// which is the textbook `(|η²−s²| + c² − 2ac)/(… + 2ac)` form with `|η² − s²| = a² + b²`
+/// expanded: nothing cancels but `a − c` and `a c − sin²`, and those are squared beside a
+/// `b²` that carries the rest (the textbook form loses every digit of a small R_s). The
+/// root is taken by its larger component `√((|w| + |Re w|)/2)`, the smaller one `Im w / 2`
+/// over it, as in the scaled form (the direct `√((|w| + Re w)/2)` cancels for metals,
+/// where `Re w < 0`). η = 1 gives exactly 0: `w = c²` rounded, `|w| = w`, and the root
+/// `√(fl(c²))` is c itself.
+#[inline(always)]
+fn conductor(c: f32, s2: f32, p: &Params, ch: usize) -> f32 {
+    // w = η² − sin²θ = (n² − k² − 1) + c² + i 2nk.
+    let wr = p.e2rm1[ch] + c * c;
+    let wabs = (wr * wr + p.e2i_sq[ch]).sqrt();
+    // The 1e-30 floor keeps w = 0 (η² = sin²θ, a measure-zero case) from 0/0.
+    let big = (0.5 * (wabs + wr.abs())).sqrt().max(1e-30);
+    let small = p.nk[ch] / big;
+    let (a, b) = if wr < 0.0 { (small, big) } else { (big, small) };
+    let b2 = b * b;
+    let (am, ap) = (a - c, a + c);
+    let rs = (am * am + b2) / (ap * ap + b2);
+    let (ac, bc) = (a * c, b * c);
+    let (pm, pp) = (ac - s2, ac + s2);
+    let bc2 = bc * bc;
+    let rp_over_rs = (pm * pm + bc2) / (pp * pp + bc2);
+    0.5 * rs * (1.0 + rp_over_rs)
 }
 
 /// Lambert on one block (`Z`: N = (0, 0, 1), the local form): only the validity and the horizon matter, so only the two
@@ -590,22 +650,29 @@ pub fn microfacet_block<const D: u8, const G: u8, const F: u8, const Z: bool>(
                     p.f0[ch] + (1.0 - p.f0[ch]) * (x2 * x2 * one_minus_c)
                 }
                 F_DIELECTRIC => dielectric(fr.c, s2, p.ior[ch], p.mu2m1[ch]),
-                _ => conductor(c, s2_f, p, ch),
+                F_CONDUCTOR => conductor(c, s2_f, p, ch),
+                _ => conductor_scaled(c, s2_f, p, ch),
             };
         }
         // K (FORMULAS.md §5), one cosine at a time.
         let kk = p.k_num / cos_o / if p.k_cos_i { cos_i } else { 1.0 };
-        let mut bad = !fr.ok;
+        // One test for every output: a sum of magnitudes is NaN if any is, and above
+        // OUTPUT_LIMIT if any is (a sum that only rounds up past it sends a lane to the
+        // reference needlessly, never the other way) — 18 operations where a test a value
+        // took 45.
+        let dgk = d * g * kk;
+        let mut size = d.abs() + g.abs() + kk.abs();
         for ch in 0..3 {
-            let b = p.diffuse[ch] + p.spec[ch] * (d * g * f[ch] * kk);
+            let b = p.diffuse[ch] + p.spec[ch] * (dgk * f[ch]);
             out.brdf[ch][k] = b;
-            bad |= b.is_nan() || b.abs() > OUTPUT_LIMIT;
+            size += b.abs() + f[ch].abs();
         }
         let terms = [d, g, f[0], f[1], f[2], kk];
         for (t, x) in terms.into_iter().enumerate() {
             out.terms[t][k] = x;
-            bad |= x.is_nan() || x.abs() > OUTPUT_LIMIT;
         }
+        // `<=` is false for NaN.
+        let bad = !fr.ok || !(size <= OUTPUT_LIMIT);
         out.rescue[k] = bad;
     }
 }

@@ -209,7 +209,8 @@ fn block_of<const Z: bool>(plan: &Plan, inp: &Inputs, out: &mut Outputs) {
                 F_NONE => microfacet_block::<$d, $g, F_NONE, Z>(p, inp, out),
                 F_SCHLICK => microfacet_block::<$d, $g, F_SCHLICK, Z>(p, inp, out),
                 F_DIELECTRIC => microfacet_block::<$d, $g, F_DIELECTRIC, Z>(p, inp, out),
-                _ => microfacet_block::<$d, $g, F_CONDUCTOR, Z>(p, inp, out),
+                F_CONDUCTOR => microfacet_block::<$d, $g, F_CONDUCTOR, Z>(p, inp, out),
+                _ => microfacet_block::<$d, $g, F_CONDUCTOR_SCALED, Z>(p, inp, out),
             }
         };
     }
@@ -312,13 +313,11 @@ fn run_chunk(
     let mut j0 = 0;
     while j0 < len {
         let n = LANES.min(len - j0);
-        for (k, slot) in idx.iter_mut().enumerate() {
-            // The tail block repeats its last row: its extra lanes are computed and dropped.
-            *slot = rows(w.start + j0 + k.min(n - 1));
-        }
-        if order.is_none() && n == LANES {
-            // Consecutive rows: a fixed-stride transpose the compiler unrolls.
-            let base = idx[0] * cols;
+        // A whole block of consecutive rows (the common case): fixed-stride transposes the
+        // compiler unrolls, and no row indices to form.
+        let whole = order.is_none() && n == LANES;
+        if whole {
+            let base = (w.start + j0) * cols;
             match cols {
                 COLUMNS_LOCAL => {
                     // Through a copy of the block that the compiler cannot see through: the
@@ -341,6 +340,11 @@ fn run_chunk(
                 ),
             }
         } else {
+            for (k, slot) in idx.iter_mut().enumerate() {
+                // The tail block repeats its last row: its extra lanes are computed and
+                // dropped.
+                *slot = rows(w.start + j0 + k.min(n - 1));
+            }
             for (k, &r) in idx.iter().enumerate() {
                 let row = &data[r * cols..r * cols + take];
                 for (c, &x) in row.iter().enumerate() {
@@ -371,10 +375,13 @@ fn run_chunk(
                 }
             }
         }
-        for k in 0..n {
-            if out.rescue[k] {
-                rescue(batch, m, idx[k], j0 + k, w, &mut counts);
-                tally.rescued += 1;
+        if out.any_rescue() {
+            for k in 0..n {
+                if out.rescue[k] {
+                    let row = if whole { w.start + j0 + k } else { idx[k] };
+                    rescue(batch, m, row, j0 + k, w, &mut counts);
+                    tally.rescued += 1;
+                }
             }
         }
         j0 += n;

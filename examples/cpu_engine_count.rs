@@ -1,0 +1,46 @@
+//! Evaluates one benchmark scenario's local form on the CPU engine, one thread, `REPS`
+//! times — a harness for instruction counts, which repeat where timings on this shared
+//! machine do not:
+//!
+//! ```text
+//! cargo build --release --example cpu_engine_count
+//! valgrind --tool=callgrind --callgrind-out-file=/dev/null \
+//!     target/release/examples/cpu_engine_count mitsuba-ggx 262144 1
+//! valgrind … cpu_engine_count mitsuba-ggx 262144 3
+//! ```
+//!
+//! Instructions per evaluation = (count at 3 − count at 1) / (2 × tuples): the set-up (the
+//! scenario's tuples, the materials) cancels. Valgrind 3.19 hides AVX-512 from the program,
+//! so the counts describe the AVX2+FMA path (`instruction set:` says which ran).
+
+use vkbrdf::backend::{Backend, Output, Request};
+use vkbrdf::bench::scenarios;
+use vkbrdf::cpu::CpuEngine;
+
+fn main() {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let name = args.first().map_or("mitsuba-ggx", String::as_str);
+    let n: usize = args.get(1).and_then(|a| a.parse().ok()).unwrap_or(262_144);
+    let reps: usize = args.get(2).and_then(|a| a.parse().ok()).unwrap_or(1);
+    let Some(s) = scenarios::by_name(name) else {
+        eprintln!("unknown scenario {name}");
+        std::process::exit(2);
+    };
+    let Some(batch) = scenarios::local_batch(&s, n, 1) else {
+        eprintln!("{name} has no local form (several materials or tangents)");
+        std::process::exit(2);
+    };
+    let mut engine = CpuEngine::with_threads(1);
+    let mut out = Output::default();
+    for _ in 0..reps {
+        engine
+            .evaluate_local_into(&batch, &s.materials, &Request::default(), &mut out)
+            .expect("evaluates");
+    }
+    println!(
+        "instruction set: {}; {name}: {n} tuples × {reps}; tally {:?}; first {:?}",
+        vkbrdf::cpu::instruction_set(),
+        engine.last_tally(),
+        &out.brdf[..3]
+    );
+}
