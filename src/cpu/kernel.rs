@@ -671,7 +671,8 @@ pub fn microfacet_block<const D: u8, const G: u8, const F: u8, const Z: bool>(
         for (t, x) in terms.into_iter().enumerate() {
             out.terms[t][k] = x;
         }
-        // `<=` is false for NaN.
+        // `<=` is false for NaN: one comparison catches both.
+        #[allow(clippy::neg_cmp_op_on_partial_ord)]
         let bad = !fr.ok || !(size <= OUTPUT_LIMIT);
         out.rescue[k] = bad;
     }
