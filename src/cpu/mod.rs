@@ -209,26 +209,22 @@ fn block_of<const Z: bool>(plan: &Plan, inp: &Inputs, out: &mut Outputs) {
                 F_NONE => microfacet_block::<$d, $g, F_NONE, Z>(p, inp, out),
                 F_SCHLICK => microfacet_block::<$d, $g, F_SCHLICK, Z>(p, inp, out),
                 F_DIELECTRIC => microfacet_block::<$d, $g, F_DIELECTRIC, Z>(p, inp, out),
-                F_CONDUCTOR => microfacet_block::<$d, $g, F_CONDUCTOR, Z>(p, inp, out),
-                _ => microfacet_block::<$d, $g, F_CONDUCTOR_SCALED, Z>(p, inp, out),
+                _ => microfacet_block::<$d, $g, F_CONDUCTOR, Z>(p, inp, out),
             }
         };
     }
-    macro_rules! by_g {
-        ($d:expr) => {
-            match *g {
-                G_NONE => by_f!($d, G_NONE),
-                G_CT => by_f!($d, G_CT),
-                G_SMITH => by_f!($d, G_SMITH),
-                G_SMITH_CORRELATED => by_f!($d, G_SMITH_CORRELATED),
-                _ => by_f!($d, G_SMITH_FAST),
-            }
-        };
-    }
-    if *d == D_GGX {
-        by_g!(D_GGX)
-    } else {
-        by_g!(D_BECKMANN)
+    // GGX has no smith-fast (Walter's fit is Beckmann's; the parser refuses it), so its
+    // variant is not compiled.
+    match (*d, *g) {
+        (D_GGX, G_NONE) => by_f!(D_GGX, G_NONE),
+        (D_GGX, G_CT) => by_f!(D_GGX, G_CT),
+        (D_GGX, G_SMITH) => by_f!(D_GGX, G_SMITH),
+        (D_GGX, _) => by_f!(D_GGX, G_SMITH_CORRELATED),
+        (_, G_NONE) => by_f!(D_BECKMANN, G_NONE),
+        (_, G_CT) => by_f!(D_BECKMANN, G_CT),
+        (_, G_SMITH) => by_f!(D_BECKMANN, G_SMITH),
+        (_, G_SMITH_CORRELATED) => by_f!(D_BECKMANN, G_SMITH_CORRELATED),
+        (_, _) => by_f!(D_BECKMANN, G_SMITH_FAST),
     }
 }
 
