@@ -270,7 +270,7 @@ const LENGTH2_MAX: f32 = 1e30;
 /// Whether a squared length is in [`LENGTH2_MIN`, `LENGTH2_MAX`] (false for NaN).
 #[inline(always)]
 fn length2_ok(q: f32) -> bool {
-    q >= LENGTH2_MIN && q <= LENGTH2_MAX
+    (LENGTH2_MIN..=LENGTH2_MAX).contains(&q)
 }
 
 /// `1/√x`, correctly rounded square root then division: within 1 ulp, and exactly 1 for
