@@ -68,6 +68,12 @@ pub struct Params {
     pub inv_m2: f64,
     /// The D normalisation: `1/(k m²)` for Beckmann, `m²/π` for GGX.
     pub d_norm: f64,
+    /// `m²`, `1/m²` and the D normalisation rounded to f32, for the f32 frame's D.
+    pub m2_f: f32,
+    /// See `m2_f`.
+    pub inv_m2_f: f32,
+    /// See `m2_f`.
+    pub d_norm_f: f32,
     /// K's numerator: 1/4 modern, 1/π Cook–Torrance 1982, 1 seed.
     pub k_num: f32,
     /// Whether K divides by `cos_i` too (all but the seed convention).
@@ -201,6 +207,7 @@ impl Plan {
             }
         };
         p.fast_frame = mr >= FAST_MIN_ROUGHNESS && f != F_DIELECTRIC;
+        (p.m2_f, p.inv_m2_f, p.d_norm_f) = (p.m2 as f32, p.inv_m2 as f32, p.d_norm as f32);
         Plan::Microfacet { d, g, f, p }
     }
 
@@ -680,6 +687,7 @@ struct Lane {
     /// `1 − c` and `sin²` of `c`, for Schlick and the conductor.
     one_minus_c: f32,
     s2: f32,
+    sin2_h32: f32,
     cos_h2: f64,
     sin2_h: f64,
     c64: f64,
@@ -702,6 +710,7 @@ impl Lane {
             sin2_o: f.sin2_o,
             one_minus_c,
             s2: f.s2,
+            sin2_h32: f.sin2_h,
             cos_h2: f64::from(f.cos_h) * f64::from(f.cos_h),
             sin2_h: f64::from(f.sin2_h),
             c64,
@@ -723,6 +732,7 @@ impl Lane {
             sin2_o: f.sin2_o as f32,
             one_minus_c: (1.0 - f.c) as f32,
             s2: s2_64 as f32,
+            sin2_h32: f.sin2_h as f32,
             cos_h2: f.cos_h * f.cos_h,
             sin2_h: f.sin2_h,
             c64: f.c,
@@ -789,7 +799,7 @@ pub fn microfacet_block<const D: u8, const G: u8, const F: u8, const Z: bool>(
                 s2: fs[7][k],
                 ok: ok[k],
             };
-            microfacet_lane::<D, G, F>(p, &Lane::from32(&fr), out, k);
+            microfacet_lane::<D, G, F, true>(p, &Lane::from32(&fr), out, k);
         }
     }
     if u128::from_ne_bytes(slow.map(u8::from)) != 0 {
@@ -824,13 +834,13 @@ fn microfacet_block64<const D: u8, const G: u8, const F: u8>(
 ) {
     for k in 0..LANES {
         let fr = frame64::<false>(&lane_inputs(inp, k));
-        microfacet_lane::<D, G, F>(p, &Lane::from64(&fr), out, k);
+        microfacet_lane::<D, G, F, false>(p, &Lane::from64(&fr), out, k);
     }
 }
 
-/// The terms and the BRDF of lane `k` from its frame.
+/// The terms and the BRDF of lane `k` from its frame (`FAST`: the f32 frame's, see D).
 #[inline(always)]
-fn microfacet_lane<const D: u8, const G: u8, const F: u8>(
+fn microfacet_lane<const D: u8, const G: u8, const F: u8, const FAST: bool>(
     p: &Params,
     fr: &Lane,
     out: &mut Outputs,
@@ -838,7 +848,22 @@ fn microfacet_lane<const D: u8, const G: u8, const F: u8>(
 ) {
     let (cos_i, cos_o, cos_h, c) = (fr.cos_i, fr.cos_o, fr.cos_h, fr.c);
     // D (FORMULAS.md §2), in f64: one division.
-    let d = if D == D_GGX {
+    let d = if FAST {
+        // The f32 frame's materials have m ≥ FAST_MIN_ROUGHNESS and its lanes cos_h ≥
+        // GRAZING, which keeps every quantity below inside f32's normal range (m²cos²_h ≥
+        // 2.5e-11, 1/cos²_h ≤ 1e8, the Beckmann norm ≤ 1.3e18): D in f32.
+        let cos_h2 = fr.cos_h * fr.cos_h;
+        let sin2_h = fr.sin2_h32;
+        if D == D_GGX {
+            let s = p.m2_f * cos_h2 + sin2_h;
+            p.d_norm_f / (s * s)
+        } else {
+            let ic = 1.0 / cos_h2;
+            let half_x = sin2_h * ic * p.inv_m2_f * 0.5;
+            let e = exp_neg(-half_x);
+            e * (p.d_norm_f * ic * ic) * e
+        }
+    } else if D == D_GGX {
         // m²/(π (m² cos_h² + sin²_h)²): no 1/cos_h⁴ to overflow; in f64 because the
         // square of the sum leaves f32's normal range for m near its lower bound.
         let s = p.m2 * fr.cos_h2 + fr.sin2_h;
