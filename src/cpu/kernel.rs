@@ -438,14 +438,9 @@ fn raw(x: &[f32; 9]) -> Raw {
 }
 
 /// The f64 frame of one lane, for the lanes [`frame`] cannot serve (see
-/// [`microfacet_block`]); `Z`: N is (0, 0, 1) (the local form), whose dot and cross
-/// products with N reduce to single components — the same operations on the same values as
-/// the general frame with that N, so both give the same bits.
+/// [`microfacet_block`]); the local form's lanes carry N = (0, 0, 1).
 #[inline(always)]
-fn frame64<const Z: bool>(x: &[f32; 9]) -> Frame64 {
-    if Z {
-        return frame64_z(x);
-    }
+fn frame64(x: &[f32; 9]) -> Frame64 {
     let Raw {
         l: [lx, ly, lz],
         v: [vx, vy, vz],
@@ -480,38 +475,6 @@ fn frame64<const Z: bool>(x: &[f32; 9]) -> Frame64 {
         sin2_h: cross2(hx, hy, hz),
         sin2_i: cross2(lx, ly, lz),
         sin2_o: cross2(vx, vy, vz),
-        ok,
-    }
-}
-
-/// [`frame64`] with N = (0, 0, 1). With that N, |N|² = 1 and its `rsqrt` are exactly 1, each
-/// `n · w` is `0·wx + 0·wy + 1·wz = wz` (a zero's sign aside, and a zero cosine is rescued
-/// either way) and each `|n × w|²` is `(−wy)² + wx² + 0 = wy·wy + wx·wx`: the general
-/// frame's bits without its N arithmetic.
-#[inline(always)]
-fn frame64_z(x: &[f32; 9]) -> Frame64 {
-    let w = |i: usize| f64::from(x[i]);
-    let (lx, ly, lz) = (w(0), w(1), w(2));
-    let (vx, vy, vz) = (w(3), w(4), w(5));
-    let (ll, vv) = (lx * lx + ly * ly + lz * lz, vx * vx + vy * vy + vz * vz);
-    let finite_sq = |q: f64| q > 0.0 && q < f64::INFINITY;
-    let finite = finite_sq(ll) && finite_sq(vv);
-    let (il, iv) = (rsqrt64(ll), rsqrt64(vv));
-    let (lx, ly, lz) = (lx * il, ly * il, lz * il);
-    let (vx, vy, vz) = (vx * iv, vy * iv, vz * iv);
-    let (hx, hy, hz) = (lx + vx, ly + vy, lz + vz);
-    let ih = rsqrt64(hx * hx + hy * hy + hz * hz);
-    let (hx, hy, hz) = (hx * ih, hy * ih, hz * ih);
-    let c = vx * hx + vy * hy + vz * hz;
-    let ok = finite && lz >= GRAZING && vz >= GRAZING && hz >= GRAZING && c >= GRAZING;
-    Frame64 {
-        cos_i: lz,
-        cos_o: vz,
-        cos_h: hz,
-        c,
-        sin2_h: hy * hy + hx * hx,
-        sin2_i: ly * ly + lx * lx,
-        sin2_o: vy * vy + vx * vx,
         ok,
     }
 }
@@ -823,9 +786,8 @@ pub fn microfacet_block<const D: u8, const G: u8, const F: u8, const Z: bool>(
 }
 
 /// [`microfacet_block`] with the f64 frame in every lane. The local form's blocks carry
-/// N = (0, 0, 1) in their lanes, and the general f64 frame gives [`frame64_z`]'s bits for
-/// it, so one variant serves both forms (the N = +z one doubled the slow path's code and
-/// put the binary past its 48 MiB budget).
+/// N = (0, 0, 1) in their lanes, so one variant serves both forms (an N = +z variant
+/// doubled the slow path's code and put the binary past its 48 MiB budget).
 #[inline(always)]
 fn microfacet_block64<const D: u8, const G: u8, const F: u8>(
     p: &Params,
@@ -833,7 +795,7 @@ fn microfacet_block64<const D: u8, const G: u8, const F: u8>(
     out: &mut Outputs,
 ) {
     for k in 0..LANES {
-        let fr = frame64::<false>(&lane_inputs(inp, k));
+        let fr = frame64(&lane_inputs(inp, k));
         microfacet_lane::<D, G, F, false>(p, &Lane::from64(&fr), out, k);
     }
 }
