@@ -601,7 +601,7 @@ fn conductor(c: f32, s2: f32, p: &Params, ch: usize) -> f32 {
 }
 
 /// Lambert on one block (`Z`: N = (0, 0, 1), the local form): only the validity and the
-/// horizon matter, so only the two cosines are formed, as [`frame`] forms them (a cosine
+/// horizon matter, so only the two cosines are formed, as `frame` forms them (a cosine
 /// below [`GRAZING`] still goes to the reference, which decides the horizon case).
 #[inline(always)]
 pub fn lambert_block<const Z: bool>(p: &Params, inp: &Inputs, out: &mut Outputs) {
@@ -719,9 +719,9 @@ pub const FAST_MIN_ROUGHNESS: f64 = 0.05;
 /// Isotropic Cook–Torrance on one block, specialised to one distribution, geometry and
 /// Fresnel term, and (`Z`) to N = (0, 0, 1) for the local form.
 ///
-/// The frame is f32 ([`frame`]) when the material allows it ([`Params::fast_frame`]) and
+/// The frame is f32 (`frame`) when the material allows it ([`Params::fast_frame`]) and
 /// the lane does (`c` ≥ [`FAST_MIN_C`]); the other lanes take the f64 frame
-/// ([`frame64`]), which a block computes only when it has such a lane. The choice depends
+/// (`frame64`), which a block computes only when it has such a lane. The choice depends
 /// only on the lane's own f32 frame, whose bits the local form and the rows with
 /// N = (0, 0, 1) share, so a lane's result depends on its tuple alone and both forms give
 /// the same bits.
