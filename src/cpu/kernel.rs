@@ -630,10 +630,16 @@ pub fn lambert_block<const Z: bool>(p: &Params, inp: &Inputs, out: &mut Outputs)
         for ch in 0..3 {
             out.brdf[ch][k] = p.diffuse[ch];
         }
-        out.terms[0][k] = 0.0;
-        for t in 1..TERM_COLUMNS {
-            out.terms[t][k] = 1.0;
-        }
+    }
+}
+
+/// Lambert's terms, the same in every lane: D = 0, G = F = K = 1 (FORMULAS.md §6). Set once
+/// a chunk, not by [`lambert_block`] (whose per-lane stores of these constants took 15 %
+/// of its time).
+pub fn lambert_terms(out: &mut Outputs) {
+    out.terms[0] = [0.0; LANES];
+    for t in 1..TERM_COLUMNS {
+        out.terms[t] = [1.0; LANES];
     }
 }
 

@@ -305,6 +305,9 @@ fn run_chunk(
     inp.v[8] = [1.0; LANES];
     let take = cols.min(9);
     let mut out = Outputs::default();
+    if let Plan::Lambert(_) = plan {
+        kernel::lambert_terms(&mut out);
+    }
     let mut idx = [0usize; LANES];
     let mut j0 = 0;
     while j0 < len {
