@@ -908,8 +908,8 @@ mod tests {
     use crate::reference::{evaluate, Status};
 
     /// Every lanes-group on ordinary directions: no lane is rescued (so the lanes, not the
-    /// reference, made the numbers) and every output is within 1e-5 relative of the
-    /// reference (these tuples are well conditioned, where that is the conformance rule).
+    /// reference, made the numbers) and every output is within 3e-6 relative of the
+    /// reference (these tuples are well conditioned; the rule allows 1e-5 there).
     #[test]
     fn every_lanes_group_computes_without_rescue() {
         let dirs: [[f32; 9]; 4] = [
@@ -1002,11 +1002,11 @@ mod tests {
                             for (i, (x, r)) in got.iter().zip(want).enumerate() {
                                 let err = (f64::from(*x) - r).abs() / r.abs().max(1e-6);
                                 // Roughness 0.3: the f32 frame (FAST_MIN_ROUGHNESS), whose few
-                                // ulp in the sines the Beckmann exponent multiplies by tan²/m²
-                                // (2.4e-6 here; the f64 frame made 1.5e-6): the conformance
-                                // rule's bound for well-conditioned values, 1e-5 relative.
+                                // ulp in the sines the Beckmann exponent multiplies by tan²/m²:
+                                // 2.4e-6 at most here (the f64 frame made 1.5e-6), well inside
+                                // the rule's 1e-5 for well-conditioned values.
                                 assert!(
-                                    err < 1e-5,
+                                    err < 3e-6,
                                     "{d} {g} {f} {conv} lane {k} col {i}: {x} vs {r}"
                                 );
                             }
