@@ -19,6 +19,7 @@
 
 pub mod kernel;
 pub mod math;
+pub mod transpose;
 
 use crate::backend::{Backend, Counts, Output, Request, TERM_COLUMNS};
 use crate::batch::{Batch, LocalBatch, Tuple, COLUMNS_LOCAL, COLUMNS_PLAIN, COLUMNS_TANGENT};
@@ -179,7 +180,32 @@ impl pulp::WithSimd for ChunkOp<'_, '_> {
 
     #[inline(always)]
     fn with_simd<S: pulp::Simd>(self, _simd: S) -> (Counts, Tally) {
-        run_chunk(self.plan, self.batch, self.order, self.work, self.material)
+        run_chunk(
+            transpose::Portable,
+            self.plan,
+            self.batch,
+            self.order,
+            self.work,
+            self.material,
+        )
+    }
+}
+
+/// [`ChunkOp`] on AVX-512, where the local form's blocks are transposed by permutes.
+#[cfg(target_arch = "x86_64")]
+struct ChunkOp4<'a, 'b> {
+    simd: pulp::x86::V4,
+    op: ChunkOp<'a, 'b>,
+}
+
+#[cfg(target_arch = "x86_64")]
+impl pulp::NullaryFnOnce for ChunkOp4<'_, '_> {
+    type Output = (Counts, Tally);
+
+    #[inline(always)]
+    fn call(self) -> (Counts, Tally) {
+        let o = self.op;
+        run_chunk(self.simd, o.plan, o.batch, o.order, o.work, o.material)
     }
 }
 
@@ -277,7 +303,8 @@ fn untranspose<const C: usize>(cols: &[[f32; LANES]; C], rows: &mut [f32]) {
 }
 
 #[inline(always)]
-fn run_chunk(
+fn run_chunk<T: transpose::Local6>(
+    local6: T,
     plan: &Plan,
     batch: Source,
     order: Option<&[usize]>,
@@ -318,17 +345,12 @@ fn run_chunk(
         if whole {
             let base = (w.start + j0) * cols;
             match cols {
-                COLUMNS_LOCAL => {
-                    // Through a copy of the block that the compiler cannot see through: the
-                    // stride-6 transpose straight from the batch compiled to masked loads
-                    // which, missing the cache, cost twice the whole tuple.
-                    let block: [f32; LANES * COLUMNS_LOCAL] = std::hint::black_box(
-                        data[base..base + LANES * COLUMNS_LOCAL]
-                            .try_into()
-                            .expect("a whole block"),
-                    );
-                    transpose::<COLUMNS_LOCAL, COLUMNS_LOCAL>(&block, &mut inp)
-                }
+                COLUMNS_LOCAL => local6.transpose6(
+                    data[base..base + transpose::BLOCK]
+                        .try_into()
+                        .expect("a whole block"),
+                    &mut inp,
+                ),
                 COLUMNS_PLAIN => transpose::<COLUMNS_PLAIN, 9>(
                     &data[base..base + LANES * COLUMNS_PLAIN],
                     &mut inp,
@@ -490,13 +512,20 @@ impl CpuEngine {
                 let Some(mut w) = queue.lock().expect("queue lock").pop() else {
                     break;
                 };
-                let (c, t) = arch.dispatch(ChunkOp {
+                let op = ChunkOp {
                     plan: &plans[w.material],
                     batch: src,
                     order: order.as_deref(),
                     material: &materials[w.material],
                     work: &mut w,
-                });
+                };
+                #[cfg(target_arch = "x86_64")]
+                let (c, t) = match arch {
+                    pulp::Arch::V4(simd) => simd.vectorize(ChunkOp4 { simd, op }),
+                    _ => arch.dispatch(op),
+                };
+                #[cfg(not(target_arch = "x86_64"))]
+                let (c, t) = arch.dispatch(op);
                 total.absorb(&c);
                 tally.add(&t);
             }
