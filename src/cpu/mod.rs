@@ -191,7 +191,7 @@ impl pulp::WithSimd for ChunkOp<'_, '_> {
     }
 }
 
-/// [`ChunkOp`] on AVX-512, where the local form's blocks are transposed by permutes.
+/// [`ChunkOp`] on AVX-512, where whole blocks are transposed by permutes.
 #[cfg(target_arch = "x86_64")]
 struct ChunkOp4<'a, 'b> {
     simd: pulp::x86::V4,
@@ -303,8 +303,8 @@ fn untranspose<const C: usize>(cols: &[[f32; LANES]; C], rows: &mut [f32]) {
 }
 
 #[inline(always)]
-fn run_chunk<T: transpose::Local6>(
-    local6: T,
+fn run_chunk<T: transpose::Transpose>(
+    tr: T,
     plan: &Plan,
     batch: Source,
     order: Option<&[usize]>,
@@ -345,14 +345,16 @@ fn run_chunk<T: transpose::Local6>(
         if whole {
             let base = (w.start + j0) * cols;
             match cols {
-                COLUMNS_LOCAL => local6.transpose6(
+                COLUMNS_LOCAL => tr.local(
                     data[base..base + transpose::BLOCK]
                         .try_into()
                         .expect("a whole block"),
                     &mut inp,
                 ),
-                COLUMNS_PLAIN => transpose::<COLUMNS_PLAIN, 9>(
-                    &data[base..base + LANES * COLUMNS_PLAIN],
+                COLUMNS_PLAIN => tr.plain(
+                    data[base..base + transpose::BLOCK_PLAIN]
+                        .try_into()
+                        .expect("a whole block"),
                     &mut inp,
                 ),
                 _ => transpose::<COLUMNS_TANGENT, 9>(

@@ -1,61 +1,94 @@
-//! The local form's whole blocks (16 rows of `Lx Ly Lz Vx Vy Vz`) into lanes: portably
-//! through a copy and fixed-stride loops, and with AVX-512 by two-source permutes.
+//! Whole blocks of rows into lanes: the local form's 16 rows of `Lx Ly Lz Vx Vy Vz` and the
+//! 10-column rows' 16 rows of `L V N material` — portably through fixed-stride loops, and
+//! with AVX-512 by two-source permutes.
 //!
 //! On AVX-512 LLVM compiled the portable stride-6 loops to 168 scalar `movss` a block (and,
 //! reading the batch directly instead of a copy, to masked loads that miss the cache); the
-//! permutes do it in 18 shuffles and 12 blends.
+//! permutes do the local form in 18 shuffles and 12 blends.
 
 use super::kernel::{Inputs, LANES};
-use crate::batch::COLUMNS_LOCAL;
+use crate::batch::{COLUMNS_LOCAL, COLUMNS_PLAIN};
 
 /// Floats in one whole block of the local form.
 pub const BLOCK: usize = LANES * COLUMNS_LOCAL;
 
-/// A way to transpose one whole block of the local form.
-pub trait Local6: Copy {
+/// Floats in one whole block of 10-column rows.
+pub const BLOCK_PLAIN: usize = LANES * COLUMNS_PLAIN;
+
+/// A way to transpose whole blocks.
+pub trait Transpose: Copy {
     /// Columns 0–5 of `block` (16 rows of 6) into `inp.v[0..6]`.
-    fn transpose6(self, block: &[f32; BLOCK], inp: &mut Inputs);
+    fn local(self, block: &[f32; BLOCK], inp: &mut Inputs);
+    /// Columns 0–8 (L, V, N) of `block` (16 rows of 10) into `inp.v[0..9]`.
+    fn plain(self, block: &[f32; BLOCK_PLAIN], inp: &mut Inputs);
 }
 
-/// The portable transpose: fixed-stride loops over a copy of the block.
-#[derive(Clone, Copy)]
-pub struct Portable;
-
-impl Local6 for Portable {
-    #[inline(always)]
-    fn transpose6(self, block: &[f32; BLOCK], inp: &mut Inputs) {
-        // Through a copy of the block that the compiler cannot see through: the stride-6
-        // transpose straight from the batch compiled to masked loads which, missing the
-        // cache, cost twice the whole tuple.
-        let block: [f32; BLOCK] = std::hint::black_box(*block);
-        for (c, col) in inp.v[..COLUMNS_LOCAL].iter_mut().enumerate() {
-            for (k, x) in col.iter_mut().enumerate() {
-                *x = block[k * COLUMNS_LOCAL + c];
-            }
+/// Columns `0..K` of `LANES` rows of `C` columns into lanes, by fixed-stride loops.
+#[inline(always)]
+fn loops<const C: usize, const K: usize>(rows: &[f32], inp: &mut Inputs) {
+    for (c, col) in inp.v[..K].iter_mut().enumerate() {
+        for (k, x) in col.iter_mut().enumerate() {
+            *x = rows[k * C + c];
         }
     }
 }
 
-/// Where column `c`'s lane `k` sits in the block: register `(6k + c)/16` of the six loaded,
-/// so each column gathers from the register pairs (0, 1), (2, 3), (4, 5) by a two-source
-/// permute (index `6k + c − 32p`, clamped where the lane comes from another pair) and two
-/// blends (the lanes at or past flat index 32, then 64).
-const fn permute_indices() -> [[[i32; LANES]; 3]; COLUMNS_LOCAL] {
-    let mut t = [[[0i32; LANES]; 3]; COLUMNS_LOCAL];
+/// The portable transpose: fixed-stride loops the compiler turns into shuffles where it can.
+#[derive(Clone, Copy)]
+pub struct Portable;
+
+impl Transpose for Portable {
+    #[inline(always)]
+    fn local(self, block: &[f32; BLOCK], inp: &mut Inputs) {
+        // Through a copy of the block that the compiler cannot see through: the stride-6
+        // transpose straight from the batch compiled to masked loads which, missing the
+        // cache, cost twice the whole tuple.
+        let block: [f32; BLOCK] = std::hint::black_box(*block);
+        loops::<COLUMNS_LOCAL, COLUMNS_LOCAL>(&block, inp)
+    }
+
+    #[inline(always)]
+    fn plain(self, block: &[f32; BLOCK_PLAIN], inp: &mut Inputs) {
+        loops::<COLUMNS_PLAIN, 9>(block, inp)
+    }
+}
+
+/// Register pairs a block of up to 10 columns spans (32 floats a pair).
+const PAIRS: usize = 5;
+
+/// Permute indices and blend masks for rows of `cols` columns: column `c`'s lane `k` is
+/// flat element `cols·k + c`, in register pair `p = flat/32`; pair p's two-source permute
+/// takes index `flat − 32p` (clamped where the lane lies in another pair), and the lanes at
+/// or past flat index 32p take pair p's result (`masks[c][p]`, p ≥ 1).
+#[derive(Clone, Copy)]
+struct Tables {
+    indices: [[[i32; LANES]; PAIRS]; COLUMNS_PLAIN],
+    masks: [[u16; PAIRS]; COLUMNS_PLAIN],
+}
+
+const fn tables(cols: usize) -> Tables {
+    let mut t = Tables {
+        indices: [[[0; LANES]; PAIRS]; COLUMNS_PLAIN],
+        masks: [[0; PAIRS]; COLUMNS_PLAIN],
+    };
     let mut c = 0;
-    while c < COLUMNS_LOCAL {
+    while c < cols {
         let mut p = 0;
-        while p < 3 {
+        while p < PAIRS {
             let mut k = 0;
             while k < LANES {
-                let i = (COLUMNS_LOCAL * k + c) as i32 - 32 * p as i32;
-                t[c][p][k] = if i < 0 {
+                let flat = cols * k + c;
+                let i = flat as i32 - 32 * p as i32;
+                t.indices[c][p][k] = if i < 0 {
                     0
                 } else if i > 31 {
                     31
                 } else {
                     i
                 };
+                if flat >= 32 * p {
+                    t.masks[c][p] |= 1 << k;
+                }
                 k += 1;
             }
             p += 1;
@@ -65,49 +98,51 @@ const fn permute_indices() -> [[[i32; LANES]; 3]; COLUMNS_LOCAL] {
     t
 }
 
-/// Lanes of column `c` whose element lies at flat index `lo` or beyond.
-const fn blend_masks() -> [[u16; 2]; COLUMNS_LOCAL] {
-    let mut t = [[0u16; 2]; COLUMNS_LOCAL];
-    let mut c = 0;
-    while c < COLUMNS_LOCAL {
-        let mut k = 0;
-        while k < LANES {
-            let flat = COLUMNS_LOCAL * k + c;
-            if flat >= 32 {
-                t[c][0] |= 1 << k;
-            }
-            if flat >= 64 {
-                t[c][1] |= 1 << k;
-            }
-            k += 1;
-        }
-        c += 1;
+#[cfg(target_arch = "x86_64")]
+const LOCAL: Tables = tables(COLUMNS_LOCAL);
+#[cfg(target_arch = "x86_64")]
+const PLAIN: Tables = tables(COLUMNS_PLAIN);
+
+/// Columns `0..K` of `LANES` rows of `C` columns (C even, at most 10) by permutes.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn permutes<const C: usize, const K: usize>(
+    simd: pulp::x86::V4,
+    rows: &[f32],
+    t: &Tables,
+    inp: &mut Inputs,
+) {
+    use core::arch::x86_64::{__m512, __m512i};
+    let f = simd.avx512f;
+    // Whole-register loads (bytemuck's casts: pulp's x86-v4 makes __m512 Pod).
+    let mut r = [bytemuck::cast::<[f32; LANES], __m512>([0.0; LANES]); 2 * PAIRS];
+    for (i, reg) in r.iter_mut().enumerate().take(C) {
+        let a: [f32; LANES] = rows[i * LANES..(i + 1) * LANES]
+            .try_into()
+            .expect("a whole register");
+        *reg = bytemuck::cast(a);
     }
-    t
+    for c in 0..K {
+        let idx = |p: usize| -> __m512i { bytemuck::cast(t.indices[c][p]) };
+        let mut col = f._mm512_permutex2var_ps(r[0], idx(0), r[1]);
+        for p in 1..C / 2 {
+            let q = f._mm512_permutex2var_ps(r[2 * p], idx(p), r[2 * p + 1]);
+            col = f._mm512_mask_blend_ps(t.masks[c][p], col, q);
+        }
+        inp.v[c] = bytemuck::cast(col);
+    }
 }
 
 #[cfg(target_arch = "x86_64")]
-const INDICES: [[[i32; LANES]; 3]; COLUMNS_LOCAL] = permute_indices();
-#[cfg(target_arch = "x86_64")]
-const MASKS: [[u16; 2]; COLUMNS_LOCAL] = blend_masks();
-
-#[cfg(target_arch = "x86_64")]
-impl Local6 for pulp::x86::V4 {
+impl Transpose for pulp::x86::V4 {
     #[inline(always)]
-    fn transpose6(self, block: &[f32; BLOCK], inp: &mut Inputs) {
-        use core::arch::x86_64::{__m512, __m512i};
-        let f = self.avx512f;
-        // Six whole-register loads (bytemuck's casts: pulp's x86-v4 makes __m512 Pod).
-        let r: [__m512; 6] = bytemuck::cast(*block);
-        for c in 0..COLUMNS_LOCAL {
-            let idx = |p: usize| -> __m512i { bytemuck::cast(INDICES[c][p]) };
-            let p0 = f._mm512_permutex2var_ps(r[0], idx(0), r[1]);
-            let p1 = f._mm512_permutex2var_ps(r[2], idx(1), r[3]);
-            let p2 = f._mm512_permutex2var_ps(r[4], idx(2), r[5]);
-            let col = f._mm512_mask_blend_ps(MASKS[c][0], p0, p1);
-            let col = f._mm512_mask_blend_ps(MASKS[c][1], col, p2);
-            inp.v[c] = bytemuck::cast(col);
-        }
+    fn local(self, block: &[f32; BLOCK], inp: &mut Inputs) {
+        permutes::<COLUMNS_LOCAL, COLUMNS_LOCAL>(self, block, &LOCAL, inp)
+    }
+
+    #[inline(always)]
+    fn plain(self, block: &[f32; BLOCK_PLAIN], inp: &mut Inputs) {
+        permutes::<COLUMNS_PLAIN, 9>(self, block, &PLAIN, inp)
     }
 }
 
@@ -115,30 +150,40 @@ impl Local6 for pulp::x86::V4 {
 mod tests {
     use super::*;
 
-    /// Every transpose this machine has puts row k's column c in lane k of column c.
+    /// Every transpose this machine has puts row k's column c in lane k of column c, for
+    /// the local form and for 10-column rows.
     #[test]
     fn every_transpose_puts_each_value_in_its_lane() {
-        let block: [f32; BLOCK] = std::array::from_fn(|i| i as f32);
-        let want = |c: usize, k: usize| (k * COLUMNS_LOCAL + c) as f32;
-        let check = |inp: &Inputs| {
-            for c in 0..COLUMNS_LOCAL {
+        let check = |inp: &Inputs, cols: usize, k_cols: usize| {
+            for c in 0..k_cols {
                 for k in 0..LANES {
-                    assert_eq!(inp.v[c][k], want(c, k), "column {c} lane {k}");
+                    assert_eq!(
+                        inp.v[c][k],
+                        (k * cols + c) as f32,
+                        "{cols} columns: column {c} lane {k}"
+                    );
                 }
             }
         };
-        let mut inp = Inputs {
+        let local: [f32; BLOCK] = std::array::from_fn(|i| i as f32);
+        let plain: [f32; BLOCK_PLAIN] = std::array::from_fn(|i| i as f32);
+        let fresh = || Inputs {
             v: [[-1.0; LANES]; 9],
         };
-        Portable.transpose6(&block, &mut inp);
-        check(&inp);
+        let mut inp = fresh();
+        Portable.local(&local, &mut inp);
+        check(&inp, COLUMNS_LOCAL, COLUMNS_LOCAL);
+        let mut inp = fresh();
+        Portable.plain(&plain, &mut inp);
+        check(&inp, COLUMNS_PLAIN, 9);
         #[cfg(target_arch = "x86_64")]
         if let pulp::Arch::V4(v4) = pulp::Arch::new() {
-            let mut inp = Inputs {
-                v: [[-1.0; LANES]; 9],
-            };
-            v4.transpose6(&block, &mut inp);
-            check(&inp);
+            let mut inp = fresh();
+            v4.local(&local, &mut inp);
+            check(&inp, COLUMNS_LOCAL, COLUMNS_LOCAL);
+            let mut inp = fresh();
+            v4.plain(&plain, &mut inp);
+            check(&inp, COLUMNS_PLAIN, 9);
         }
     }
 }
