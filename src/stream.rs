@@ -343,8 +343,13 @@ impl NpyOut {
 /// The header of a C-order float32 `.npy` of shape `(rows, columns)`, version 1.0, padded
 /// so that the data starts at a multiple of 64 bytes (as NumPy writes it).
 pub fn npy_header_f32(rows: u64, columns: usize) -> Vec<u8> {
-    let dict =
-        format!("{{'descr': '<f4', 'fortran_order': False, 'shape': ({rows}, {columns}), }}");
+    npy_header_f32_shape(&format!("{rows}, {columns}"))
+}
+
+/// The header of a C-order float32 `.npy` of shape `(shape)` (its comma-separated
+/// dimensions), padded so that the data starts at a multiple of 64 bytes.
+pub fn npy_header_f32_shape(shape: &str) -> Vec<u8> {
+    let dict = format!("{{'descr': '<f4', 'fortran_order': False, 'shape': ({shape}), }}");
     let unpadded = 10 + dict.len() + 1; // magic, version, length; the dict; '\n'
     let total = unpadded.div_ceil(64) * 64;
     let mut h = Vec::with_capacity(total);

@@ -170,20 +170,32 @@ mod tests {
         let fresh = || Inputs {
             v: [[-1.0; LANES]; 9],
         };
-        let mut inp = fresh();
-        Portable.local(&local, &mut inp);
-        check(&inp, COLUMNS_LOCAL, COLUMNS_LOCAL);
-        let mut inp = fresh();
-        Portable.plain(&plain, &mut inp);
-        check(&inp, COLUMNS_PLAIN, 9);
+        let run = |t: &dyn Fn(&mut Inputs, bool)| {
+            for (plain_rows, cols, k_cols) in [
+                (false, COLUMNS_LOCAL, COLUMNS_LOCAL),
+                (true, COLUMNS_PLAIN, 9),
+            ] {
+                let mut inp = fresh();
+                t(&mut inp, plain_rows);
+                check(&inp, cols, k_cols);
+            }
+        };
+        run(&|inp, plain_rows| {
+            if plain_rows {
+                Portable.plain(&plain, inp)
+            } else {
+                Portable.local(&local, inp)
+            }
+        });
         #[cfg(target_arch = "x86_64")]
         if let pulp::Arch::V4(v4) = pulp::Arch::new() {
-            let mut inp = fresh();
-            v4.local(&local, &mut inp);
-            check(&inp, COLUMNS_LOCAL, COLUMNS_LOCAL);
-            let mut inp = fresh();
-            v4.plain(&plain, &mut inp);
-            check(&inp, COLUMNS_PLAIN, 9);
+            run(&|inp, plain_rows| {
+                if plain_rows {
+                    v4.plain(&plain, inp)
+                } else {
+                    v4.local(&local, inp)
+                }
+            });
         }
     }
 }

@@ -152,21 +152,32 @@ impl Sidecar {
 
     /// Reads the sidecar of part `part`.
     pub fn read(part: &Path) -> Result<Sidecar> {
-        let path = sidecar_path(part);
-        let text = std::fs::read_to_string(&path).map_err(|source| Error::Io {
-            path: path.clone(),
-            source,
-        })?;
-        serde_json::from_str(&text).map_err(|e| Error::Batch {
-            path,
-            message: format!("not a vkbrdf shard sidecar: {e}"),
-        })
+        read_sidecar(part, "shard sidecar")
     }
 
     /// The sidecar as it is written (pretty JSON).
     pub fn to_json(&self) -> String {
-        serde_json::to_string_pretty(self).expect("a sidecar serialises") + "\n"
+        sidecar_json(self)
     }
+}
+
+/// Reads the sidecar of part `part` (a batch's or a table's): an I/O error names the
+/// file, a parse error says it is not a vkbrdf `what`.
+pub fn read_sidecar<T: serde::de::DeserializeOwned>(part: &Path, what: &str) -> Result<T> {
+    let path = sidecar_path(part);
+    let text = std::fs::read_to_string(&path).map_err(|source| Error::Io {
+        path: path.clone(),
+        source,
+    })?;
+    serde_json::from_str(&text).map_err(|e| Error::Batch {
+        path,
+        message: format!("not a vkbrdf {what}: {e}"),
+    })
+}
+
+/// A sidecar as it is written: pretty JSON and a newline.
+pub fn sidecar_json<T: serde::Serialize>(sidecar: &T) -> String {
+    serde_json::to_string_pretty(sidecar).expect("a sidecar serialises") + "\n"
 }
 
 /// Joins the parts `parts` (BRDF `.npy` parts with their sidecars) into `output` (and their

@@ -120,20 +120,12 @@ pub fn is_table_part(part: &Path) -> Result<bool> {
 impl TableSidecar {
     /// Reads the sidecar of part `part`.
     pub fn read(part: &Path) -> Result<TableSidecar> {
-        let path = sidecar_path(part);
-        let text = std::fs::read_to_string(&path).map_err(|source| Error::Io {
-            path: path.clone(),
-            source,
-        })?;
-        serde_json::from_str(&text).map_err(|e| Error::Batch {
-            path,
-            message: format!("not a vkbrdf table shard sidecar: {e}"),
-        })
+        crate::stream::shard::read_sidecar(part, "table shard sidecar")
     }
 
     /// The sidecar as it is written (pretty JSON).
     pub fn to_json(&self) -> String {
-        serde_json::to_string_pretty(self).expect("a sidecar serialises") + "\n"
+        crate::stream::shard::sidecar_json(self)
     }
 
     fn band(&self) -> Range<usize> {
@@ -228,7 +220,11 @@ pub fn stage_exr_part(
         engine: provenance.backend.clone(),
         version: super::VERSION.to_string(),
     };
-    let header = npy_header_f32_3d(band.len(), row_texels, channels.len());
+    let header = crate::stream::npy_header_f32_shape(&format!(
+        "{}, {row_texels}, {}",
+        band.len(),
+        channels.len()
+    ));
     let data = crate::atomic::stage(path, cancel, |w| {
         w.write_all(&header)?;
         let mut buf = Vec::with_capacity(channels.len() * 4 * 4096);
@@ -299,20 +295,6 @@ pub fn write_merl_part(
         w.write_all(json.as_bytes())
     })?;
     crate::atomic::commit(vec![data, side])
-}
-
-/// The header of a C-order float32 `.npy` of shape `(a, b, c)`.
-fn npy_header_f32_3d(a: usize, b: usize, c: usize) -> Vec<u8> {
-    let dict = format!("{{'descr': '<f4', 'fortran_order': False, 'shape': ({a}, {b}, {c}), }}");
-    let unpadded = 10 + dict.len() + 1; // magic, version, length; the dict; '\n'
-    let total = unpadded.div_ceil(64) * 64;
-    let mut h = Vec::with_capacity(total);
-    h.extend_from_slice(b"\x93NUMPY\x01\x00");
-    h.extend_from_slice(&((total - 10) as u16).to_le_bytes());
-    h.extend_from_slice(dict.as_bytes());
-    h.resize(total - 1, b' ');
-    h.push(b'\n');
-    h
 }
 
 /// What [`merge`] wrote: the table kind, the parts, and the warnings to show.
