@@ -9,6 +9,10 @@
 //! valgrind … cpu_engine_count mitsuba-ggx 262144 3
 //! ```
 //!
+//! For counts by source line, build with `--profile profiling` (the release profile drops
+//! the line tables) and annotate `target/profiling/examples/cpu_engine_count`'s output
+//! with `callgrind_annotate`.
+//!
 //! Instructions per evaluation = (count at 3 − count at 1) / (2 × tuples): the set-up (the
 //! scenario's tuples, the materials) cancels. Valgrind 3.19 hides AVX-512 from the program,
 //! so the counts describe the AVX2+FMA path (`instruction set:` says which ran).

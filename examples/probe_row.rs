@@ -1,5 +1,6 @@
-//! Debug aid: evaluates stress-corpus rows on Vulkan and the reference and prints both.
-//! Usage: cargo run --release --example probe_row -- ROW [ROW …]
+//! Debug aid: evaluates stress-corpus rows on an engine and the reference and prints both.
+//! Usage: cargo run --release --example probe_row -- [--cpu] ROW [ROW …] (Vulkan unless
+//! `--cpu`, the native CPU engine).
 use vkbrdf::backend::{Backend, Request};
 use vkbrdf::gpu::{VulkanBackend, VulkanOptions};
 
@@ -8,7 +9,11 @@ fn main() -> vkbrdf::Result<()> {
         .skip(1)
         .filter_map(|a| a.parse().ok())
         .collect();
-    let mut gpu = VulkanBackend::new(None, VulkanOptions::default())?;
+    let mut gpu: Box<dyn Backend> = if std::env::args().any(|a| a == "--cpu") {
+        Box::new(vkbrdf::cpu::CpuEngine::new())
+    } else {
+        Box::new(VulkanBackend::new(None, VulkanOptions::default())?)
+    };
     for row in rows {
         let (materials, batch, cases) = vkbrdf::stress::corpus::corpus_rows(row..row + 1, 7);
         let out = gpu.evaluate(&batch, &materials, &Request { terms: true })?;
@@ -19,8 +24,11 @@ fn main() -> vkbrdf::Result<()> {
             cases[0], materials[t.material].name, t
         );
         println!(
-            "  vulkan brdf {:?} terms {:?} counts {:?}",
-            out.brdf, out.terms, out.counts
+            "  {} brdf {:?} terms {:?} counts {:?}",
+            gpu.name(),
+            out.brdf,
+            out.terms,
+            out.counts
         );
         println!("  reference {r:?}");
     }

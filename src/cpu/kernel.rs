@@ -14,7 +14,7 @@
 #![allow(clippy::needless_range_loop)]
 
 use crate::backend::TERM_COLUMNS;
-use crate::cpu::math::{erfc, exp_neg};
+use crate::cpu::math::{atan2_positive, erfc, exp_neg, log_cos};
 use crate::material::{Convention, Distribution, Fresnel, Geometry, Material, Model, Roughness};
 use std::f64::consts::PI;
 
@@ -35,6 +35,12 @@ pub const OUTPUT_LIMIT: f32 = 1e37;
 pub const D_GGX: u8 = 0;
 /// Distribution: Beckmann.
 pub const D_BECKMANN: u8 = 1;
+/// Distribution: Torrance–Sparrow Gaussian.
+pub const D_GAUSSIAN: u8 = 2;
+/// Distribution: normalised Blinn–Phong NDF.
+pub const D_BLINN: u8 = 3;
+/// Distribution: Estevez–Kulla "Charlie" sheen.
+pub const D_CHARLIE: u8 = 4;
 /// Geometry: none.
 pub const G_NONE: u8 = 0;
 /// Geometry: Cook–Torrance V-cavity.
@@ -45,6 +51,10 @@ pub const G_SMITH: u8 = 2;
 pub const G_SMITH_CORRELATED: u8 = 3;
 /// Geometry: Walter's rational Smith–Beckmann fit.
 pub const G_SMITH_FAST: u8 = 4;
+/// Geometry: Schlick–Smith with Karis's k.
+pub const G_SCHLICK_SMITH: u8 = 5;
+/// Geometry: Neubelt–Pettineo cloth.
+pub const G_NEUBELT: u8 = 6;
 /// Fresnel: none.
 pub const F_NONE: u8 = 0;
 /// Fresnel: Schlick.
@@ -105,6 +115,11 @@ pub struct Params {
     pub fast_frame: bool,
     /// Conductor `Re(η²) = n² − k²`, formed in f64.
     pub e2r: [f32; 3],
+    /// The exponent of a `cos^e` lobe: Blinn's and the empirical models' `e`, Charlie's
+    /// `1/m`.
+    pub exponent: f32,
+    /// Schlick–Smith's k (Karis 2013: `m/2` GGX, `m √(2/π)` Beckmann).
+    pub schlick_k: f32,
 }
 
 /// How a material group is evaluated.
@@ -120,6 +135,14 @@ pub enum Plan {
         g: u8,
         /// One of the `F_*` constants.
         f: u8,
+        /// The material's constants.
+        p: Params,
+    },
+    /// One of the empirical lobe models (Phong, Blinn–Phong, RTR, isotropic Ward) in the
+    /// lanes (`src/cpu/lobes.rs`).
+    Lobe {
+        /// One of the `L_*` constants of [`crate::cpu::lobes`].
+        model: u8,
         /// The material's constants.
         p: Params,
     },
@@ -143,26 +166,50 @@ impl Plan {
         let ct = match &m.model {
             Model::Lambert => return Plan::Lambert(p),
             Model::CookTorrance(ct) => ct,
-            _ => return Plan::Reference,
+            Model::Measured(_)
+            | Model::Ward {
+                roughness: Roughness::Anisotropic(..),
+            } => return Plan::Reference,
+            _ => return crate::cpu::lobes::plan(m, p),
         };
+        // m for the distributions with an rms slope (0 for Blinn; Charlie's m is not one).
         let (d, mr) = match ct.distribution {
             Distribution::Ggx(Roughness::Isotropic(mr)) => (D_GGX, mr),
             Distribution::Beckmann(Roughness::Isotropic(mr)) => (D_BECKMANN, mr),
+            Distribution::Gaussian { m } => {
+                p.inv_m2_f = (1.0 / (m * m)) as f32;
+                (D_GAUSSIAN, m)
+            }
+            Distribution::Blinn { exponent } => {
+                p.exponent = exponent as f32;
+                p.d_norm_f = ((exponent + 2.0) / (2.0 * PI)) as f32;
+                (D_BLINN, 0.0)
+            }
+            Distribution::Charlie { m } => {
+                p.exponent = (1.0 / m) as f32;
+                p.d_norm_f = ((2.0 + 1.0 / m) / (2.0 * PI)) as f32;
+                (D_CHARLIE, 0.0)
+            }
+            // Anisotropic GGX and Beckmann need the tangent frame.
             _ => return Plan::Reference,
         };
+        // The rms-slope distributions' constants; the others set theirs above.
+        let slope = d == D_GGX || d == D_BECKMANN;
         p.diffuse = f32x3(m.diffuse.map(|c| ct.diffuse_weight * c / PI));
         p.spec = f32x3(m.specular.map(|c| ct.specular_weight * c));
-        p.m2 = mr * mr;
-        p.inv_m2 = 1.0 / p.m2;
+        if slope {
+            p.m2 = mr * mr;
+            p.inv_m2 = 1.0 / p.m2;
+        }
         let beckmann_k = match ct.convention {
             Convention::Seed => 4.0,
             Convention::CookTorrance1982 => 1.0,
             Convention::Modern => PI,
         };
-        p.d_norm = if d == D_GGX {
-            p.m2 / PI
-        } else {
-            1.0 / (beckmann_k * p.m2)
+        p.d_norm = match d {
+            D_GGX => p.m2 / PI,
+            D_BECKMANN => 1.0 / (beckmann_k * p.m2),
+            _ => 0.0,
         };
         (p.k_num, p.k_cos_i) = match ct.convention {
             Convention::Seed => (1.0, false),
@@ -175,8 +222,16 @@ impl Plan {
             Geometry::Smith => G_SMITH,
             Geometry::SmithCorrelated => G_SMITH_CORRELATED,
             Geometry::SmithFast => G_SMITH_FAST,
-            // Not in the lanes yet: the reference evaluates these groups.
-            Geometry::SchlickSmith | Geometry::Neubelt => return Plan::Reference,
+            Geometry::SchlickSmith => {
+                // The parser allows it with GGX and Beckmann only.
+                p.schlick_k = if d == D_GGX {
+                    mr / 2.0
+                } else {
+                    mr * (2.0 / PI).sqrt()
+                } as f32;
+                G_SCHLICK_SMITH
+            }
+            Geometry::Neubelt => G_NEUBELT,
         };
         let f = match ct.fresnel {
             Fresnel::None => F_NONE,
@@ -206,8 +261,10 @@ impl Plan {
                 F_CONDUCTOR
             }
         };
-        p.fast_frame = mr >= FAST_MIN_ROUGHNESS && f != F_DIELECTRIC;
-        (p.m2_f, p.inv_m2_f, p.d_norm_f) = (p.m2 as f32, p.inv_m2 as f32, p.d_norm as f32);
+        p.fast_frame = slope && mr >= FAST_MIN_ROUGHNESS && f != F_DIELECTRIC;
+        if slope {
+            (p.m2_f, p.inv_m2_f, p.d_norm_f) = (p.m2 as f32, p.inv_m2 as f32, p.d_norm as f32);
+        }
         Plan::Microfacet { d, g, f, p }
     }
 
@@ -383,29 +440,40 @@ fn frame<const Z: bool>(x: &[f32; 9]) -> Frame {
 
 /// The f64 frame of one lane (FORMULAS.md §1) and whether the lanes may take it.
 #[derive(Clone, Copy, Default)]
-struct Frame64 {
-    cos_i: f64,
-    cos_o: f64,
-    cos_h: f64,
+pub(super) struct Frame64 {
+    pub(super) cos_i: f64,
+    pub(super) cos_o: f64,
+    pub(super) cos_h: f64,
     c: f64,
-    sin2_h: f64,
+    pub(super) sin2_h: f64,
     sin2_i: f64,
     sin2_o: f64,
-    ok: bool,
+    /// `r · v` with `r = 2 cos_i n − l` (Phong), and `sin²` of the angle between r and v:
+    /// near the peak `1 − |r − v|²/2` and `|r − v|²/2 (2 − |r − v|²/2)`, which keep the
+    /// relative precision that `cos^e` needs (the reference's `phong_lobe`); elsewhere
+    /// `2 cos_i cos_o − l · v` and 1 (`log_cos` then takes the cosine itself). Only
+    /// Phong's lanes read them; the others' variants do not compute them.
+    pub(super) rv: f64,
+    pub(super) sin2_rv: f64,
+    pub(super) ok: bool,
 }
 
-/// `1/√x` to ~1e-14 relative for x in f32's range: the f32 estimate (cheap in wide
-/// lanes) refined by one Newton step in f64, which squares its relative error (~1e-7).
-/// Outside f32's range the estimate is 0 or ∞ and the result 0 or NaN: the frame then
-/// fails its tests and the lane is rescued.
+/// `1/√x` to f64 rounding for x in f32's range: the f32 estimate (cheap in wide lanes)
+/// refined by two Newton steps in f64, each of which squares the relative error (6e-8,
+/// 5e-15, then rounding). One step was not enough: a unit vector's length off by 5e-15
+/// turns h by as much, which near the peak of a lobe cos^e with e = 1e18 (sin_h ~ 1e-9)
+/// is 5e-6 of sin²_h and put the stress corpus's RTR 2e-4 off. Outside f32's range the
+/// estimate is 0 or ∞ and the result 0 or NaN: the frame then fails its tests and the lane
+/// is rescued.
 #[inline(always)]
 fn rsqrt64(x: f64) -> f64 {
     let y0 = f64::from(1.0 / (x as f32).sqrt());
-    y0 * (1.5 - 0.5 * x * y0 * y0)
+    let y1 = y0 * (1.5 - 0.5 * x * y0 * y0);
+    y1 * (1.5 - 0.5 * x * y1 * y1)
 }
 
-/// One lane's L, V, N in f64 with their squared lengths, and whether all three are finite
-/// and non-zero (the invalid test, shared by the frame and Lambert's cosines).
+/// One lane's L, V, N in f64 with their squared lengths, and whether all three are lengths
+/// the f64 frame can normalise (see `in_range`).
 struct Raw {
     l: [f64; 3],
     v: [f64; 3],
@@ -413,7 +481,7 @@ struct Raw {
     ll: f64,
     vv: f64,
     nn: f64,
-    finite: bool,
+    in_range: bool,
 }
 
 #[inline(always)]
@@ -424,8 +492,13 @@ fn raw(x: &[f32; 9]) -> Raw {
     // f64's normal range, so these lengths neither overflow nor underflow.
     let sq = |a: [f64; 3]| a[0] * a[0] + a[1] * a[1] + a[2] * a[2];
     let (ll, vv, nn) = (sq(l), sq(v), sq(n));
-    // NaN fails both comparisons, ±inf the second: a non-finite or zero input is invalid.
-    let ok = |q: f64| q > 0.0 && q < f64::INFINITY;
+    // Squared lengths inside f32's normal range, where `rsqrt64`'s estimate is finite and
+    // non-zero: outside it the Newton steps turn an estimate of ∞ into ±∞ (not NaN), which
+    // made every cosine of an N with components of 1e-43 come out +∞ and pass the
+    // frame's tests. The lanes outside it (zero, non-finite, or merely very short or long
+    // inputs) go to the reference, which decides whether they are invalid. NaN fails the
+    // range test.
+    let ok = |q: f64| (1e-37..=1e37).contains(&q);
     Raw {
         l,
         v,
@@ -433,14 +506,14 @@ fn raw(x: &[f32; 9]) -> Raw {
         ll,
         vv,
         nn,
-        finite: ok(ll) && ok(vv) && ok(nn),
+        in_range: ok(ll) && ok(vv) && ok(nn),
     }
 }
 
 /// The f64 frame of one lane, for the lanes [`frame`] cannot serve (see
 /// [`microfacet_block`]); the local form's lanes carry N = (0, 0, 1).
 #[inline(always)]
-fn frame64(x: &[f32; 9]) -> Frame64 {
+pub(super) fn frame64(x: &[f32; 9]) -> Frame64 {
     let Raw {
         l: [lx, ly, lz],
         v: [vx, vy, vz],
@@ -448,7 +521,7 @@ fn frame64(x: &[f32; 9]) -> Frame64 {
         ll,
         vv,
         nn,
-        finite,
+        in_range,
     } = raw(x);
     let (il, iv, inn) = (rsqrt64(ll), rsqrt64(vv), rsqrt64(nn));
     let (lx, ly, lz) = (lx * il, ly * il, lz * il);
@@ -465,9 +538,25 @@ fn frame64(x: &[f32; 9]) -> Frame64 {
         let (cx, cy, cz) = (ny * az - nz * ay, nz * ax - nx * az, nx * ay - ny * ax);
         cx * cx + cy * cy + cz * cz
     };
+    let (rx, ry, rz) = (
+        2.0 * cos_i * nx - lx,
+        2.0 * cos_i * ny - ly,
+        2.0 * cos_i * nz - lz,
+    );
+    let (dx, dy, dz) = (rx - vx, ry - vy, rz - vz);
+    let half_d2 = 0.5 * (dx * dx + dy * dy + dz * dz);
+    let near = half_d2 < 0.5;
+    let rv = if near {
+        1.0 - half_d2
+    } else {
+        2.0 * cos_i * cos_o - (lx * vx + ly * vy + lz * vz)
+    };
+    let sin2_rv = if near { half_d2 * (2.0 - half_d2) } else { 1.0 };
     // `>=` is false for NaN: lanes that went non-finite above are rescued too.
-    let ok = finite && cos_i >= GRAZING && cos_o >= GRAZING && cos_h >= GRAZING && c >= GRAZING;
+    let ok = in_range && cos_i >= GRAZING && cos_o >= GRAZING && cos_h >= GRAZING && c >= GRAZING;
     Frame64 {
+        rv,
+        sin2_rv,
         cos_i,
         cos_o,
         cos_h,
@@ -480,7 +569,7 @@ fn frame64(x: &[f32; 9]) -> Frame64 {
 }
 
 #[inline(always)]
-fn lane_inputs(inp: &Inputs, k: usize) -> [f32; 9] {
+pub(super) fn lane_inputs(inp: &Inputs, k: usize) -> [f32; 9] {
     std::array::from_fn(|j| inp.v[j][k])
 }
 
@@ -740,7 +829,10 @@ pub fn microfacet_block<const D: u8, const G: u8, const F: u8, const Z: bool>(
     // Lanes for the f64 frame: every lane unless the material may take the f32 frame (the
     // dielectric never does, see `Params::fast_frame`: no f32 code for it).
     let mut slow = [true; LANES];
-    if F != F_DIELECTRIC && p.fast_frame {
+    // Only GGX and Beckmann have f32-frame code (`Params::fast_frame` is false for the
+    // others); the constant keeps it out of their variants.
+    let fast_code = F != F_DIELECTRIC && (D == D_GGX || D == D_BECKMANN);
+    if fast_code && p.fast_frame {
         // The block's f32 frames as structure of arrays (an array of `Frame`s kept LLVM
         // from vectorising either loop: 4× slower).
         let mut fs = [[0.0f32; LANES]; 8];
@@ -815,8 +907,28 @@ fn microfacet_lane<const D: u8, const G: u8, const F: u8, const FAST: bool>(
     k: usize,
 ) {
     let (cos_i, cos_o, cos_h, c) = (fr.cos_i, fr.cos_o, fr.cos_h, fr.c);
-    // D (FORMULAS.md §2), in f64: one division.
-    let d = if FAST {
+    // D (FORMULAS.md §2).
+    let d = if D == D_GAUSSIAN {
+        // Torrance & Sparrow 1967: exp(−(δ/m)²), δ = atan2(sin δ, cos δ), which keeps δ
+        // exact near the peak where acos(cos_h) loses half its digits.
+        let delta = atan2_positive(fr.sin2_h32.sqrt(), cos_h);
+        exp_neg(-(delta * delta) * p.inv_m2_f)
+    } else if D == D_BLINN {
+        // Blinn 1977, normalised: (e + 2)/(2π) cos_h^e as exp(e ln cos_h), ln cos_h from
+        // sin²_h near the peak (`log_cos`), where cos_h itself keeps only absolute
+        // precision that the exponent would multiply. e·ln cos_h ≤ 0: exp_neg suffices.
+        p.d_norm_f * exp_neg(p.exponent * log_cos(cos_h, fr.sin2_h32))
+    } else if D == D_CHARLIE {
+        // Estevez & Kulla 2017: (2 + 1/m)/(2π) sin_h^(1/m), ln sin_h as the log of the
+        // complementary angle's cosine (from cos²_h near grazing h). 0 at sin_h = 0.
+        let x = p.exponent * log_cos(fr.sin2_h32.sqrt(), fr.cos_h2 as f32);
+        let v = p.d_norm_f * exp_neg(x);
+        if fr.sin2_h32 == 0.0 {
+            0.0
+        } else {
+            v
+        }
+    } else if FAST {
         // The f32 frame's materials have m ≥ FAST_MIN_ROUGHNESS and its lanes cos_h ≥
         // GRAZING, which keeps every quantity below inside f32's normal range (m²cos²_h ≥
         // 2.5e-11, 1/cos²_h ≤ 1e8, the Beckmann norm ≤ 1.3e18): D in f32.
@@ -860,7 +972,16 @@ fn microfacet_lane<const D: u8, const G: u8, const F: u8, const FAST: bool>(
         }
         G_SMITH => 1.0 / (1.0 + lambda::<D>(q2_o)) * (1.0 / (1.0 + lambda::<D>(q2_i))),
         G_SMITH_CORRELATED => 1.0 / (1.0 + lambda::<D>(q2_o) + lambda::<D>(q2_i)),
-        _ => smith_fast_g1(q2_o) * smith_fast_g1(q2_i),
+        G_SMITH_FAST => smith_fast_g1(q2_o) * smith_fast_g1(q2_i),
+        G_SCHLICK_SMITH => {
+            // cos/(cos + k(1 − cos)), 1 − cos = sin²/(1 + cos): the subtraction would carry
+            // cos's absolute error, which k (up to 8e3) multiplies.
+            let k = p.schlick_k;
+            let (omc_o, omc_i) = (fr.sin2_o / (1.0 + cos_o), fr.sin2_i / (1.0 + cos_i));
+            cos_o / (cos_o + k * omc_o) * (cos_i / (cos_i + k * omc_i))
+        }
+        // Neubelt & Pettineo 2013, the denominator a sum of non-negative terms.
+        _ => cos_i * cos_o / (cos_i + cos_o * (1.0 - cos_i)),
     };
     // F (FORMULAS.md §4) per channel.
     let (one_minus_c, s2_f) = (fr.one_minus_c, fr.s2);
@@ -926,16 +1047,28 @@ mod tests {
                 inp.v[j][k] = dirs[k % 4][j];
             }
         }
-        let mut count = 0;
-        for d in ["ggx", "beckmann"] {
+        // Every group the lanes take: each distribution with each geometry it is legal
+        // with, each Fresnel term and convention, then the lobe models.
+        let mut materials = Vec::new();
+        for (d, param) in [
+            ("ggx", "roughness = 0.3"),
+            ("beckmann", "roughness = 0.3"),
+            ("gaussian", "roughness = 0.3"),
+            ("blinn", "exponent = 40"),
+            ("charlie", "roughness = 0.4"),
+        ] {
+            let slope = d == "ggx" || d == "beckmann";
             for g in [
                 "none",
                 "cook-torrance",
                 "smith",
                 "smith-correlated",
                 "smith-fast",
+                "schlick-smith",
+                "neubelt",
             ] {
-                if g == "smith-fast" && d != "beckmann" {
+                let smith = g.starts_with("smith") || g == "schlick-smith";
+                if (smith && !slope) || (g == "smith-fast" && d != "beckmann") {
                     continue;
                 }
                 for f in [
@@ -945,78 +1078,73 @@ mod tests {
                     "fresnel = \"conductor\"\nior = [0.2, 0.9, 1.1]\nextinction = [3.9, 2.4, 0.0]",
                 ] {
                     for conv in ["modern", "seed", "cook-torrance-1982"] {
-                        let toml = format!(
-                            "[[material]]\nname = \"x\"\nmodel = \"cook-torrance\"\n\
-                             distribution = \"{d}\"\ngeometry = \"{g}\"\n{f}\nroughness = 0.3\n\
-                             convention = \"{conv}\"\ndiffuse = [0.2, 0.3, 0.4]\n\
-                             diffuse_weight = 0.5\nspecular_weight = 0.7\n"
-                        );
-                        let m = &parse_materials(&toml, "t").unwrap()[0];
-                        let Plan::Microfacet {
-                            d: dd,
-                            g: gg,
-                            f: ff,
-                            p,
-                        } = Plan::for_material(m)
-                        else {
-                            panic!("{d} {g} {f} {conv} is not in the lanes");
-                        };
-                        let mut out = Outputs::default();
-                        crate::cpu::block(
-                            &Plan::Microfacet {
-                                d: dd,
-                                g: gg,
-                                f: ff,
-                                p,
-                            },
-                            &inp,
-                            &mut out,
-                            false,
-                        );
-                        for k in 0..LANES {
-                            assert!(!out.rescue[k], "{d} {g} {f} {conv}: lane {k} rescued");
-                            let w = |a: usize| f64::from(dirs[k % 4][a]);
-                            let e = evaluate(
-                                [w(0), w(1), w(2)],
-                                [w(3), w(4), w(5)],
-                                [w(6), w(7), w(8)],
-                                None,
-                                m,
-                            );
-                            assert_eq!(e.status, Status::Valid);
-                            let want = [
-                                e.brdf[0], e.brdf[1], e.brdf[2], e.d, e.g, e.f[0], e.f[1], e.f[2],
-                                e.k,
-                            ];
-                            let got = [
-                                out.brdf[0][k],
-                                out.brdf[1][k],
-                                out.brdf[2][k],
-                                out.terms[0][k],
-                                out.terms[1][k],
-                                out.terms[2][k],
-                                out.terms[3][k],
-                                out.terms[4][k],
-                                out.terms[5][k],
-                            ];
-                            for (i, (x, r)) in got.iter().zip(want).enumerate() {
-                                let err = (f64::from(*x) - r).abs() / r.abs().max(1e-6);
-                                // Roughness 0.3: the f32 frame (FAST_MIN_ROUGHNESS), whose few
-                                // ulp in the sines the Beckmann exponent multiplies by tan²/m²:
-                                // 2.4e-6 at most here (the f64 frame made 1.5e-6), well inside
-                                // the rule's 1e-5 for well-conditioned values.
-                                assert!(
-                                    err < 3e-6,
-                                    "{d} {g} {f} {conv} lane {k} col {i}: {x} vs {r}"
-                                );
-                            }
-                        }
-                        count += 1;
+                        materials.push(format!(
+                            "model = \"cook-torrance\"\ndistribution = \"{d}\"\n\
+                             geometry = \"{g}\"\n{f}\n{param}\nconvention = \"{conv}\"\n\
+                             diffuse_weight = 0.5\nspecular_weight = 0.7"
+                        ));
                     }
                 }
             }
         }
-        assert_eq!(count, 2 * 4 * 4 * 3 + 4 * 3);
+        for model in [
+            "model = \"phong\"\nexponent = 30",
+            "model = \"phong\"\nexponent = 0",
+            "model = \"blinn-phong\"\nexponent = 50",
+            "model = \"rtr\"\nexponent = 20",
+            "model = \"ward\"\nroughness = 0.3",
+        ] {
+            materials.push(model.to_string());
+        }
+        // 2 rms-slope distributions × (6 geometries for GGX, 7 for Beckmann), 3 others × 3
+        // geometries, each × 4 Fresnel × 3 conventions; 5 lobe materials.
+        assert_eq!(materials.len(), (6 + 7 + 3 * 3) * 4 * 3 + 5);
+        for body in &materials {
+            let toml = format!(
+                "[[material]]\nname = \"x\"\n{body}\ndiffuse = [0.2, 0.3, 0.4]\n\
+                 specular = [0.9, 0.8, 0.7]\n"
+            );
+            let m = &parse_materials(&toml, "t").unwrap()[0];
+            let plan = Plan::for_material(m);
+            assert!(plan.is_simd(), "{body} is not in the lanes");
+            let mut out = Outputs::default();
+            lambert_terms(&mut out);
+            crate::cpu::block(&plan, &inp, &mut out, false);
+            for k in 0..LANES {
+                assert!(!out.rescue[k], "{body}: lane {k} rescued");
+                let w = |a: usize| f64::from(dirs[k % 4][a]);
+                let e = evaluate(
+                    [w(0), w(1), w(2)],
+                    [w(3), w(4), w(5)],
+                    [w(6), w(7), w(8)],
+                    None,
+                    m,
+                );
+                assert_eq!(e.status, Status::Valid);
+                let want = [
+                    e.brdf[0], e.brdf[1], e.brdf[2], e.d, e.g, e.f[0], e.f[1], e.f[2], e.k,
+                ];
+                let got = [
+                    out.brdf[0][k],
+                    out.brdf[1][k],
+                    out.brdf[2][k],
+                    out.terms[0][k],
+                    out.terms[1][k],
+                    out.terms[2][k],
+                    out.terms[3][k],
+                    out.terms[4][k],
+                    out.terms[5][k],
+                ];
+                for (i, (x, r)) in got.iter().zip(want).enumerate() {
+                    let err = (f64::from(*x) - r).abs() / r.abs().max(1e-6);
+                    // Roughness 0.3: the f32 frame (FAST_MIN_ROUGHNESS), whose few ulp in
+                    // the sines the Beckmann exponent multiplies by tan²/m²: 2.4e-6 at most
+                    // here (the f64 frame made 1.5e-6), well inside the rule's 1e-5 for
+                    // well-conditioned values.
+                    assert!(err < 3e-6, "{body}\nlane {k} col {i}: {x} vs {r}");
+                }
+            }
+        }
     }
 
     #[test]

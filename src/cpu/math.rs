@@ -53,6 +53,89 @@ pub fn erfc(z: f32) -> f32 {
     t * exp_neg(p)
 }
 
+/// ln(1 + y) for |y| ≤ 0.42 as 2 atanh(s), s = y/(2 + y), |s| ≤ 0.27, the series to s¹³
+/// (truncation below 1e-9 relative): relative precision even for tiny y, where
+/// `ln(1 + y)` would lose everything to the rounding of 1 + y. The kernel's
+/// `log1p_small` (`glsl/math.glsl`).
+#[inline(always)]
+pub fn log1p_small(y: f32) -> f32 {
+    let s = y / (2.0 + y);
+    let s2 = s * s;
+    2.0 * s
+        * (1.0
+            + s2 * (1.0 / 3.0
+                + s2 * (1.0 / 5.0
+                    + s2 * (1.0 / 7.0 + s2 * (1.0 / 9.0 + s2 * (1.0 / 11.0 + s2 * (1.0 / 13.0)))))))
+}
+
+/// ln x for a normal f32 x > 0 to about 2 ulp: x = 2^e f with f in [√½, √2), f − 1 exact
+/// (Sterbenz) and ln f from [`log1p_small`]; the exponent and mantissa are taken from the
+/// bits (no `frexp`, a libm call that stops vectorisation). The kernel's `log_acc`. Other
+/// inputs (0, subnormal, negative, non-finite) give finite nonsense, never a trap: the
+/// lanes use it only where the frame guarantees a normal positive argument.
+#[inline(always)]
+pub fn log_acc(x: f32) -> f32 {
+    let bits = x.to_bits();
+    // f in [1, 2) from the mantissa; e the unbiased exponent.
+    let f = f32::from_bits((bits & 0x007f_ffff) | 0x3f80_0000);
+    let e = ((bits >> 23) & 0xff) as i32 - 127;
+    // f ≥ √2: take f/2 and e + 1, so that f − 1 stays within [√½ − 1, √2 − 1].
+    let (f, e) = if f >= std::f32::consts::SQRT_2 {
+        (0.5 * f, e + 1)
+    } else {
+        (f, e)
+    };
+    let fe = e as f32;
+    fe * LN2_HI + (log1p_small(f - 1.0) + fe * LN2_LO)
+}
+
+/// ln(1 + y) for y > −1: [`log1p_small`] where it converges, `ln(1 + y)` elsewhere.
+#[inline(always)]
+pub fn log1p_acc(y: f32) -> f32 {
+    if y.abs() <= 0.42 {
+        log1p_small(y)
+    } else {
+        log_acc(1.0 + y)
+    }
+}
+
+/// ln cos of an angle given both `cos > 0` and `sin² = |n × w|²`: near the pole `cos` is
+/// `1 − sin²/2` and `ln(1 − sin²)/2` keeps the relative precision `ln cos` itself would
+/// lose; near the horizon `cos` is the accurate number. The kernel's `log_cos`.
+#[inline(always)]
+pub fn log_cos(cos_w: f32, sin2_w: f32) -> f32 {
+    if sin2_w < 0.5 {
+        0.5 * log1p_acc(-sin2_w)
+    } else {
+        log_acc(cos_w)
+    }
+}
+
+/// atan(y/x) for x ≥ 0, y ≥ 0 (an angle in [0, π/2]) to a few ulp: reduced to t ≤ 1, the
+/// angle halved twice (`atan t = 2 atan(t/(1 + √(1 + t²)))`) to |t| ≤ tan(π/16), then the
+/// series to t¹⁵ (truncation below 1e-13). The kernel's `atan2_positive`.
+#[inline(always)]
+pub fn atan2_positive(y: f32, x: f32) -> f32 {
+    let swap = y > x;
+    let t = if swap { x / y } else { y / x };
+    let t = t / (1.0 + (1.0 + t * t).sqrt());
+    let t = t / (1.0 + (1.0 + t * t).sqrt());
+    let t2 = t * t;
+    let a = 4.0
+        * t
+        * (1.0
+            - t2 * (1.0 / 3.0
+                - t2 * (1.0 / 5.0
+                    - t2 * (1.0 / 7.0
+                        - t2 * (1.0 / 9.0
+                            - t2 * (1.0 / 11.0 - t2 * (1.0 / 13.0 - t2 * (1.0 / 15.0))))))));
+    if swap {
+        std::f32::consts::FRAC_PI_2 - a
+    } else {
+        a
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -83,5 +166,42 @@ mod tests {
                 "z = {z}: {got} vs {want}"
             );
         }
+    }
+    #[test]
+    fn log_acc_and_log_cos_are_within_a_few_ulp_of_f64() {
+        let mut worst = 0f64;
+        for i in 1..200_000 {
+            let x = (f64::from(i) / 200_000.0).powi(3) * 4.0;
+            let xf = x as f32;
+            let got = f64::from(log_acc(xf));
+            let want = f64::from(xf).ln();
+            worst = worst.max((got - want).abs() / want.abs().max(1e-30));
+        }
+        assert!(worst < 5e-7, "log_acc: worst relative error {worst}");
+        // ln cos from sin² near the pole: ln(1 − s)/2 to relative precision at s = 1e-12,
+        // where cos itself rounds to 1.
+        for s in [1e-12f64, 1e-8, 1e-4, 0.3, 0.6, 0.99] {
+            let (cos, s2) = ((1.0 - s).sqrt() as f32, s as f32);
+            let got = f64::from(log_cos(cos, s2));
+            let want = 0.5 * (-f64::from(s2)).ln_1p();
+            assert!(
+                (got - want).abs() <= 1e-6 * want.abs(),
+                "log_cos at sin² = {s}: {got} vs {want}"
+            );
+        }
+    }
+
+    #[test]
+    fn atan2_positive_is_within_a_few_ulp_of_f64() {
+        let mut worst = 0f64;
+        for i in 0..=20_000 {
+            let a = std::f64::consts::FRAC_PI_2 * f64::from(i) / 20_000.0;
+            let (y, x) = (a.sin() as f32, a.cos() as f32);
+            let got = f64::from(atan2_positive(y, x));
+            let want = f64::from(y).atan2(f64::from(x));
+            worst = worst.max((got - want).abs() / want.max(1e-30));
+        }
+        assert!(worst < 5e-7, "worst relative error {worst}");
+        assert_eq!(atan2_positive(0.0, 1.0), 0.0);
     }
 }

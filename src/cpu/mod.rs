@@ -18,6 +18,7 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod kernel;
+pub mod lobes;
 pub mod math;
 pub mod transpose;
 
@@ -210,18 +211,29 @@ impl pulp::NullaryFnOnce for ChunkOp4<'_, '_> {
 }
 
 /// One block of `plan`'s lanes; `z`: every lane's N is (0, 0, 1) (the local form), which
-/// runs the frame without N's arithmetic, to the same bits.
+/// the groups with an f32 frame run without N's arithmetic, to the same bits. The groups
+/// whose frame is always the f64 one (which serves both forms: the local form's lanes
+/// carry N) are compiled once, not once per form.
 #[inline(always)]
 pub(crate) fn block(plan: &Plan, inp: &Inputs, out: &mut Outputs, z: bool) {
+    use kernel::*;
+    match plan {
+        Plan::Lambert(_) => {}
+        Plan::Microfacet { d, f, .. }
+            if (*d == D_GGX || *d == D_BECKMANN) && *f != F_DIELECTRIC => {}
+        _ => return f64_frame_block(plan, inp, out),
+    }
     if z {
-        block_of::<true>(plan, inp, out)
+        f32_frame_block::<true>(plan, inp, out)
     } else {
-        block_of::<false>(plan, inp, out)
+        f32_frame_block::<false>(plan, inp, out)
     }
 }
 
+/// Lambert and the GGX and Beckmann groups other than the dielectric: the groups with an
+/// f32 frame, compiled per form (`Z`: N = +z).
 #[inline(always)]
-fn block_of<const Z: bool>(plan: &Plan, inp: &Inputs, out: &mut Outputs) {
+fn f32_frame_block<const Z: bool>(plan: &Plan, inp: &Inputs, out: &mut Outputs) {
     use kernel::*;
     let Plan::Microfacet { d, g, f, p } = plan else {
         if let Plan::Lambert(p) = plan {
@@ -229,12 +241,12 @@ fn block_of<const Z: bool>(plan: &Plan, inp: &Inputs, out: &mut Outputs) {
         }
         return;
     };
+    // The dielectric goes to `f64_frame_block`.
     macro_rules! by_f {
         ($d:expr, $g:expr) => {
             match *f {
                 F_NONE => microfacet_block::<$d, $g, F_NONE, Z>(p, inp, out),
                 F_SCHLICK => microfacet_block::<$d, $g, F_SCHLICK, Z>(p, inp, out),
-                F_DIELECTRIC => microfacet_block::<$d, $g, F_DIELECTRIC, Z>(p, inp, out),
                 _ => microfacet_block::<$d, $g, F_CONDUCTOR, Z>(p, inp, out),
             }
         };
@@ -245,12 +257,78 @@ fn block_of<const Z: bool>(plan: &Plan, inp: &Inputs, out: &mut Outputs) {
         (D_GGX, G_NONE) => by_f!(D_GGX, G_NONE),
         (D_GGX, G_CT) => by_f!(D_GGX, G_CT),
         (D_GGX, G_SMITH) => by_f!(D_GGX, G_SMITH),
-        (D_GGX, _) => by_f!(D_GGX, G_SMITH_CORRELATED),
+        (D_GGX, G_SMITH_CORRELATED) => by_f!(D_GGX, G_SMITH_CORRELATED),
+        (D_GGX, G_SCHLICK_SMITH) => by_f!(D_GGX, G_SCHLICK_SMITH),
+        (D_GGX, _) => by_f!(D_GGX, G_NEUBELT),
         (_, G_NONE) => by_f!(D_BECKMANN, G_NONE),
         (_, G_CT) => by_f!(D_BECKMANN, G_CT),
         (_, G_SMITH) => by_f!(D_BECKMANN, G_SMITH),
         (_, G_SMITH_CORRELATED) => by_f!(D_BECKMANN, G_SMITH_CORRELATED),
-        (_, _) => by_f!(D_BECKMANN, G_SMITH_FAST),
+        (_, G_SMITH_FAST) => by_f!(D_BECKMANN, G_SMITH_FAST),
+        (_, G_SCHLICK_SMITH) => by_f!(D_BECKMANN, G_SCHLICK_SMITH),
+        (_, _) => by_f!(D_BECKMANN, G_NEUBELT),
+    }
+}
+
+/// The groups whose frame is always the f64 one: the empirical lobes, the Gaussian, Blinn
+/// and Charlie distributions, and every dielectric group.
+#[inline(always)]
+fn f64_frame_block(plan: &Plan, inp: &Inputs, out: &mut Outputs) {
+    use kernel::*;
+    use lobes::{lobe_block, L_BLINN_PHONG, L_PHONG, L_RTR};
+    let (d, g, f, p) = match plan {
+        Plan::Microfacet { d, g, f, p } => (*d, *g, *f, p),
+        Plan::Lobe { model, p } => {
+            match *model {
+                L_PHONG => lobe_block::<L_PHONG>(p, inp, out),
+                L_BLINN_PHONG => lobe_block::<L_BLINN_PHONG>(p, inp, out),
+                L_RTR => lobe_block::<L_RTR>(p, inp, out),
+                _ => lobe_block::<{ lobes::L_WARD }>(p, inp, out),
+            }
+            return;
+        }
+        _ => return,
+    };
+    // `Z` is false: these variants never run the f32 frame, the only code that reads it.
+    macro_rules! by_f {
+        ($d:expr, $g:expr) => {
+            match f {
+                F_NONE => microfacet_block::<$d, $g, F_NONE, false>(p, inp, out),
+                F_SCHLICK => microfacet_block::<$d, $g, F_SCHLICK, false>(p, inp, out),
+                F_DIELECTRIC => microfacet_block::<$d, $g, F_DIELECTRIC, false>(p, inp, out),
+                _ => microfacet_block::<$d, $g, F_CONDUCTOR, false>(p, inp, out),
+            }
+        };
+    }
+    // The GGX and Beckmann groups here are the dielectric ones (`by_f!` compiles their
+    // other Fresnel arms too, never taken). Gaussian, Blinn and Charlie have no Smith
+    // geometry (FORMULAS.md §3: no Λ to take).
+    macro_rules! by_g {
+        ($d:expr) => {
+            match g {
+                G_NONE => by_f!($d, G_NONE),
+                G_CT => by_f!($d, G_CT),
+                _ => by_f!($d, G_NEUBELT),
+            }
+        };
+    }
+    match (d, g) {
+        (D_GGX, G_NONE) => by_f!(D_GGX, G_NONE),
+        (D_GGX, G_CT) => by_f!(D_GGX, G_CT),
+        (D_GGX, G_SMITH) => by_f!(D_GGX, G_SMITH),
+        (D_GGX, G_SMITH_CORRELATED) => by_f!(D_GGX, G_SMITH_CORRELATED),
+        (D_GGX, G_SCHLICK_SMITH) => by_f!(D_GGX, G_SCHLICK_SMITH),
+        (D_GGX, _) => by_f!(D_GGX, G_NEUBELT),
+        (D_BECKMANN, G_NONE) => by_f!(D_BECKMANN, G_NONE),
+        (D_BECKMANN, G_CT) => by_f!(D_BECKMANN, G_CT),
+        (D_BECKMANN, G_SMITH) => by_f!(D_BECKMANN, G_SMITH),
+        (D_BECKMANN, G_SMITH_CORRELATED) => by_f!(D_BECKMANN, G_SMITH_CORRELATED),
+        (D_BECKMANN, G_SMITH_FAST) => by_f!(D_BECKMANN, G_SMITH_FAST),
+        (D_BECKMANN, G_SCHLICK_SMITH) => by_f!(D_BECKMANN, G_SCHLICK_SMITH),
+        (D_BECKMANN, _) => by_f!(D_BECKMANN, G_NEUBELT),
+        (D_GAUSSIAN, _) => by_g!(D_GAUSSIAN),
+        (D_BLINN, _) => by_g!(D_BLINN),
+        (_, _) => by_g!(D_CHARLIE),
     }
 }
 
@@ -332,7 +410,8 @@ fn run_chunk<T: transpose::Transpose>(
     inp.v[8] = [1.0; LANES];
     let take = cols.min(9);
     let mut out = Outputs::default();
-    if let Plan::Lambert(_) = plan {
+    if let Plan::Lambert(_) | Plan::Lobe { .. } = plan {
+        // G = F = K = 1 (and Lambert's D = 0; a lobe's blocks write their D).
         kernel::lambert_terms(&mut out);
     }
     let mut idx = [0usize; LANES];

@@ -1,0 +1,110 @@
+//! The empirical lobe models in the lanes (FORMULAS.md §6): Phong, Blinn–Phong, RTR and
+//! isotropic Ward, each `c_diff/π + c_spec · lobe` with the terms D = lobe, G = F = K = 1.
+//! The frame is the f64 one (`kernel::frame64`: these lobes raise cosines to exponents
+//! up to 1e4 and more, which multiply the frame's error), the lobe's `ln`/`exp` f32, as
+//! the kernel's `glsl/models.glsl` computes them, function for function. Anisotropic Ward
+//! needs the tangent frame and stays with the reference.
+
+// The lane loops index several arrays with the same lane number (see `kernel`).
+#![allow(clippy::needless_range_loop)]
+
+use super::kernel::{frame64, lane_inputs, Inputs, Outputs, Params, Plan, LANES, OUTPUT_LIMIT};
+use super::math::{exp_neg, log_cos};
+use crate::material::{Material, Model, Roughness};
+use std::f64::consts::PI;
+
+/// Lobe model: modified, normalised Phong.
+pub const L_PHONG: u8 = 0;
+/// Lobe model: the seed's Blinn–Phong.
+pub const L_BLINN_PHONG: u8 = 1;
+/// Lobe model: RTR's shading equation.
+pub const L_RTR: u8 = 2;
+/// Lobe model: isotropic Ward.
+pub const L_WARD: u8 = 3;
+
+/// The plan for an empirical model (`p` holds its diffuse and specular colours): its
+/// lobe's exponent and normalisation, formed in f64 and rounded once.
+pub fn plan(m: &Material, mut p: Params) -> Plan {
+    let model = match m.model {
+        Model::Phong { exponent } => {
+            p.exponent = exponent as f32;
+            p.d_norm_f = ((exponent + 2.0) / (2.0 * PI)) as f32;
+            L_PHONG
+        }
+        Model::BlinnPhong { exponent } => {
+            p.exponent = exponent as f32;
+            p.d_norm_f = (1.0 / PI) as f32;
+            L_BLINN_PHONG
+        }
+        Model::Rtr { exponent } => {
+            p.exponent = exponent as f32;
+            p.d_norm_f = ((exponent + 8.0) / (8.0 * PI)) as f32;
+            L_RTR
+        }
+        Model::Ward {
+            roughness: Roughness::Isotropic(r),
+        } => {
+            p.inv_m2 = 1.0 / (r * r);
+            p.d_norm_f = (1.0 / (4.0 * PI * r * r)) as f32;
+            L_WARD
+        }
+        _ => return Plan::Reference,
+    };
+    Plan::Lobe { model, p }
+}
+
+/// One block of lobe model `M` (one of the `L_*` constants). Writes the BRDF and D (the
+/// caller sets G = F = K = 1 once a chunk, `kernel::lambert_terms`, whose D the block
+/// overwrites).
+#[inline(always)]
+pub fn lobe_block<const M: u8>(p: &Params, inp: &Inputs, out: &mut Outputs) {
+    for k in 0..LANES {
+        let f = frame64(&lane_inputs(inp, k));
+        let (cos_i, cos_h, sin2_h) = (f.cos_i as f32, f.cos_h as f32, f.sin2_h as f32);
+        // cos_h^e (Blinn–Phong, RTR): e ln cos_h ≤ 0, so exp_neg suffices; cos_h ≥ GRAZING
+        // on every lane that is kept, so the log's argument is a normal number.
+        let cos_h_e = || exp_neg(p.exponent * log_cos(cos_h, sin2_h));
+        // A lane that must go to the reference although its frame is fine.
+        let mut hard = false;
+        let lobe = match M {
+            L_PHONG => {
+                // Lewis 1994: (e + 2)/(2π) max(0, r·v)^e; pow(0, e) is 0, or 1 for e = 0.
+                let rv = f.rv as f32;
+                let pow = exp_neg(p.exponent * log_cos(rv, f.sin2_rv as f32));
+                let pow = if rv > 0.0 {
+                    pow
+                } else if p.exponent == 0.0 {
+                    1.0
+                } else {
+                    0.0
+                };
+                // An r·v below f32's normal range has no f32 logarithm here (and with a
+                // small exponent its power is not small): the reference takes it.
+                hard = rv > 0.0 && rv < f32::MIN_POSITIVE;
+                p.d_norm_f * pow
+            }
+            // Blinn 1977 as the seed writes it: cos_h^e/(π cos_i).
+            L_BLINN_PHONG => p.d_norm_f * cos_h_e() / cos_i,
+            // RTR 3rd ed. §5.5: (e + 8)/(8π) cos_h^e.
+            L_RTR => p.d_norm_f * cos_h_e(),
+            _ => {
+                // Ward 1992, isotropic: exp(−tan²δ/m²)/(4π m² √(cos_i cos_o)), the exponent
+                // and the root in f64 (tan² of a grazing h and m up to 1e-7 leave f32).
+                let x = (f.sin2_h / (f.cos_h * f.cos_h) * p.inv_m2) as f32;
+                let inv_root = (1.0 / (f.cos_i * f.cos_o).sqrt()) as f32;
+                p.d_norm_f * exp_neg(-x) * inv_root
+            }
+        };
+        let mut size = lobe.abs();
+        for ch in 0..3 {
+            let b = p.diffuse[ch] + p.spec[ch] * lobe;
+            out.brdf[ch][k] = b;
+            size += b.abs();
+        }
+        out.terms[0][k] = lobe;
+        // `<=` is false for NaN: one comparison catches both (see `microfacet_lane`).
+        #[allow(clippy::neg_cmp_op_on_partial_ord)]
+        let bad = !f.ok || hard || !(size <= OUTPUT_LIMIT);
+        out.rescue[k] = bad;
+    }
+}
