@@ -216,11 +216,9 @@ impl pulp::NullaryFnOnce for ChunkOp4<'_, '_> {
 /// carry N) are compiled once, not once per form.
 #[inline(always)]
 pub(crate) fn block(plan: &Plan, inp: &Inputs, out: &mut Outputs, z: bool) {
-    use kernel::*;
     match plan {
         Plan::Lambert(_) => {}
-        Plan::Microfacet { d, f, .. }
-            if (*d == D_GGX || *d == D_BECKMANN) && *f != F_DIELECTRIC => {}
+        Plan::Microfacet { d, g, f, .. } if kernel::fused(*d, *g, *f) => {}
         _ => return f64_frame_block(plan, inp, out),
     }
     if z {
@@ -230,8 +228,8 @@ pub(crate) fn block(plan: &Plan, inp: &Inputs, out: &mut Outputs, z: bool) {
     }
 }
 
-/// Lambert and the GGX and Beckmann groups other than the dielectric: the groups with an
-/// f32 frame, compiled per form (`Z`: N = +z).
+/// Lambert and the fused microfacet groups ([`kernel::fused`]): the groups with an f32
+/// frame, compiled per form (`Z`: N = +z).
 #[inline(always)]
 fn f32_frame_block<const Z: bool>(plan: &Plan, inp: &Inputs, out: &mut Outputs) {
     use kernel::*;
@@ -241,7 +239,6 @@ fn f32_frame_block<const Z: bool>(plan: &Plan, inp: &Inputs, out: &mut Outputs) 
         }
         return;
     };
-    // The dielectric goes to `f64_frame_block`.
     macro_rules! by_f {
         ($d:expr, $g:expr) => {
             match *f {
@@ -257,21 +254,17 @@ fn f32_frame_block<const Z: bool>(plan: &Plan, inp: &Inputs, out: &mut Outputs) 
         (D_GGX, G_NONE) => by_f!(D_GGX, G_NONE),
         (D_GGX, G_CT) => by_f!(D_GGX, G_CT),
         (D_GGX, G_SMITH) => by_f!(D_GGX, G_SMITH),
-        (D_GGX, G_SMITH_CORRELATED) => by_f!(D_GGX, G_SMITH_CORRELATED),
-        (D_GGX, G_SCHLICK_SMITH) => by_f!(D_GGX, G_SCHLICK_SMITH),
-        (D_GGX, _) => by_f!(D_GGX, G_NEUBELT),
+        (D_GGX, _) => by_f!(D_GGX, G_SMITH_CORRELATED),
         (_, G_NONE) => by_f!(D_BECKMANN, G_NONE),
         (_, G_CT) => by_f!(D_BECKMANN, G_CT),
         (_, G_SMITH) => by_f!(D_BECKMANN, G_SMITH),
         (_, G_SMITH_CORRELATED) => by_f!(D_BECKMANN, G_SMITH_CORRELATED),
-        (_, G_SMITH_FAST) => by_f!(D_BECKMANN, G_SMITH_FAST),
-        (_, G_SCHLICK_SMITH) => by_f!(D_BECKMANN, G_SCHLICK_SMITH),
-        (_, _) => by_f!(D_BECKMANN, G_NEUBELT),
+        (_, _) => by_f!(D_BECKMANN, G_SMITH_FAST),
     }
 }
 
-/// The groups whose frame is always the f64 one: the empirical lobes, the Gaussian, Blinn
-/// and Charlie distributions, and every dielectric group.
+/// The groups whose frame is always the f64 one: the empirical lobes, and the microfacet
+/// groups [`kernel::fused`] leaves out, in two passes ([`kernel::dg_block64`]).
 #[inline(always)]
 fn f64_frame_block(plan: &Plan, inp: &Inputs, out: &mut Outputs) {
     use kernel::*;
@@ -289,46 +282,45 @@ fn f64_frame_block(plan: &Plan, inp: &Inputs, out: &mut Outputs) {
         }
         _ => return,
     };
-    // `Z` is false: these variants never run the f32 frame, the only code that reads it.
-    macro_rules! by_f {
+    let mut st = Stage::default();
+    macro_rules! dg {
         ($d:expr, $g:expr) => {
-            match f {
-                F_NONE => microfacet_block::<$d, $g, F_NONE, false>(p, inp, out),
-                F_SCHLICK => microfacet_block::<$d, $g, F_SCHLICK, false>(p, inp, out),
-                F_DIELECTRIC => microfacet_block::<$d, $g, F_DIELECTRIC, false>(p, inp, out),
-                _ => microfacet_block::<$d, $g, F_CONDUCTOR, false>(p, inp, out),
-            }
+            dg_block64::<$d, $g>(p, inp, &mut st)
         };
     }
-    // The GGX and Beckmann groups here are the dielectric ones (`by_f!` compiles their
-    // other Fresnel arms too, never taken). Gaussian, Blinn and Charlie have no Smith
-    // geometry (FORMULAS.md §3: no Λ to take).
+    // Gaussian, Blinn and Charlie have no Smith geometry (FORMULAS.md §3: no Λ to take).
     macro_rules! by_g {
         ($d:expr) => {
             match g {
-                G_NONE => by_f!($d, G_NONE),
-                G_CT => by_f!($d, G_CT),
-                _ => by_f!($d, G_NEUBELT),
+                G_NONE => dg!($d, G_NONE),
+                G_CT => dg!($d, G_CT),
+                _ => dg!($d, G_NEUBELT),
             }
         };
     }
     match (d, g) {
-        (D_GGX, G_NONE) => by_f!(D_GGX, G_NONE),
-        (D_GGX, G_CT) => by_f!(D_GGX, G_CT),
-        (D_GGX, G_SMITH) => by_f!(D_GGX, G_SMITH),
-        (D_GGX, G_SMITH_CORRELATED) => by_f!(D_GGX, G_SMITH_CORRELATED),
-        (D_GGX, G_SCHLICK_SMITH) => by_f!(D_GGX, G_SCHLICK_SMITH),
-        (D_GGX, _) => by_f!(D_GGX, G_NEUBELT),
-        (D_BECKMANN, G_NONE) => by_f!(D_BECKMANN, G_NONE),
-        (D_BECKMANN, G_CT) => by_f!(D_BECKMANN, G_CT),
-        (D_BECKMANN, G_SMITH) => by_f!(D_BECKMANN, G_SMITH),
-        (D_BECKMANN, G_SMITH_CORRELATED) => by_f!(D_BECKMANN, G_SMITH_CORRELATED),
-        (D_BECKMANN, G_SMITH_FAST) => by_f!(D_BECKMANN, G_SMITH_FAST),
-        (D_BECKMANN, G_SCHLICK_SMITH) => by_f!(D_BECKMANN, G_SCHLICK_SMITH),
-        (D_BECKMANN, _) => by_f!(D_BECKMANN, G_NEUBELT),
+        (D_GGX, G_NONE) => dg!(D_GGX, G_NONE),
+        (D_GGX, G_CT) => dg!(D_GGX, G_CT),
+        (D_GGX, G_SMITH) => dg!(D_GGX, G_SMITH),
+        (D_GGX, G_SMITH_CORRELATED) => dg!(D_GGX, G_SMITH_CORRELATED),
+        (D_GGX, G_SCHLICK_SMITH) => dg!(D_GGX, G_SCHLICK_SMITH),
+        (D_GGX, _) => dg!(D_GGX, G_NEUBELT),
+        (D_BECKMANN, G_NONE) => dg!(D_BECKMANN, G_NONE),
+        (D_BECKMANN, G_CT) => dg!(D_BECKMANN, G_CT),
+        (D_BECKMANN, G_SMITH) => dg!(D_BECKMANN, G_SMITH),
+        (D_BECKMANN, G_SMITH_CORRELATED) => dg!(D_BECKMANN, G_SMITH_CORRELATED),
+        (D_BECKMANN, G_SMITH_FAST) => dg!(D_BECKMANN, G_SMITH_FAST),
+        (D_BECKMANN, G_SCHLICK_SMITH) => dg!(D_BECKMANN, G_SCHLICK_SMITH),
+        (D_BECKMANN, _) => dg!(D_BECKMANN, G_NEUBELT),
         (D_GAUSSIAN, _) => by_g!(D_GAUSSIAN),
         (D_BLINN, _) => by_g!(D_BLINN),
         (_, _) => by_g!(D_CHARLIE),
+    }
+    match f {
+        F_NONE => f_block::<F_NONE>(p, &st, out),
+        F_SCHLICK => f_block::<F_SCHLICK>(p, &st, out),
+        F_DIELECTRIC => f_block::<F_DIELECTRIC>(p, &st, out),
+        _ => f_block::<F_CONDUCTOR>(p, &st, out),
     }
 }
 
