@@ -70,36 +70,17 @@ fn every_combination_matches_the_reference() {
 }
 
 #[test]
-fn every_isotropic_group_runs_in_the_lanes_and_the_rest_falls_back() {
+fn every_analytic_group_runs_in_the_lanes_and_measured_ones_fall_back() {
     let combos = check::combinations(1).expect("combinations");
-    // Every model, distribution, geometry, Fresnel term and convention in the lanes, except
-    // what needs the tangent frame (anisotropic roughness) and the measured (MERL) tables:
-    // those go to the reference.
+    // Every model, distribution, geometry, Fresnel term, convention and anisotropy in the
+    // lanes; the measured (MERL) tables go to the reference.
     let mut in_lanes = 0;
     for c in &combos {
         let simd = c.materials.iter().all(|m| Plan::for_material(m).is_simd());
-        let fallback = c.name.contains("aniso") || c.name.starts_with("merl");
-        assert_eq!(simd, !fallback, "{}", c.name);
+        assert_eq!(simd, !c.name.starts_with("merl"), "{}", c.name);
         in_lanes += usize::from(simd);
     }
-    assert!(in_lanes >= 250, "only {in_lanes} combinations in the lanes");
-    for m in materials(
-        r#"
-        [[material]]
-        name = "w"
-        model = "ward"
-        roughness = [0.2, 0.4]
-        [[material]]
-        name = "g"
-        model = "cook-torrance"
-        distribution = "ggx"
-        roughness = [0.1, 0.3]
-        geometry = "smith"
-        fresnel = "none"
-        "#,
-    ) {
-        assert!(!Plan::for_material(&m).is_simd(), "{}", m.name);
-    }
+    assert!(in_lanes >= 300, "only {in_lanes} combinations in the lanes");
 }
 
 /// Rows over several materials in an interleaved order, with invalid and below-horizon rows.
@@ -203,6 +184,131 @@ fn mixed_materials_give_the_reference_counts_and_values_for_any_thread_count() {
                 (x - r).abs() <= check::allowed_error(r, s[3 + c]),
                 "row {i} term {c}: {x} vs {r}"
             );
+        }
+    }
+}
+
+/// Anisotropic materials (and an isotropic one) on 13-column rows whose tangents include
+/// ones parallel to N and zero (invalid, FORMULAS.md §1) and ones within 1e-7 of N's
+/// direction (valid, for the reference to take), or on 10-column rows (no tangent: every
+/// anisotropic tuple invalid). Also returns how many tuples are invalid by construction.
+fn tangent_batch(n: usize, columns: usize) -> (Batch<'static>, Vec<Material>, u64) {
+    let mats = materials(
+        r#"
+        [[material]]
+        name = "ggx-aniso"
+        model = "cook-torrance"
+        distribution = "ggx"
+        geometry = "smith-correlated"
+        fresnel = "conductor"
+        ior = [0.2, 0.9, 1.1]
+        extinction = [3.9, 2.4, 2.2]
+        roughness = [0.1, 0.5]
+        [[material]]
+        name = "beckmann-aniso"
+        model = "cook-torrance"
+        distribution = "beckmann"
+        geometry = "smith-fast"
+        fresnel = "schlick"
+        f0 = 0.04
+        roughness = [0.6, 0.05]
+        [[material]]
+        name = "ward-aniso"
+        model = "ward"
+        roughness = [0.3, 0.08]
+        diffuse = [0.2, 0.2, 0.2]
+        [[material]]
+        name = "ggx"
+        model = "cook-torrance"
+        distribution = "ggx"
+        geometry = "smith"
+        fresnel = "none"
+        roughness = 0.3
+        "#,
+    );
+    let mut s = 777u64;
+    let mut rnd = || {
+        s = s
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((s >> 40) as f32 / (1u64 << 24) as f32) * 2.0 - 1.0
+    };
+    let mut rows = Vec::with_capacity(n * columns);
+    let mut invalid = 0;
+    for i in 0..n {
+        let l = [rnd(), rnd(), rnd().abs() + 0.01];
+        let v = [rnd(), rnd(), rnd().abs() + 0.01];
+        let nrm = [0.1 * rnd(), 0.1 * rnd(), 1.0];
+        let material = (i * 5) % 4;
+        let mut t = [rnd(), rnd(), rnd()];
+        let mut bad = false;
+        if i % 89 == 5 {
+            t = nrm.map(|x| 2.0 * x); // exactly parallel to N: invalid
+            bad = true;
+        } else if i % 83 == 2 {
+            t = [0.0; 3]; // zero: invalid
+            bad = true;
+        } else if i % 79 == 1 {
+            // Parallel but for 3x's rounding: valid, unless every product rounds exactly
+            // (then T × N is exactly 0).
+            t = nrm.map(|x| 3.0 * x);
+            let p = |a: usize, b: usize| f64::from(t[a]) * f64::from(nrm[b]);
+            bad = p(1, 2) == p(2, 1) && p(2, 0) == p(0, 2) && p(0, 1) == p(1, 0);
+        }
+        invalid += u64::from((bad || columns == 10) && material != 3);
+        rows.extend_from_slice(&l);
+        rows.extend_from_slice(&v);
+        rows.extend_from_slice(&nrm);
+        rows.push(material as f32);
+        if columns == 13 {
+            rows.extend_from_slice(&t);
+        }
+    }
+    let batch = Batch::new(rows, columns, mats.len(), &memory_source()).expect("batch");
+    (batch, mats, invalid)
+}
+
+#[test]
+fn anisotropic_lanes_give_the_reference_counts_and_values_with_and_without_tangents() {
+    let request = Request { terms: true };
+    for columns in [13, 10] {
+        let (batch, mats, invalid) = tangent_batch(20_011, columns);
+        let reference = CpuReference::new()
+            .evaluate(&batch, &mats, &request)
+            .expect("reference");
+        let mut engine = CpuEngine::with_threads(1);
+        let one = engine
+            .evaluate(&batch, &mats, &request)
+            .expect("one thread");
+        let tally = engine.last_tally();
+        let three = CpuEngine::with_threads(3)
+            .evaluate(&batch, &mats, &request)
+            .expect("three threads");
+        assert_eq!(one, three, "the thread count changed a result");
+        assert_eq!(one.counts, reference.counts, "{columns} columns");
+        assert_eq!(one.counts.invalid, invalid, "{columns} columns");
+        if columns == 13 {
+            // The lanes took all but the invalid, nearly parallel and below-horizon tuples.
+            assert!(tally.rescued * 10 < tally.lanes, "{tally:?}");
+        }
+        let terms = one.terms.as_ref().expect("terms");
+        let ref_terms = reference.terms.as_ref().expect("terms");
+        for i in 0..batch.len() {
+            let t = batch.tuple(i);
+            let sens = check::f32_sensitivity(&t, &mats[t.material]);
+            let got = (0..3)
+                .map(|c| one.brdf[i * 3 + c])
+                .chain((0..6).map(|c| terms[i * 6 + c]));
+            let want = (0..3)
+                .map(|c| reference.brdf[i * 3 + c])
+                .chain((0..6).map(|c| ref_terms[i * 6 + c]));
+            for (c, (x, r)) in got.zip(want).enumerate() {
+                let (x, r) = (f64::from(x), f64::from(r));
+                assert!(
+                    (x - r).abs() <= check::allowed_error(r, sens[c]),
+                    "{columns} columns, row {i} column {c}: {x} vs {r}"
+                );
+            }
         }
     }
 }

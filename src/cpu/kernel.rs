@@ -41,6 +41,10 @@ pub const D_GAUSSIAN: u8 = 2;
 pub const D_BLINN: u8 = 3;
 /// Distribution: Estevez–Kulla "Charlie" sheen.
 pub const D_CHARLIE: u8 = 4;
+/// Distribution: anisotropic GGX (needs the tangent frame, `src/cpu/aniso.rs`).
+pub const D_GGX_ANISO: u8 = 5;
+/// Distribution: anisotropic Beckmann (needs the tangent frame).
+pub const D_BECKMANN_ANISO: u8 = 6;
 /// Geometry: none.
 pub const G_NONE: u8 = 0;
 /// Geometry: Cook–Torrance V-cavity.
@@ -120,6 +124,8 @@ pub struct Params {
     pub exponent: f32,
     /// Schlick–Smith's k (Karis 2013: `m/2` GGX, `m √(2/π)` Beckmann).
     pub schlick_k: f32,
+    /// Anisotropic roughness `[1/mx², 1/my², mx², my²]`.
+    pub aniso: [f64; 4],
 }
 
 /// How a material group is evaluated.
@@ -166,10 +172,7 @@ impl Plan {
         let ct = match &m.model {
             Model::Lambert => return Plan::Lambert(p),
             Model::CookTorrance(ct) => ct,
-            Model::Measured(_)
-            | Model::Ward {
-                roughness: Roughness::Anisotropic(..),
-            } => return Plan::Reference,
+            Model::Measured(_) => return Plan::Reference,
             _ => return crate::cpu::lobes::plan(m, p),
         };
         // m for the distributions with an rms slope (0 for Blinn; Charlie's m is not one).
@@ -190,8 +193,15 @@ impl Plan {
                 p.d_norm_f = ((2.0 + 1.0 / m) / (2.0 * PI)) as f32;
                 (D_CHARLIE, 0.0)
             }
-            // Anisotropic GGX and Beckmann need the tangent frame.
-            _ => return Plan::Reference,
+            // Anisotropic GGX and Beckmann (modern convention only): D's normalisation
+            // 1/(π mx my) for both.
+            Distribution::Ggx(Roughness::Anisotropic(mx, my))
+            | Distribution::Beckmann(Roughness::Anisotropic(mx, my)) => {
+                p.aniso = crate::cpu::aniso::roughness(mx, my);
+                p.d_norm = 1.0 / (PI * mx * my);
+                let ggx = matches!(ct.distribution, Distribution::Ggx(_));
+                (if ggx { D_GGX_ANISO } else { D_BECKMANN_ANISO }, 0.0)
+            }
         };
         // The rms-slope distributions' constants; the others set theirs above.
         let slope = d == D_GGX || d == D_BECKMANN;
@@ -209,7 +219,7 @@ impl Plan {
         p.d_norm = match d {
             D_GGX => p.m2 / PI,
             D_BECKMANN => 1.0 / (beckmann_k * p.m2),
-            _ => 0.0,
+            _ => p.d_norm,
         };
         (p.k_num, p.k_cos_i) = match ct.convention {
             Convention::Seed => (1.0, false),
@@ -272,13 +282,32 @@ impl Plan {
     pub fn is_simd(&self) -> bool {
         !matches!(self, Plan::Reference)
     }
+
+    /// Whether the plan reads the tangent (anisotropic roughness): rows without tangent
+    /// columns then go to the reference, which counts them invalid.
+    pub fn needs_tangent(&self) -> bool {
+        match self {
+            Plan::Microfacet { d, .. } => *d == D_GGX_ANISO || *d == D_BECKMANN_ANISO,
+            Plan::Lobe { model, .. } => *model == crate::cpu::lobes::L_WARD_ANISO,
+            _ => false,
+        }
+    }
 }
 
 /// One block's inputs as structure of arrays (f32, as read from the rows).
 #[derive(Clone, Copy)]
 pub struct Inputs {
-    /// L, V, N components: `v[j][k]` is column `j` (0–8) of lane `k`.
-    pub v: [[f32; LANES]; 9],
+    /// L, V, N and T components: `v[j][k]` is component `j` of lane `k` (0–8: L, V, N;
+    /// 9–11: T, filled only for the groups that read it).
+    pub v: [[f32; LANES]; 12],
+}
+
+impl Default for Inputs {
+    fn default() -> Self {
+        Inputs {
+            v: [[0.0; LANES]; 12],
+        }
+    }
 }
 
 /// One block's outputs.
@@ -440,7 +469,7 @@ fn frame<const Z: bool>(x: &[f32; 9]) -> Frame {
 
 /// The f64 frame of one lane (FORMULAS.md §1) and whether the lanes may take it.
 #[derive(Clone, Copy, Default)]
-pub(super) struct Frame64 {
+pub struct Frame64 {
     pub(super) cos_i: f64,
     pub(super) cos_o: f64,
     pub(super) cos_h: f64,
@@ -455,6 +484,11 @@ pub(super) struct Frame64 {
     /// Phong's lanes read them; the others' variants do not compute them.
     pub(super) rv: f64,
     pub(super) sin2_rv: f64,
+    /// The unit vectors, for the tangent frame (`src/cpu/aniso.rs`).
+    pub(super) n: [f64; 3],
+    pub(super) l: [f64; 3],
+    pub(super) v: [f64; 3],
+    pub(super) h: [f64; 3],
     pub(super) ok: bool,
 }
 
@@ -466,7 +500,7 @@ pub(super) struct Frame64 {
 /// estimate is 0 or ∞ and the result 0 or NaN: the frame then fails its tests and the lane
 /// is rescued.
 #[inline(always)]
-fn rsqrt64(x: f64) -> f64 {
+pub(super) fn rsqrt64(x: f64) -> f64 {
     let y0 = f64::from(1.0 / (x as f32).sqrt());
     let y1 = y0 * (1.5 - 0.5 * x * y0 * y0);
     y1 * (1.5 - 0.5 * x * y1 * y1)
@@ -557,6 +591,10 @@ pub(super) fn frame64(x: &[f32; 9]) -> Frame64 {
     Frame64 {
         rv,
         sin2_rv,
+        n: [nx, ny, nz],
+        l: [lx, ly, lz],
+        v: [vx, vy, vz],
+        h: [hx, hy, hz],
         cos_i,
         cos_o,
         cos_h,
@@ -735,7 +773,7 @@ pub fn lambert_terms(out: &mut Outputs) {
 /// A lane's frame as the terms read it: f32 values, and f64 ones where D and the
 /// dielectric Fresnel take f64 — from [`frame`], or [`frame64`] rounded.
 #[derive(Clone, Copy)]
-struct Lane {
+pub struct Lane {
     cos_i: f32,
     cos_o: f32,
     cos_h: f32,
@@ -750,7 +788,7 @@ struct Lane {
     sin2_h: f64,
     c64: f64,
     s2_64: f64,
-    ok: bool,
+    pub(super) ok: bool,
 }
 
 impl Lane {
@@ -778,7 +816,7 @@ impl Lane {
     }
 
     #[inline(always)]
-    fn from64(f: &Frame64) -> Lane {
+    pub(super) fn from64(f: &Frame64) -> Lane {
         // 1 − c in f64: of a c rounded to f32 it would cancel.
         let s2_64 = (1.0 - f.c) * (1.0 + f.c);
         Lane {
@@ -948,6 +986,15 @@ pub fn dg_block64<const D: u8, const G: u8>(p: &Params, inp: &Inputs, st: &mut S
     for k in 0..LANES {
         let fr = Lane::from64(&frame64(&lane_inputs(inp, k)));
         let (d, g) = microfacet_dg::<D, G, false>(p, &fr);
+        st.put(k, &fr, d, g);
+    }
+}
+
+impl Stage {
+    /// Stores lane `k`'s frame values that F and K read, its D and G.
+    #[inline(always)]
+    pub(super) fn put(&mut self, k: usize, fr: &Lane, d: f32, g: f32) {
+        let st = self;
         st.cos_i[k] = fr.cos_i;
         st.cos_o[k] = fr.cos_o;
         st.c[k] = fr.c;
@@ -1001,7 +1048,7 @@ fn microfacet_lane<const D: u8, const G: u8, const F: u8, const FAST: bool>(
 /// D and G of one lane (FORMULAS.md §2–§3) from its frame (`FAST`: the f32 frame's).
 #[inline(always)]
 fn microfacet_dg<const D: u8, const G: u8, const FAST: bool>(p: &Params, fr: &Lane) -> (f32, f32) {
-    let (cos_i, cos_o, cos_h, c) = (fr.cos_i, fr.cos_o, fr.cos_h, fr.c);
+    let (cos_i, cos_o, cos_h) = (fr.cos_i, fr.cos_o, fr.cos_h);
     // D (FORMULAS.md §2).
     let d = if D == D_GAUSSIAN {
         // Torrance & Sparrow 1967: exp(−(δ/m)²), δ = atan2(sin δ, cos δ), which keeps δ
@@ -1059,7 +1106,20 @@ fn microfacet_dg<const D: u8, const G: u8, const FAST: bool>(p: &Params, fr: &La
     let m2 = p.m2 as f32;
     let q2_i = m2 * fr.sin2_i / (cos_i * cos_i);
     let q2_o = m2 * fr.sin2_o / (cos_o * cos_o);
-    let g = match G {
+    (d, geometry::<D, G>(p, fr, q2_i, q2_o))
+}
+
+/// G (FORMULAS.md §3) of one lane given `q2 = m² tan²θ` of each direction (for
+/// anisotropic roughness `(mx² (w·t)² + my² (w·b)²)/cos²θ`); `D` picks Smith's Λ.
+#[inline(always)]
+pub(super) fn geometry<const D: u8, const G: u8>(
+    p: &Params,
+    fr: &Lane,
+    q2_i: f32,
+    q2_o: f32,
+) -> f32 {
+    let (cos_i, cos_o, cos_h, c) = (fr.cos_i, fr.cos_o, fr.cos_h, fr.c);
+    match G {
         G_NONE => 1.0,
         G_CT => {
             let t = 2.0 * cos_h / c;
@@ -1077,8 +1137,7 @@ fn microfacet_dg<const D: u8, const G: u8, const FAST: bool>(p: &Params, fr: &La
         }
         // Neubelt & Pettineo 2013, the denominator a sum of non-negative terms.
         _ => cos_i * cos_o / (cos_i + cos_o * (1.0 - cos_i)),
-    };
-    (d, g)
+    }
 }
 
 /// F, K and the outputs of lane `k` given its D and G (FORMULAS.md §4–§6).
@@ -1141,12 +1200,15 @@ mod tests {
             [0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0],
             [0.5, 0.5, 0.2, 0.1, -0.6, 0.4, 0.1, 0.05, 1.0],
         ];
-        let mut inp = Inputs {
-            v: [[0.0; LANES]; 9],
-        };
+        let mut inp = Inputs::default();
+        // A tangent for the anisotropic groups, across every lane's N.
+        let tangent = [1.0f32, 0.2, 0.0];
         for k in 0..LANES {
             for j in 0..9 {
                 inp.v[j][k] = dirs[k % 4][j];
+            }
+            for j in 0..3 {
+                inp.v[9 + j][k] = tangent[j];
             }
         }
         // Every group the lanes take: each distribution with each geometry it is legal
@@ -1189,7 +1251,24 @@ mod tests {
                 }
             }
         }
+        // Anisotropic roughness: modern convention only, no schlick-smith.
+        for (d, g) in [
+            ("ggx", "none"),
+            ("ggx", "smith"),
+            ("ggx", "smith-correlated"),
+            ("ggx", "neubelt"),
+            ("beckmann", "cook-torrance"),
+            ("beckmann", "smith"),
+            ("beckmann", "smith-fast"),
+        ] {
+            materials.push(format!(
+                "model = \"cook-torrance\"\ndistribution = \"{d}\"\ngeometry = \"{g}\"\n\
+                 fresnel = \"conductor\"\nior = [0.2, 0.9, 1.1]\nextinction = [3.9, 2.4, 0.0]\n\
+                 roughness = [0.2, 0.45]"
+            ));
+        }
         for model in [
+            "model = \"ward\"\nroughness = [0.15, 0.4]",
             "model = \"phong\"\nexponent = 30",
             "model = \"phong\"\nexponent = 0",
             "model = \"blinn-phong\"\nexponent = 50",
@@ -1199,8 +1278,8 @@ mod tests {
             materials.push(model.to_string());
         }
         // 2 rms-slope distributions × (6 geometries for GGX, 7 for Beckmann), 3 others × 3
-        // geometries, each × 4 Fresnel × 3 conventions; 5 lobe materials.
-        assert_eq!(materials.len(), (6 + 7 + 3 * 3) * 4 * 3 + 5);
+        // geometries, each × 4 Fresnel × 3 conventions; 7 anisotropic groups; 6 lobes.
+        assert_eq!(materials.len(), (6 + 7 + 3 * 3) * 4 * 3 + 7 + 6);
         for body in &materials {
             let toml = format!(
                 "[[material]]\nname = \"x\"\n{body}\ndiffuse = [0.2, 0.3, 0.4]\n\
@@ -1219,7 +1298,7 @@ mod tests {
                     [w(0), w(1), w(2)],
                     [w(3), w(4), w(5)],
                     [w(6), w(7), w(8)],
-                    None,
+                    Some(tangent.map(f64::from)),
                     m,
                 );
                 assert_eq!(e.status, Status::Valid);
@@ -1251,9 +1330,7 @@ mod tests {
 
     #[test]
     fn grazing_invalid_and_below_horizon_lanes_are_rescued() {
-        let mut inp = Inputs {
-            v: [[0.0; LANES]; 9],
-        };
+        let mut inp = Inputs::default();
         let rows: [[f32; 9]; 4] = [
             [1.0, 0.0, 1e-6, -0.2, 0.1, 0.8, 0.0, 0.0, 1.0], // cos_i ≈ 1e-6
             [0.3, 0.2, 0.9, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0],   // V = 0
@@ -1288,9 +1365,7 @@ mod tests {
         };
         let mut blocks = Vec::new();
         for b in 0..64 {
-            let mut inp = Inputs {
-                v: [[0.0; LANES]; 9],
-            };
+            let mut inp = Inputs::default();
             for k in 0..LANES {
                 for j in 0..6 {
                     inp.v[j][k] = rnd() * if b % 3 == 0 { 1e-3 } else { 1.0 };

@@ -3,11 +3,12 @@
 //! The frame is the f64 one (`kernel::frame64`: these lobes raise cosines to exponents
 //! up to 1e4 and more, which multiply the frame's error), the lobe's `ln`/`exp` f32, as
 //! the kernel's `glsl/models.glsl` computes them, function for function. Anisotropic Ward
-//! needs the tangent frame and stays with the reference.
+//! adds the tangent frame (`src/cpu/aniso.rs`).
 
 // The lane loops index several arrays with the same lane number (see `kernel`).
 #![allow(clippy::needless_range_loop)]
 
+use super::aniso::{lane_tangent, slope2, tangent};
 use super::kernel::{frame64, lane_inputs, Inputs, Outputs, Params, Plan, LANES, OUTPUT_LIMIT};
 use super::math::{exp_neg, log_cos};
 use crate::material::{Material, Model, Roughness};
@@ -21,6 +22,8 @@ pub const L_BLINN_PHONG: u8 = 1;
 pub const L_RTR: u8 = 2;
 /// Lobe model: isotropic Ward.
 pub const L_WARD: u8 = 3;
+/// Lobe model: anisotropic Ward (needs the tangent).
+pub const L_WARD_ANISO: u8 = 4;
 
 /// The plan for an empirical model (`p` holds its diffuse and specular colours): its
 /// lobe's exponent and normalisation, formed in f64 and rounded once.
@@ -48,6 +51,13 @@ pub fn plan(m: &Material, mut p: Params) -> Plan {
             p.d_norm_f = (1.0 / (4.0 * PI * r * r)) as f32;
             L_WARD
         }
+        Model::Ward {
+            roughness: Roughness::Anisotropic(mx, my),
+        } => {
+            p.aniso = super::aniso::roughness(mx, my);
+            p.d_norm_f = (1.0 / (4.0 * PI * mx * my)) as f32;
+            L_WARD_ANISO
+        }
         _ => return Plan::Reference,
     };
     Plan::Lobe { model, p }
@@ -66,6 +76,8 @@ pub fn lobe_block<const M: u8>(p: &Params, inp: &Inputs, out: &mut Outputs) {
         let cos_h_e = || exp_neg(p.exponent * log_cos(cos_h, sin2_h));
         // A lane that must go to the reference although its frame is fine.
         let mut hard = false;
+        // The anisotropic Ward's tangent frame (the others' variants do not compute it).
+        let t = tangent(&f, lane_tangent(inp, k));
         let lobe = match M {
             L_PHONG => {
                 // Lewis 1994: (e + 2)/(2π) max(0, r·v)^e; pow(0, e) is 0, or 1 for e = 0.
@@ -88,9 +100,15 @@ pub fn lobe_block<const M: u8>(p: &Params, inp: &Inputs, out: &mut Outputs) {
             // RTR 3rd ed. §5.5: (e + 8)/(8π) cos_h^e.
             L_RTR => p.d_norm_f * cos_h_e(),
             _ => {
-                // Ward 1992, isotropic: exp(−tan²δ/m²)/(4π m² √(cos_i cos_o)), the exponent
-                // and the root in f64 (tan² of a grazing h and m up to 1e-7 leave f32).
-                let x = (f.sin2_h / (f.cos_h * f.cos_h) * p.inv_m2) as f32;
+                // Ward 1992: exp(−((hx/mx)² + (hy/my)²)/hz²)/(4π mx my √(cos_i cos_o)),
+                // isotropic exp(−tan²δ/m²)/(4π m² …), the exponent and the root in f64
+                // (tan² of a grazing h and m up to 1e-7 leave f32).
+                let x = if M == L_WARD_ANISO {
+                    hard = !t.ok;
+                    (slope2(p, &t) / (f.cos_h * f.cos_h)) as f32
+                } else {
+                    (f.sin2_h / (f.cos_h * f.cos_h) * p.inv_m2) as f32
+                };
                 let inv_root = (1.0 / (f.cos_i * f.cos_o).sqrt()) as f32;
                 p.d_norm_f * exp_neg(-x) * inv_root
             }

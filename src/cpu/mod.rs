@@ -17,6 +17,7 @@
 // Lane loops index the lanes' arrays by lane number (see kernel.rs).
 #![allow(clippy::needless_range_loop)]
 
+pub mod aniso;
 pub mod kernel;
 pub mod lobes;
 pub mod math;
@@ -276,7 +277,8 @@ fn f64_frame_block(plan: &Plan, inp: &Inputs, out: &mut Outputs) {
                 L_PHONG => lobe_block::<L_PHONG>(p, inp, out),
                 L_BLINN_PHONG => lobe_block::<L_BLINN_PHONG>(p, inp, out),
                 L_RTR => lobe_block::<L_RTR>(p, inp, out),
-                _ => lobe_block::<{ lobes::L_WARD }>(p, inp, out),
+                lobes::L_WARD => lobe_block::<{ lobes::L_WARD }>(p, inp, out),
+                _ => lobe_block::<{ lobes::L_WARD_ANISO }>(p, inp, out),
             }
             return;
         }
@@ -286,6 +288,11 @@ fn f64_frame_block(plan: &Plan, inp: &Inputs, out: &mut Outputs) {
     macro_rules! dg {
         ($d:expr, $g:expr) => {
             dg_block64::<$d, $g>(p, inp, &mut st)
+        };
+    }
+    macro_rules! aniso {
+        ($d:expr, $g:expr) => {
+            aniso::dg_block64_aniso::<$d, $g>(p, inp, &mut st)
         };
     }
     // Gaussian, Blinn and Charlie have no Smith geometry (FORMULAS.md §3: no Λ to take).
@@ -312,6 +319,19 @@ fn f64_frame_block(plan: &Plan, inp: &Inputs, out: &mut Outputs) {
         (D_BECKMANN, G_SMITH_FAST) => dg!(D_BECKMANN, G_SMITH_FAST),
         (D_BECKMANN, G_SCHLICK_SMITH) => dg!(D_BECKMANN, G_SCHLICK_SMITH),
         (D_BECKMANN, _) => dg!(D_BECKMANN, G_NEUBELT),
+        // Anisotropic roughness: no schlick-smith (FORMULAS.md §3), smith-fast with
+        // Beckmann only.
+        (D_GGX_ANISO, G_NONE) => aniso!(D_GGX, G_NONE),
+        (D_GGX_ANISO, G_CT) => aniso!(D_GGX, G_CT),
+        (D_GGX_ANISO, G_SMITH) => aniso!(D_GGX, G_SMITH),
+        (D_GGX_ANISO, G_SMITH_CORRELATED) => aniso!(D_GGX, G_SMITH_CORRELATED),
+        (D_GGX_ANISO, _) => aniso!(D_GGX, G_NEUBELT),
+        (D_BECKMANN_ANISO, G_NONE) => aniso!(D_BECKMANN, G_NONE),
+        (D_BECKMANN_ANISO, G_CT) => aniso!(D_BECKMANN, G_CT),
+        (D_BECKMANN_ANISO, G_SMITH) => aniso!(D_BECKMANN, G_SMITH),
+        (D_BECKMANN_ANISO, G_SMITH_CORRELATED) => aniso!(D_BECKMANN, G_SMITH_CORRELATED),
+        (D_BECKMANN_ANISO, G_SMITH_FAST) => aniso!(D_BECKMANN, G_SMITH_FAST),
+        (D_BECKMANN_ANISO, _) => aniso!(D_BECKMANN, G_NEUBELT),
         (D_GAUSSIAN, _) => by_g!(D_GAUSSIAN),
         (D_BLINN, _) => by_g!(D_BLINN),
         (_, _) => by_g!(D_CHARLIE),
@@ -361,6 +381,17 @@ fn transpose<const C: usize, const K: usize>(rows: &[f32], inp: &mut Inputs) {
     }
 }
 
+/// The tangent columns (10–12) of `LANES` consecutive 13-column rows into components
+/// 9–11 of the lanes.
+#[inline(always)]
+fn tangent_columns(rows: &[f32], inp: &mut Inputs) {
+    for c in 0..3 {
+        for k in 0..LANES {
+            inp.v[9 + c][k] = rows[k * COLUMNS_TANGENT + 10 + c];
+        }
+    }
+}
+
 /// `C` lane arrays into `LANES` rows of `C` columns.
 #[inline(always)]
 fn untranspose<const C: usize>(cols: &[[f32; LANES]; C], rows: &mut [f32]) {
@@ -385,7 +416,11 @@ fn run_chunk<T: transpose::Transpose>(
     let mut counts = Counts::default();
     let len = w.brdf.len() / 3;
     let mut tally = Tally::default();
-    if !plan.is_simd() {
+    let cols = batch.columns();
+    // A group that reads the tangent, on rows without one: the reference counts those
+    // tuples invalid (FORMULAS.md §1).
+    let tangent = plan.needs_tangent();
+    if !plan.is_simd() || (tangent && cols != COLUMNS_TANGENT) {
         for j in 0..len {
             rescue(batch, m, rows(w.start + j), j, w, &mut counts);
         }
@@ -394,10 +429,7 @@ fn run_chunk<T: transpose::Transpose>(
     }
     tally.lanes = len as u64;
     let data = batch.data();
-    let cols = batch.columns();
-    let mut inp = Inputs {
-        v: [[0.0; LANES]; 9],
-    };
+    let mut inp = Inputs::default();
     // The local form's N = (0, 0, 1) in every lane; its transposes fill only L and V.
     inp.v[8] = [1.0; LANES];
     let take = cols.min(9);
@@ -428,10 +460,13 @@ fn run_chunk<T: transpose::Transpose>(
                         .expect("a whole block"),
                     &mut inp,
                 ),
-                _ => transpose::<COLUMNS_TANGENT, 9>(
-                    &data[base..base + LANES * COLUMNS_TANGENT],
-                    &mut inp,
-                ),
+                _ => {
+                    let rows = &data[base..base + LANES * COLUMNS_TANGENT];
+                    transpose::<COLUMNS_TANGENT, 9>(rows, &mut inp);
+                    if tangent {
+                        tangent_columns(rows, &mut inp);
+                    }
+                }
             }
         } else {
             for (k, slot) in idx.iter_mut().enumerate() {
@@ -443,6 +478,11 @@ fn run_chunk<T: transpose::Transpose>(
                 let row = &data[r * cols..r * cols + take];
                 for (c, &x) in row.iter().enumerate() {
                     inp.v[c][k] = x;
+                }
+                if tangent {
+                    for c in 0..3 {
+                        inp.v[9 + c][k] = data[r * cols + 10 + c];
+                    }
                 }
             }
         }

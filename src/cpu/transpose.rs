@@ -168,7 +168,7 @@ mod tests {
         let local: [f32; BLOCK] = std::array::from_fn(|i| i as f32);
         let plain: [f32; BLOCK_PLAIN] = std::array::from_fn(|i| i as f32);
         let fresh = || Inputs {
-            v: [[-1.0; LANES]; 9],
+            v: [[-1.0; LANES]; 12],
         };
         let run = |t: &dyn Fn(&mut Inputs, bool)| {
             for (plain_rows, cols, k_cols) in [
