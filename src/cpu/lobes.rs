@@ -72,8 +72,10 @@ pub fn lobe_block<const M: u8>(p: &Params, inp: &Inputs, out: &mut Outputs) {
         let f = frame64(&lane_inputs(inp, k));
         let (cos_i, cos_h, sin2_h) = (f.cos_i as f32, f.cos_h as f32, f.sin2_h as f32);
         // cos_h^e (Blinn–Phong, RTR): e ln cos_h ≤ 0, so exp_neg suffices; cos_h ≥ GRAZING
-        // on every lane that is kept, so the log's argument is a normal number.
-        let cos_h_e = || exp_neg(p.exponent * log_cos(cos_h, sin2_h));
+        // on every lane that is kept, so the log's argument is a normal number. A value,
+        // not a closure: LLVM left the closure a call a lane, and nothing vectorised
+        // (157 cycles an evaluation); the other models' variants drop it unused.
+        let cos_h_e = exp_neg(p.exponent * log_cos(cos_h, sin2_h));
         // A lane that must go to the reference although its frame is fine.
         let mut hard = false;
         // The anisotropic Ward's tangent frame (the others' variants do not compute it).
@@ -96,9 +98,9 @@ pub fn lobe_block<const M: u8>(p: &Params, inp: &Inputs, out: &mut Outputs) {
                 p.d_norm_f * pow
             }
             // Blinn 1977 as the seed writes it: cos_h^e/(π cos_i).
-            L_BLINN_PHONG => p.d_norm_f * cos_h_e() / cos_i,
+            L_BLINN_PHONG => p.d_norm_f * cos_h_e / cos_i,
             // RTR 3rd ed. §5.5: (e + 8)/(8π) cos_h^e.
-            L_RTR => p.d_norm_f * cos_h_e(),
+            L_RTR => p.d_norm_f * cos_h_e,
             _ => {
                 // Ward 1992: exp(−((hx/mx)² + (hy/my)²)/hz²)/(4π mx my √(cos_i cos_o)),
                 // isotropic exp(−tan²δ/m²)/(4π m² …), the exponent and the root in f64
