@@ -156,10 +156,22 @@ fn mixed_materials_give_the_reference_counts_and_values_for_any_thread_count() {
     let one = CpuEngine::with_threads(1)
         .evaluate(&batch, &mats, &request)
         .expect("one thread");
-    let three = CpuEngine::with_threads(3)
+    let mut engine = CpuEngine::with_threads(3);
+    let three = engine
         .evaluate(&batch, &mats, &request)
         .expect("three threads");
     assert_eq!(one, three, "the thread count changed a result");
+    // The engine keeps its grouped-order scratch between calls: a smaller mixed batch
+    // after a larger one, and one without terms, come out as from a fresh engine.
+    let (small, _) = mixed_batch(20_011);
+    for terms in [false, true] {
+        let r = Request { terms };
+        let again = engine.evaluate(&small, &mats, &r).expect("again");
+        let fresh = CpuEngine::with_threads(3)
+            .evaluate(&small, &mats, &r)
+            .expect("fresh");
+        assert_eq!(again, fresh, "terms {terms}");
+    }
     assert_eq!(one.counts, reference.counts);
     assert!(one.counts.invalid > 0 && one.counts.below_horizon > 0);
     assert_eq!(one.counts.first_invalid, Some(7));

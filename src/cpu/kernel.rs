@@ -469,7 +469,7 @@ fn frame<const Z: bool>(x: &[f32; 9]) -> Frame {
 
 /// The f64 frame of one lane (FORMULAS.md §1) and whether the lanes may take it.
 #[derive(Clone, Copy, Default)]
-pub struct Frame64 {
+pub(crate) struct Frame64 {
     pub(super) cos_i: f64,
     pub(super) cos_o: f64,
     pub(super) cos_h: f64,
@@ -773,7 +773,7 @@ pub fn lambert_terms(out: &mut Outputs) {
 /// A lane's frame as the terms read it: f32 values, and f64 ones where D and the
 /// dielectric Fresnel take f64 — from [`frame`], or [`frame64`] rounded.
 #[derive(Clone, Copy)]
-pub struct Lane {
+pub(crate) struct Lane {
     cos_i: f32,
     cos_o: f32,
     cos_h: f32,
