@@ -793,3 +793,56 @@ fn eval_refuses_a_local_batch_without_a_usable_material() {
         assert!(!o.exists(), "nothing is written");
     }
 }
+
+// ---------------------------------------------------------------------------------------
+// Tables: the engine makes a slice's directions itself.
+
+#[test]
+fn the_engine_made_slice_is_the_host_made_one_bit_for_bit() {
+    use vkbrdf::table::slice::{self, Spacing};
+    use vkbrdf::table::{Grid, Runner};
+    let mats = materials(
+        r#"
+        [[material]]
+        name = "metal"
+        preset = "gold"
+        [[material]]
+        name = "brushed"
+        preset = "aluminium"
+        roughness = [0.05, 0.5]
+        [[material]]
+        name = "phong"
+        model = "blinn-phong"
+        exponent = 200
+        [[material]]
+        name = "glass"
+        preset = "glass"
+        "#,
+    );
+    let mut engine = CpuEngine::with_threads(3);
+    assert!(engine.generated_directions().is_some());
+    for m in &mats {
+        // Shapes with tail blocks and several chunks (16,384 texels a chunk).
+        for (w, h) in [(90, 90), (7, 13), (257, 3), (1000, 70)] {
+            let grid = Grid::new(w, h).unwrap();
+            for spacing in [Spacing::Sqrt, Spacing::Linear] {
+                let made =
+                    slice::compute(&mut Runner::new(&mut engine), m, grid, spacing, true).unwrap();
+                let sent = slice::compute_from_tuples(
+                    &mut Runner::new(&mut engine),
+                    m,
+                    grid,
+                    spacing,
+                    true,
+                )
+                .unwrap();
+                assert_eq!(made.0.len(), w * h * 3);
+                assert!(
+                    made == sent,
+                    "{} {w}x{h} {spacing:?}: the engine's directions differ",
+                    m.name
+                );
+            }
+        }
+    }
+}

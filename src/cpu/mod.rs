@@ -18,6 +18,7 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod aniso;
+mod generated;
 pub mod kernel;
 pub mod lobes;
 pub mod math;
@@ -129,6 +130,8 @@ impl CpuEngine {
 enum Source<'a> {
     Rows(&'a Batch<'a>),
     Local(&'a LocalBatch),
+    /// A half/difference slice whose tuples the workers make block by block.
+    Slice(&'a generated::SliceTuples),
 }
 
 impl Source<'_> {
@@ -136,6 +139,7 @@ impl Source<'_> {
         match self {
             Source::Rows(b) => b.len(),
             Source::Local(b) => b.len(),
+            Source::Slice(s) => s.len(),
         }
     }
 
@@ -143,6 +147,7 @@ impl Source<'_> {
         match self {
             Source::Rows(b) => b.material(i),
             Source::Local(b) => b.material(),
+            Source::Slice(_) => 0,
         }
     }
 
@@ -150,6 +155,7 @@ impl Source<'_> {
         match self {
             Source::Rows(b) => b.tuple(i),
             Source::Local(b) => b.tuple(i),
+            Source::Slice(s) => s.tuple(i),
         }
     }
 
@@ -157,6 +163,8 @@ impl Source<'_> {
         match self {
             Source::Rows(b) => b.as_slice(),
             Source::Local(b) => b.as_slice(),
+            // Made block by block (see `run_chunk`), never read as rows.
+            Source::Slice(_) => &[],
         }
     }
 
@@ -164,6 +172,8 @@ impl Source<'_> {
         match self {
             Source::Rows(b) => b.columns(),
             Source::Local(_) => COLUMNS_LOCAL,
+            // The columns its tuples would have as rows.
+            Source::Slice(s) => s.columns(),
         }
     }
 }
@@ -453,7 +463,21 @@ fn run_chunk<T: transpose::Transpose>(
         // A whole block of consecutive rows (the common case): fixed-stride transposes the
         // compiler unrolls, and no row indices to form.
         let whole = order.is_none() && n == LANES;
-        if whole {
+        if let Source::Slice(s) = batch {
+            // The block's tuples made here, lane by lane (the tail block repeats its last).
+            for (k, slot) in idx.iter_mut().enumerate() {
+                *slot = w.start + j0 + k.min(n - 1);
+                let t = s.tuple(*slot);
+                for c in 0..3 {
+                    inp.v[c][k] = t.l[c];
+                    inp.v[3 + c][k] = t.v[c];
+                    inp.v[6 + c][k] = t.n[c];
+                    if let Some(tt) = t.t {
+                        inp.v[9 + c][k] = tt[c];
+                    }
+                }
+            }
+        } else if whole {
             let base = (w.start + j0) * cols;
             match cols {
                 COLUMNS_LOCAL => tr.local(
@@ -565,6 +589,7 @@ impl CpuEngine {
             // Every row is material 0 (the batch validated its indices): no pass over it.
             Source::Rows(_) if materials.len() == 1 => counts_per[0] = n,
             Source::Local(b) => counts_per[b.material()] = n,
+            Source::Slice(_) => counts_per[0] = n,
             Source::Rows(_) => {
                 row_material = (0..n).map(|i| src.material(i) as u32).collect();
                 for &mi in &row_material {
@@ -828,5 +853,9 @@ impl Backend for CpuEngine {
         out: &mut Output,
     ) -> Result<()> {
         self.run(Source::Local(batch), materials, request, out)
+    }
+
+    fn generated_directions(&mut self) -> Option<&mut dyn crate::backend::GeneratedDirections> {
+        Some(self)
     }
 }
