@@ -83,6 +83,17 @@ fn every_analytic_group_runs_in_the_lanes_and_measured_ones_fall_back() {
     assert!(in_lanes >= 300, "only {in_lanes} combinations in the lanes");
 }
 
+/// Seeded values uniform in [−1, 1) (a 64-bit LCG's top 24 bits).
+fn uniform(seed: u64) -> impl FnMut() -> f32 {
+    let mut s = seed;
+    move || {
+        s = s
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((s >> 40) as f32 / (1u64 << 24) as f32) * 2.0 - 1.0
+    }
+}
+
 /// Rows over several materials in an interleaved order, with invalid and below-horizon rows.
 fn mixed_batch(n: usize) -> (Batch<'static>, Vec<Material>) {
     let mats = materials(
@@ -116,13 +127,7 @@ fn mixed_batch(n: usize) -> (Batch<'static>, Vec<Material>) {
         "#,
     );
     let mut rows = Vec::with_capacity(n * 10);
-    let mut s = 12345u64;
-    let mut rnd = || {
-        s = s
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        ((s >> 40) as f32 / (1u64 << 24) as f32) * 2.0 - 1.0
-    };
+    let mut rnd = uniform(12345);
     for i in 0..n {
         let l = [rnd(), rnd(), rnd().abs() + 0.01];
         let mut v = [rnd(), rnd(), rnd().abs() + 0.01];
@@ -238,13 +243,7 @@ fn tangent_batch(n: usize, columns: usize) -> (Batch<'static>, Vec<Material>, u6
         roughness = 0.3
         "#,
     );
-    let mut s = 777u64;
-    let mut rnd = || {
-        s = s
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        ((s >> 40) as f32 / (1u64 << 24) as f32) * 2.0 - 1.0
-    };
+    let mut rnd = uniform(777);
     let mut rows = Vec::with_capacity(n * columns);
     let mut invalid = 0;
     for i in 0..n {
