@@ -1,9 +1,9 @@
 //! The tables' directions made inside the engine ([`GeneratedDirections`]), as the Vulkan
 //! kernel makes them on the device: a half/difference slice is evaluated texel block by
 //! texel block on every core, each block's directions formed where it is evaluated, with
-//! no tuple batch on the host. The directions are the host's (`table::slice`'s
-//! `from_half_diff`, rounded to f32 as its rows are), so the slice is bit for bit the one
-//! its tuples give; importance-sampled sums take the host path (`None`).
+//! no tuple batch on the host. The directions are the host's
+//! ([`SliceGrid::texel_directions`], rounded to f32 as the table's rows are), so the slice is
+//! bit for bit the one its tuples give; importance-sampled sums take the host path (`None`).
 
 use super::{CpuEngine, Source};
 use crate::backend::{GeneratedDirections, Output, Request};
@@ -11,9 +11,6 @@ use crate::batch::Tuple;
 use crate::directions::{ImportanceJob, SliceGrid};
 use crate::error::Result;
 use crate::material::Material;
-use crate::table::slice::{from_half_diff, theta_h, Spacing, TANGENT};
-use crate::table::{texel_centre, NORMAL};
-use std::f64::consts::FRAC_PI_2;
 
 /// The tuples of a half/difference slice, made on demand: texel `t` (row-major, θ_h
 /// fastest) is the tuple `table::slice` builds for it.
@@ -41,22 +38,15 @@ impl SliceTuples {
 
     /// Texel `t`'s tuple (material 0).
     pub(super) fn tuple(&self, t: usize) -> Tuple {
-        let (w, h) = (self.grid.width as usize, self.grid.height as usize);
-        let spacing = if self.grid.linear {
-            Spacing::Linear
-        } else {
-            Spacing::Sqrt
-        };
-        let th = theta_h(texel_centre(t % w, w), spacing);
-        let td = texel_centre(t / w, h) * FRAC_PI_2;
-        let (l, v) = from_half_diff(th, td, FRAC_PI_2);
+        let (l, v) = self.grid.texel_directions(t as u64);
         let f = |a: [f64; 3]| a.map(|x| x as f32);
         Tuple {
             l: f(l),
             v: f(v),
-            n: f(NORMAL),
+            // The slice's frame (`SliceGrid`): n = +z, tangent +x.
+            n: [0.0, 0.0, 1.0],
             material: 0,
-            t: self.tangent.then(|| f(TANGENT)),
+            t: self.tangent.then_some([1.0, 0.0, 0.0]),
         }
     }
 }

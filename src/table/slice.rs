@@ -35,18 +35,7 @@ pub fn theta_h(x: f64, spacing: Spacing) -> f64 {
     }
 }
 
-/// `(l, v)` of half/difference angles with `φ_h = 0` and `n = +z`: `h = R_y(θ_h) z`,
-/// `l = R_y(θ_h) · d(θ_d, φ_d)`, `v` = `l` reflected about `h`.
-pub fn from_half_diff(theta_h: f64, theta_d: f64, phi_d: f64) -> ([f64; 3], [f64; 3]) {
-    let (sh, ch) = theta_h.sin_cos();
-    let (sd, cd) = theta_d.sin_cos();
-    let d = [sd * phi_d.cos(), sd * phi_d.sin(), cd];
-    let l = [d[0] * ch + d[2] * sh, d[1], -d[0] * sh + d[2] * ch];
-    let h = [sh, 0.0, ch];
-    let lh = l[0] * h[0] + l[2] * h[2];
-    let v = std::array::from_fn(|i| 2.0 * lh * h[i] - l[i]);
-    (l, v)
-}
+pub use crate::directions::from_half_diff;
 
 /// The tangent every table passes for anisotropic materials.
 pub const TANGENT: [f64; 3] = [1.0, 0.0, 0.0];
