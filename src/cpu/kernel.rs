@@ -864,13 +864,11 @@ pub fn microfacet_block<const D: u8, const G: u8, const F: u8, const Z: bool>(
     inp: &Inputs,
     out: &mut Outputs,
 ) {
-    // Lanes for the f64 frame: every lane unless the material may take the f32 frame (the
-    // dielectric never does, see `Params::fast_frame`: no f32 code for it).
+    // Lanes for the f64 frame: every lane unless the material may take the f32 frame
+    // (`Params::fast_frame`). Only the fused groups (`fused`) are compiled here: the
+    // dielectric and the other distributions take `dg_block64`.
     let mut slow = [true; LANES];
-    // Only GGX and Beckmann have f32-frame code (`Params::fast_frame` is false for the
-    // others); the constant keeps it out of their variants.
-    let fast_code = F != F_DIELECTRIC && (D == D_GGX || D == D_BECKMANN);
-    if fast_code && p.fast_frame {
+    if p.fast_frame {
         // The block's f32 frames as structure of arrays (an array of `Frame`s kept LLVM
         // from vectorising either loop: 4× slower).
         let mut fs = [[0.0f32; LANES]; 8];
