@@ -70,6 +70,9 @@ pub struct ImportancePoint {
     pub alpha: f32,
     /// Index into the job's material table.
     pub material: u32,
+    /// `(μ, α)` unrounded: an engine that makes its samples in f64 (the CPU engine) builds
+    /// the host's sampling constants from it, and so the host's samples.
+    pub point: [f64; 2],
 }
 
 /// An importance-sampled table integral for

@@ -40,6 +40,7 @@ pub mod directions;
 pub mod error;
 pub mod features;
 pub mod gpu;
+pub mod importance;
 pub mod material;
 pub mod precision;
 pub mod reference;

@@ -845,3 +845,101 @@ fn the_engine_made_slice_is_the_host_made_one_bit_for_bit() {
         }
     }
 }
+
+// ---------------------------------------------------------------------------------------
+// Tables: the engine makes the albedo and DFG tables' importance samples itself.
+
+/// `(μ, α)` points from grazing to normal view and from α = 2⁻¹⁰ to 1.
+fn importance_points() -> Vec<(f64, f64)> {
+    let mut points = Vec::new();
+    for mu in [0.004, 0.03, 0.31, 0.77, 1.0] {
+        for alpha in [1.0 / 1024.0, 0.02, 0.3, 0.81, 1.0] {
+            points.push((mu, alpha));
+        }
+    }
+    points
+}
+
+#[test]
+fn the_engine_made_importance_sums_are_the_host_made_ones() {
+    use vkbrdf::material::Geometry;
+    use vkbrdf::table::albedo::{self, Lobe, Microfacet};
+    use vkbrdf::table::dfg::schlick_weight;
+    use vkbrdf::table::Runner;
+    let points = importance_points();
+    // A fused group of each distribution, and a two-pass one (schlick-smith, neubelt).
+    let specs = [
+        (Lobe::Ggx, Geometry::SmithCorrelated),
+        (Lobe::Beckmann, Geometry::Smith),
+        (Lobe::Beckmann, Geometry::SmithFast),
+        (Lobe::Ggx, Geometry::SchlickSmith),
+        (Lobe::Beckmann, Geometry::Neubelt),
+    ];
+    let mut engine = CpuEngine::with_threads(3);
+    let mut one = CpuEngine::with_threads(1);
+    for (lobe, geometry) in specs {
+        let spec = Microfacet { lobe, geometry };
+        // One block of samples (the engine's sums are the host's bits), and several with
+        // a partial last one (block sums added in order: equal to rounding).
+        for samples in [1000, 4096, 3 * 4096 + 17] {
+            let what = format!("{lobe:?} {geometry:?} {samples} samples");
+            let made =
+                albedo::backend_sums(&mut Runner::new(&mut engine), &spec, &points, samples, "t")
+                    .expect("the engine makes the samples")
+                    .unwrap();
+            let alone =
+                albedo::backend_sums(&mut Runner::new(&mut one), &spec, &points, samples, "t")
+                    .expect("the engine makes the samples")
+                    .unwrap();
+            assert!(made == alone, "{what}: the thread count changed the sums");
+            let sent = albedo::integrate(
+                &mut Runner::new(&mut engine),
+                &spec,
+                &points,
+                samples,
+                "t",
+                |c| [1.0, schlick_weight(c)],
+            )
+            .unwrap();
+            assert_eq!(made.len(), points.len());
+            for (p, (m, s)) in made.iter().zip(&sent).enumerate() {
+                for k in 0..2 {
+                    let (a, b) = (m[k], s[k]);
+                    assert!(a.is_finite() && a >= 0.0, "{what}: point {p} sum {k} = {a}");
+                    if samples <= 4096 {
+                        assert_eq!(a.to_bits(), b.to_bits(), "{what}: point {p} sum {k}");
+                    } else {
+                        assert!(
+                            (a - b).abs() <= 1e-13 * b.abs(),
+                            "{what}: point {p} sum {k}: {a} vs {b}"
+                        );
+                    }
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn a_cancelled_token_stops_the_importance_sums() {
+    use vkbrdf::backend::GeneratedDirections;
+    use vkbrdf::material::Geometry;
+    use vkbrdf::table::albedo::{self, Lobe, Microfacet};
+    use vkbrdf::table::Runner;
+    let spec = Microfacet {
+        lobe: Lobe::Ggx,
+        geometry: Geometry::SmithCorrelated,
+    };
+    let cancel = Cancel::new();
+    let mut engine = CpuEngine::with_threads(2);
+    let _: Option<&mut dyn GeneratedDirections> = engine.generated_directions();
+    cancel.cancel();
+    let mut runner = Runner::new(&mut engine).with_cancel(cancel);
+    let r = albedo::backend_sums(&mut runner, &spec, &importance_points(), 1 << 16, "t")
+        .expect("the engine makes the samples");
+    assert!(
+        matches!(r, Err(vkbrdf::Error::Cancelled)),
+        "got {:?}",
+        r.map(|s| s.len())
+    );
+}

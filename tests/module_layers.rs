@@ -12,7 +12,7 @@ const LAYERS: &[&[&str]] = &[
     &["atomic", "material"],
     &["batch", "directions"],
     &["backend", "precision", "sample"],
-    &["reference", "features"],
+    &["reference", "features", "importance"],
     &["gpu", "cpu"],
     &[
         "table",

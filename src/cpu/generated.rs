@@ -3,7 +3,8 @@
 //! texel block on every core, each block's directions formed where it is evaluated, with
 //! no tuple batch on the host. The directions are the host's
 //! ([`SliceGrid::texel_directions`], rounded to f32 as the table's rows are), so the slice is
-//! bit for bit the one its tuples give; importance-sampled sums take the host path (`None`).
+//! bit for bit the one its tuples give. The importance-sampled sums of the albedo and DFG
+//! tables are made the same way ([`super::importance`]).
 
 use super::{CpuEngine, Source};
 use crate::backend::{GeneratedDirections, Output, Request};
@@ -77,9 +78,9 @@ impl GeneratedDirections for CpuEngine {
 
     fn importance_sums(
         &mut self,
-        _job: &ImportanceJob,
-        _progress: &mut dyn FnMut(u64),
+        job: &ImportanceJob,
+        progress: &mut dyn FnMut(u64),
     ) -> Option<Result<Vec<[f64; 2]>>> {
-        None
+        Some(self.sum_importance(job, progress))
     }
 }

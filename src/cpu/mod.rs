@@ -19,6 +19,7 @@
 
 pub mod aniso;
 mod generated;
+pub mod importance;
 pub mod kernel;
 pub mod lobes;
 pub mod math;

@@ -14,15 +14,13 @@
 //! [`DEFAULT_SAMPLES`] states the count and the accuracy measured for it.
 
 use super::exr_out::{self, Channel, Layer, Provenance};
-use super::{as_f32, push_row, texel_centre, Grid, Runner, NORMAL};
+use super::{push_row, texel_centre, Grid, Runner, NORMAL};
 use crate::batch::COLUMNS_PLAIN;
 use crate::directions::{ImportanceJob, ImportancePoint};
 use crate::error::{Error, Result};
-use crate::material::{DistributionKind, Geometry, Material};
-use crate::reference::distribution::{beckmann_d, ggx_d};
-use crate::reference::geometry::ggx_lambda;
-use crate::vector::{cross, dot, normalize_reciprocal};
-use std::f64::consts::{PI, TAU};
+pub use crate::importance::{hammersley, Lobe, Sample, Sampler, UnitSample, View};
+use crate::material::{Geometry, Material};
+use std::f64::consts::PI;
 use std::path::PathBuf;
 
 /// Samples per texel by default: 2¹⁶ Hammersley points.
@@ -50,57 +48,6 @@ pub const BYTES_PER_TEXEL: u64 = 256;
 
 /// Gauss–Legendre nodes in μ for [`average_albedo`].
 pub const AVERAGE_NODES: usize = 32;
-
-/// The microfacet distribution of an integrated table.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum Lobe {
-    /// GGX / Trowbridge–Reitz, sampled by its visible normals.
-    Ggx,
-    /// Beckmann (modern convention, `k = π`), sampled by `D cos_h`.
-    Beckmann,
-}
-
-impl Lobe {
-    /// The sampler of distribution `d`, or why the integrators cannot take it: each needs
-    /// an importance sampler of its own, and only GGX and Beckmann have one.
-    pub fn of(d: DistributionKind) -> Result<Lobe> {
-        match d {
-            DistributionKind::Ggx => Ok(Lobe::Ggx),
-            DistributionKind::Beckmann => Ok(Lobe::Beckmann),
-            other => Err(Error::Table(format!(
-                "--distribution {}: the albedo and DFG integrators importance-sample the \
-                 distribution, and only ggx and beckmann have a sampler; use one of those \
-                 (or evaluate `{}` through `vkbrdf eval` / `table slice`)",
-                other.toml_name(),
-                other.toml_name()
-            ))),
-        }
-    }
-
-    /// The materials-file name (`ggx`, `beckmann`).
-    pub fn name(self) -> &'static str {
-        match self {
-            Lobe::Ggx => "ggx",
-            Lobe::Beckmann => "beckmann",
-        }
-    }
-}
-
-/// How an integrated table draws its microfacet normals.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum Sampler {
-    /// The project's integrator: GGX by its visible normals (Heitz 2018), Beckmann by
-    /// `D cos_h`, from the Hammersley points of [`hammersley`] (converged to the accuracy
-    /// [`DEFAULT_SAMPLES`] states).
-    Visible,
-    /// The engines' integrator (GGX only): `h` drawn by `D cos_h` from the point
-    /// `(k/N, radical inverse₂(k))` with `φ = 2π k/N` and
-    /// `cos²θ = (1 − u₂)/(1 + (α² − 1) u₂)` — what UE4's `IntegrateBRDF` (Karis 2013) and
-    /// Filament's DFG generator do. With their sample count a table reproduces their LUT
-    /// texel for texel, their quasi-Monte Carlo error included (up to ~6e-3 at 1024
-    /// points near grazing view against a converged integral).
-    Engine,
-}
 
 /// The name of a geometry term as a materials file spells it.
 pub fn geometry_name(g: Geometry) -> &'static str {
@@ -146,173 +93,6 @@ impl Microfacet {
             geometry_name(self.geometry)
         )
     }
-}
-
-/// Point `k` of the `n`-point Hammersley set, `((k + ½)/n, radical inverse₂(k))`.
-pub fn hammersley(k: u32, n: u32) -> (f64, f64) {
-    (
-        (f64::from(k) + 0.5) / f64::from(n),
-        f64::from(k.reverse_bits()) * (1.0 / 4_294_967_296.0),
-    )
-}
-
-/// A Hammersley point `(u1, u2)` in the forms the two mappings read: computed once per
-/// sample index and shared by every `(μ, α)` point.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct UnitSample {
-    /// `(√u1 cos 2πu2, √u1 sin 2πu2)`: the point on the unit disk (GGX).
-    disk: [f64; 2],
-    /// `√(1 − disk₀²)`: half the disk's chord at `disk₀` (GGX).
-    chord: f64,
-    /// `−ln(1 − u1)`: Beckmann's `tan²θ / α²`.
-    neg_log: f64,
-    /// `(cos 2πu2, sin 2πu2)` (Beckmann).
-    phi: [f64; 2],
-    /// `(cos 2πk/N, sin 2πk/N, radical inverse₂(k))` ([`Sampler::Engine`]).
-    engine: [f64; 3],
-}
-
-impl UnitSample {
-    /// Point `k` of `n` ([`hammersley`]).
-    pub fn new(k: u32, n: u32) -> UnitSample {
-        let (u1, u2) = hammersley(k, n);
-        let (sin, cos) = (TAU * u2).sin_cos();
-        let r = u1.sqrt();
-        UnitSample {
-            disk: [r * cos, r * sin],
-            chord: (1.0 - r * r * cos * cos).max(0.0).sqrt(),
-            neg_log: -(-u1).ln_1p(),
-            phi: [cos, sin],
-            engine: {
-                let (s, c) = (TAU * f64::from(k) / f64::from(n)).sin_cos();
-                [c, s, u2]
-            },
-        }
-    }
-}
-
-/// The sampling constants of one `(μ, α)` point, computed once for all its samples.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct View {
-    lobe: Lobe,
-    sampler: Sampler,
-    alpha: f64,
-    /// `v = (√(1−μ²), 0, μ)`.
-    v: [f64; 3],
-    /// `v` as the backend reads it: rounded to f32, normalised.
-    vf: [f64; 3],
-    /// `G1(v)` of GGX (Smith, uncorrelated: the visible-normal density's own G1).
-    g1: f64,
-    /// The hemisphere frame of the stretched view (GGX): `t1`, `t2`, `v_h`, and
-    /// `s = (1 + v_h·z)/2`.
-    frame: [[f64; 3]; 3],
-    s: f64,
-}
-
-impl View {
-    /// The constants for view cosine `mu` and roughness `alpha` ([`Sampler::Visible`]).
-    pub fn new(lobe: Lobe, mu: f64, alpha: f64) -> View {
-        View::sampled(lobe, Sampler::Visible, mu, alpha)
-    }
-
-    /// The constants for view cosine `mu` and roughness `alpha`, drawing with `sampler`
-    /// ([`Sampler::Engine`] draws GGX whatever `lobe` says: [`integrate_with`] refuses
-    /// Beckmann with it).
-    pub fn sampled(lobe: Lobe, sampler: Sampler, mu: f64, alpha: f64) -> View {
-        let v = [(1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu];
-        let vf = normalize_reciprocal(as_f32(v));
-        let tan2_o = (vf[0] * vf[0] + vf[1] * vf[1]) / (vf[2] * vf[2]);
-        // Heitz 2018 listing 1: the view stretched to the hemisphere configuration and an
-        // orthonormal basis around it.
-        let vh = normalize_reciprocal([alpha * v[0], alpha * v[1], v[2]]);
-        let len2 = vh[0] * vh[0] + vh[1] * vh[1];
-        let t1 = if len2 > 0.0 {
-            let inv = 1.0 / len2.sqrt();
-            [-vh[1] * inv, vh[0] * inv, 0.0]
-        } else {
-            [1.0, 0.0, 0.0]
-        };
-        View {
-            lobe,
-            sampler,
-            alpha,
-            v,
-            vf,
-            g1: 1.0 / (1.0 + ggx_lambda(alpha * alpha * tan2_o)),
-            frame: [t1, cross(vh, t1), vh],
-            s: 0.5 * (1.0 + vh[2]),
-        }
-    }
-
-    /// The microfacet normal of unit sample `u`: GGX by Heitz 2018, "Sampling the GGX
-    /// Distribution of Visible Normals" (JCGT 7(4)), density `G1(v) max(0, v·h) D(h)/cos_o`;
-    /// Beckmann by `D(h) cos_h`, `tan²θ = −α² ln(1 − u1)`, `φ = 2π u2`.
-    pub fn normal(&self, u: &UnitSample) -> [f64; 3] {
-        let a = self.alpha;
-        if self.sampler == Sampler::Engine {
-            let [cos_phi, sin_phi, u2] = u.engine;
-            // (α² − 1) as (α − 1)(α + 1): no cancellation for α near 1.
-            let cos2 = ((1.0 - u2) / (1.0 + (a - 1.0) * (a + 1.0) * u2)).clamp(0.0, 1.0);
-            let sin = (1.0 - cos2).sqrt();
-            return [sin * cos_phi, sin * sin_phi, cos2.sqrt()];
-        }
-        match self.lobe {
-            Lobe::Ggx => {
-                let [t1, t2, vh] = self.frame;
-                let p1 = u.disk[0];
-                let p2 = (1.0 - self.s) * u.chord + self.s * u.disk[1];
-                let p3 = (1.0 - p1 * p1 - p2 * p2).max(0.0).sqrt();
-                let n: [f64; 3] = std::array::from_fn(|i| p1 * t1[i] + p2 * t2[i] + p3 * vh[i]);
-                normalize_reciprocal([a * n[0], a * n[1], n[2].max(0.0)])
-            }
-            Lobe::Beckmann => {
-                let tan2 = a * a * u.neg_log;
-                let cos = 1.0 / (1.0 + tan2).sqrt();
-                let sin = tan2.sqrt() * cos;
-                [sin * u.phi[0], sin * u.phi[1], cos]
-            }
-        }
-    }
-
-    /// The sample of `u`, or `None` when `l` falls below the horizon (f = 0 there). The
-    /// weight is computed from the f32-rounded directions the backend evaluates, so
-    /// `f(l) · weight` is consistent: GGX `cos_i / (G1(v) D(h) / (4 cos_o))`, Beckmann
-    /// `cos_i / (D(h) cos_h / (4 c))`.
-    pub fn sample(&self, u: &UnitSample) -> Option<Sample> {
-        let (v, vf) = (self.v, self.vf);
-        let h = self.normal(u);
-        let vh = dot(v, h);
-        let l: [f64; 3] = std::array::from_fn(|i| 2.0 * vh * h[i] - v[i]);
-        let lf = normalize_reciprocal(as_f32(l));
-        let (cos_i, cos_o) = (lf[2], vf[2]);
-        if cos_i.is_nan() || cos_i <= 0.0 {
-            return None; // below the horizon (or a degenerate l)
-        }
-        let hf = normalize_reciprocal(std::array::from_fn(|i| lf[i] + vf[i]));
-        let (cos_h, sin2_h, c) = (hf[2], hf[0] * hf[0] + hf[1] * hf[1], dot(vf, hf));
-        let pdf = match (self.sampler, self.lobe) {
-            (Sampler::Engine, _) => ggx_d(cos_h, sin2_h, self.alpha) * cos_h / (4.0 * c),
-            (Sampler::Visible, Lobe::Ggx) => {
-                self.g1 * ggx_d(cos_h, sin2_h, self.alpha) / (4.0 * cos_o)
-            }
-            (Sampler::Visible, Lobe::Beckmann) => {
-                beckmann_d(cos_h, sin2_h, self.alpha, PI) * cos_h / (4.0 * c)
-            }
-        };
-        let weight = cos_i / pdf;
-        weight.is_finite().then_some(Sample { l, weight, c })
-    }
-}
-
-/// One importance sample: the light direction, `cos_i / pdf(l)`, and `c = v·h`.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Sample {
-    /// Direction toward the light (unit; the backend reads it rounded to f32).
-    pub l: [f64; 3],
-    /// `cos_i / pdf(l)`, from the f32-rounded directions.
-    pub weight: f64,
-    /// `c = v·h`, from the f32-rounded directions.
-    pub c: f64,
 }
 
 /// `(1/N) Σ f cos_i/pdf · weight(c)` for each `(μ, α)` point: the integrals
@@ -477,6 +257,7 @@ pub fn backend_sums(
                 s: view.s as f32,
                 alpha: alpha as f32,
                 material: material as u32,
+                point: [mu, alpha],
             }
         })
         .collect();

@@ -231,10 +231,7 @@ impl LutStyle {
     }
 }
 
-/// `(1 − c)⁵`: Schlick's weight of `1 − F0` (Schlick 1994).
-pub fn schlick_weight(c: f64) -> f64 {
-    (1.0 - c).clamp(0.0, 1.0).powi(5)
-}
+pub use crate::importance::schlick_weight;
 
 /// `[A, B]` at each `(μ, α)` point, with `samples` points each.
 pub fn split_sum(

@@ -200,10 +200,7 @@ pub fn push_row(
     }
 }
 
-/// A unit vector rounded to f32 and widened back: the direction the backend actually sees.
-pub fn as_f32(a: [f64; 3]) -> [f64; 3] {
-    a.map(|x| f64::from(x as f32))
-}
+pub use crate::importance::as_f32;
 
 /// Runs a table's tuples through a backend in chunks, advancing a progress bar.
 pub struct Runner<'a> {

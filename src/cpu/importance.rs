@@ -1,0 +1,295 @@
+//! The albedo and DFG tables' importance-sampled sums made inside the engine
+//! ([`GeneratedDirections::importance_sums`](crate::backend::GeneratedDirections::importance_sums)):
+//! each worker makes a block of samples with the host's sampler ([`crate::importance`]),
+//! evaluates them in the lanes and adds `f · cos_i/pdf` as it goes. No tuple batch exists
+//! on the host, below-horizon samples are skipped instead of evaluated, and the samples
+//! and their weights are the host path's value for value, so a point of at most
+//! [`SAMPLE_BLOCK`] samples sums to the host path's bits (tests/cpu_engine.rs).
+//!
+//! The work is cut into items of one block of samples × a group of points, taken by every
+//! core in turn; a point's block sums are added in block order, so the result does not
+//! depend on the thread count.
+
+use super::kernel::{self, Inputs, Outputs, Params, Plan, LANES};
+use super::CpuEngine;
+use crate::batch::Tuple;
+use crate::directions::ImportanceJob;
+use crate::error::{Error, Result};
+use crate::importance::{schlick_weight, Lobe, Sample, Samples, UnitSample, View};
+use crate::material::Material;
+use crate::reference::{evaluate_tuple, to_output_f32};
+use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
+use std::sync::Mutex;
+
+/// Samples per work item: a point's sum runs over its samples in order within a block.
+pub const SAMPLE_BLOCK: u32 = 4096;
+
+/// Points per work item: they share the block's unit samples, made once per item.
+const POINT_GROUP: usize = 32;
+
+/// One point's sampler, material and lanes plan.
+struct Point<'a> {
+    view: View,
+    plan: &'a Plan,
+    material: &'a Material,
+}
+
+/// Evaluates one block of lanes of an F = 1 microfacet material (the tables' models) on
+/// the N = +z form, or returns `false` for a plan the tables never send (the caller then
+/// asks the reference for every lane). Narrower than [`super::block`] on purpose: only
+/// these variants are compiled for the sums.
+#[inline(always)]
+fn f_none_block(plan: &Plan, inp: &Inputs, out: &mut Outputs) -> bool {
+    use kernel::*;
+    let Plan::Microfacet { d, g, f: F_NONE, p } = plan else {
+        return false;
+    };
+    macro_rules! fused {
+        ($d:expr, $g:expr) => {
+            microfacet_block::<$d, $g, F_NONE, true>(p, inp, out)
+        };
+    }
+    match (*d, *g) {
+        (D_GGX, G_NONE) => fused!(D_GGX, G_NONE),
+        (D_GGX, G_CT) => fused!(D_GGX, G_CT),
+        (D_GGX, G_SMITH) => fused!(D_GGX, G_SMITH),
+        (D_GGX, G_SMITH_CORRELATED) => fused!(D_GGX, G_SMITH_CORRELATED),
+        (D_BECKMANN, G_NONE) => fused!(D_BECKMANN, G_NONE),
+        (D_BECKMANN, G_CT) => fused!(D_BECKMANN, G_CT),
+        (D_BECKMANN, G_SMITH) => fused!(D_BECKMANN, G_SMITH),
+        (D_BECKMANN, G_SMITH_CORRELATED) => fused!(D_BECKMANN, G_SMITH_CORRELATED),
+        (D_BECKMANN, G_SMITH_FAST) => fused!(D_BECKMANN, G_SMITH_FAST),
+        (D_GGX, G_SCHLICK_SMITH) => two_pass::<D_GGX, G_SCHLICK_SMITH>(p, inp, out),
+        (D_GGX, G_NEUBELT) => two_pass::<D_GGX, G_NEUBELT>(p, inp, out),
+        (D_BECKMANN, G_SCHLICK_SMITH) => two_pass::<D_BECKMANN, G_SCHLICK_SMITH>(p, inp, out),
+        (D_BECKMANN, G_NEUBELT) => two_pass::<D_BECKMANN, G_NEUBELT>(p, inp, out),
+        _ => return false,
+    }
+    true
+}
+
+/// The groups the engine runs in two passes ([`kernel::dg_block64`]), with F = 1.
+#[inline(always)]
+fn two_pass<const D: u8, const G: u8>(p: &Params, inp: &Inputs, out: &mut Outputs) {
+    let mut st = kernel::Stage::default();
+    kernel::dg_block64::<D, G>(p, inp, &mut st);
+    kernel::f_block::<{ kernel::F_NONE }>(p, &st, out);
+}
+
+/// One work item: samples `first..first + len` of every point in `points`.
+struct ItemOp<'a> {
+    points: &'a [Point<'a>],
+    units: &'a [UnitSample],
+    /// `units` as columns ([`UnitSample::columns`]), padded to whole blocks of lanes.
+    cols: &'a [Vec<f64>; 3],
+    sums: &'a mut [[f64; 2]],
+}
+
+impl pulp::WithSimd for ItemOp<'_> {
+    type Output = ();
+
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, _simd: S) {
+        for (pt, sum) in self.points.iter().zip(self.sums.iter_mut()) {
+            *sum = point_sums(pt, self.units, self.cols);
+        }
+    }
+}
+
+/// `[Σ x, Σ x (1 − c)⁵]`, `x = f · cos_i/pdf`, over the samples `units` of one point, in
+/// sample order (a below-horizon sample adds nothing, as its weight 0 does on the host).
+#[inline(always)]
+fn point_sums(pt: &Point, units: &[UnitSample], cols: &[Vec<f64>; 3]) -> [f64; 2] {
+    let v32 = pt.view.v.map(|x| x as f32);
+    let mut inp = Inputs::default();
+    for c in 0..3 {
+        inp.v[3 + c] = [v32[c]; LANES];
+    }
+    inp.v[8] = [1.0; LANES];
+    let mut out = Outputs::default();
+    let mut weights = [[0f64; 2]; LANES];
+    let mut sums = [0f64; 2];
+    let mut n = 0;
+    // The lanes' results of the `n` samples gathered so far, added in order.
+    let mut flush = |inp: &Inputs, weights: &[[f64; 2]; LANES], n: usize, sums: &mut [f64; 2]| {
+        let lanes = f_none_block(pt.plan, inp, &mut out);
+        for k in 0..n {
+            let f = if lanes && !out.rescue[k] {
+                out.brdf[0][k]
+            } else {
+                let t = Tuple {
+                    l: [inp.v[0][k], inp.v[1][k], inp.v[2][k]],
+                    v: v32,
+                    n: [0.0, 0.0, 1.0],
+                    material: 0,
+                    t: None,
+                };
+                to_output_f32(evaluate_tuple(&t, pt.material).brdf[0])
+            };
+            let f = f64::from(f);
+            for (s, w) in sums.iter_mut().zip(weights[k]) {
+                *s += f * w;
+            }
+        }
+    };
+    // One sample into the next lane, flushed when the block is full.
+    let mut push = |s: Sample, inp: &mut Inputs, sums: &mut [f64; 2]| {
+        for c in 0..3 {
+            inp.v[c][n] = s.l[c] as f32;
+        }
+        // The host's weights, `weight(c)` times `cos_i/pdf` (tables' DFG: [1, (1 − c)⁵]).
+        weights[n] = [s.weight, schlick_weight(s.c) * s.weight];
+        n += 1;
+        if n == LANES {
+            flush(inp, &weights, n, sums);
+            n = 0;
+        }
+    };
+    if pt.view.is_ggx_visible() {
+        // GGX: `LANES` samples at a time in wide f64 registers.
+        let mut made = Samples::<LANES>::default();
+        for (j, u) in units.chunks(LANES).enumerate() {
+            let col = |c: usize| -> &[f64; LANES] {
+                cols[c][j * LANES..(j + 1) * LANES]
+                    .try_into()
+                    .expect("columns padded to whole blocks")
+            };
+            pt.view.ggx_samples(col(0), col(1), col(2), &mut made);
+            for k in 0..u.len() {
+                if made.ok[k] {
+                    let l = [made.l[0][k], made.l[1][k], made.l[2][k]];
+                    let s = Sample {
+                        l,
+                        weight: made.weight[k],
+                        c: made.c[k],
+                    };
+                    push(s, &mut inp, &mut sums);
+                }
+            }
+        }
+    } else {
+        for u in units {
+            if let Some(s) = pt.view.sample(u) {
+                push(s, &mut inp, &mut sums);
+            }
+        }
+    }
+    if n > 0 {
+        flush(&inp, &weights, n, &mut sums);
+    }
+    sums
+}
+
+impl CpuEngine {
+    /// See [`crate::backend::GeneratedDirections::importance_sums`].
+    pub(super) fn sum_importance(
+        &mut self,
+        job: &ImportanceJob,
+        progress: &mut dyn FnMut(u64),
+    ) -> Result<Vec<[f64; 2]>> {
+        let samples = job.samples;
+        if samples == 0 {
+            return Err(Error::Table("--samples must be at least 1".into()));
+        }
+        let lobe = if job.ggx { Lobe::Ggx } else { Lobe::Beckmann };
+        let plans: Vec<Plan> = job.materials.iter().map(Plan::for_material).collect();
+        let mut points = Vec::with_capacity(job.points.len());
+        for (i, p) in job.points.iter().enumerate() {
+            let mi = p.material as usize;
+            let (Some(plan), Some(material)) = (plans.get(mi), job.materials.get(mi)) else {
+                return Err(Error::Table(format!(
+                    "importance point {i} names material {mi} of {}",
+                    job.materials.len()
+                )));
+            };
+            points.push(Point {
+                view: View::new(lobe, p.point[0], p.point[1]),
+                plan,
+                material,
+            });
+        }
+        let blocks = samples.div_ceil(SAMPLE_BLOCK) as usize;
+        let groups = points.len().div_ceil(POINT_GROUP);
+        let items = blocks * groups;
+        // Block sums, point-major: `block_sums[p * blocks + b]`.
+        let block_sums = Mutex::new(vec![[0f64; 2]; points.len() * blocks]);
+        let next = AtomicUsize::new(0);
+        let done = AtomicU64::new(0);
+        let helpers = self.threads.min(items).saturating_sub(1);
+        let pool = if helpers > 0 { self.pool() } else { None };
+        let cancel = &self.cancel;
+        let arch = pulp::Arch::new();
+        // Items block-major, so a worker's consecutive items mostly share their unit
+        // samples (made again only when the block changes).
+        let work = |mut report: Option<&mut dyn FnMut(u64)>| {
+            let mut units: Vec<UnitSample> = Vec::new();
+            let mut cols: [Vec<f64>; 3] = Default::default();
+            let mut units_of = usize::MAX;
+            let mut sums = Vec::new();
+            let mut reported = 0;
+            loop {
+                let i = next.fetch_add(1, Ordering::Relaxed);
+                if i >= items || cancel.is_cancelled() {
+                    break;
+                }
+                let (b, g) = (i / groups, i % groups);
+                let first = b as u32 * SAMPLE_BLOCK;
+                let len = SAMPLE_BLOCK.min(samples - first);
+                if units_of != b {
+                    units.clear();
+                    units.extend((first..first + len).map(|k| UnitSample::new(k, samples)));
+                    units_of = b;
+                    for (c, col) in cols.iter_mut().enumerate() {
+                        col.clear();
+                        col.extend(units.iter().map(|u| u.columns()[c]));
+                        col.resize(units.len().next_multiple_of(LANES), 0.0);
+                    }
+                }
+                let group = &points[g * POINT_GROUP..points.len().min((g + 1) * POINT_GROUP)];
+                sums.clear();
+                sums.resize(group.len(), [0f64; 2]);
+                arch.dispatch(ItemOp {
+                    points: group,
+                    units: &units,
+                    cols: &cols,
+                    sums: &mut sums,
+                });
+                {
+                    let mut all = block_sums.lock().expect("sums lock");
+                    for (j, s) in sums.iter().enumerate() {
+                        all[(g * POINT_GROUP + j) * blocks + b] = *s;
+                    }
+                }
+                let total = done.fetch_add(u64::from(len) * group.len() as u64, Ordering::Relaxed)
+                    + u64::from(len) * group.len() as u64;
+                if let Some(report) = report.as_deref_mut() {
+                    report(total - reported);
+                    reported = total;
+                }
+            }
+        };
+        match pool {
+            None => work(Some(progress)),
+            Some(pool) => pool.in_place_scope(|s| {
+                for _ in 0..helpers {
+                    s.spawn(|_| work(None));
+                }
+                work(Some(progress));
+            }),
+        }
+        self.cancel.check()?;
+        let block_sums = block_sums.into_inner().expect("sums lock");
+        let n = f64::from(samples);
+        Ok(block_sums
+            .chunks(blocks)
+            .map(|bs| {
+                let mut s = [0f64; 2];
+                for b in bs {
+                    s[0] += b[0];
+                    s[1] += b[1];
+                }
+                s.map(|x| x / n)
+            })
+            .collect())
+    }
+}
