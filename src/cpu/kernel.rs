@@ -152,6 +152,9 @@ pub enum Plan {
         /// The material's constants.
         p: Params,
     },
+    /// A measured (MERL) material: the half/difference angles in f64 lanes, then the
+    /// table lookup (`src/cpu/measured.rs`; the data is the material's).
+    Measured,
     /// Every tuple through the f64 reference.
     Reference,
 }
@@ -172,7 +175,7 @@ impl Plan {
         let ct = match &m.model {
             Model::Lambert => return Plan::Lambert(p),
             Model::CookTorrance(ct) => ct,
-            Model::Measured(_) => return Plan::Reference,
+            Model::Measured(_) => return Plan::Measured,
             _ => return crate::cpu::lobes::plan(m, p),
         };
         // m for the distributions with an rms slope (0 for Blinn; Charlie's m is not one).

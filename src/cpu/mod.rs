@@ -23,13 +23,14 @@ pub mod importance;
 pub mod kernel;
 pub mod lobes;
 pub mod math;
+mod measured;
 pub mod transpose;
 
 use crate::backend::{Backend, Counts, Output, Request, TERM_COLUMNS};
 use crate::batch::{Batch, LocalBatch, Tuple, COLUMNS_LOCAL, COLUMNS_PLAIN, COLUMNS_TANGENT};
 use crate::cancel::Cancel;
 use crate::error::Result;
-use crate::material::Material;
+use crate::material::{Material, Model};
 use crate::reference::{evaluate_tuple, to_output_f32, Status};
 use kernel::{Inputs, Outputs, Plan, LANES};
 use std::sync::{Arc, Mutex};
@@ -453,8 +454,9 @@ fn run_chunk<T: transpose::Transpose>(
     inp.v[8] = [1.0; LANES];
     let take = cols.min(9);
     let mut out = Outputs::default();
-    if let Plan::Lambert(_) | Plan::Lobe { .. } = plan {
-        // G = F = K = 1 (and Lambert's D = 0; a lobe's blocks write their D).
+    if let Plan::Lambert(_) | Plan::Lobe { .. } | Plan::Measured = plan {
+        // G = F = K = 1 (and D = 0 for Lambert and measured data; a lobe's blocks write
+        // their D).
         kernel::lambert_terms(&mut out);
     }
     let mut idx = [0usize; LANES];
@@ -532,7 +534,12 @@ fn run_chunk<T: transpose::Transpose>(
                 }
             }
         }
-        block(plan, &inp, &mut out, cols == COLUMNS_LOCAL);
+        match (plan, &m.model) {
+            (Plan::Measured, Model::Measured(data)) => {
+                measured::measured_block(&data.data, data.lookup, &inp, &mut out)
+            }
+            _ => block(plan, &inp, &mut out, cols == COLUMNS_LOCAL),
+        }
         if n == LANES {
             // Fixed-size interleaving stores the compiler turns into shuffles.
             untranspose::<3>(&out.brdf, &mut w.brdf[j0 * 3..(j0 + LANES) * 3]);
