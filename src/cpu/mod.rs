@@ -2,10 +2,10 @@
 //! common material groups in f32 SIMD lanes (see [`kernel`]) and every other group through
 //! the f64 reference, tuple by tuple, in parallel (docs/CPU_ENGINE.md).
 //!
-//! Rows are grouped by material (a stable counting sort when the batch has several), cut
-//! into chunks that never straddle two groups, and the chunks are taken from a shared
-//! queue by the calling thread and the workers of a persistent pool (`rayon-core`, built
-//! once per engine). Each tuple's result depends only on the tuple and its material, so the
+//! The batch is cut into chunks of rows, taken from a shared queue by the calling thread
+//! and the workers of a persistent pool (`rayon-core`, built once per engine). A chunk of
+//! a batch with several materials groups its own rows by material (a stable counting
+//! sort) and puts the outputs back in row order, all within the cache. Each tuple's result depends only on the tuple and its material, so the
 //! output is the same for any chunk size and thread count. The local-frame form
 //! ([`LocalBatch`]: `Lx Ly Lz Vx Vy Vz`, N = +z, one material) is read as it is, never
 //! expanded to rows.
@@ -48,14 +48,7 @@ pub struct CpuEngine {
     /// more than one chunk and kept for the engine's life (spawning threads per call cost
     /// a large share of a small batch's time).
     pool: Option<Arc<rayon_core::ThreadPool>>,
-    /// A mixed batch's outputs in grouped order (BRDF, terms), kept between calls so that
-    /// their pages are faulted in once.
-    scratch: (Vec<f32>, Vec<f32>),
 }
-
-/// Largest grouped-order scratch (f32 values of BRDF) kept between calls: 4,194,304 rows'
-/// worth, 48 MiB with their terms.
-const SCRATCH_KEEP: usize = 3 << 22;
 
 /// Where the tuples of the last evaluation went.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
@@ -112,7 +105,6 @@ impl CpuEngine {
             cancel: Cancel::new(),
             last: Tally::default(),
             pool: None,
-            scratch: (Vec::new(), Vec::new()),
         }
     }
 
@@ -180,12 +172,115 @@ impl Source<'_> {
     }
 }
 
-/// One unit of work: rows `start..end` of the (grouped) order, all of material `material`.
+/// One unit of work: its outputs, from position `start` of the order its rows are read
+/// in (the batch's, or a chunk's grouped order).
 struct Work<'a> {
-    material: usize,
+    /// The one material of its rows, or `None`: the chunk groups its rows itself.
+    material: Option<usize>,
     start: usize,
     brdf: &'a mut [f32],
     terms: Option<&'a mut [f32]>,
+}
+
+/// What every chunk of one evaluation shares.
+struct Context<'a> {
+    arch: pulp::Arch,
+    plans: &'a [Plan],
+    materials: &'a [Material],
+    src: Source<'a>,
+}
+
+/// A worker's buffers for grouping a mixed chunk, kept from chunk to chunk.
+#[derive(Default)]
+struct Grouping {
+    /// Rows per material in the chunk, then where each material's rows start.
+    start: Vec<usize>,
+    /// The chunk's rows (batch indices) grouped by material, in row order within a group.
+    order: Vec<usize>,
+    /// Outputs in that order.
+    brdf: Vec<f32>,
+    terms: Vec<f32>,
+}
+
+impl Context<'_> {
+    /// Material `mi`'s lanes over `w`, whose rows are `order[w.start..]` (or the batch's
+    /// rows from `w.start` on), in the instruction set pulp chose.
+    fn lanes(&self, mi: usize, order: Option<&[usize]>, w: &mut Work) -> (Counts, Tally) {
+        let op = ChunkOp {
+            plan: &self.plans[mi],
+            batch: self.src,
+            order,
+            material: &self.materials[mi],
+            work: w,
+        };
+        #[cfg(target_arch = "x86_64")]
+        if let pulp::Arch::V4(simd) = self.arch {
+            return simd.vectorize(ChunkOp4 { simd, op });
+        }
+        self.arch.dispatch(op)
+    }
+
+    /// A chunk of a batch with several materials: its rows grouped by material (a stable
+    /// counting sort), each group through its lanes into `g`'s buffers, and the outputs
+    /// put back in row order. Everything it touches is the chunk's, so it stays in the
+    /// cache (grouping the whole batch first made every block a gather from far apart:
+    /// slower than lavapipe at 2^20 rows).
+    fn mixed_chunk(&self, w: &mut Work, g: &mut Grouping) -> (Counts, Tally) {
+        let len = w.brdf.len() / 3;
+        let m = self.materials.len();
+        g.start.clear();
+        g.start.resize(m + 1, 0);
+        for r in w.start..w.start + len {
+            g.start[self.src.material(r) + 1] += 1;
+        }
+        if let Some(mi) = (0..m).find(|&mi| g.start[mi + 1] == len) {
+            // One material in this chunk: read in place.
+            w.material = Some(mi);
+            return self.lanes(mi, None, w);
+        }
+        for mi in 0..m {
+            g.start[mi + 1] += g.start[mi];
+        }
+        g.order.clear();
+        g.order.resize(len, 0);
+        let mut next = g.start.clone();
+        for r in w.start..w.start + len {
+            let mi = self.src.material(r);
+            g.order[next[mi]] = r;
+            next[mi] += 1;
+        }
+        let terms = w.terms.is_some();
+        set_len(&mut g.brdf, len * 3);
+        if terms {
+            set_len(&mut g.terms, len * TERM_COLUMNS);
+        }
+        let mut counts = Counts::default();
+        let mut tally = Tally::default();
+        for mi in 0..m {
+            let (a, b) = (g.start[mi], g.start[mi + 1]);
+            if a == b {
+                continue;
+            }
+            let mut part = Work {
+                material: Some(mi),
+                start: a,
+                brdf: &mut g.brdf[a * 3..b * 3],
+                terms: terms.then(|| &mut g.terms[a * TERM_COLUMNS..b * TERM_COLUMNS]),
+            };
+            let (c, t) = self.lanes(mi, Some(&g.order), &mut part);
+            counts.absorb(&c);
+            tally.add(&t);
+        }
+        for (p, &r) in g.order.iter().enumerate() {
+            let j = r - w.start;
+            w.brdf[j * 3..j * 3 + 3].copy_from_slice(&g.brdf[p * 3..p * 3 + 3]);
+            if let Some(t) = w.terms.as_deref_mut() {
+                t[j * TERM_COLUMNS..(j + 1) * TERM_COLUMNS]
+                    .copy_from_slice(&g.terms[p * TERM_COLUMNS..(p + 1) * TERM_COLUMNS]);
+            }
+        }
+        (counts, tally)
+    }
 }
 
 /// The lanes over one chunk, inside the instruction set pulp chose.
@@ -587,87 +682,45 @@ impl CpuEngine {
     ) -> Result<()> {
         let n = src.len();
         let plans: Vec<Plan> = materials.iter().map(Plan::for_material).collect();
-        // Group the rows by material: a stable counting sort, skipped when one material
-        // covers the batch (then the grouped order is the row order).
-        let mut counts_per = vec![0usize; materials.len()];
-        // Each row's material, read once (the column is one value in every 40 or 52
-        // bytes: two strided passes over the batch took a tenth of a mixed batch's time).
-        let mut row_material: Vec<u32> = Vec::new();
-        match src {
-            // Every row is material 0 (the batch validated its indices): no pass over it.
-            Source::Rows(_) if materials.len() == 1 => counts_per[0] = n,
-            Source::Local(b) => counts_per[b.material()] = n,
-            Source::Slice(_) => counts_per[0] = n,
-            Source::Rows(_) => {
-                row_material = (0..n).map(|i| src.material(i) as u32).collect();
-                for &mi in &row_material {
-                    counts_per[mi as usize] += 1;
-                }
-            }
-        }
-        let single = counts_per.iter().filter(|&&c| c > 0).count() <= 1;
-        let mut group_start = vec![0usize; materials.len() + 1];
-        for (mi, c) in counts_per.iter().enumerate() {
-            group_start[mi + 1] = group_start[mi] + c;
-        }
-        // The grouped order (position → row) and its inverse (row → position), for the
-        // scatter back to row order.
-        let (order, position): (Option<Vec<usize>>, Vec<usize>) = if single {
-            (None, Vec::new())
-        } else {
-            let mut next = group_start.clone();
-            let (mut order, mut position) = (vec![0usize; n], vec![0usize; n]);
-            for (i, &mi) in row_material.iter().enumerate() {
-                let mi = mi as usize;
-                order[next[mi]] = i;
-                position[i] = next[mi];
-                next[mi] += 1;
-            }
-            (Some(order), position)
+        // The material of every row when the batch says so without a pass over it; else
+        // each chunk groups its own rows (`mixed_chunk`).
+        let single = match src {
+            // Every row is material 0 (the batch validated its indices).
+            Source::Rows(_) if materials.len() == 1 => Some(0),
+            Source::Rows(_) => None,
+            Source::Local(b) => Some(b.material()),
+            Source::Slice(_) => Some(0),
         };
-
-        // Outputs in the grouped order: the caller's buffers themselves when there is one
-        // group (reused, so no fresh pages to fault in and zero), else scratch buffers
-        // scattered back to row order below.
-        let (mut scratch_b, mut kept_t) = std::mem::take(&mut self.scratch);
-        let mut scratch_t = request.terms.then(|| std::mem::take(&mut kept_t));
-        let (brdf, mut terms): (&mut Vec<f32>, Option<&mut Vec<f32>>) = if single {
-            out.terms = request.terms.then(|| out.terms.take().unwrap_or_default());
-            (&mut out.brdf, out.terms.as_mut())
-        } else {
-            (&mut scratch_b, scratch_t.as_mut())
-        };
-        set_len(brdf, n * 3);
-        if let Some(t) = terms.as_deref_mut() {
+        // The caller's buffers, reused: no fresh pages to fault in and zero.
+        out.terms = request.terms.then(|| out.terms.take().unwrap_or_default());
+        set_len(&mut out.brdf, n * 3);
+        if let Some(t) = out.terms.as_mut() {
             set_len(t, n * TERM_COLUMNS);
         }
-        let mut queue = Vec::new();
+        let mut queue = Vec::with_capacity(n.div_ceil(CHUNK));
         {
-            let mut rest_b: &mut [f32] = brdf;
-            let mut rest_t: Option<&mut [f32]> = terms.map(|t| t.as_mut_slice());
-            for (mi, &count) in counts_per.iter().enumerate() {
-                let mut start = group_start[mi];
-                let end = start + count;
-                while start < end {
-                    let len = CHUNK.min(end - start);
-                    let (b, rb) = std::mem::take(&mut rest_b).split_at_mut(len * 3);
-                    rest_b = rb;
-                    let t = match rest_t.take() {
-                        Some(t) => {
-                            let (a, rt) = t.split_at_mut(len * TERM_COLUMNS);
-                            rest_t = Some(rt);
-                            Some(a)
-                        }
-                        None => None,
-                    };
-                    queue.push(Work {
-                        material: if single { src.material(0) } else { mi },
-                        start,
-                        brdf: b,
-                        terms: t,
-                    });
-                    start += len;
-                }
+            let mut rest_b: &mut [f32] = &mut out.brdf;
+            let mut rest_t: Option<&mut [f32]> = out.terms.as_mut().map(|t| t.as_mut_slice());
+            let mut start = 0;
+            while start < n {
+                let len = CHUNK.min(n - start);
+                let (b, rb) = std::mem::take(&mut rest_b).split_at_mut(len * 3);
+                rest_b = rb;
+                let t = match rest_t.take() {
+                    Some(t) => {
+                        let (a, rt) = t.split_at_mut(len * TERM_COLUMNS);
+                        rest_t = Some(rt);
+                        Some(a)
+                    }
+                    None => None,
+                };
+                queue.push(Work {
+                    material: single,
+                    start,
+                    brdf: b,
+                    terms: t,
+                });
+                start += len;
             }
         }
         queue.reverse(); // workers pop from the back: rows go out roughly in order
@@ -677,9 +730,16 @@ impl CpuEngine {
         let pool = if helpers > 0 { self.pool() } else { None };
         let cancel = &self.cancel;
         let arch = pulp::Arch::new();
+        let ctx = Context {
+            arch,
+            plans: &plans,
+            materials,
+            src,
+        };
         let work = || -> (Counts, Tally) {
             let mut total = Counts::default();
             let mut tally = Tally::default();
+            let mut local = Grouping::default();
             loop {
                 if cancel.is_cancelled() {
                     break;
@@ -687,20 +747,10 @@ impl CpuEngine {
                 let Some(mut w) = queue.lock().expect("queue lock").pop() else {
                     break;
                 };
-                let op = ChunkOp {
-                    plan: &plans[w.material],
-                    batch: src,
-                    order: order.as_deref(),
-                    material: &materials[w.material],
-                    work: &mut w,
+                let (c, t) = match w.material {
+                    Some(mi) => ctx.lanes(mi, None, &mut w),
+                    None => ctx.mixed_chunk(&mut w, &mut local),
                 };
-                #[cfg(target_arch = "x86_64")]
-                let (c, t) = match arch {
-                    pulp::Arch::V4(simd) => simd.vectorize(ChunkOp4 { simd, op }),
-                    _ => arch.dispatch(op),
-                };
-                #[cfg(not(target_arch = "x86_64"))]
-                let (c, t) = arch.dispatch(op);
                 total.absorb(&c);
                 tally.add(&t);
             }
@@ -723,10 +773,7 @@ impl CpuEngine {
                 parts.into_inner().expect("parts lock")
             }
         };
-        if let Err(e) = self.cancel.check() {
-            self.scratch = (scratch_b, scratch_t.unwrap_or(kept_t));
-            return Err(e);
-        }
+        self.cancel.check()?;
         let mut counts = Counts {
             tuples: n as u64,
             ..Counts::default()
@@ -737,61 +784,6 @@ impl CpuEngine {
             self.last.add(t);
         }
         out.counts = counts;
-        // Back to row order: each thread fills a contiguous range of rows, reading the
-        // grouped outputs where `position` says (the serial scatter took a quarter of an
-        // eight-material batch's time).
-        if order.is_some() {
-            set_len(&mut out.brdf, n * 3);
-            let terms_out = scratch_t.as_ref().map(|_| {
-                let mut u = out.terms.take().unwrap_or_default();
-                set_len(&mut u, n * TERM_COLUMNS);
-                u
-            });
-            out.terms = terms_out;
-            let pool = if self.threads > 1 && n >= 2 * CHUNK {
-                self.pool()
-            } else {
-                None
-            };
-            let parts = if pool.is_some() { self.threads } else { 1 };
-            let rows_per = n.div_ceil(parts).max(1);
-            let job = |r0: usize, b: &mut [f32], t: Option<&mut [f32]>| {
-                for (j, d) in b.chunks_exact_mut(3).enumerate() {
-                    let p = position[r0 + j];
-                    d.copy_from_slice(&scratch_b[p * 3..p * 3 + 3]);
-                }
-                if let (Some(t), Some(src_t)) = (t, scratch_t.as_ref()) {
-                    for (j, d) in t.chunks_exact_mut(TERM_COLUMNS).enumerate() {
-                        let p = position[r0 + j];
-                        d.copy_from_slice(&src_t[p * TERM_COLUMNS..(p + 1) * TERM_COLUMNS]);
-                    }
-                }
-            };
-            let b_parts = out.brdf.chunks_mut(rows_per * 3);
-            let mut t_parts: Vec<Option<&mut [f32]>> = match out.terms.as_mut() {
-                Some(t) => t.chunks_mut(rows_per * TERM_COLUMNS).map(Some).collect(),
-                None => Vec::new(),
-            };
-            t_parts.resize_with(b_parts.len(), || None);
-            match pool {
-                None => {
-                    for (i, (b, t)) in b_parts.zip(t_parts).enumerate() {
-                        job(i * rows_per, b, t);
-                    }
-                }
-                Some(pool) => pool.in_place_scope(|s| {
-                    for (i, (b, t)) in b_parts.zip(t_parts).enumerate() {
-                        let job = &job;
-                        s.spawn(move |_| job(i * rows_per, b, t));
-                    }
-                }),
-            }
-        }
-        // Kept for the next call unless large (a caller's one-off batch of 10^8 rows
-        // should not hold gigabytes for the engine's life).
-        if scratch_b.capacity() <= SCRATCH_KEEP {
-            self.scratch = (scratch_b, scratch_t.unwrap_or(kept_t));
-        }
         Ok(())
     }
 
