@@ -700,7 +700,7 @@ impl CpuEngine {
         let mut queue = Vec::with_capacity(n.div_ceil(CHUNK));
         {
             let mut rest_b: &mut [f32] = &mut out.brdf;
-            let mut rest_t: Option<&mut [f32]> = out.terms.as_mut().map(|t| t.as_mut_slice());
+            let mut rest_t: Option<&mut [f32]> = out.terms.as_deref_mut();
             let mut start = 0;
             while start < n {
                 let len = CHUNK.min(n - start);
