@@ -137,7 +137,7 @@ impl View {
     }
 
     /// The constants for view cosine `mu` and roughness `alpha`, drawing with `sampler`
-    /// ([`Sampler::Engine`] draws GGX whatever `lobe` says: [`integrate_with`] refuses
+    /// ([`Sampler::Engine`] draws GGX whatever `lobe` says: [`crate::table::albedo::integrate_with`] refuses
     /// Beckmann with it).
     pub fn sampled(lobe: Lobe, sampler: Sampler, mu: f64, alpha: f64) -> View {
         let v = [(1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu];
