@@ -38,6 +38,25 @@ use std::sync::{Arc, Mutex};
 /// Rows per chunk: the unit the workers take and between which they check the cancel token.
 const CHUNK: usize = 16_384;
 
+/// Fewest rows per chunk: a small batch is cut into at least [`CHUNKS_PER_THREAD`] chunks a
+/// thread, down to this size.
+const MIN_CHUNK: usize = 1024;
+
+/// Chunks a thread gets at least (for batches of more than `MIN_CHUNK` rows a chunk): with
+/// one or two chunks a thread, the calling thread had often taken them all before a pooled
+/// worker woke (1 → 2 threads 0.98× at 65,536 tuples, four chunks).
+const CHUNKS_PER_THREAD: usize = 8;
+
+/// Rows per chunk for a batch of `n` rows on `threads` threads: [`CHUNK`], or less for a
+/// small batch (a multiple of the lanes' block, at least [`MIN_CHUNK`]). A tuple's result
+/// does not depend on the chunking.
+fn chunk_rows(n: usize, threads: usize) -> usize {
+    let share = n
+        .div_ceil(threads * CHUNKS_PER_THREAD)
+        .next_multiple_of(LANES);
+    share.clamp(MIN_CHUNK, CHUNK)
+}
+
 /// The native CPU engine.
 #[derive(Debug, Clone)]
 pub struct CpuEngine {
@@ -697,13 +716,14 @@ impl CpuEngine {
         if let Some(t) = out.terms.as_mut() {
             set_len(t, n * TERM_COLUMNS);
         }
-        let mut queue = Vec::with_capacity(n.div_ceil(CHUNK));
+        let chunk = chunk_rows(n, self.threads);
+        let mut queue = Vec::with_capacity(n.div_ceil(chunk));
         {
             let mut rest_b: &mut [f32] = &mut out.brdf;
             let mut rest_t: Option<&mut [f32]> = out.terms.as_deref_mut();
             let mut start = 0;
             while start < n {
-                let len = CHUNK.min(n - start);
+                let len = chunk.min(n - start);
                 let (b, rb) = std::mem::take(&mut rest_b).split_at_mut(len * 3);
                 rest_b = rb;
                 let t = match rest_t.take() {
