@@ -88,3 +88,15 @@ pub struct ImportanceJob<'a> {
     /// Hammersley points per `(μ, α)` point.
     pub samples: u32,
 }
+
+impl ImportanceJob<'_> {
+    /// The samples per point, or the tables' error for a job without any.
+    pub fn checked_samples(&self) -> crate::error::Result<u32> {
+        match self.samples {
+            0 => Err(crate::error::Error::Table(
+                "--samples must be at least 1".into(),
+            )),
+            n => Ok(n),
+        }
+    }
+}

@@ -187,10 +187,7 @@ impl CpuEngine {
         job: &ImportanceJob,
         progress: &mut dyn FnMut(u64),
     ) -> Result<Vec<[f64; 2]>> {
-        let samples = job.samples;
-        if samples == 0 {
-            return Err(Error::Table("--samples must be at least 1".into()));
-        }
+        let samples = job.checked_samples()?;
         let lobe = if job.ggx { Lobe::Ggx } else { Lobe::Beckmann };
         let plans: Vec<Plan> = job.materials.iter().map(Plan::for_material).collect();
         let mut points = Vec::with_capacity(job.points.len());

@@ -163,10 +163,7 @@ impl VulkanBackend {
         job: &ImportanceJob,
         progress: &mut dyn FnMut(u64),
     ) -> Result<Vec<[f64; 2]>> {
-        let samples = job.samples;
-        if samples == 0 {
-            return Err(Error::Table("--samples must be at least 1".into()));
-        }
+        let samples = job.checked_samples()?;
         let blocks = samples.div_ceil(SAMPLES_PER_BLOCK);
         let total = job.points.len() as u64 * u64::from(blocks);
         if total > MAX_GENERATED_TEXELS {
