@@ -89,9 +89,13 @@ pub struct UnitSample {
 }
 
 impl UnitSample {
-    /// The columns [`View::ggx_samples`] reads: `(√u1 cos 2πu2, √u1 sin 2πu2, chord)`.
-    pub fn columns(&self) -> [f64; 3] {
-        [self.disk[0], self.disk[1], self.chord]
+    /// The columns [`View::lane_samples`] reads for `lobe`: GGX `(√u1 cos 2πu2,
+    /// √u1 sin 2πu2, chord)`, Beckmann `(−ln(1 − u1), cos 2πu2, sin 2πu2)`.
+    pub fn columns(&self, lobe: Lobe) -> [f64; 3] {
+        match lobe {
+            Lobe::Ggx => [self.disk[0], self.disk[1], self.chord],
+            Lobe::Beckmann => [self.neg_log, self.phi[0], self.phi[1]],
+        }
     }
 
     /// Point `k` of `n` ([`hammersley`]).
@@ -165,10 +169,15 @@ impl View {
         }
     }
 
-    /// Whether [`View::ggx_samples`] makes this view's samples (GGX by its visible
-    /// normals).
-    pub fn is_ggx_visible(&self) -> bool {
-        self.sampler == Sampler::Visible && self.lobe == Lobe::Ggx
+    /// Whether [`View::lane_samples`] makes this view's samples (the project's sampler,
+    /// [`Sampler::Visible`], of either lobe).
+    pub fn has_lanes(&self) -> bool {
+        self.sampler == Sampler::Visible
+    }
+
+    /// The lobe it samples.
+    pub fn lobe(&self) -> Lobe {
+        self.lobe
     }
 
     /// The microfacet normal of unit sample `u`: GGX by Heitz 2018, "Sampling the GGX
@@ -206,15 +215,25 @@ impl View {
     /// `f(l) · weight` is consistent: GGX `cos_i / (G1(v) D(h) / (4 cos_o))`, Beckmann
     /// `cos_i / (D(h) cos_h / (4 c))`.
     pub fn sample(&self, u: &UnitSample) -> Option<Sample> {
-        if self.is_ggx_visible() {
+        if self.has_lanes() {
             let mut s = Samples::<1>::default();
-            self.ggx_samples(&[u.disk[0]], &[u.disk[1]], &[u.chord], &mut s);
-            return s.ok[0].then_some(Sample {
-                l: [s.l[0][0], s.l[1][0], s.l[2][0]],
-                weight: s.weight[0],
-                c: s.c[0],
-            });
+            let [a, b, c] = u.columns(self.lobe);
+            self.lane_samples(&[a], &[b], &[c], &mut s);
+            if !s.redo[0] {
+                return s.ok[0].then_some(Sample {
+                    l: [s.l[0][0], s.l[1][0], s.l[2][0]],
+                    weight: s.weight[0],
+                    c: s.c[0],
+                });
+            }
         }
+        self.sample_one(u)
+    }
+
+    /// [`View::sample`] lane by lane with libm's `exp` and the reference's guarded D:
+    /// the engines' LUT sampler, and the Beckmann lanes whose D leaves the range of
+    /// [`View::lane_samples`]' direct form (`redo`).
+    pub fn sample_one(&self, u: &UnitSample) -> Option<Sample> {
         let (v, vf) = (self.v, self.vf);
         let h = self.normal(u);
         let vh = dot(v, h);
@@ -241,21 +260,24 @@ impl View {
 }
 
 impl View {
-    /// [`View::sample`] of `L` unit samples at once, GGX by its visible normals: the unit
-    /// samples as columns ([`UnitSample::columns`]), the samples into `out`. Each lane
-    /// runs `sample`'s operations in its order, written as loops over the lanes that the
-    /// compiler vectorises where the caller enables wide registers (the CPU engine): so
-    /// `sample` is this function with one lane, and both give the same bits.
+    /// [`View::sample`] of `L` unit samples at once ([`Sampler::Visible`]): the unit
+    /// samples as columns ([`UnitSample::columns`] of this view's lobe), the samples into
+    /// `out`. Each lane runs `sample`'s operations in its order, written as loops over the
+    /// lanes that the compiler vectorises where the caller enables wide registers (the CPU
+    /// engine): `sample` is this function with one lane, so both give the same bits. A
+    /// lane marked `redo` (Beckmann's D outside its direct form's range) is
+    /// [`View::sample_one`]'s.
     #[inline(always)]
-    pub fn ggx_samples<const L: usize>(
+    pub fn lane_samples<const L: usize>(
         &self,
-        disk0: &[f64; L],
-        disk1: &[f64; L],
-        chord: &[f64; L],
+        c0: &[f64; L],
+        c1: &[f64; L],
+        c2: &[f64; L],
         out: &mut Samples<L>,
     ) {
         let (a, s, v, vf) = (self.alpha, self.s, self.v, self.vf);
         let [t1, t2, vh] = self.frame;
+        let ggx = self.lobe == Lobe::Ggx;
         let dot3 = |x: [f64; 3], y: [f64; 3]| (x[0] * y[0] + x[1] * y[1]) + x[2] * y[2];
         let unit = |x: [f64; 3]| {
             let inv = 1.0 / dot3(x, x).sqrt();
@@ -263,11 +285,18 @@ impl View {
         };
         for k in 0..L {
             // The normal (`View::normal`).
-            let p1 = disk0[k];
-            let p2 = (1.0 - s) * chord[k] + s * disk1[k];
-            let p3 = (1.0 - p1 * p1 - p2 * p2).max(0.0).sqrt();
-            let n: [f64; 3] = std::array::from_fn(|i| p1 * t1[i] + p2 * t2[i] + p3 * vh[i]);
-            let h = unit([a * n[0], a * n[1], n[2].max(0.0)]);
+            let h = if ggx {
+                let (p1, chord, disk1) = (c0[k], c2[k], c1[k]);
+                let p2 = (1.0 - s) * chord + s * disk1;
+                let p3 = (1.0 - p1 * p1 - p2 * p2).max(0.0).sqrt();
+                let n: [f64; 3] = std::array::from_fn(|i| p1 * t1[i] + p2 * t2[i] + p3 * vh[i]);
+                unit([a * n[0], a * n[1], n[2].max(0.0)])
+            } else {
+                let tan2 = a * a * c0[k];
+                let cos = 1.0 / (1.0 + tan2).sqrt();
+                let sin = tan2.sqrt() * cos;
+                [sin * c1[k], sin * c2[k], cos]
+            };
             // The sample.
             let vdh = dot3(v, h);
             let l: [f64; 3] = std::array::from_fn(|i| 2.0 * vdh * h[i] - v[i]);
@@ -275,7 +304,18 @@ impl View {
             let (cos_i, cos_o) = (lf[2], vf[2]);
             let hf = unit(std::array::from_fn(|i| lf[i] + vf[i]));
             let (cos_h, sin2_h, c) = (hf[2], hf[0] * hf[0] + hf[1] * hf[1], dot3(vf, hf));
-            let pdf = self.g1 * ggx_d(cos_h, sin2_h, a) / (4.0 * cos_o);
+            let (pdf, redo) = if ggx {
+                (self.g1 * ggx_d(cos_h, sin2_h, a) / (4.0 * cos_o), false)
+            } else {
+                // Beckmann's D, exp(−tan²/α²)/(π α² cos⁴), in its direct form; where that
+                // form under- or overflows the lane is redone with the reference's guarded
+                // one (`sample_one`).
+                let arg = -(sin2_h / (cos_h * cos_h)) / (a * a);
+                let c4 = cos_h.powi(4);
+                let d = exp_neg(arg) / (PI * a * a * c4);
+                let pdf = d * cos_h / (4.0 * c);
+                (pdf, !(arg >= EXP_NEG_MIN && c4.is_normal()))
+            };
             let weight = cos_i / pdf;
             for (o, x) in out.l.iter_mut().zip(l) {
                 o[k] = x;
@@ -284,11 +324,40 @@ impl View {
             out.c[k] = c;
             // Below the horizon (or a degenerate l: NaN), or a pdf that underflowed.
             out.ok[k] = cos_i > 0.0 && weight.is_finite();
+            out.redo[k] = redo && cos_i > 0.0;
         }
     }
 }
 
-/// `L` samples of [`View::ggx_samples`], lane by lane.
+/// Smallest argument of [`exp_neg`]: e^−700 ≈ 1e-304 is still normal.
+const EXP_NEG_MIN: f64 = -700.0;
+
+/// e^x for `EXP_NEG_MIN ≤ x ≤ 0` within 2 ulp, branch free (so that lanes of it
+/// vectorise, where libm's `exp` is a call a lane): x = k ln 2 + r with |r| ≤ ln 2/2
+/// (Cody–Waite, ln 2 split so that k·LN2_HI is exact), the Taylor polynomial of e^r to r¹³
+/// (the first term left out is below 4e-18), times 2^k from the exponent bits. Outside the
+/// range the caller does not use the value.
+#[inline(always)]
+fn exp_neg(x: f64) -> f64 {
+    const LN2_HI: f64 = 6.931_471_803_691_238e-1;
+    const LN2_LO: f64 = 1.908_214_929_270_587_7e-10;
+    // 1.5 · 2^52: adding and subtracting it rounds to an integer without `round` (a libm
+    // call below SSE4.1).
+    const ROUND: f64 = 6_755_399_441_055_744.0;
+    let x = x.clamp(EXP_NEG_MIN, 0.0);
+    let k = (x * std::f64::consts::LOG2_E + ROUND) - ROUND;
+    let r = (x - k * LN2_HI) - k * LN2_LO;
+    let mut p = 1.0 / 6_227_020_800.0; // 1/13!
+    let mut f = 6_227_020_800.0;
+    for n in (1..13).rev() {
+        f /= f64::from(n + 1);
+        p = p * r + 1.0 / f;
+    }
+    let p = p * r + 1.0;
+    p * f64::from_bits(((k as i64 + 1023) as u64) << 52)
+}
+
+/// `L` samples of [`View::lane_samples`], lane by lane.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Samples<const L: usize> {
     /// `l` (unit; the backend reads it rounded to f32): `l[i][k]` is component `i` of lane `k`.
@@ -300,6 +369,9 @@ pub struct Samples<const L: usize> {
     /// Whether the lane is a sample (`false`: below the horizon, where [`View::sample`]
     /// gives `None`).
     pub ok: [bool; L],
+    /// Whether the lane must be made again by [`View::sample_one`] (its other fields are
+    /// then not the sample).
+    pub redo: [bool; L],
 }
 
 impl<const L: usize> Default for Samples<L> {
@@ -309,6 +381,7 @@ impl<const L: usize> Default for Samples<L> {
             weight: [0.0; L],
             c: [0.0; L],
             ok: [false; L],
+            redo: [false; L],
         }
     }
 }
@@ -332,4 +405,51 @@ pub fn as_f32(a: [f64; 3]) -> [f64; 3] {
 /// `(1 − c)⁵`: Schlick's weight of `1 − F0` (Schlick 1994), the DFG table's second sum.
 pub fn schlick_weight(c: f64) -> f64 {
     (1.0 - c).clamp(0.0, 1.0).powi(5)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn exp_neg_is_within_two_ulp_of_libm() {
+        let mut worst = 0f64;
+        for i in 0..=700_000 {
+            let x = -f64::from(i) / 1000.0 - f64::from(i % 7) * 1e-4;
+            let x = x.max(EXP_NEG_MIN);
+            let (got, want) = (exp_neg(x), x.exp());
+            let ulps = (got - want).abs() / (want * f64::EPSILON);
+            assert!(ulps <= 2.0, "exp({x}) = {got:e}, libm {want:e}: {ulps} ulp");
+            worst = worst.max(ulps);
+        }
+        assert_eq!(exp_neg(0.0), 1.0);
+        assert!(worst > 0.0, "compared something");
+    }
+
+    #[test]
+    fn one_lane_and_sixteen_give_the_same_samples() {
+        for lobe in [Lobe::Ggx, Lobe::Beckmann] {
+            for (mu, alpha) in [(0.01, 0.001), (0.3, 0.2), (0.9, 1.0)] {
+                let view = View::new(lobe, mu, alpha);
+                let units: Vec<UnitSample> = (0..64).map(|k| UnitSample::new(k, 64)).collect();
+                for block in units.chunks(16) {
+                    let col = |c: usize| -> [f64; 16] {
+                        std::array::from_fn(|k| block[k].columns(lobe)[c])
+                    };
+                    let mut out = Samples::<16>::default();
+                    view.lane_samples(&col(0), &col(1), &col(2), &mut out);
+                    for (k, u) in block.iter().enumerate() {
+                        let one = view.sample(u);
+                        assert!(!out.redo[k]);
+                        assert_eq!(out.ok[k], one.is_some(), "{lobe:?} {mu} {alpha} lane {k}");
+                        if let Some(s) = one {
+                            assert_eq!(s.weight.to_bits(), out.weight[k].to_bits());
+                            assert_eq!(s.c.to_bits(), out.c[k].to_bits());
+                            assert_eq!(s.l, [out.l[0][k], out.l[1][k], out.l[2][k]]);
+                        }
+                    }
+                }
+            }
+        }
+    }
 }

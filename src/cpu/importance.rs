@@ -96,57 +96,85 @@ impl pulp::WithSimd for ItemOp<'_> {
     }
 }
 
-/// `[Σ x, Σ x (1 − c)⁵]`, `x = f · cos_i/pdf`, over the samples `units` of one point, in
-/// sample order (a below-horizon sample adds nothing, as its weight 0 does on the host).
-#[inline(always)]
-fn point_sums(pt: &Point, units: &[UnitSample], cols: &[Vec<f64>; 3]) -> [f64; 2] {
-    let v32 = pt.view.v.map(|x| x as f32);
-    let mut inp = Inputs::default();
-    for c in 0..3 {
-        inp.v[3 + c] = [v32[c]; LANES];
+/// The samples of one point gathered into a block of lanes, and its sums so far.
+struct Acc<'a> {
+    pt: &'a Point<'a>,
+    v32: [f32; 3],
+    inp: Inputs,
+    out: Outputs,
+    weights: [[f64; 2]; LANES],
+    n: usize,
+    sums: [f64; 2],
+}
+
+impl<'a> Acc<'a> {
+    #[inline(always)]
+    fn new(pt: &'a Point<'a>) -> Acc<'a> {
+        let v32 = pt.view.v.map(|x| x as f32);
+        let mut inp = Inputs::default();
+        for c in 0..3 {
+            inp.v[3 + c] = [v32[c]; LANES];
+        }
+        inp.v[8] = [1.0; LANES];
+        Acc {
+            pt,
+            v32,
+            inp,
+            out: Outputs::default(),
+            weights: [[0f64; 2]; LANES],
+            n: 0,
+            sums: [0f64; 2],
+        }
     }
-    inp.v[8] = [1.0; LANES];
-    let mut out = Outputs::default();
-    let mut weights = [[0f64; 2]; LANES];
-    let mut sums = [0f64; 2];
-    let mut n = 0;
-    // The lanes' results of the `n` samples gathered so far, added in order.
-    let mut flush = |inp: &Inputs, weights: &[[f64; 2]; LANES], n: usize, sums: &mut [f64; 2]| {
-        let lanes = f_none_block(pt.plan, inp, &mut out);
-        for k in 0..n {
-            let f = if lanes && !out.rescue[k] {
-                out.brdf[0][k]
+
+    /// One sample into the next lane, the block evaluated when full. (Methods rather than
+    /// closures: a closure LLVM leaves out of line is a call a lane and no vectors.)
+    #[inline(always)]
+    fn push(&mut self, s: Sample) {
+        for c in 0..3 {
+            self.inp.v[c][self.n] = s.l[c] as f32;
+        }
+        // The host's weights, `weight(c)` times `cos_i/pdf` (tables' DFG: [1, (1 − c)⁵]).
+        self.weights[self.n] = [s.weight, schlick_weight(s.c) * s.weight];
+        self.n += 1;
+        if self.n == LANES {
+            self.flush();
+        }
+    }
+
+    /// The lanes' results of the samples gathered so far, added in order.
+    #[inline(always)]
+    fn flush(&mut self) {
+        let lanes = f_none_block(self.pt.plan, &self.inp, &mut self.out);
+        for k in 0..self.n {
+            let f = if lanes && !self.out.rescue[k] {
+                self.out.brdf[0][k]
             } else {
                 let t = Tuple {
-                    l: [inp.v[0][k], inp.v[1][k], inp.v[2][k]],
-                    v: v32,
+                    l: [self.inp.v[0][k], self.inp.v[1][k], self.inp.v[2][k]],
+                    v: self.v32,
                     n: [0.0, 0.0, 1.0],
                     material: 0,
                     t: None,
                 };
-                to_output_f32(evaluate_tuple(&t, pt.material).brdf[0])
+                to_output_f32(evaluate_tuple(&t, self.pt.material).brdf[0])
             };
             let f = f64::from(f);
-            for (s, w) in sums.iter_mut().zip(weights[k]) {
+            for (s, w) in self.sums.iter_mut().zip(self.weights[k]) {
                 *s += f * w;
             }
         }
-    };
-    // One sample into the next lane, flushed when the block is full.
-    let mut push = |s: Sample, inp: &mut Inputs, sums: &mut [f64; 2]| {
-        for c in 0..3 {
-            inp.v[c][n] = s.l[c] as f32;
-        }
-        // The host's weights, `weight(c)` times `cos_i/pdf` (tables' DFG: [1, (1 − c)⁵]).
-        weights[n] = [s.weight, schlick_weight(s.c) * s.weight];
-        n += 1;
-        if n == LANES {
-            flush(inp, &weights, n, sums);
-            n = 0;
-        }
-    };
-    if pt.view.is_ggx_visible() {
-        // GGX: `LANES` samples at a time in wide f64 registers.
+        self.n = 0;
+    }
+}
+
+/// `[Σ x, Σ x (1 − c)⁵]`, `x = f · cos_i/pdf`, over the samples `units` of one point, in
+/// sample order (a below-horizon sample adds nothing, as its weight 0 does on the host).
+#[inline(always)]
+fn point_sums(pt: &Point, units: &[UnitSample], cols: &[Vec<f64>; 3]) -> [f64; 2] {
+    let mut acc = Acc::new(pt);
+    if pt.view.has_lanes() {
+        // `LANES` samples at a time in wide f64 registers.
         let mut made = Samples::<LANES>::default();
         for (j, u) in units.chunks(LANES).enumerate() {
             let col = |c: usize| -> &[f64; LANES] {
@@ -154,30 +182,32 @@ fn point_sums(pt: &Point, units: &[UnitSample], cols: &[Vec<f64>; 3]) -> [f64; 2
                     .try_into()
                     .expect("columns padded to whole blocks")
             };
-            pt.view.ggx_samples(col(0), col(1), col(2), &mut made);
+            pt.view.lane_samples(col(0), col(1), col(2), &mut made);
             for k in 0..u.len() {
-                if made.ok[k] {
-                    let l = [made.l[0][k], made.l[1][k], made.l[2][k]];
-                    let s = Sample {
-                        l,
+                if made.redo[k] {
+                    if let Some(s) = pt.view.sample_one(&u[k]) {
+                        acc.push(s);
+                    }
+                } else if made.ok[k] {
+                    acc.push(Sample {
+                        l: [made.l[0][k], made.l[1][k], made.l[2][k]],
                         weight: made.weight[k],
                         c: made.c[k],
-                    };
-                    push(s, &mut inp, &mut sums);
+                    });
                 }
             }
         }
     } else {
         for u in units {
             if let Some(s) = pt.view.sample(u) {
-                push(s, &mut inp, &mut sums);
+                acc.push(s);
             }
         }
     }
-    if n > 0 {
-        flush(&inp, &weights, n, &mut sums);
+    if acc.n > 0 {
+        acc.flush();
     }
-    sums
+    acc.sums
 }
 
 impl CpuEngine {
@@ -238,7 +268,7 @@ impl CpuEngine {
                     units_of = b;
                     for (c, col) in cols.iter_mut().enumerate() {
                         col.clear();
-                        col.extend(units.iter().map(|u| u.columns()[c]));
+                        col.extend(units.iter().map(|u| u.columns(lobe)[c]));
                         col.resize(units.len().next_multiple_of(LANES), 0.0);
                     }
                 }
