@@ -824,10 +824,16 @@ impl CpuEngine {
 
 /// Makes `v` exactly `len` long. Every element is overwritten by the evaluation, so a
 /// reused buffer keeps its stale values instead of being zeroed again; only growth is
-/// filled (and fresh memory faulted in).
+/// filled. A buffer that must grow is replaced by a zeroed allocation (`calloc`: fresh
+/// pages arrive zero from the system), so its pages are faulted in by the workers that
+/// write them, in parallel, instead of by a serial fill here first.
 fn set_len(v: &mut Vec<f32>, len: usize) {
-    v.truncate(len);
-    v.resize(len, 0.0);
+    if len > v.capacity() {
+        *v = vec![0.0; len];
+    } else {
+        v.truncate(len);
+        v.resize(len, 0.0);
+    }
 }
 
 impl Backend for CpuEngine {
