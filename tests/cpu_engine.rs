@@ -951,8 +951,9 @@ fn the_engine_made_importance_sums_are_the_host_made_ones() {
                     if samples <= 4096 {
                         assert_eq!(a.to_bits(), b.to_bits(), "{what}: point {p} sum {k}");
                     } else {
+                        // Block sums added in another order: measured up to 9.2e-15.
                         assert!(
-                            (a - b).abs() <= 1e-13 * b.abs(),
+                            (a - b).abs() <= 3e-14 * b.abs(),
                             "{what}: point {p} sum {k}: {a} vs {b}"
                         );
                     }
