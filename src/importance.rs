@@ -192,20 +192,30 @@ impl View {
             let sin = (1.0 - cos2).sqrt();
             return [sin * cos_phi, sin * sin_phi, cos2.sqrt()];
         }
+        let [c0, c1, c2] = u.columns(self.lobe);
+        self.lane_normal(c0, c1, c2)
+    }
+
+    /// The normal of one unit sample given as its columns ([`UnitSample::columns`]): the
+    /// one formula behind [`View::normal`] and [`View::lane_samples`].
+    #[inline(always)]
+    fn lane_normal(&self, c0: f64, c1: f64, c2: f64) -> [f64; 3] {
+        let a = self.alpha;
         match self.lobe {
             Lobe::Ggx => {
                 let [t1, t2, vh] = self.frame;
-                let p1 = u.disk[0];
-                let p2 = (1.0 - self.s) * u.chord + self.s * u.disk[1];
+                let (p1, disk1, chord) = (c0, c1, c2);
+                let p2 = (1.0 - self.s) * chord + self.s * disk1;
                 let p3 = (1.0 - p1 * p1 - p2 * p2).max(0.0).sqrt();
                 let n: [f64; 3] = std::array::from_fn(|i| p1 * t1[i] + p2 * t2[i] + p3 * vh[i]);
                 normalize_reciprocal([a * n[0], a * n[1], n[2].max(0.0)])
             }
             Lobe::Beckmann => {
-                let tan2 = a * a * u.neg_log;
+                let (neg_log, cos_phi, sin_phi) = (c0, c1, c2);
+                let tan2 = a * a * neg_log;
                 let cos = 1.0 / (1.0 + tan2).sqrt();
                 let sin = tan2.sqrt() * cos;
-                [sin * u.phi[0], sin * u.phi[1], cos]
+                [sin * cos_phi, sin * sin_phi, cos]
             }
         }
     }
@@ -275,8 +285,7 @@ impl View {
         c2: &[f64; L],
         out: &mut Samples<L>,
     ) {
-        let (a, s, v, vf) = (self.alpha, self.s, self.v, self.vf);
-        let [t1, t2, vh] = self.frame;
+        let (a, v, vf) = (self.alpha, self.v, self.vf);
         let ggx = self.lobe == Lobe::Ggx;
         let dot3 = |x: [f64; 3], y: [f64; 3]| (x[0] * y[0] + x[1] * y[1]) + x[2] * y[2];
         let unit = |x: [f64; 3]| {
@@ -284,19 +293,7 @@ impl View {
             x.map(|c| c * inv)
         };
         for k in 0..L {
-            // The normal (`View::normal`).
-            let h = if ggx {
-                let (p1, chord, disk1) = (c0[k], c2[k], c1[k]);
-                let p2 = (1.0 - s) * chord + s * disk1;
-                let p3 = (1.0 - p1 * p1 - p2 * p2).max(0.0).sqrt();
-                let n: [f64; 3] = std::array::from_fn(|i| p1 * t1[i] + p2 * t2[i] + p3 * vh[i]);
-                unit([a * n[0], a * n[1], n[2].max(0.0)])
-            } else {
-                let tan2 = a * a * c0[k];
-                let cos = 1.0 / (1.0 + tan2).sqrt();
-                let sin = tan2.sqrt() * cos;
-                [sin * c1[k], sin * c2[k], cos]
-            };
+            let h = self.lane_normal(c0[k], c1[k], c2[k]);
             // The sample.
             let vdh = dot3(v, h);
             let l: [f64; 3] = std::array::from_fn(|i| 2.0 * vdh * h[i] - v[i]);

@@ -1,11 +1,12 @@
-//! The native CPU engine ([`CpuEngine`]): the whole contract on every core, with the most
-//! common material groups in f32 SIMD lanes (see [`kernel`]) and every other group through
-//! the f64 reference, tuple by tuple, in parallel (docs/CPU_ENGINE.md).
+//! The native CPU engine ([`CpuEngine`]): the whole contract on every core, every material
+//! group in SIMD lanes (see [`kernel`]; measured materials in `measured`), and the tuples
+//! the lanes cannot vouch for through the f64 reference (docs/CPU_ENGINE.md).
 //!
 //! The batch is cut into chunks of rows, taken from a shared queue by the calling thread
 //! and the workers of a persistent pool (`rayon-core`, built once per engine). A chunk of
 //! a batch with several materials groups its own rows by material (a stable counting
-//! sort) and puts the outputs back in row order, all within the cache. Each tuple's result depends only on the tuple and its material, so the
+//! sort) and puts the outputs back in row order, all within the cache. Each tuple's
+//! result depends only on the tuple and its material, so the
 //! output is the same for any chunk size and thread count. The local-frame form
 //! ([`LocalBatch`]: `Lx Ly Lz Vx Vy Vz`, N = +z, one material) is read as it is, never
 //! expanded to rows.
@@ -212,6 +213,8 @@ struct Context<'a> {
 /// A worker's buffers for grouping a mixed chunk, kept from chunk to chunk.
 #[derive(Default)]
 struct Grouping {
+    /// Each row's material, read once from the batch.
+    material: Vec<usize>,
     /// Rows per material in the chunk, then where each material's rows start.
     start: Vec<usize>,
     /// The chunk's rows (batch indices) grouped by material, in row order within a group.
@@ -247,14 +250,16 @@ impl Context<'_> {
     fn mixed_chunk(&self, w: &mut Work, g: &mut Grouping) -> (Counts, Tally) {
         let len = w.brdf.len() / 3;
         let m = self.materials.len();
+        g.material.clear();
+        g.material
+            .extend((w.start..w.start + len).map(|r| self.src.material(r)));
         g.start.clear();
         g.start.resize(m + 1, 0);
-        for r in w.start..w.start + len {
-            g.start[self.src.material(r) + 1] += 1;
+        for &mi in &g.material {
+            g.start[mi + 1] += 1;
         }
         if let Some(mi) = (0..m).find(|&mi| g.start[mi + 1] == len) {
             // One material in this chunk: read in place.
-            w.material = Some(mi);
             return self.lanes(mi, None, w);
         }
         for mi in 0..m {
@@ -263,9 +268,8 @@ impl Context<'_> {
         g.order.clear();
         g.order.resize(len, 0);
         let mut next = g.start.clone();
-        for r in w.start..w.start + len {
-            let mi = self.src.material(r);
-            g.order[next[mi]] = r;
+        for (j, &mi) in g.material.iter().enumerate() {
+            g.order[next[mi]] = w.start + j;
             next[mi] += 1;
         }
         let terms = w.terms.is_some();
