@@ -94,16 +94,26 @@ pub fn open(
 ) -> Result<Box<dyn Backend>> {
     Ok(match kind {
         Kind::Reference => Box::new(CpuReference::new()),
-        Kind::Cpu => Box::new(CpuEngine::new()),
+        Kind::Cpu => Box::new(cpu_engine()?),
         Kind::Vulkan => Box::new(open_vulkan(device, options)?),
         Kind::Auto => {
             if auto_choice(device.as_ref()).0 {
                 Box::new(open_vulkan(device, options)?)
             } else {
-                Box::new(CpuEngine::new())
+                Box::new(cpu_engine()?)
             }
         }
     })
+}
+
+/// The CPU engine on every core, on the instruction set `VKBRDF_CPU_ISA` names (an error
+/// for a bad name or one this CPU lacks), else the best.
+pub fn cpu_engine() -> Result<CpuEngine> {
+    let isa = crate::cpu::Isa::from_env()?;
+    Ok(CpuEngine::with_isa(
+        std::thread::available_parallelism().map_or(1, |n| n.get()),
+        isa,
+    ))
 }
 
 #[cfg(test)]

@@ -169,26 +169,20 @@ impl CombinationReport {
     }
 }
 
-/// The tolerance, one rule for every combination and column: a value `x` with reference
-/// `r` passes when
+/// The tolerance, FORMULAS.md §1's conformance rule, one for every engine, combination and
+/// column: a value `x` with reference `r` passes when
 ///
-/// `|x − r| ≤ RELATIVE_TOLERANCE · max(|r|, FLOOR) + CONDITIONING_FACTOR · S`,
+/// `|x − r| ≤ RELATIVE_TOLERANCE · max(|r|, FLOOR) + CONDITIONING_FACTOR · S_in`,
 ///
-/// where `S` is [`f32_sensitivity`]: how far the exact function moves when its inputs and
-/// the unit vectors derived from them are perturbed by one f32 rounding.
-///
-/// Where the problem is well conditioned, `S` is negligible and the rule is 1e-5 relative
-/// (measured on lavapipe, 198 combinations × 2000 tuples: largest relative error among
-/// values whose `4 S` is below `1e-5 |r|` is 7.2e-6). Where it is not, no f32 evaluator can
-/// match 1e-5: near grazing mirror geometry (l ≈ −v, so `|l + v| = 2c` is small) the
-/// rounding of the unit vectors l and v turns the half vector by ~u/|l + v| (u = 6e-8), and
-/// a sharp lobe (`exp(−tan²δ/m²)`, `cos^e`) amplifies a change of δ by ~2δ/m². There the
-/// plain relative error reaches 1e-3 (m = 0.01, cosines ~1e-2) and the rule allows a small
-/// multiple of `S`. The kernel's error is at most 1.6 `S` in the runs made (seeds 1–3, up
-/// to 4000 tuples per combination: most tolerance used 0.41), so the factor 4 leaves a
-/// margin of 2.5 for longer runs.
+/// where `S_in` is [`f32_sensitivity`]: how far the exact function moves when the given
+/// float32 inputs L, V, N (and T) are rotated by one rounding. Where the problem is well
+/// conditioned `S_in` is negligible and the rule is 1e-5 relative; where the inputs
+/// themselves do not determine the value to 1e-5 (a sharp lobe near grazing mirror
+/// geometry, where rounding L or V turns the half vector by ~u/|l + v| and the lobe
+/// multiplies a change of δ by ~2δ/m²), no evaluator of those inputs can do better than a
+/// small multiple of `S_in`.
 pub fn tolerance() -> &'static str {
-    "1e-5 × max(|ref|, 1e-6) + 4 × f32 sensitivity"
+    "1e-5 × max(|ref|, 1e-6) + 4 × S_in (sensitivity to one rounding of the f32 inputs)"
 }
 
 /// The relative part of the tolerance (see [`tolerance`]).
@@ -605,17 +599,14 @@ pub fn generate(c: &Combination, tuples: usize, seed: u64) -> Result<Batch<'stat
 /// The f32 rounding unit u = 2⁻²⁴.
 const U: f64 = 1.0 / (1u64 << 24) as f64;
 
-/// How much each output moves under the perturbations an f32 evaluator cannot avoid, per
-/// column: `Σ_modes |f(perturbed) − f|` with the f64 reference, over
-/// - each input direction (L, V, N, and T when present) rotated by an angle u about two
-///   perpendicular axes (the rounding of a unit vector's components), and
-/// - the two scale modes `h' = normalize((1 + u) l + v)` and `normalize(l + (1 + u) v)`
-///   (the light re-derived as the reflection of v about h', and vice versa): a unit vector
-///   rounded to f32 is 1 ± u long, and where l and v are nearly opposite (grazing mirror
-///   geometry) that length error turns h by u/|l + v| — the dominant error of any f32
-///   evaluation there, although the scale of L or V is irrelevant to the exact function.
+/// `S_in` of FORMULAS.md §1's rule, per column: how much each output moves when the given
+/// float32 inputs change by one rounding — `Σ_modes |f(perturbed) − f|` with the f64
+/// reference, over each input direction (L, V, N, and T when present) rotated by an angle
+/// u = 2⁻²⁴ about two axes perpendicular to it. There are no modes for the quantities an
+/// evaluator derives (the unit vectors' lengths, the half vector): their rounding is the
+/// evaluator's own error, which the f64 frames show is avoidable.
 ///
-/// Large where the problem is ill-conditioned for f32 (sharp lobes, grazing mirror
+/// Large where the problem is ill-conditioned for f32 inputs (sharp lobes, grazing mirror
 /// configurations), tiny elsewhere; the tolerance scales with it
 /// ([`CONDITIONING_FACTOR`]).
 pub fn f32_sensitivity(t: &Tuple, m: &Material) -> [f64; 9] {
@@ -668,15 +659,6 @@ pub fn f32_sensitivity(t: &Tuple, m: &Material) -> [f64; 9] {
             add(l, v, n, Some(r));
         }
     }
-    // The length errors of the unit vectors l and v, seen through h.
-    let (lu, vu) = (normalize_direct(l), normalize_direct(v));
-    let reflect = |d: [f64; 3], h: [f64; 3]| -> [f64; 3] {
-        std::array::from_fn(|k| 2.0 * dot(d, h) * h[k] - d[k])
-    };
-    let h_l = normalize_direct(std::array::from_fn(|k| (1.0 + U) * lu[k] + vu[k]));
-    add(reflect(vu, h_l), v, n, tan);
-    let h_v = normalize_direct(std::array::from_fn(|k| lu[k] + (1.0 + U) * vu[k]));
-    add(l, reflect(lu, h_v), n, tan);
     s
 }
 

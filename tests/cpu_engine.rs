@@ -18,10 +18,22 @@ fn materials(toml: &str) -> Vec<Material> {
 }
 
 #[test]
-fn every_combination_matches_the_reference() {
-    let mut engine = CpuEngine::new();
+fn every_combination_matches_the_reference_on_every_instruction_set() {
+    // The best variant at the check's full size, the others (scalar always) at a third.
+    for isa in vkbrdf::cpu::Isa::available_all() {
+        let tuples = if isa == vkbrdf::cpu::Isa::best() {
+            3000
+        } else {
+            1000
+        };
+        every_combination_matches_the_reference(CpuEngine::with_isa(2, isa), tuples);
+    }
+}
+
+fn every_combination_matches_the_reference(mut engine: CpuEngine, tuples: usize) {
+    eprintln!("{}", engine.name());
     let options = CheckOptions {
-        tuples: 3000,
+        tuples,
         seed: 7,
         only: None,
     };
@@ -55,7 +67,8 @@ fn every_combination_matches_the_reference() {
         .collect();
     assert!(
         failures.is_empty(),
-        "{} of 316 combinations fail:\n{}",
+        "{}: {} of 316 combinations fail:\n{}",
+        engine.name(),
         failures.len(),
         failures.join("\n")
     );

@@ -173,7 +173,7 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         }
     };
     let mut cpu = CpuReference::new();
-    let mut engine = vkbrdf::cpu::CpuEngine::new();
+    let mut engine = vkbrdf::backend_choice::cpu_engine()?;
     let device = vulkan
         .as_ref()
         .map_or("none".to_string(), |v| v.device_name());

@@ -96,7 +96,7 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
     } else if args.backend == Some(BackendKind::Reference) {
         (Box::new(vkbrdf::reference::CpuReference::new()), None)
     } else {
-        (Box::new(vkbrdf::cpu::CpuEngine::new()), None)
+        (Box::new(vkbrdf::backend_choice::cpu_engine()?), None)
     };
     let check_options = CheckOptions {
         tuples: args.tuples,

@@ -15,7 +15,11 @@ with the environment variable VKBRDF_DEVICE. The last line says what `--backend 
 (the default) runs and why: the Vulkan kernel when a device is named or a discrete or
 integrated GPU exists, else the native CPU engine.
 
-Exit status: 0 devices listed, 2 no Vulkan loader or no device.
+The first line names the CPU engine's instruction set (the best this CPU runs, or the
+one VKBRDF_CPU_ISA=scalar|avx2+fma|avx512 forces) and the ones the CPU could run.
+
+Exit status: 0 devices listed, 2 no Vulkan loader or no device, or a VKBRDF_CPU_ISA this
+CPU cannot run.
 
 Examples:
   vkbrdf devices
@@ -25,6 +29,21 @@ pub struct Args {}
 
 /// Runs `vkbrdf devices`.
 pub fn run(_args: &Args) -> anyhow::Result<ExitCode> {
+    let isa = vkbrdf::cpu::Isa::from_env()?;
+    let others: Vec<&str> = vkbrdf::cpu::Isa::available_all()
+        .iter()
+        .map(|i| i.name())
+        .collect();
+    let how = match std::env::var(vkbrdf::cpu::isa::ENV) {
+        Ok(v) if !v.trim().is_empty() => format!("forced by {}", vkbrdf::cpu::isa::ENV),
+        _ => "the best this CPU runs".to_string(),
+    };
+    outln!(
+        "CPU engine: {} ({how}; this CPU runs {}; force one with {}=NAME)",
+        isa.name(),
+        others.join(", "),
+        vkbrdf::cpu::isa::ENV
+    );
     let devices = list_devices()?;
     if devices.is_empty() {
         anyhow::bail!("the Vulkan loader found no device; {INSTALL_HINT}");

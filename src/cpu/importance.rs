@@ -245,7 +245,7 @@ impl CpuEngine {
         let helpers = self.threads.min(items).saturating_sub(1);
         let pool = if helpers > 0 { self.pool() } else { None };
         let cancel = &self.cancel;
-        let arch = pulp::Arch::new();
+        let arch = self.arch();
         // Items block-major, so a worker's consecutive items mostly share their unit
         // samples (made again only when the block changes).
         let work = |mut report: Option<&mut dyn FnMut(u64)>| {

@@ -369,6 +369,12 @@ fn length2_ok(q: f32) -> bool {
     (LENGTH2_MIN..=LENGTH2_MAX).contains(&q)
 }
 
+/// [`length2_ok`] of a squared length formed in f64 (false for NaN).
+#[inline(always)]
+fn length2_ok64(q: f64) -> bool {
+    (f64::from(LENGTH2_MIN)..=f64::from(LENGTH2_MAX)).contains(&q)
+}
+
 /// `1/√x`, correctly rounded square root then division: within 1 ulp, and exactly 1 for
 /// x = 1 (the local form's N must come out exactly (0, 0, 1), see [`frame`]).
 #[inline(always)]
@@ -380,40 +386,47 @@ fn rsqrt(x: f32) -> f32 {
 /// cross products with N reduce to single components — the same operations on the same
 /// values as the general frame with that N, so both give the same bits.
 ///
-/// Why f32 suffices (each point within the conformance rule, whose f32 sensitivity models
-/// exactly these roundings, measured by `vkbrdf check` and `stress`): the unit vectors are
-/// the inputs times `1/|x|` (1.5 ulp); in the local form each cosine is one component of
-/// one of them (no cancellation at any angle), in the general form a dot product whose
-/// absolute error, ~2 ulp, is that of the input rotation the rule allows for. The half
-/// vector's components cancel near grazing mirror geometry (`l ≈ −v`), but only by as much
-/// as rounding the unit vectors already turns h; `c` is taken as `|l + v|/2` rather than
-/// `v · h`, which would cancel a second time (`v·l + 1`). The sines are sums of squares
-/// (cross products), never `1 − cos²`.
+/// Why f32 suffices (the bound and its margin: docs/CPU_ENGINE.md, "The f32 frame's error
+/// bound"): l and v are the inputs times `1/|x|` formed in f64 and rounded once to f32, so
+/// each component is within u = 2⁻²⁴ (relative) of the exact unit vector's. Their lengths
+/// must agree to far better than f32's 1 ± 2u: h = normalize(l + v) turns by
+/// `(ε_l − ε_v) tan θ_d` when l and v are scaled by 1 + ε_l and 1 + ε_v, and near the peak of
+/// a lobe of roughness m that rotation δ moves D by ~2δ/m — with f32 lengths (ε up to
+/// 2.5u each) 2e-5 of D at m = 0.05, four times the inputs' own rounding. In the local form
+/// each cosine is one component of a unit vector (no cancellation at any angle), in the
+/// general form a dot product of the raw inputs in f64, then scaled. The half vector's
+/// components cancel near grazing mirror geometry (`l ≈ −v`), but only by as much as the
+/// inputs' own rounding turns h there, and those lanes (`c` < [`FAST_MIN_C`]) take the f64
+/// frame; `c` is taken as `|l + v|/2` rather than `v · h`, which would cancel a second time
+/// (`v·l + 1`). The sines are sums of squares (cross products), never `1 − cos²`.
 #[inline(always)]
 fn frame<const Z: bool>(x: &[f32; 9]) -> Frame {
-    let (lx, ly, lz) = (x[0], x[1], x[2]);
-    let (vx, vy, vz) = (x[3], x[4], x[5]);
-    let (ll, vv) = (lx * lx + ly * ly + lz * lz, vx * vx + vy * vy + vz * vz);
-    let (il, iv) = (rsqrt(ll), rsqrt(vv));
-    let (lx, ly, lz) = (lx * il, ly * il, lz * il);
-    let (vx, vy, vz) = (vx * iv, vy * iv, vz * iv);
-    let (hx, hy, hz) = (lx + vx, ly + vy, lz + vz);
-    let hh = hx * hx + hy * hy + hz * hz;
-    let ih = rsqrt(hh);
-    let c = 0.5 * (hh * ih);
-    // sin² of c from |l − v|/2 = sin θ_d: `1 − c²` of an f32 c near 1 would keep only
-    // the bits c lost (F near the horizon of η² = sin², where it is steep in sin², went
-    // 1.4e-5 wrong that way).
+    // l, v and h in f64, each rounded once to f32 (see the bound above): |L|² and |V|²
+    // are exact in f64 (squares of f32 values), 1/|x| by `rsqrt64` (~1e-16 relative).
+    let w = |i: usize| f64::from(x[i]);
+    let sq3 = |a: [f64; 3]| a[0] * a[0] + a[1] * a[1] + a[2] * a[2];
+    let (l64, v64) = ([w(0), w(1), w(2)], [w(3), w(4), w(5)]);
+    let (ll, vv) = (sq3(l64), sq3(v64));
+    let (il, iv) = (rsqrt64_fast(ll), rsqrt64_fast(vv));
+    let (l64, v64) = (l64.map(|q| q * il), v64.map(|q| q * iv));
+    let h64: [f64; 3] = std::array::from_fn(|j| l64[j] + v64[j]);
+    let hh = sq3(h64);
+    let ih = rsqrt64_fast(hh);
+    let c = (0.5 * (hh * ih)) as f32;
+    let [lx, ly, lz] = l64.map(|q| q as f32);
+    let [vx, vy, vz] = v64.map(|q| q as f32);
+    // sin² of c from |l − v|/2 = sin θ_d: `1 − c²` of a c near 1 keeps only the bits c
+    // lost, and F near the horizon of η² = sin² is steep in sin². (In f32: its relative
+    // error, a few u, enters F no more than c's.)
     let (dx, dy, dz) = (lx - vx, ly - vy, lz - vz);
     let s2 = 0.25 * (dx * dx + dy * dy + dz * dz);
-    let (hx, hy, hz) = (hx * ih, hy * ih, hz * ih);
+    let [hx, hy, hz] = h64.map(|q| (q * ih) as f32);
     let (cos_i, cos_o, cos_h, sin2_h, sin2_i, sin2_o, n_ok);
     if Z {
         // N = (0, 0, 1): |N|² = 1, `rsqrt(1)` = 1, each `n · w` is `0·wx + 0·wy + 1·wz =
         // wz` (a zero's sign aside, and a zero cosine is rescued either way) and each
         // `|n × w|²` is `(−wy)² + wx² + 0 = wy·wy + wx·wx`.
-        (cos_i, cos_o) = (lz, vz);
-        cos_h = (cos_i + cos_o) * ih;
+        (cos_i, cos_o, cos_h) = (lz, vz, hz);
         sin2_h = hy * hy + hx * hx;
         sin2_i = ly * ly + lx * lx;
         sin2_o = vy * vy + vx * vx;
@@ -422,22 +435,19 @@ fn frame<const Z: bool>(x: &[f32; 9]) -> Frame {
         let (nx, ny, nz) = (x[6], x[7], x[8]);
         let nn = nx * nx + ny * ny + nz * nz;
         let inn = rsqrt(nn);
-        // n · l and n · v of the raw inputs in f64 (the products are exact there), then
-        // scaled: an f32 dot product of unit vectors has an absolute error of ~2 ulp, which
-        // a grazing cosine turns into a relative error of K of 1e-3; this one is a few
-        // ulp relative at any angle. With N = (0, 0, 1) these are `lz · 1 · il`, the
-        // local form's bits.
-        let raw_dot = |a: usize| {
-            (f64::from(x[6]) * f64::from(x[a])
-                + f64::from(x[7]) * f64::from(x[a + 1])
-                + f64::from(x[8]) * f64::from(x[a + 2])) as f32
-        };
-        let (nl, nv) = (raw_dot(0) * inn, raw_dot(3) * inn);
-        cos_i = nl * il;
-        cos_o = nv * iv;
+        // n · l and n · v from the raw inputs in f64 (the products are exact there): an
+        // f32 dot product of unit vectors has an absolute error of ~2 ulp, which a grazing
+        // cosine turns into a relative error of K of 1e-3; this one is a few ulp relative
+        // at any angle. (N · L)/|L| is rounded once, then scaled by 1/|N|: with N = (0, 0, 1)
+        // the dot product is Lz exactly and `inn` is 1, so these are the local form's `lz`
+        // and `vz`.
+        let raw_dot = |a: usize| w(6) * w(a) + w(7) * w(a + 1) + w(8) * w(a + 2);
+        let (nl, nv) = (raw_dot(0) * il, raw_dot(3) * iv);
+        cos_i = nl as f32 * inn;
+        cos_o = nv as f32 * inn;
         // n · h = (n · l + n · v)/|l + v|: a sum of two cosines, which above the horizon
-        // does not cancel.
-        cos_h = (cos_i + cos_o) * ih;
+        // does not cancel; with N = (0, 0, 1) it is the local form's `hz`.
+        cos_h = ((nl + nv) * ih) as f32 * inn;
         let (nx, ny, nz) = (nx * inn, ny * inn, nz * inn);
         let cross2 = |ax: f32, ay: f32, az: f32| {
             let (cx, cy, cz) = (ny * az - nz * ay, nz * ax - nx * az, nx * ay - ny * ax);
@@ -450,8 +460,8 @@ fn frame<const Z: bool>(x: &[f32; 9]) -> Frame {
     }
     let g = GRAZING as f32;
     // `>=` is false for NaN: lanes that went non-finite above are rescued too.
-    let ok = length2_ok(ll)
-        && length2_ok(vv)
+    let ok = length2_ok64(ll)
+        && length2_ok64(vv)
         && n_ok
         && cos_i >= g
         && cos_o >= g
@@ -507,6 +517,16 @@ pub(super) fn rsqrt64(x: f64) -> f64 {
     let y0 = f64::from(1.0 / (x as f32).sqrt());
     let y1 = y0 * (1.5 - 0.5 * x * y0 * y0);
     y1 * (1.5 - 0.5 * x * y1 * y1)
+}
+
+/// `1/√x` in f64 with one Newton step from f32's estimate: relative error below 1e-14
+/// (1.5 e² for the estimate's e ≤ 6e-8), for the f32 frame, which rounds every result to
+/// f32 and needs only that l and v be scaled alike to far better than u = 6e-8 (see
+/// [`frame`]). Outside f32's range the result is 0, ∞ or NaN and the frame's tests fail.
+#[inline(always)]
+fn rsqrt64_fast(x: f64) -> f64 {
+    let y0 = f64::from(1.0 / (x as f32).sqrt());
+    y0 * (1.5 - 0.5 * x * y0 * y0)
 }
 
 /// One lane's L, V, N in f64 with their squared lengths, and whether all three are lengths
@@ -847,10 +867,12 @@ impl Lane {
 /// tolerance each threshold used). Uniform directions fall below it in 0.09 % of lanes.
 pub const FAST_MIN_C: f32 = 0.1;
 
-/// Smallest roughness m for which a material may take the f32 frame: below it D turns the
-/// f32 rounding of sin²θ_h at the peak into errors the f64 frame does not make (the stress
-/// corpus's m = 1e-7 gave relative errors of 1e10 in D).
-pub const FAST_MIN_ROUGHNESS: f64 = 0.05;
+/// Smallest roughness m for which a material may take the f32 frame: the frame turns h by
+/// at most ~5u (u = 2⁻²⁴), which near D's peak is a relative error of up to 10u/m, and the
+/// f32 terms add ≤ 25u more; at m = 0.075 the sum is 9.5e-6, inside the rule's 1e-5
+/// wherever the inputs determine the value (docs/CPU_ENGINE.md, "The f32 frame's error
+/// bound"). Below it the f64 frame takes the material.
+pub const FAST_MIN_ROUGHNESS: f64 = 0.075;
 
 /// Isotropic Cook–Torrance on one block, specialised to one distribution, geometry and
 /// Fresnel term, and (`Z`) to N = (0, 0, 1) for the local form.
@@ -1074,7 +1096,7 @@ fn microfacet_dg<const D: u8, const G: u8, const FAST: bool>(p: &Params, fr: &La
     } else if FAST {
         // The f32 frame's materials have m ≥ FAST_MIN_ROUGHNESS and its lanes cos_h ≥
         // GRAZING, which keeps every quantity below inside f32's normal range (m²cos²_h ≥
-        // 2.5e-11, 1/cos²_h ≤ 1e8, the Beckmann norm ≤ 1.3e18): D in f32.
+        // 5.6e-11, 1/cos²_h ≤ 1e8, the Beckmann norm ≤ 5.7e17): D in f32.
         let cos_h2 = fr.cos_h * fr.cos_h;
         let sin2_h = fr.sin2_h32;
         if D == D_GGX {

@@ -11,9 +11,9 @@
 //! ([`LocalBatch`]: `Lx Ly Lz Vx Vy Vz`, N = +z, one material) is read as it is, never
 //! expanded to rows.
 //!
-//! Instruction sets are chosen at run time by `pulp` (AVX-512, AVX2+FMA, or the baseline):
-//! one portable binary, and no `unsafe` here — pulp proves the CPU feature before it enters
-//! a function compiled for it.
+//! Instruction sets are chosen at run time by `pulp` (AVX-512, AVX2+FMA, or the baseline;
+//! [`isa`], `VKBRDF_CPU_ISA` forces one): one portable binary, and no `unsafe` here — pulp
+//! proves the CPU feature before it enters a function compiled for it.
 
 // Lane loops index the lanes' arrays by lane number (see kernel.rs).
 #![allow(clippy::needless_range_loop)]
@@ -21,6 +21,7 @@
 pub mod aniso;
 mod generated;
 pub mod importance;
+pub mod isa;
 pub mod kernel;
 pub mod lobes;
 pub mod math;
@@ -33,6 +34,7 @@ use crate::cancel::Cancel;
 use crate::error::Result;
 use crate::material::{Material, Model};
 use crate::reference::{evaluate_tuple, to_output_f32, Status};
+pub use isa::Isa;
 use kernel::{Inputs, Outputs, Plan, LANES};
 use std::sync::{Arc, Mutex};
 
@@ -62,6 +64,7 @@ fn chunk_rows(n: usize, threads: usize) -> usize {
 #[derive(Debug, Clone)]
 pub struct CpuEngine {
     threads: usize,
+    isa: Isa,
     cancel: Cancel,
     last: Tally,
     /// The `threads − 1` workers beside the calling thread, started at the first batch of
@@ -96,20 +99,10 @@ impl Default for CpuEngine {
     }
 }
 
-/// The instruction set the lanes run on this machine (`avx512`, `avx2+fma` or `scalar`).
+/// The instruction set a default engine's lanes run on this machine (`avx512`, `avx2+fma`
+/// or `scalar`): the one `VKBRDF_CPU_ISA` names, else the best the CPU has.
 pub fn instruction_set() -> &'static str {
-    #[cfg(any(target_arch = "x86", target_arch = "x86_64"))]
-    {
-        match pulp::Arch::new() {
-            pulp::Arch::V4(_) => "avx512",
-            pulp::Arch::V3(_) => "avx2+fma",
-            _ => "scalar",
-        }
-    }
-    #[cfg(not(any(target_arch = "x86", target_arch = "x86_64")))]
-    {
-        "native"
-    }
+    Isa::from_env().unwrap_or_else(|_| Isa::best()).name()
 }
 
 impl CpuEngine {
@@ -118,14 +111,33 @@ impl CpuEngine {
         CpuEngine::with_threads(std::thread::available_parallelism().map_or(1, |n| n.get()))
     }
 
-    /// An engine with `threads` workers (at least 1).
+    /// An engine with `threads` workers (at least 1), on the instruction set
+    /// `VKBRDF_CPU_ISA` names (the best the CPU has when it is unset; a front end calls
+    /// [`Isa::from_env`] first to report a bad name).
     pub fn with_threads(threads: usize) -> CpuEngine {
+        CpuEngine::with_isa(threads, Isa::from_env().unwrap_or_else(|_| Isa::best()))
+    }
+
+    /// An engine with `threads` workers on instruction set `isa`; the best available one
+    /// if the CPU lacks `isa` (check [`Isa::available`] first).
+    pub fn with_isa(threads: usize, isa: Isa) -> CpuEngine {
         CpuEngine {
             threads: threads.max(1),
+            isa: if isa.available() { isa } else { Isa::best() },
             cancel: Cancel::new(),
             last: Tally::default(),
             pool: None,
         }
+    }
+
+    /// The instruction set this engine's lanes run.
+    pub fn isa(&self) -> Isa {
+        self.isa
+    }
+
+    /// pulp's handle for [`CpuEngine::isa`] (available: `with_isa` made sure).
+    fn arch(&self) -> pulp::Arch {
+        self.isa.arch().unwrap_or(pulp::Arch::Scalar)
     }
 
     /// Where the tuples of the last [`Backend::evaluate`] went: lanes, rescued, reference.
@@ -753,7 +765,7 @@ impl CpuEngine {
         let helpers = self.threads.min(chunks).saturating_sub(1);
         let pool = if helpers > 0 { self.pool() } else { None };
         let cancel = &self.cancel;
-        let arch = pulp::Arch::new();
+        let arch = self.arch();
         let ctx = Context {
             arch,
             plans: &plans,
@@ -844,7 +856,7 @@ impl Backend for CpuEngine {
     fn name(&self) -> String {
         format!(
             "cpu ({}, {} thread{})",
-            instruction_set(),
+            self.isa.name(),
             self.threads,
             if self.threads == 1 { "" } else { "s" }
         )

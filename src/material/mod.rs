@@ -15,7 +15,7 @@ pub use terms::{
     Term,
 };
 
-pub use parse::{load_materials, parse_materials, parse_materials_in};
+pub use parse::{load_materials, parse_materials, parse_materials_in, MAX_MATERIALS};
 
 /// An RGB triple (linear, per channel).
 pub type Rgb = [f64; 3];

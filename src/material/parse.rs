@@ -38,6 +38,10 @@ struct Document {
     material: Vec<Spanned<BTreeMap<String, Spanned<Value>>>>,
 }
 
+/// The most materials one file may hold: the tuples' material column is a float32, which
+/// represents every integer only up to 2^24.
+pub const MAX_MATERIALS: usize = 1 << 24;
+
 /// Reads and validates a materials file.
 pub fn load_materials(path: &Path) -> crate::Result<Vec<Material>> {
     let text = std::fs::read_to_string(path).map_err(|source| crate::Error::Io {
@@ -83,7 +87,23 @@ pub fn parse_materials_in(
                 .into(),
         });
     }
+    if doc.material.len() > MAX_MATERIALS {
+        return Err(MaterialError {
+            source_name: source_name.to_string(),
+            line: None,
+            material: None,
+            key: None,
+            message: format!(
+                "{} materials; at most {MAX_MATERIALS} (2^24): the tuples' material column is a float32, which holds every integer only up to 2^24",
+                doc.material.len()
+            ),
+        });
+    }
     let mut out: Vec<Material> = Vec::with_capacity(doc.material.len());
+    // Names seen so far: a hash set keeps the duplicate check linear (comparing each name
+    // with every earlier one took over 20 minutes for 938,213 materials).
+    let mut names: std::collections::HashSet<String> =
+        std::collections::HashSet::with_capacity(doc.material.len());
     for table in &doc.material {
         let ctx = Ctx {
             source_name,
@@ -92,7 +112,7 @@ pub fn parse_materials_in(
             table_line: lines.line(table.span().start),
         };
         let m = ctx.material(table.get_ref())?;
-        if out.iter().any(|o| o.name == m.name) {
+        if !names.insert(m.name.clone()) {
             return Err(ctx.err(
                 Some(&m.name),
                 Some("name"),
@@ -165,6 +185,16 @@ impl Ctx<'_> {
     ) -> Result<Material, MaterialError> {
         let name = match table.get("name") {
             Some(v) => match v.get_ref() {
+                // A control character (a newline, NUL) would break every listing and
+                // report that prints the name on one line.
+                Value::String(s) if s.chars().any(char::is_control) => {
+                    return Err(self.err(
+                        None,
+                        Some("name"),
+                        Some(self.lines.line(v.span().start)),
+                        format!("{s:?} holds a control character (a newline, tab or NUL); names are printed on one line"),
+                    ))
+                }
                 Value::String(s) if !s.trim().is_empty() => s.clone(),
                 _ => {
                     return Err(self.err(
@@ -224,6 +254,21 @@ impl Ctx<'_> {
             preset_storage = body
                 .parse::<toml::Table>()
                 .expect("preset bodies are valid TOML (tested)");
+            // A table that changes the preset's model would silently drop everything the
+            // preset set (its Fresnel, roughness, …): refuse it.
+            let preset_model = preset_storage.get("model").and_then(|v| v.as_str());
+            if let (Some(own), Some(pm)) = (table.get("model"), preset_model) {
+                if own.get_ref().as_str().is_some_and(|m| m != pm) {
+                    return Err(self.err(
+                        Some(&name),
+                        Some("model"),
+                        Some(self.lines.line(own.span().start)),
+                        format!(
+                            "preset `{pname}` is a `{pm}` material; a different `model` would drop what the preset sets — remove `preset` or `model`"
+                        ),
+                    ));
+                }
+            }
             for (k, v) in &preset_storage {
                 map.insert(
                     k.clone(),
