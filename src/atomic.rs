@@ -141,6 +141,17 @@ enum Held {
     Memory { data: Vec<u8>, stdout: bool },
 }
 
+impl Staged {
+    /// The temporary file holding the staged bytes (`None` for an output held in memory:
+    /// a FIFO, a device or standard output).
+    pub fn temp_path(&self) -> Option<&Path> {
+        match &self.bytes {
+            Held::Temp { file, .. } => Some(file.path()),
+            Held::Memory { .. } => None,
+        }
+    }
+}
+
 /// The writer a [`stage`] body gets: buffered, seekable, and checking the cancellation
 /// token on every block it passes on.
 pub struct Sink<'a> {

@@ -233,6 +233,18 @@ pub fn evaluate(
     }
     if let Some(s) = job.shard {
         let c = summary.counts;
+        // The parts' fingerprints as staged (the bytes the rename will publish); an output
+        // held in memory (a device) cannot be merged anyway.
+        let print = |st: Option<&atomic::Staged>| -> Result<Option<shard::InputPrint>> {
+            st.and_then(atomic::Staged::temp_path)
+                .map(shard::fingerprint)
+                .transpose()
+        };
+        let part_print = print(staged.first())?.unwrap_or(shard::InputPrint {
+            size: 0,
+            hash: String::new(),
+        });
+        let terms_part = print(staged.get(1))?;
         let car = shard::Sidecar {
             schema: shard::SIDECAR_SCHEMA,
             shard: s,
@@ -244,6 +256,8 @@ pub fn evaluate(
             version: env!("CARGO_PKG_VERSION").to_string(),
             // Relative to the part's own directory when it lies there, as merge reads it.
             terms: job.terms.map(|t| relative_to_dir_of(t, job.output)),
+            part: part_print,
+            terms_part,
             invalid: c.invalid,
             below_horizon: c.below_horizon,
             saturated: c.saturated,

@@ -13,8 +13,8 @@ use std::io::{Read, Seek, SeekFrom, Write};
 
 use std::path::{Path, PathBuf};
 
-/// Version of the sidecar's layout.
-pub const SIDECAR_SCHEMA: u32 = 1;
+/// Version of the sidecar's layout (2: the part's and its terms part's fingerprints).
+pub const SIDECAR_SCHEMA: u32 = 2;
 
 /// Part `k` of `n` (1-based, as Jest and Playwright spell it).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -69,6 +69,11 @@ pub struct Sidecar {
     pub version: String,
     /// Whether a terms part (`TERMS.npy` of the same rows) was written.
     pub terms: Option<PathBuf>,
+    /// The BRDF part's own fingerprint as written (`merge` verifies it).
+    pub part: InputPrint,
+    /// The terms part's fingerprint as written (`merge --terms` verifies it: shards that
+    /// shared one terms file overwrote each other's rows).
+    pub terms_part: Option<InputPrint>,
     /// The part's counts (first invalid row counted from the batch's start).
     pub invalid: u64,
     /// See `invalid`.
@@ -196,6 +201,40 @@ pub fn merge(
         message,
     };
     let (first, mut cars) = read_parts(parts, output, Sidecar::read)?;
+    let terms_file = |(p, c): &(PathBuf, Sidecar)| {
+        c.terms.as_ref().map(|rel| {
+            if rel.is_absolute() {
+                rel.clone()
+            } else {
+                p.parent().unwrap_or(Path::new("")).join(rel)
+            }
+        })
+    };
+    // Every file merge reads is an input for the output checks: the parts, their
+    // sidecars, and the terms parts the sidecars name.
+    let terms_parts: Vec<PathBuf> = cars.iter().filter_map(terms_file).collect();
+    let sidecars: Vec<PathBuf> = parts.iter().map(|p| sidecar_path(p)).collect();
+    let inputs: Vec<&Path> = parts
+        .iter()
+        .chain(&sidecars)
+        .chain(&terms_parts)
+        .map(PathBuf::as_path)
+        .collect();
+    let outputs: Vec<&Path> = std::iter::once(output).chain(terms).collect();
+    atomic::check_outputs(&outputs, &inputs)?;
+    for (p, c) in &cars {
+        c.validate().map_err(|m| bad(&sidecar_path(p), m))?;
+        let print = fingerprint(p)?;
+        if print != c.part {
+            return Err(bad(
+                p,
+                format!(
+                    "its content is not what its sidecar recorded (size {} hash {} against {} {}): the part was changed or overwritten after eval wrote it",
+                    print.size, print.hash, c.part.size, c.part.hash
+                ),
+            ));
+        }
+    }
     let base = cars[0].1.clone();
     for (p, c) in &cars {
         let differs = |what: &str, a: &dyn std::fmt::Debug, b: &dyn std::fmt::Debug| {
@@ -214,7 +253,11 @@ pub fn merge(
             return Err(differs("the number of shards", &c.shard.n, &base.shard.n));
         }
         if c.input != base.input || c.total_rows != base.total_rows {
-            return Err(differs("the input", &c.input, &base.input));
+            return Err(differs(
+                "the input (its fingerprint and row count)",
+                &(&c.input, c.total_rows),
+                &(&base.input, base.total_rows),
+            ));
         }
         if c.materials != base.materials {
             return Err(differs("the materials file", &c.materials, &base.materials));
@@ -229,6 +272,20 @@ pub fn merge(
         if terms.is_some() && c.terms.is_none() {
             return Err(bad(p, "this part has no terms part (eval --terms)".into()));
         }
+        if let (Some(_), Some(file)) = (terms, terms_file(&(p.clone(), c.clone()))) {
+            let print = fingerprint(&file)?;
+            if Some(&print) != c.terms_part.as_ref() {
+                return Err(bad(
+                    &file,
+                    format!(
+                        "the terms part of {} is not what its sidecar recorded (size {} hash {}): another shard or run wrote it since — give each shard its own --terms file",
+                        p.display(),
+                        print.size,
+                        print.hash
+                    ),
+                ));
+            }
+        }
     }
     check_complete(&mut cars, |c| c.shard, base.shard.n, output, "")?;
     let mut counts = Counts {
@@ -238,38 +295,91 @@ pub fn merge(
     for (_, c) in &cars {
         counts.absorb(&c.counts());
     }
-    let mut staged = vec![join(
+    let (brdf, brdf_saturated) = join(
         &cars,
         |(p, _)| p.clone(),
         output,
         3,
         base.total_rows,
         cancel,
-    )?];
+    )?;
+    let mut staged = vec![brdf];
+    let mut terms_saturated = vec![0; cars.len()];
     if let Some(t) = terms {
-        let part_terms = |(p, c): &(PathBuf, Sidecar)| {
-            let rel = c.terms.clone().expect("checked above");
-            if rel.is_absolute() {
-                rel
-            } else {
-                p.parent().unwrap_or(Path::new("")).join(rel)
-            }
+        let part_terms = |car: &(PathBuf, Sidecar)| terms_file(car).expect("checked above");
+        let (joined, sat) = join(&cars, part_terms, t, TERM_COLUMNS, base.total_rows, cancel)?;
+        staged.push(joined);
+        terms_saturated = sat;
+    }
+    // The saturated count against the data: a saturated tuple has an output of f32::MAX,
+    // so the rows holding one bound the count from below (and, with the terms, above).
+    for (i, (p, c)) in cars.iter().enumerate() {
+        let (b, t) = (brdf_saturated[i], terms_saturated[i]);
+        let low = b.max(t);
+        let high = if terms.is_some() {
+            b + t
+        } else {
+            c.rows[1] - c.rows[0]
         };
-        staged.push(join(
-            &cars,
-            part_terms,
-            t,
-            TERM_COLUMNS,
-            base.total_rows,
-            cancel,
-        )?);
+        if c.saturated < low || c.saturated > high {
+            return Err(bad(
+                &sidecar_path(p),
+                format!(
+                    "records {} saturated tuples, but the part's data holds {b} rows with an output of f32::MAX{}",
+                    c.saturated,
+                    if terms.is_some() { format!(" ({t} in its terms)") } else { String::new() }
+                ),
+            ));
+        }
     }
     atomic::commit(staged)?;
     Ok(counts)
 }
 
+impl Sidecar {
+    /// The sidecar's numbers checked against each other: the row range is the shard's own
+    /// of the total, the counts fit in it and the first invalid row lies in it exactly when
+    /// a tuple is invalid. The message says which field is wrong.
+    pub fn validate(&self) -> std::result::Result<(), String> {
+        let Shard { k, n } = self.shard;
+        if n == 0 || k == 0 || k > n {
+            return Err(format!("shard {k}/{n} is not K/N with 1 <= K <= N"));
+        }
+        let want = self.shard.rows(self.total_rows);
+        if self.rows != [want.start, want.end] {
+            return Err(format!(
+                "rows {:?} are not shard {k}/{n}'s rows of {} ({:?})",
+                self.rows, self.total_rows, want
+            ));
+        }
+        let rows = want.end - want.start;
+        let counted =
+            u128::from(self.invalid) + u128::from(self.below_horizon) + u128::from(self.saturated);
+        if counted > u128::from(rows) {
+            return Err(format!(
+                "invalid {} + below_horizon {} + saturated {} exceed the part's {rows} rows",
+                self.invalid, self.below_horizon, self.saturated
+            ));
+        }
+        match self.first_invalid {
+            Some(r) if self.invalid == 0 || !want.contains(&r) => Err(format!(
+                "first_invalid {r} with {} invalid tuples in rows {:?}",
+                self.invalid, want
+            )),
+            None if self.invalid > 0 => Err(format!(
+                "{} invalid tuples but no first_invalid row",
+                self.invalid
+            )),
+            _ => Ok(()),
+        }
+    }
+}
+
 /// Concatenates the parts' rows (each checked against its sidecar's row range) into a
 /// staged `.npy` of `total × columns` float32.
+///
+/// Every value is checked on the way (an output is never inf or NaN: a part that holds one
+/// was altered), and the rows holding f32::MAX (saturated) are counted per part.
 fn join(
     cars: &[(PathBuf, Sidecar)],
     file_of: impl Fn(&(PathBuf, Sidecar)) -> PathBuf,
@@ -277,7 +387,8 @@ fn join(
     columns: usize,
     total: u64,
     cancel: &Cancel,
-) -> Result<atomic::Staged> {
+) -> Result<(atomic::Staged, Vec<u64>)> {
+    let mut saturated = Vec::with_capacity(cars.len());
     let mut w = atomic::stage_writer(output, cancel)?;
     w.write_all(&super::npy_header_f32(total, columns))
         .map_err(|e| w.error(e))?;
@@ -303,16 +414,60 @@ fn join(
                 ),
             });
         }
-        let want = rows * columns as u64 * 4;
-        let copied = std::io::copy(&mut reader.take(want), &mut w).map_err(|e| w.error(e))?;
-        if copied != want {
-            return Err(Error::Batch {
-                path: file,
-                message: format!("truncated: {copied} of {want} data bytes"),
-            });
+        let row_bytes = columns * 4;
+        let want = rows * row_bytes as u64;
+        let mut buf = vec![0u8; row_bytes * 16_384];
+        let (mut copied, mut row, mut sat) = (0u64, car.1.rows[0], 0u64);
+        let mut reader = reader.take(want);
+        while copied < want {
+            let take = buf.len().min((want - copied) as usize);
+            let n = read_full(&mut reader, &mut buf[..take]).map_err(|source| Error::Io {
+                path: file.clone(),
+                source,
+            })?;
+            if n < take {
+                return Err(Error::Batch {
+                    path: file,
+                    message: format!("truncated: {} of {want} data bytes", copied + n as u64),
+                });
+            }
+            for r in buf[..n].chunks_exact(row_bytes) {
+                let mut max = false;
+                for v in r.chunks_exact(4) {
+                    let x = f32::from_le_bytes([v[0], v[1], v[2], v[3]]);
+                    if !x.is_finite() {
+                        return Err(Error::Batch {
+                            path: file,
+                            message: format!(
+                                "row {row} holds {x}: vkbrdf never writes inf or NaN, so the part was altered"
+                            ),
+                        });
+                    }
+                    max |= x == f32::MAX;
+                }
+                sat += u64::from(max);
+                row += 1;
+            }
+            w.write_all(&buf[..n]).map_err(|e| w.error(e))?;
+            copied += n as u64;
+        }
+        saturated.push(sat);
+    }
+    Ok((w.finish()?, saturated))
+}
+
+/// Reads until `buf` is full or the reader ends; returns the bytes read.
+fn read_full(r: &mut impl Read, buf: &mut [u8]) -> std::io::Result<usize> {
+    let mut n = 0;
+    while n < buf.len() {
+        match r.read(&mut buf[n..]) {
+            Ok(0) => break,
+            Ok(k) => n += k,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+            Err(e) => return Err(e),
         }
     }
-    w.finish()
+    Ok(n)
 }
 
 /// The error of part `part` whose `what` differs from the first part's (`a` against `b`).

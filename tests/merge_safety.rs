@@ -1,0 +1,157 @@
+//! `vkbrdf merge` never destroys an input and never joins what does not belong together
+//! (issue 30, items 2–4): the terms parts a sidecar names are inputs too; each part and
+//! terms part is identified by content (shards sharing one `--terms` file are refused);
+//! sidecar numbers are validated, and counts the data can show are recomputed.
+
+mod common;
+
+use common::{eval, generate, path, stderr, vkbrdf};
+use std::path::{Path, PathBuf};
+
+const MATERIALS: &str = "[[material]]\nname = \"g\"\npreset = \"gold\"\n";
+
+/// A materials file, 1,000 tuples and the two shards of them with their own terms parts.
+fn sharded(dir: &Path) -> (PathBuf, PathBuf) {
+    let m = dir.join("m.toml");
+    std::fs::write(&m, MATERIALS).unwrap();
+    let t = dir.join("t.npy");
+    assert!(generate(&m, 1000, &t).status.success());
+    for k in 1..=2 {
+        let part = dir.join(format!("part-{k}.npy"));
+        let terms = dir.join(format!("terms-{k}.npy"));
+        let shard = format!("{k}/2");
+        let o = eval(
+            &m,
+            &t,
+            &[
+                "--backend",
+                "cpu",
+                "-o",
+                path(&part),
+                "--terms",
+                path(&terms),
+                "--shard",
+                &shard,
+            ],
+        );
+        assert!(o.status.success(), "{}", stderr(&o));
+    }
+    (m, t)
+}
+
+fn parts(dir: &Path) -> Vec<String> {
+    (1..=2)
+        .map(|k| path(&dir.join(format!("part-{k}.npy"))).to_string())
+        .collect()
+}
+
+fn merge(args: &[&str], dir: &Path) -> std::process::Output {
+    let mut a = vec!["merge"];
+    a.extend_from_slice(args);
+    let p = parts(dir);
+    a.extend(p.iter().map(String::as_str));
+    vkbrdf(&a)
+}
+
+#[test]
+fn a_terms_part_named_by_a_sidecar_is_an_input_and_is_never_overwritten() {
+    let dir = tempfile::tempdir().unwrap();
+    sharded(dir.path());
+    let terms2 = dir.path().join("terms-2.npy");
+    let before = std::fs::read(&terms2).unwrap();
+    let out = dir.path().join("o.npy");
+    for args in [
+        vec!["-o", path(&out), "--terms", path(&terms2)],
+        vec!["-o", path(&terms2)],
+    ] {
+        let o = merge(&args, dir.path());
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", stderr(&o));
+        assert!(stderr(&o).contains("terms-2.npy"), "{}", stderr(&o));
+        assert!(stderr(&o).contains("input"), "{}", stderr(&o));
+        assert_eq!(std::fs::read(&terms2).unwrap(), before, "{args:?}");
+    }
+    // The right call still works.
+    let terms = dir.path().join("terms.npy");
+    let o = merge(&["-o", path(&out), "--terms", path(&terms)], dir.path());
+    assert!(o.status.success(), "{}", stderr(&o));
+}
+
+#[test]
+fn shards_that_shared_one_terms_file_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let m = d.join("m.toml");
+    std::fs::write(&m, MATERIALS).unwrap();
+    let t = d.join("t.npy");
+    assert!(generate(&m, 1000, &t).status.success());
+    let shared = d.join("terms.npy");
+    for k in 1..=2 {
+        let part = d.join(format!("part-{k}.npy"));
+        let shard = format!("{k}/2");
+        let o = eval(
+            &m,
+            &t,
+            &[
+                "--backend",
+                "cpu",
+                "-o",
+                path(&part),
+                "--terms",
+                path(&shared),
+                "--shard",
+                &shard,
+            ],
+        );
+        assert!(o.status.success(), "{}", stderr(&o));
+    }
+    let out = d.join("o.npy");
+    let all = d.join("all-terms.npy");
+    let o = merge(&["-o", path(&out), "--terms", path(&all)], d);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("own --terms"), "{}", stderr(&o));
+    assert!(!out.exists() && !all.exists());
+}
+
+/// Rewrites part `k`'s sidecar through `edit` (on its JSON value).
+fn edit_sidecar(dir: &Path, k: u32, edit: impl Fn(&mut serde_json::Value)) {
+    let p = dir.join(format!("part-{k}.npy.shard.json"));
+    let mut v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&p).unwrap()).unwrap();
+    edit(&mut v);
+    std::fs::write(&p, serde_json::to_string_pretty(&v).unwrap()).unwrap();
+}
+
+#[test]
+fn sidecar_numbers_are_validated_and_altered_data_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    sharded(d);
+    let out = d.join("o.npy");
+    let keep = std::fs::read(d.join("part-1.npy.shard.json")).unwrap();
+    for (field, value, says) in [
+        ("invalid", serde_json::json!(99_999_999u64), "exceed"),
+        ("rows", serde_json::json!([0, 900]), "rows"),
+        ("first_invalid", serde_json::json!(7), "first_invalid"),
+        ("saturated", serde_json::json!(3), "saturated"),
+    ] {
+        edit_sidecar(d, 1, |v| v[field] = value.clone());
+        // With the terms joined, the data bounds the saturated count from both sides.
+        let terms = d.join("terms.npy");
+        let o = merge(&["-o", path(&out), "--terms", path(&terms)], d);
+        assert_eq!(o.status.code(), Some(2), "{field}: {}", stderr(&o));
+        assert!(stderr(&o).contains(says), "{field}: {}", stderr(&o));
+        assert!(!stderr(&o).contains("18446744073"), "{}", stderr(&o));
+        assert!(!out.exists());
+        std::fs::write(d.join("part-1.npy.shard.json"), &keep).unwrap();
+    }
+    // A part whose data was altered (an inf written over a value) is refused by content.
+    let p2 = d.join("part-2.npy");
+    let mut bytes = std::fs::read(&p2).unwrap();
+    let at = bytes.len() - 4;
+    bytes[at..].copy_from_slice(&f32::INFINITY.to_le_bytes());
+    std::fs::write(&p2, &bytes).unwrap();
+    let o = merge(&["-o", path(&out)], d);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("part-2.npy"), "{}", stderr(&o));
+    assert!(!out.exists());
+}
