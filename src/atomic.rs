@@ -19,6 +19,7 @@ use crate::error::{Error, Result};
 use std::fs::File;
 use std::io::{BufWriter, Cursor, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
+use std::sync::Mutex;
 
 /// The path that means standard output.
 pub const STDOUT: &str = "-";
@@ -123,6 +124,88 @@ pub fn check_outputs(outputs: &[&Path], inputs: &[&Path]) -> Result<()> {
     Ok(())
 }
 
+/// Serialises [`commit`] against [`exit_cancelled`].
+static COMMIT: Mutex<()> = Mutex::new(());
+
+/// The temporary files this process has staged and not yet renamed.
+static LIVE: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+/// The prefix of this process's temporary files: `.vkbrdf-PID-`, so that a later run can
+/// tell a dead process's leftovers (after SIGKILL or a power cut) from a live one's.
+fn temp_prefix(pid: u32) -> String {
+    format!(".vkbrdf-{pid}-")
+}
+
+/// A new temporary file in `dir` for a staged output, recorded for [`exit_cancelled`];
+/// the first use of a directory removes the leftovers of dead vkbrdf processes there.
+fn temp_file_in(dir: &Path) -> std::io::Result<tempfile::NamedTempFile> {
+    remove_stale_temp_files(dir);
+    let file = tempfile::Builder::new()
+        .prefix(&temp_prefix(std::process::id()))
+        .suffix(".partial")
+        .tempfile_in(dir)?;
+    LIVE.lock()
+        .unwrap_or_else(|e| e.into_inner())
+        .push(file.path().to_owned());
+    Ok(file)
+}
+
+fn untrack(temp: &Path) {
+    LIVE.lock()
+        .unwrap_or_else(|e| e.into_inner())
+        .retain(|p| p != temp);
+}
+
+/// Removes `.vkbrdf-PID-*.partial` files in `dir` whose process no longer runs (Linux:
+/// no `/proc/PID`). A live process's files, and names of any other form (an older
+/// vkbrdf's `.vkbrdf-XXXXXX.partial`, which `vkbrdf eval --help` says may be deleted),
+/// are left alone. Each directory is swept once per process.
+pub fn remove_stale_temp_files(dir: &Path) {
+    static SWEPT: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+    if !Path::new("/proc/self").exists() {
+        return; // no way to tell a live pid here
+    }
+    {
+        let mut swept = SWEPT.lock().unwrap_or_else(|e| e.into_inner());
+        if swept.iter().any(|d| d == dir) {
+            return;
+        }
+        swept.push(dir.to_owned());
+    }
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return;
+    };
+    for e in entries.flatten() {
+        let name = e.file_name();
+        let Some(name) = name.to_str() else { continue };
+        let Some(rest) = name.strip_prefix(".vkbrdf-") else {
+            continue;
+        };
+        if !name.ends_with(".partial") {
+            continue;
+        }
+        let Some(pid) = rest.split('-').next().and_then(|p| p.parse::<u32>().ok()) else {
+            continue;
+        };
+        if pid != std::process::id() && !Path::new(&format!("/proc/{pid}")).exists() {
+            let _ = std::fs::remove_file(e.path());
+        }
+    }
+}
+
+/// For a front end's signal handling: waits for a [`commit`] in progress to end, removes
+/// every temporary file this process staged and exits with status 130. Used when an
+/// operation does not reach its next cancellation check in time (a driver call, a read
+/// from a FIFO without a writer): nothing is left half written.
+pub fn exit_cancelled() -> ! {
+    let _committing = COMMIT.lock().unwrap_or_else(|e| e.into_inner());
+    for p in LIVE.lock().unwrap_or_else(|e| e.into_inner()).iter() {
+        let _ = std::fs::remove_file(p);
+    }
+    eprintln!("error: cancelled; nothing was written");
+    std::process::exit(130)
+}
+
 /// A finished output that [`commit`] makes appear.
 #[derive(Debug)]
 pub struct Staged {
@@ -205,11 +288,7 @@ pub fn stage(
     let bytes = match destination(path)? {
         Destination::Regular { target } => {
             let dir = parent_dir(&target);
-            let mut file = tempfile::Builder::new()
-                .prefix(".vkbrdf-")
-                .suffix(".partial")
-                .tempfile_in(dir)
-                .map_err(|e| io_error(path, e))?;
+            let mut file = temp_file_in(dir).map_err(|e| io_error(path, e))?;
             {
                 let mut sink = Sink {
                     inner: SinkInner::File(BufWriter::with_capacity(1 << 20, file.as_file_mut())),
@@ -272,11 +351,7 @@ pub fn stage_writer(path: &Path, cancel: &Cancel) -> Result<StagedWriter> {
     cancel.check()?;
     let inner = match destination(path)? {
         Destination::Regular { target } => {
-            let file = tempfile::Builder::new()
-                .prefix(".vkbrdf-")
-                .suffix(".partial")
-                .tempfile_in(parent_dir(&target))
-                .map_err(|e| io_error(path, e))?;
+            let file = temp_file_in(parent_dir(&target)).map_err(|e| io_error(path, e))?;
             let out = file.as_file().try_clone().map_err(|e| io_error(path, e))?;
             WriterInner::Temp {
                 file,
@@ -356,6 +431,9 @@ impl StagedWriter {
 /// previous files restored from hard links, new ones removed), so the set appears whole or
 /// not at all.
 pub fn commit(staged: Vec<Staged>) -> Result<()> {
+    // A forced exit on a signal (`exit_cancelled`) waits for a commit in progress, so a
+    // set of outputs is never left half renamed.
+    let _committing = COMMIT.lock().unwrap_or_else(|e| e.into_inner());
     let (direct, regular): (Vec<Staged>, Vec<Staged>) = staged
         .into_iter()
         .partition(|s| matches!(s.bytes, Held::Memory { .. }));
@@ -382,8 +460,10 @@ pub fn commit(staged: Vec<Staged>) -> Result<()> {
         } else {
             None
         };
+        let temp = file.path().to_owned();
         match file.persist(&target) {
             Ok(_) => {
+                untrack(&temp);
                 sync_dir(parent_dir(&target));
                 done.push((target, backup));
             }

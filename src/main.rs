@@ -7,6 +7,10 @@ mod cli;
 use clap::Parser;
 use std::process::ExitCode;
 
+/// How long the running operation gets after the first signal to stop at its own
+/// cancellation check (and clean up) before the watchdog exits for it.
+const CANCEL_GRACE: std::time::Duration = std::time::Duration::from_millis(800);
+
 fn main() -> ExitCode {
     let args = cli::Cli::parse();
     let cancel = vkbrdf::cancel::Cancel::new();
@@ -17,6 +21,18 @@ fn main() -> ExitCode {
         let _ = signal_hook::flag::register_conditional_shutdown(signal, 130, cancel.flag());
         let _ = signal_hook::flag::register(signal, cancel.flag());
     }
+    // Every phase stops within about a second of the first signal: the running operation
+    // at its next check, or else — parsing, a FIFO without a writer, a driver call, a
+    // phase without checks — this watchdog, which removes the staged temporary files
+    // and exits 130 itself.
+    let watched = cancel.clone();
+    std::thread::spawn(move || loop {
+        std::thread::sleep(std::time::Duration::from_millis(50));
+        if watched.is_cancelled() {
+            std::thread::sleep(CANCEL_GRACE);
+            vkbrdf::atomic::exit_cancelled();
+        }
+    });
     match cli::run(args, cancel) {
         Ok(code) => code,
         Err(e) => {

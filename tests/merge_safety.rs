@@ -155,3 +155,38 @@ fn sidecar_numbers_are_validated_and_altered_data_is_refused() {
     assert!(stderr(&o).contains("part-2.npy"), "{}", stderr(&o));
     assert!(!out.exists());
 }
+
+#[test]
+fn materials_files_refuse_far_duplicates_control_characters_and_a_model_that_drops_its_preset() {
+    use vkbrdf::material::parse_materials;
+    // A duplicate 40,000 materials apart is still found (by a hash set, in linear time).
+    let mut text = String::new();
+    for i in 0..40_000 {
+        text.push_str(&format!(
+            "[[material]]\nname = \"m{i}\"\nmodel = \"lambert\"\ndiffuse = 0.5\n"
+        ));
+    }
+    assert_eq!(parse_materials(&text, "big").unwrap().len(), 40_000);
+    text.push_str("[[material]]\nname = \"m0\"\nmodel = \"lambert\"\ndiffuse = 0.5\n");
+    let e = parse_materials(&text, "big").unwrap_err().to_string();
+    assert!(e.contains("duplicate") && e.contains("m0"), "{e}");
+    for name in ["a\\nb", "a\\u0000b", "tab\\there"] {
+        let t = format!("[[material]]\nname = \"{name}\"\nmodel = \"lambert\"\ndiffuse = 0.5\n");
+        let e = parse_materials(&t, "names").unwrap_err().to_string();
+        assert!(e.contains("control character"), "{name}: {e}");
+    }
+    let e = parse_materials(
+        "[[material]]\nname = \"x\"\npreset = \"gold\"\nmodel = \"lambert\"\n",
+        "preset",
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("preset `gold`") && e.contains("model"), "{e}");
+    // The preset's own model, restated, is fine.
+    assert!(parse_materials(
+        "[[material]]\nname = \"x\"\npreset = \"gold\"\nmodel = \"cook-torrance\"\n",
+        "preset"
+    )
+    .is_ok());
+    assert_eq!(vkbrdf::material::MAX_MATERIALS, 1 << 24);
+}
