@@ -1,6 +1,6 @@
 //! `FeatureSet`: what a batch needs (models, distributions, G, F, conventions,
 //! anisotropy) and which outputs were asked for. The Vulkan backend compiles one kernel
-//! variant per feature set, so code a batch does not use is never run (DESIGN.md).
+//! variant per feature set, so code a batch does not use is never run.
 
 use crate::backend::Request;
 use crate::batch::Batch;

@@ -1,4 +1,4 @@
-//! Shared test helpers: every backend, so one test body runs on each (STYLE.md 6).
+//! Shared test helpers: every backend, so one test body runs on each.
 #![allow(dead_code)]
 
 pub mod quadrature;
