@@ -564,6 +564,15 @@ pub(crate) fn npy_head(reader: &mut impl Read, len: Option<u64>, source: &Path) 
                     len - start - header_len
                 )));
             }
+            // Bytes after the data are not part of any array: a file with them is not
+            // what its header says (two arrays concatenated, a botched write).
+            if let Some(needed) = needed.filter(|&n| n < len) {
+                return Err(err(format!(
+                    "{} bytes follow the data that the header's shape {shape:?} describes; \
+                     a .npy file holds one array and nothing after it",
+                    len - needed
+                )));
+            }
         }
     }
     Ok(head)

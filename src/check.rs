@@ -781,6 +781,10 @@ pub fn run(
     Ok(run_with_skips(backend, options, progress)?.0)
 }
 
+/// The most tuples a combination may have (the CLI's `--tuples` range): bounds the
+/// batch, the reference's outputs and the sensitivities allocated per combination.
+pub const MAX_TUPLES: usize = 10_000_000;
+
 /// A combination left out of a run, and why (the backend's message).
 pub type Skipped = (String, String);
 
@@ -792,9 +796,23 @@ pub fn run_with_skips(
     options: &CheckOptions,
     progress: &mut dyn FnMut(&CombinationReport),
 ) -> Result<(Vec<CombinationReport>, Vec<Skipped>)> {
+    if !(1..=MAX_TUPLES).contains(&options.tuples) {
+        return Err(crate::Error::Unsupported(format!(
+            "tuples: {} is out of range 1 to {MAX_TUPLES} per combination",
+            options.tuples
+        )));
+    }
+    let all = combinations(options.seed)?;
+    if let Some(only) = options.only.as_deref() {
+        if !all.iter().any(|c| c.name.contains(only)) {
+            return Err(crate::Error::Unsupported(format!(
+                "only {only:?} matches no combination (names look like `cook-torrance modern ggx-aniso smith conductor`)"
+            )));
+        }
+    }
     let mut reports = Vec::new();
     let mut skipped = Vec::new();
-    for (i, c) in combinations(options.seed)?.iter().enumerate() {
+    for (i, c) in all.iter().enumerate() {
         if options
             .only
             .as_deref()

@@ -86,6 +86,12 @@ pub enum Error {
     /// The message names the file or option at fault.
     #[error("{0}")]
     Table(String),
+
+    /// A job whose buffers, sized by its input (a table's size, a batch's rows), would not
+    /// fit in the memory available: refused before anything is allocated. The message
+    /// names what and how much.
+    #[error("{0}")]
+    Memory(String),
 }
 
 /// Where in a batch a Vulkan call failed: the chunk (0-based, of `count`), the batch rows it

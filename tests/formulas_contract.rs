@@ -241,7 +241,13 @@ fn the_contract_and_the_code_define_the_same_terms() {
     use vkbrdf::material::{Convention, DistributionKind, FresnelKind, Geometry};
     let repo = parse(&read(&repo_root().join("docs/FORMULAS.md")));
     let code: [(u32, Vec<&str>); 4] = [
-        (2, DistributionKind::ALL.iter().map(|d| d.toml_name()).collect()),
+        (
+            2,
+            DistributionKind::ALL
+                .iter()
+                .map(|d| d.toml_name())
+                .collect(),
+        ),
         (3, Geometry::ALL.iter().map(|g| g.toml_name()).collect()),
         (4, FresnelKind::ALL.iter().map(|f| f.toml_name()).collect()),
         (5, Convention::ALL.iter().map(|c| c.toml_name()).collect()),
@@ -254,10 +260,16 @@ fn the_contract_and_the_code_define_the_same_terms() {
             .map(|n| n.split(' ').next().unwrap_or(n).to_string())
             .collect();
         for n in &names {
-            assert!(table.iter().any(|t| t == n), "§{num} does not define `{n}`, which the code knows: {table:?}");
+            assert!(
+                table.iter().any(|t| t == n),
+                "§{num} does not define `{n}`, which the code knows: {table:?}"
+            );
         }
         for t in &table {
-            assert!(names.contains(&t.as_str()), "§{num} defines `{t}`, which the code does not know: {names:?}");
+            assert!(
+                names.contains(&t.as_str()),
+                "§{num} defines `{t}`, which the code does not know: {names:?}"
+            );
         }
     }
 }

@@ -1026,7 +1026,7 @@ fn integrated_tables_refuse_a_distribution_without_a_sampler() {
         };
         spec.material(0.5).unwrap();
         let mut cpu = vkbrdf::reference::CpuReference::new();
-        let points = albedo::grid_points(Grid::new(4, 4).unwrap());
+        let points = albedo::grid_points(Grid::new(4, 4).unwrap()).unwrap();
         let e =
             albedo::directional_albedo(&mut Runner::new(&mut cpu), &spec, &points, 1024).unwrap();
         assert!(

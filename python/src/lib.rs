@@ -247,6 +247,7 @@ fn to_py(py: Python<'_>, e: Error) -> PyErr {
             error_instance(py, "DeviceError", e.to_string(), &[])
         }
         Error::Table(_) => error_instance(py, "TableError", e.to_string(), &[]),
+        Error::Memory(_) => Ok(pyo3::exceptions::PyMemoryError::new_err(e.to_string())),
     };
     match built {
         Ok(err) => err,
@@ -650,7 +651,7 @@ fn table_albedo<'py>(
     check_samples(py, samples)?;
     let (e, avg) = run_engine(py, kind, |backend, cancel| {
         let mut runner = Runner::new(backend).with_cancel(cancel.clone());
-        let e = albedo::directional_albedo(&mut runner, &spec, &albedo::grid_points(g), samples)?;
+        let e = albedo::directional_albedo(&mut runner, &spec, &albedo::grid_points(g)?, samples)?;
         let avg = if average {
             let alphas: Vec<f64> = (0..g.height).map(|j| texel_centre(j, g.height)).collect();
             Some(albedo::average_albedo(
@@ -699,7 +700,7 @@ fn table_dfg<'py>(
     check_samples(py, samples)?;
     let ab = run_engine(py, kind, |backend, cancel| {
         let mut runner = Runner::new(backend).with_cancel(cancel.clone());
-        vkbrdf::table::dfg::split_sum(&mut runner, &spec, &albedo::grid_points(g), samples)
+        vkbrdf::table::dfg::split_sum(&mut runner, &spec, &albedo::grid_points(g)?, samples)
     })?;
     let flat: Vec<f64> = ab.iter().flat_map(|v| [v[0], v[1]]).collect();
     Ok(Array3::from_shape_vec((g.height, g.width, 2), flat)
@@ -718,8 +719,25 @@ fn check<'py>(
     only: Option<String>,
 ) -> PyResult<Bound<'py, PyList>> {
     let kind = parse_backend(py, backend)?;
-    if tuples == 0 {
-        return Err(raise(py, "UsageError", "tuples: must be at least 1".into()));
+    if !(1..=vkbrdf::check::MAX_TUPLES).contains(&tuples) {
+        return Err(raise(
+            py,
+            "UsageError",
+            format!(
+                "tuples: {tuples} is out of range 1 to {}",
+                vkbrdf::check::MAX_TUPLES
+            ),
+        ));
+    }
+    if let Some(o) = only.as_deref() {
+        let names = vkbrdf::check::combinations(seed).map_err(|e| to_py(py, e))?;
+        if !names.iter().any(|c| c.name.contains(o)) {
+            return Err(raise(
+                py,
+                "UsageError",
+                format!("only={o:?} matches no combination (names look like `cook-torrance modern ggx-aniso smith conductor`)"),
+            ));
+        }
     }
     let options = vkbrdf::check::CheckOptions { tuples, seed, only };
     let (name, reports) = run_engine(py, kind, |backend, _| {

@@ -138,3 +138,21 @@ def test_vulkan_unavailable_is_device_error(tmp_path):
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env)
     assert r.returncode == 0, r.stderr
     assert "DeviceError:" in r.stdout and "auto ok (3,)" in r.stdout
+
+
+def test_table_sizes_beyond_memory_raise_memory_error_not_abort():
+    # Each would need far more than any machine's memory: refused before allocating,
+    # as a MemoryError the caller can catch (these aborted or were OOM-killed before).
+    with pytest.raises(MemoryError, match="memory"):
+        vkbrdf.tables.slice("gold", size=100000, backend="cpu")
+    with pytest.raises(MemoryError, match="memory"):
+        vkbrdf.tables.dfg(size=100000, samples=1, backend="cpu")
+    with pytest.raises(MemoryError, match="memory"):
+        vkbrdf.tables.albedo(size=(100000, 100000), samples=1, backend="cpu")
+
+
+def test_check_with_a_filter_that_matches_nothing_is_an_error():
+    with pytest.raises(vkbrdf.UsageError, match="matches no combination"):
+        vkbrdf.check(backend="cpu", only="nomatch")
+    with pytest.raises(vkbrdf.UsageError, match="out of range"):
+        vkbrdf.check(backend="cpu", tuples=10**12)

@@ -18,8 +18,11 @@ each --rus is Rusinkiewicz's θ_h,θ_d,φ_d with φ_h = 0. Without either, a sma
 pair). Printed per direction: f (RGB, 1/sr, no cosine) and the terms D, G, F (RGB), K;
 --json prints the same as a JSON array.
 
-MATERIAL is a preset (gold, glass, shiny-plastic, … — `vkbrdf materials --presets`) or,
+MATERIAL is a preset (gold, glass, shiny-plastic, … — `vkbrdf materials` lists them) or,
 with --materials FILE, the name of one of its [[material]] tables.
+
+Evaluator: `at` runs the f64 reference unless --backend names another (cpu, vulkan, auto);
+the `auto` default shown for --backend is that of the evaluating commands, not this one.
 
 Examples:
   vkbrdf at gold

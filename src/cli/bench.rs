@@ -114,6 +114,9 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
     if let Some(path) = &args.json {
         vkbrdf::atomic::check_outputs(&[path.as_path()], &[])?;
     }
+    if let Some(dir) = &args.plot {
+        super::output_dir(dir, "--plot")?;
+    }
     let sizes: Vec<usize> = if args.quick {
         vec![1_000, 10_000, 100_000, 1 << 20]
     } else {
@@ -313,7 +316,7 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         eprintln!("wrote {}", path.display());
     }
     if let Some(dir) = &args.plot {
-        std::fs::create_dir_all(dir)?;
+        super::output_dir(dir, "--plot")?;
         plot::throughput(
             &dir.join("throughput.svg"),
             &report
@@ -585,7 +588,7 @@ fn dfg_row(v: &mut VulkanBackend, repeats: usize) -> anyhow::Result<ResultRow> {
         lobe: Lobe::Ggx,
         geometry: vkbrdf::material::Geometry::SmithCorrelated,
     };
-    let points = grid_points(vkbrdf::table::Grid::new(128, 128)?);
+    let points = grid_points(vkbrdf::table::Grid::new(128, 128)?)?;
     let samples = 1024;
     let mut runner = vkbrdf::table::Runner::new(v);
     let mut secs = Vec::new();

@@ -37,6 +37,7 @@ pub struct Args {
 
 /// Runs `vkbrdf demo`.
 pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
+    super::output_dir(&args.out_dir, "--out-dir")?;
     let materials = presets::all();
     let batch = vkbrdf::sample::sample_batch(args.tuples, materials.len(), 2026, false);
     let mut backend = backend_choice::open(&args.backend)?;
@@ -137,7 +138,7 @@ fn beside_lavapipe(
 fn tables(backend: &mut dyn vkbrdf::backend::Backend, dir: &std::path::Path) -> anyhow::Result<()> {
     use vkbrdf::material::Geometry;
     use vkbrdf::table::{albedo, dfg, preview, slice, Grid, Runner};
-    std::fs::create_dir_all(dir)?;
+    super::output_dir(dir, "--out-dir")?;
     let ggx = albedo::Microfacet {
         lobe: albedo::Lobe::Ggx,
         geometry: Geometry::SmithCorrelated,

@@ -111,6 +111,7 @@ pub fn cancel() -> Cancel {
 /// Runs the parsed command line; `cancel` is set when the user asks the process to stop.
 pub fn run(cli: Cli, cancel: Cancel) -> anyhow::Result<ExitCode> {
     let _ = CANCEL.set(cancel);
+    check_environment()?;
     match cli.command {
         Command::Eval(a) => eval::run(&a),
         Command::Merge(a) => merge::run(&a),
@@ -124,4 +125,35 @@ pub fn run(cli: Cli, cancel: Cancel) -> anyhow::Result<ExitCode> {
         Command::Devices(a) => devices::run(&a),
         Command::Table(a) => table::run(&a),
     }
+}
+
+/// The environment variables vkbrdf reads whose values are not free text, checked before
+/// any work: a misspelt value is an error, never silently the default.
+fn check_environment() -> anyhow::Result<()> {
+    vkbrdf::cpu::Isa::from_env()?;
+    if let Ok(v) = std::env::var("VKBRDF_VALIDATION") {
+        if !matches!(v.as_str(), "" | "0" | "1" | "true" | "false" | "yes" | "no") {
+            anyhow::bail!(
+                "VKBRDF_VALIDATION={v:?}: use 1, true or yes to turn the Vulkan validation layer on, 0, false or no (or unset it) for off"
+            );
+        }
+    }
+    Ok(())
+}
+
+/// Makes the output directory `dir` (with its parents), or says why not, naming it: called
+/// before any work, so that a bad `--out-dir` or `--plot` is found at once.
+pub(crate) fn output_dir(dir: &std::path::Path, option: &str) -> anyhow::Result<()> {
+    if dir.exists() && !dir.is_dir() {
+        anyhow::bail!(
+            "{option} {}: exists and is not a directory; give a directory (it is created if missing)",
+            dir.display()
+        );
+    }
+    std::fs::create_dir_all(dir).map_err(|e| {
+        anyhow::anyhow!(
+            "{option} {}: cannot create the directory: {e}",
+            dir.display()
+        )
+    })
 }

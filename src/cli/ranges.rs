@@ -59,7 +59,7 @@ pub const MAX_STRESS_TUPLES: u64 = 10_000_000_000;
 pub const MAX_CHECK_TUPLES: u64 = 10_000_000;
 
 /// A size in bytes in `lo..=hi`: a number with an optional binary unit — `K`/`KiB`,
-/// `M`/`MiB`, `G`/`GiB` (also lower-case `k`, `m`, `g`), or none for bytes.
+/// `M`/`MiB`, `G`/`GiB`, `T`/`TiB` (also lower-case `k`, `m`, `g`, `t`), or none for bytes.
 pub fn bytes(lo: u64, hi: u64) -> impl Fn(&str) -> Result<u64, String> + Clone + Send + Sync {
     move |s: &str| {
         let t = s.trim();
@@ -71,9 +71,10 @@ pub fn bytes(lo: u64, hi: u64) -> impl Fn(&str) -> Result<u64, String> + Clone +
             "K" | "k" | "KiB" => 1 << 10,
             "M" | "m" | "MiB" => 1 << 20,
             "G" | "g" | "GiB" => 1 << 30,
+            "T" | "t" | "TiB" => 1 << 40,
             other => {
                 return Err(format!(
-                    "unknown unit `{other}`; use K, M or G (KiB, MiB, GiB); {}",
+                    "unknown unit `{other}`; use K, M, G or T (KiB, MiB, GiB, TiB); {}",
                     range()
                 ))
             }

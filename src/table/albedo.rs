@@ -407,8 +407,16 @@ pub fn gauss_legendre(n: usize) -> Vec<(f64, f64)> {
         .collect()
 }
 
-/// The `(μ, α)` texel centres of a table, row-major (row j ↔ α, column i ↔ μ).
-pub fn grid_points(grid: Grid) -> Vec<(f64, f64)> {
+/// The `(μ, α)` texel centres of a table, row-major (row j ↔ α, column i ↔ μ); refused
+/// before anything is allocated when the table's buffers (at [`BYTES_PER_TEXEL`]) would
+/// not fit in the memory available, so no front end can abort on a size.
+pub fn grid_points(grid: Grid) -> Result<Vec<(f64, f64)>> {
+    super::check_memory(super::table_bytes(grid, BYTES_PER_TEXEL), "the table")?;
+    Ok(grid_points_unchecked(grid))
+}
+
+/// [`grid_points`] without the memory check (for a grid already checked).
+fn grid_points_unchecked(grid: Grid) -> Vec<(f64, f64)> {
     (0..grid.height)
         .flat_map(|j| {
             (0..grid.width)
@@ -446,8 +454,10 @@ impl AlbedoJob {
             super::table_bytes(self.grid, BYTES_PER_TEXEL),
             "the albedo table",
         )?;
-        super::check_output(&self.output)?;
-        self.average.as_deref().map_or(Ok(()), super::check_output)
+        super::check_exr_output(&self.output)?;
+        self.average
+            .as_deref()
+            .map_or(Ok(()), super::check_exr_output)
     }
 
     /// [`AlbedoJob::check`] for the band `part` names: memory for its rows only, and .npy

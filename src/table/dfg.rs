@@ -308,7 +308,7 @@ impl DfgJob {
         self.check_model()?;
         let bytes = super::table_bytes(self.grid, albedo::BYTES_PER_TEXEL + 16);
         super::check_memory(bytes, "the DFG table")?;
-        super::check_output(&self.output)
+        super::check_exr_output(&self.output)
     }
 
     /// [`DfgJob::check`] for the band `part` names: memory for its rows only, and a .npy

@@ -117,10 +117,10 @@ pub fn available_memory() -> Option<u64> {
 pub fn check_memory(bytes: Option<u128>, what: &str) -> Result<()> {
     let gib = |b: u128| b as f64 / (1u64 << 30) as f64;
     match (bytes, available_memory()) {
-        (None, _) => Err(Error::Table(format!(
+        (None, _) => Err(Error::Memory(format!(
             "{what} would need more memory than can be addressed; use a smaller size"
         ))),
-        (Some(b), Some(avail)) if b > avail as u128 => Err(Error::Table(format!(
+        (Some(b), Some(avail)) if b > avail as u128 => Err(Error::Memory(format!(
             "{what} would need {:.1} GiB of memory, more than the {:.1} GiB available; use a smaller size",
             gib(b),
             gib(avail as u128)
@@ -142,6 +142,27 @@ pub fn table_bytes(grid: Grid, per_texel: u64) -> Option<u128> {
 /// ([`crate::atomic::check_outputs`]: a directory, a missing or read-only directory).
 pub fn check_output(path: &Path) -> Result<()> {
     crate::atomic::check_outputs(&[path], &[])
+}
+
+/// [`check_output`] for a whole table, which is written as OpenEXR: a name whose extension
+/// says another format (`x.png`, `x.npy`, …) is refused rather than given EXR bytes under
+/// it. Names without an extension, and `.exr`, are fine.
+pub fn check_exr_output(path: &Path) -> Result<()> {
+    const OTHER: &[&str] = &[
+        "png", "jpg", "jpeg", "npy", "npz", "hdr", "tif", "tiff", "bmp", "txt", "json", "csv",
+        "binary", "toml",
+    ];
+    if let Some(ext) = path.extension().and_then(|e| e.to_str()) {
+        if OTHER.contains(&ext.to_ascii_lowercase().as_str()) {
+            return Err(Error::Output {
+                path: path.to_owned(),
+                message: format!(
+                    "the table is written as OpenEXR, not as .{ext}: name it .exr (`table slice` and `table preview` write pictures with --png; a sharded run's parts are .npy with --shard)"
+                ),
+            });
+        }
+    }
+    check_output(path)
 }
 
 /// The material called `name`: from `materials_file` when given, else from the presets.

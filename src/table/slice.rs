@@ -119,6 +119,14 @@ pub fn compute_band(
     if rows.is_empty() {
         return Ok((Vec::new(), terms.then(Vec::new)));
     }
+    // Every front end (the CLI, Python, a library caller) gets the memory check before
+    // the band's outputs are allocated: an allocation that fails aborts the process.
+    let channels: u64 = if terms { 3 + TERM_COLUMNS as u64 } else { 3 };
+    let band = super::Grid {
+        width: grid.width,
+        height: rows.len(),
+    };
+    super::check_memory(super::table_bytes(band, 4 * channels), "the slice")?;
     let texels = rows.start * grid.width..rows.end * grid.width;
     if let (Ok(width), Ok(height)) = (u32::try_from(grid.width), u32::try_from(grid.height)) {
         let slice = SliceGrid {
@@ -170,7 +178,7 @@ impl SliceJob {
             super::table_bytes(self.grid, 12 * channels as u64),
             "the slice",
         )?;
-        super::check_output(&self.output)
+        super::check_exr_output(&self.output)
     }
 
     /// [`SliceJob::check`] for the band `part` names: memory for its rows (and for the

@@ -1,0 +1,105 @@
+//! Issue 30 item 10: quiet wrong answers and misleading messages, each refused or fixed.
+
+mod common;
+
+use common::{path, stderr, vkbrdf};
+
+#[test]
+fn a_table_named_as_another_format_is_refused_before_any_work() {
+    let dir = tempfile::tempdir().unwrap();
+    for (args, name) in [
+        (
+            vec!["table", "slice", "--material", "gold", "--size", "8"],
+            "x.png",
+        ),
+        (vec!["table", "dfg", "--size", "4"], "d.npy"),
+        (vec!["table", "albedo", "--size", "4"], "a.PNG"),
+    ] {
+        let out = dir.path().join(name);
+        let mut a = args.clone();
+        a.extend(["-o", path(&out)]);
+        let o = vkbrdf(&a);
+        assert_eq!(o.status.code(), Some(2), "{a:?}: {}", stderr(&o));
+        assert!(
+            stderr(&o).contains("OpenEXR") && stderr(&o).contains(name),
+            "{}",
+            stderr(&o)
+        );
+        assert!(!out.exists());
+    }
+}
+
+#[test]
+fn bytes_after_an_npy_arrays_data_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let m = dir.path().join("m.toml");
+    std::fs::write(&m, "[[material]]\nname = \"g\"\npreset = \"gold\"\n").unwrap();
+    let t = dir.path().join("t.npy");
+    assert!(common::generate(&m, 10, &t).status.success());
+    let mut bytes = std::fs::read(&t).unwrap();
+    bytes.extend([0u8; 400]);
+    std::fs::write(&t, &bytes).unwrap();
+    let out = dir.path().join("o.npy");
+    let o = common::eval(&m, &t, &["--backend", "cpu", "-o", path(&out)]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("400 bytes follow the data"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!out.exists());
+}
+
+#[test]
+fn sizes_in_tib_are_understood_and_a_garbage_validation_setting_is_an_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let m = dir.path().join("m.toml");
+    std::fs::write(&m, "[[material]]\nname = \"g\"\npreset = \"gold\"\n").unwrap();
+    let t = dir.path().join("t.npy");
+    assert!(common::generate(&m, 10, &t).status.success());
+    let out = dir.path().join("o.npy");
+    let o = common::eval(
+        &m,
+        &t,
+        &["--backend", "cpu", "--max-memory", "1TiB", "-o", path(&out)],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_vkbrdf"))
+        .args(["materials"])
+        .env("VKBRDF_VALIDATION", "garbage")
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("VKBRDF_VALIDATION"), "{}", stderr(&o));
+}
+
+#[test]
+fn an_output_directory_that_is_a_file_is_named_before_any_work() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("plain");
+    std::fs::write(&file, b"x").unwrap();
+    for args in [
+        vec!["demo", "--out-dir", path(&file)],
+        vec!["bench", "--quick", "--no-peers", "--plot", path(&file)],
+    ] {
+        let t = std::time::Instant::now();
+        let o = vkbrdf(&args);
+        assert_eq!(o.status.code(), Some(2), "{args:?}");
+        assert!(stderr(&o).contains(path(&file)), "{}", stderr(&o));
+        assert!(stderr(&o).contains("not a directory"), "{}", stderr(&o));
+        // Refused before the work, not after it (the bench took 14 s to say so).
+        assert!(t.elapsed() < std::time::Duration::from_secs(5));
+    }
+}
+
+#[test]
+fn at_help_points_to_a_command_that_exists_and_names_its_own_default() {
+    let o = vkbrdf(&["at", "--help"]);
+    let help = String::from_utf8_lossy(&o.stdout);
+    assert!(!help.contains("materials --presets"), "{help}");
+    assert!(help.contains("`vkbrdf materials` lists them"), "{help}");
+    assert!(
+        help.contains("runs the f64 reference unless --backend"),
+        "{help}"
+    );
+}
