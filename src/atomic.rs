@@ -45,6 +45,12 @@ pub fn destination(path: &Path) -> Result<Destination> {
     if path.as_os_str() == STDOUT {
         return Ok(Destination::Stdout);
     }
+    // What the path opens to, links followed by the kernel: `/dev/stdout` is a link to
+    // `/proc/self/fd/1`, itself a "magic" link to a pipe or terminal that no path names,
+    // so resolving it by hand finds nothing to write.
+    if std::fs::metadata(path).is_ok_and(|m| is_fifo_or_device(&m)) {
+        return Ok(Destination::Special);
+    }
     let target = resolve_links(path).map_err(|source| io_error(path, source))?;
     match std::fs::metadata(&target) {
         Ok(m) if m.is_file() => Ok(Destination::Regular { target }),
@@ -122,6 +128,73 @@ pub fn check_outputs(outputs: &[&Path], inputs: &[&Path]) -> Result<()> {
         seen.push((out, identity));
     }
     Ok(())
+}
+
+/// An advisory lock on one output while this process writes it: `flock` on
+/// `.NAME.vkbrdf-lock` beside the target, taken when the output is staged and released
+/// (the lock file removed) once the set is committed or abandoned. A second vkbrdf writing
+/// the same file meanwhile is refused, so two runs never mix their output sets. (On NFS,
+/// Linux emulates `flock` with byte-range locks through the lock manager: it holds across
+/// clients where `lockd` runs, and not on mounts with `nolock`.)
+#[derive(Debug)]
+struct OutputLock {
+    file: File,
+    path: PathBuf,
+}
+
+impl Drop for OutputLock {
+    fn drop(&mut self) {
+        // Removed while still held: a process that opened it meanwhile finds, after it
+        // locks, that the path no longer names its file, and starts again.
+        let _ = std::fs::remove_file(&self.path);
+        let _ = self.file.unlock();
+        LOCKS
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .retain(|p| p != &self.path);
+    }
+}
+
+/// The lock files this process holds, for [`exit_cancelled`] to remove.
+static LOCKS: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+/// Takes the lock of output `target` (`shown` as the user gave it, for the message).
+fn lock_output(target: &Path, shown: &Path) -> Result<OutputLock> {
+    use std::os::unix::fs::MetadataExt;
+    let name = target.file_name().unwrap_or_default().to_string_lossy();
+    let path = parent_dir(target).join(format!(".{name}.vkbrdf-lock"));
+    loop {
+        let file = std::fs::OpenOptions::new()
+            .create(true)
+            .truncate(false)
+            .write(true)
+            .open(&path)
+            .map_err(|e| io_error(&path, e))?;
+        match file.try_lock() {
+            Ok(()) => {}
+            Err(std::fs::TryLockError::WouldBlock) => {
+                return Err(output_error(
+                    shown,
+                    &format!(
+                        "another vkbrdf process is writing this output now (lock `{}`); wait for it to finish, or write elsewhere",
+                        path.display()
+                    ),
+                ))
+            }
+            Err(std::fs::TryLockError::Error(e)) => return Err(io_error(&path, e)),
+        }
+        let held = file.metadata().map_err(|e| io_error(&path, e))?;
+        match std::fs::metadata(&path) {
+            Ok(now) if now.dev() == held.dev() && now.ino() == held.ino() => {
+                LOCKS
+                    .lock()
+                    .unwrap_or_else(|e| e.into_inner())
+                    .push(path.clone());
+                return Ok(OutputLock { file, path });
+            }
+            _ => continue, // its holder removed it between our open and our lock
+        }
+    }
 }
 
 /// Serialises [`commit`] against [`exit_cancelled`].
@@ -202,6 +275,9 @@ pub fn exit_cancelled() -> ! {
     for p in LIVE.lock().unwrap_or_else(|e| e.into_inner()).iter() {
         let _ = std::fs::remove_file(p);
     }
+    for p in LOCKS.lock().unwrap_or_else(|e| e.into_inner()).iter() {
+        let _ = std::fs::remove_file(p);
+    }
     eprintln!("error: cancelled; nothing was written");
     std::process::exit(130)
 }
@@ -219,6 +295,7 @@ enum Held {
     Temp {
         file: tempfile::NamedTempFile,
         target: PathBuf,
+        lock: OutputLock,
     },
     /// For a FIFO, a device or standard output: written directly at commit.
     Memory { data: Vec<u8>, stdout: bool },
@@ -288,6 +365,7 @@ pub fn stage(
     let bytes = match destination(path)? {
         Destination::Regular { target } => {
             let dir = parent_dir(&target);
+            let lock = lock_output(&target, path)?;
             let mut file = temp_file_in(dir).map_err(|e| io_error(path, e))?;
             {
                 let mut sink = Sink {
@@ -301,7 +379,7 @@ pub fn stage(
             // tempfile creates 0600; give the result the mode a plain create would
             // (0666 & !umask), or keep the mode of the file it replaces.
             set_final_mode(file.as_file(), &target).map_err(failed)?;
-            Held::Temp { file, target }
+            Held::Temp { file, target, lock }
         }
         dest => {
             let mut cursor = Cursor::new(Vec::new());
@@ -339,6 +417,7 @@ enum WriterInner {
         file: tempfile::NamedTempFile,
         out: BufWriter<File>,
         target: PathBuf,
+        lock: OutputLock,
     },
     Memory {
         cursor: Cursor<Vec<u8>>,
@@ -351,12 +430,14 @@ pub fn stage_writer(path: &Path, cancel: &Cancel) -> Result<StagedWriter> {
     cancel.check()?;
     let inner = match destination(path)? {
         Destination::Regular { target } => {
+            let lock = lock_output(&target, path)?;
             let file = temp_file_in(parent_dir(&target)).map_err(|e| io_error(path, e))?;
             let out = file.as_file().try_clone().map_err(|e| io_error(path, e))?;
             WriterInner::Temp {
                 file,
                 out: BufWriter::with_capacity(1 << 20, out),
                 target,
+                lock,
             }
         }
         dest => WriterInner::Memory {
@@ -409,12 +490,13 @@ impl StagedWriter {
                 file,
                 mut out,
                 target,
+                lock,
             } => {
                 out.flush().map_err(failed)?;
                 drop(out);
                 file.as_file().sync_all().map_err(failed)?;
                 set_final_mode(file.as_file(), &target).map_err(failed)?;
-                Held::Temp { file, target }
+                Held::Temp { file, target, lock }
             }
             WriterInner::Memory { cursor, stdout } => Held::Memory {
                 data: cursor.into_inner(),
@@ -444,11 +526,13 @@ pub fn commit(staged: Vec<Staged>) -> Result<()> {
     }
     let keep_backups = regular.len() > 1;
     let mut done: Vec<(PathBuf, Option<PathBuf>)> = Vec::new();
+    let mut locks: Vec<OutputLock> = Vec::new();
     let mut result = Ok(());
     for s in regular {
-        let Held::Temp { file, target } = s.bytes else {
+        let Held::Temp { file, target, lock } = s.bytes else {
             continue;
         };
+        locks.push(lock); // released when the whole set is done
         let backup = if keep_backups {
             match backup_of(&target) {
                 Ok(b) => b,

@@ -107,7 +107,7 @@ impl<'a> Batch<'a> {
                 "expected 10 columns (Lx Ly Lz Vx Vy Vz Nx Ny Nz material) or 13 (plus Tx Ty Tz), found {columns}"
             )));
         }
-        if data.len() % columns != 0 {
+        if !data.len().is_multiple_of(columns) {
             return Err(err(format!(
                 "{} values do not make whole rows of {columns}",
                 data.len()
@@ -245,7 +245,7 @@ impl LocalBatch {
         source: &Path,
     ) -> Result<LocalBatch> {
         check_local_material(material, materials, source)?;
-        if data.len() % COLUMNS_LOCAL != 0 {
+        if !data.len().is_multiple_of(COLUMNS_LOCAL) {
             return Err(Error::Batch {
                 path: source.to_owned(),
                 message: format!(

@@ -172,7 +172,7 @@ fn render_vulkan(call: &str, result: ash::vk::Result, chunk: Option<&FailedChunk
 /// `n` bytes in the units `--max-gpu-memory` reads (K, M, G: binary multiples).
 fn bytes(n: u64) -> String {
     for (unit, size) in [("G", 1u64 << 30), ("M", 1 << 20), ("K", 1 << 10)] {
-        if n >= size && n % size == 0 {
+        if n >= size && n.is_multiple_of(size) {
             return format!("{}{unit}", n / size);
         }
     }

@@ -330,3 +330,29 @@ fn npy_repeated_shape_key_is_checked_as_npyz_reads_it() {
     .unwrap();
     assert_eq!((data.len(), shape), (10, vec![1, 10]));
 }
+
+/// The sidecar target's check (`fuzz/fuzz_targets/sidecar.rs`).
+fn check_sidecar(data: &[u8]) {
+    use vkbrdf::stream::shard::{parse_sidecar, Sidecar};
+    let text = String::from_utf8_lossy(data);
+    let path = Path::new("part.npy.shard.json");
+    match parse_sidecar::<Sidecar>(&text, path, "shard sidecar") {
+        Ok(car) => {
+            if car.validate().is_ok() {
+                let c = car.counts();
+                assert!(c.invalid + c.below_horizon + c.saturated <= c.tuples);
+            }
+        }
+        Err(e) => assert!(e.to_string().contains("part.npy.shard.json"), "{e}"),
+    }
+    if let Err(e) =
+        parse_sidecar::<vkbrdf::table::shard::TableSidecar>(&text, path, "table sidecar")
+    {
+        assert!(e.to_string().contains("part.npy.shard.json"), "{e}");
+    }
+}
+
+#[test]
+fn sidecar_corpus_replays_without_panic() {
+    replay("sidecar", 2, check_sidecar);
+}

@@ -190,3 +190,65 @@ fn materials_files_refuse_far_duplicates_control_characters_and_a_model_that_dro
     .is_ok());
     assert_eq!(vkbrdf::material::MAX_MATERIALS, 1 << 24);
 }
+
+#[test]
+fn a_second_writer_of_an_output_set_is_refused_and_sets_never_mix() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (ma, mb) = (d.join("a.toml"), d.join("b.toml"));
+    std::fs::write(&ma, "[[material]]\nname = \"g\"\npreset = \"gold\"\n").unwrap();
+    std::fs::write(&mb, "[[material]]\nname = \"s\"\npreset = \"silver\"\n").unwrap();
+    let t = d.join("t.npy");
+    assert!(generate(&ma, 200_000, &t).status.success());
+    let (x, xt) = (d.join("X.npy"), d.join("Xt.npy"));
+    // A lock held by "another process" (this test) refuses the writer, naming the file.
+    let lock_path = d.join(".X.npy.vkbrdf-lock");
+    let held = std::fs::File::create(&lock_path).unwrap();
+    held.try_lock().unwrap();
+    let o = eval(
+        &ma,
+        &t,
+        &["--backend", "cpu", "-o", path(&x), "--terms", path(&xt)],
+    );
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("another vkbrdf process") && stderr(&o).contains("X.npy"));
+    assert!(!x.exists() && !xt.exists());
+    held.unlock().unwrap();
+    drop(held);
+    std::fs::remove_file(&lock_path).unwrap();
+    // The expected sets of each run alone.
+    let expect = |m: &Path, tag: &str| {
+        let (b, tt) = (d.join(format!("{tag}.npy")), d.join(format!("{tag}t.npy")));
+        let o = eval(
+            m,
+            &t,
+            &["--backend", "cpu", "-o", path(&b), "--terms", path(&tt)],
+        );
+        assert!(o.status.success(), "{}", stderr(&o));
+        (std::fs::read(b).unwrap(), std::fs::read(tt).unwrap())
+    };
+    let (a, b) = (expect(&ma, "A"), expect(&mb, "B"));
+    for round in 0..6 {
+        let spawn = |m: &Path| {
+            std::process::Command::new(env!("CARGO_BIN_EXE_vkbrdf"))
+                .args(["eval", "--backend", "cpu", "-m", path(m), "-i", path(&t)])
+                .args(["-o", path(&x), "--terms", path(&xt)])
+                .output()
+        };
+        let (ra, rb) = std::thread::scope(|s| {
+            let ha = s.spawn(|| spawn(&ma).unwrap());
+            let hb = s.spawn(|| spawn(&mb).unwrap());
+            (ha.join().unwrap(), hb.join().unwrap())
+        });
+        for r in [&ra, &rb] {
+            assert!(matches!(r.status.code(), Some(0 | 2)), "{}", stderr(r));
+        }
+        let got = (std::fs::read(&x).unwrap(), std::fs::read(&xt).unwrap());
+        assert!(
+            got == a || got == b,
+            "round {round}: the outputs mix two runs"
+        );
+    }
+    // No lock file is left behind.
+    assert!(!lock_path.exists());
+}

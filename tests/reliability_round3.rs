@@ -103,3 +103,79 @@ fn at_help_points_to_a_command_that_exists_and_names_its_own_default() {
         "{help}"
     );
 }
+
+#[test]
+fn dev_stdout_is_written_directly_and_a_non_seekable_input_is_refused_by_name() {
+    use std::io::Write;
+    use std::process::{Command, Stdio};
+    let dir = tempfile::tempdir().unwrap();
+    let m = dir.path().join("m.toml");
+    std::fs::write(&m, "[[material]]\nname = \"g\"\npreset = \"gold\"\n").unwrap();
+    let t = dir.path().join("t.npy");
+    assert!(common::generate(&m, 50, &t).status.success());
+    // -o /dev/stdout into a pipe: the .npy arrives on the pipe.
+    let o = Command::new(env!("CARGO_BIN_EXE_vkbrdf"))
+        .args(["eval", "--backend", "cpu", "-m", path(&m), "-i", path(&t)])
+        .args(["-o", "/dev/stdout"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(o.stdout.starts_with(b"\x93NUMPY"));
+    assert_eq!(o.stdout.len(), 128 + 50 * 12);
+    // stress --report /dev/stdout too.
+    let o = vkbrdf(&[
+        "stress",
+        "--tuples",
+        "1000",
+        "--backend",
+        "cpu",
+        "--report",
+        "/dev/stdout",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("stress tuples"));
+    // Standard input, /dev/stdin and a FIFO as the input: refused with the reason.
+    for input in ["-", "/dev/stdin"] {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_vkbrdf"))
+            .args(["eval", "--backend", "cpu", "-m", path(&m), "-i", input])
+            .args(["-o", path(&dir.path().join("o.npy"))])
+            .stdin(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        let _ = child
+            .stdin
+            .take()
+            .unwrap()
+            .write_all(&std::fs::read(&t).unwrap());
+        let o = child.wait_with_output().unwrap();
+        assert_eq!(o.status.code(), Some(2), "{input}");
+        assert!(
+            stderr(&o).contains("save them to a file first"),
+            "{}",
+            stderr(&o)
+        );
+    }
+}
+
+#[test]
+fn long_commands_print_progress_lines_when_stderr_is_not_a_terminal() {
+    // The interval is 10 s by default; VKBRDF_PROGRESS_INTERVAL shortens it here.
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_vkbrdf"))
+        .args([
+            "check",
+            "--backend",
+            "cpu",
+            "--tuples",
+            "3000",
+            "--filter",
+            "ggx",
+        ])
+        .env("VKBRDF_PROGRESS_INTERVAL", "0.1")
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    let e = stderr(&o);
+    assert!(e.contains("[vkbrdf check]"), "{e}");
+    assert!(e.contains("combinations done"), "{e}");
+}

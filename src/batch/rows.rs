@@ -42,6 +42,20 @@ impl NpyRows {
             path: path.to_owned(),
             message,
         };
+        // The rows are read with random access (chunks, shards, the sidecar's
+        // fingerprint): a pipe, a device or standard input cannot be, so say so rather
+        // than fail later with "Illegal seek".
+        let not_seekable = path.as_os_str() == "-"
+            || std::fs::metadata(path).is_ok_and(|m| {
+                use std::os::unix::fs::FileTypeExt;
+                let t = m.file_type();
+                t.is_fifo() || t.is_char_device() || t.is_socket()
+            });
+        if not_seekable {
+            return Err(err(
+                "is standard input, a pipe or a device; the tuples are read from a regular file (random access for chunks and shards): save them to a file first (e.g. `cat > t.npy`)".into(),
+            ));
+        }
         let (mut reader, len) = open_sized(path)?;
         let head = npy_head(&mut reader, len, path)?;
         let data_start = head.len() as u64;

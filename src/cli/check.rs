@@ -120,7 +120,13 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
     say(CombinationReport::header());
     let t0 = Instant::now();
     let verbose = args.verbose;
+    let mut done = 0usize;
     let (reports, skipped) = check::run_with_skips(gpu.as_mut(), &check_options, &mut |r| {
+        done += 1;
+        super::set_status(format!(
+            "{done} combinations done, the last {}",
+            r.combination
+        ));
         say(r.row());
         if verbose || !r.pass() {
             if let Some(w) = &r.worst {

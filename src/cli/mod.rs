@@ -112,6 +112,19 @@ pub fn cancel() -> Cancel {
 pub fn run(cli: Cli, cancel: Cancel) -> anyhow::Result<ExitCode> {
     let _ = CANCEL.set(cancel);
     check_environment()?;
+    let long = match &cli.command {
+        Command::Check(_) => Some("check"),
+        Command::Bench(_) => Some("bench"),
+        Command::Stress(_) => Some("stress"),
+        Command::Table(_) => Some("table"),
+        Command::Eval(_) => Some("eval"),
+        Command::Demo(_) => Some("demo"),
+        Command::Merge(_) => Some("merge"),
+        _ => None,
+    };
+    if let Some(name) = long {
+        start_heartbeat(name);
+    }
     match cli.command {
         Command::Eval(a) => eval::run(&a),
         Command::Merge(a) => merge::run(&a),
@@ -157,3 +170,51 @@ pub(crate) fn output_dir(dir: &std::path::Path, option: &str) -> anyhow::Result<
         )
     })
 }
+
+/// What a long command is doing now, for [`start_heartbeat`]'s lines.
+static STATUS: std::sync::Mutex<String> = std::sync::Mutex::new(String::new());
+
+/// Sets the status line a long command reports (see [`start_heartbeat`]).
+pub(crate) fn set_status(status: impl Into<String>) {
+    *STATUS.lock().unwrap_or_else(|e| e.into_inner()) = status.into();
+}
+
+/// `bar.set_message(msg)`, and the same text as the heartbeat's status.
+pub(crate) fn progress_message(bar: &indicatif::ProgressBar, msg: String) {
+    set_status(msg.clone());
+    bar.set_message(msg);
+}
+
+/// Where standard error is not a terminal (a pipe, a log, CI), the progress bars draw
+/// nothing: a line every 10 s says the command is alive, how long it has run and what it
+/// is doing, so that a person reading the log never waits minutes on silence.
+fn start_heartbeat(command: &'static str) {
+    use std::io::IsTerminal;
+    if std::io::stderr().is_terminal() {
+        return;
+    }
+    // VKBRDF_PROGRESS_INTERVAL=SECONDS changes the interval (a log that wants fewer
+    // lines, a test that wants them sooner).
+    let every = std::env::var("VKBRDF_PROGRESS_INTERVAL")
+        .ok()
+        .and_then(|v| v.parse::<f64>().ok())
+        .filter(|s| s.is_finite() && *s >= 0.05)
+        .map_or(HEARTBEAT, std::time::Duration::from_secs_f64);
+    let start = std::time::Instant::now();
+    std::thread::spawn(move || loop {
+        std::thread::sleep(every);
+        let status = STATUS.lock().unwrap_or_else(|e| e.into_inner()).clone();
+        let status = if status.is_empty() {
+            "working".to_string()
+        } else {
+            status
+        };
+        eprintln!(
+            "[vkbrdf {command}] {:.0} s: {status}",
+            start.elapsed().as_secs_f64()
+        );
+    });
+}
+
+/// How often [`start_heartbeat`] prints by default.
+const HEARTBEAT: std::time::Duration = std::time::Duration::from_secs(10);

@@ -94,7 +94,7 @@ pub fn bytes(lo: u64, hi: u64) -> impl Fn(&str) -> Result<u64, String> + Clone +
 /// `n` bytes as the largest binary unit that divides it (`512MiB`, `1TiB`).
 fn human(n: u64) -> String {
     for (unit, shift) in [("TiB", 40), ("GiB", 30), ("MiB", 20), ("KiB", 10)] {
-        if n >= 1 << shift && n % (1 << shift) == 0 {
+        if n >= 1 << shift && n.is_multiple_of(1 << shift) {
             return format!("{}{unit}", n >> shift);
         }
     }

@@ -731,7 +731,7 @@ impl VulkanBackend {
         debug_assert!(slot.pending.is_none());
         // Whole RGBA32UI texels, so the texel view covers every input float.
         let input_bytes = (4 * input_floats as u64).div_ceil(16) * 16;
-        if slot.input.as_ref().map_or(true, |b| b.size() < input_bytes) {
+        if slot.input.as_ref().is_none_or(|b| b.size() < input_bytes) {
             slot.input_view = None; // the view goes before the buffer it views
         }
         ensure(
@@ -990,7 +990,7 @@ fn ensure(
     bytes: u64,
     usage: MemoryUse,
 ) -> Result<()> {
-    if buffer.as_ref().map_or(true, |b| b.size() < bytes) {
+    if buffer.as_ref().is_none_or(|b| b.size() < bytes) {
         *buffer = None;
         *buffer = Some(Buffer::new(device, bytes, usage)?);
     }

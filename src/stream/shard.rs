@@ -174,8 +174,18 @@ pub fn read_sidecar<T: serde::de::DeserializeOwned>(part: &Path, what: &str) -> 
         path: path.clone(),
         source,
     })?;
-    serde_json::from_str(&text).map_err(|e| Error::Batch {
-        path,
+    parse_sidecar(&text, &path, what)
+}
+
+/// A sidecar's JSON `text` (read from `path`, named in errors) as `T`: an error, never a
+/// panic, for anything that is not one (the sidecar fuzz target drives this).
+pub fn parse_sidecar<T: serde::de::DeserializeOwned>(
+    text: &str,
+    path: &Path,
+    what: &str,
+) -> Result<T> {
+    serde_json::from_str(text).map_err(|e| Error::Batch {
+        path: path.to_owned(),
         message: format!("not a vkbrdf {what}: {e}"),
     })
 }
