@@ -7,7 +7,7 @@ cd "$(dirname "$0")"
 seconds=${1:-600}
 shift || true
 targets=("$@")
-[ ${#targets[@]} -gt 0 ] || targets=(merl merl_lookup npy materials)
+[ ${#targets[@]} -gt 0 ] || targets=(merl merl_lookup npy materials sidecar)
 [ -d corpus ] || python3 make_seeds.py
 mkdir -p logs
 for t in "${targets[@]}"; do
