@@ -56,8 +56,11 @@ type Reduced<'py> = (Bound<'py, PyAny>, (&'static str, String, String));
 enum Origin {
     /// TOML text.
     Text(String),
-    /// A file (read again by the process that unpickles: it must see the same path).
-    File(PathBuf),
+    /// A file: its text as read when it was loaded (a file changed since does not change
+    /// what unpickles) and its directory (relative MERL `file` keys resolve against it,
+    /// so a measured material's data file must be at the same path in the receiving
+    /// process).
+    File { text: String, base: PathBuf },
     /// The presets.
     Presets,
 }
@@ -127,7 +130,7 @@ impl Materials {
         let rebuild = py.import("vkbrdf")?.getattr("_rebuild_materials")?;
         let (kind, payload) = match &self.origin {
             Origin::Text(t) => ("text", t.clone()),
-            Origin::File(p) => ("file", p.display().to_string()),
+            Origin::File { text, base } => ("file", format!("{}\n{text}", base.display())),
             Origin::Presets => ("presets", String::new()),
         };
         Ok((rebuild, (kind, payload, self.source.clone())))
@@ -513,11 +516,39 @@ fn rows(
 /// Reads a materials file (TOML).
 #[pyfunction]
 fn load_materials(py: Python<'_>, path: PathBuf) -> PyResult<Materials> {
-    let list = vkbrdf::material::load_materials(&path).map_err(|e| to_py(py, e))?;
+    let text = std::fs::read_to_string(&path).map_err(|source| {
+        to_py(
+            py,
+            Error::Io {
+                path: path.clone(),
+                source,
+            },
+        )
+    })?;
+    let base = path.parent().unwrap_or(Path::new(".")).to_path_buf();
+    let list = vkbrdf::material::parse_materials_in(&text, &path.display().to_string(), &base)
+        .map_err(|e| to_py(py, Error::Material(e)))?;
     Ok(Materials {
         list: Arc::new(list),
         source: path.display().to_string(),
-        origin: Origin::File(path),
+        origin: Origin::File { text, base },
+    })
+}
+
+/// Rebuilds a file-loaded table from its pickled text and directory (see `__reduce__`).
+#[pyfunction]
+fn materials_from_file_text(py: Python<'_>, payload: &str, source: &str) -> PyResult<Materials> {
+    let (base, text) = payload.split_once('\n').unwrap_or((".", payload));
+    let base = PathBuf::from(base);
+    let list = vkbrdf::material::parse_materials_in(text, source, &base)
+        .map_err(|e| to_py(py, Error::Material(e)))?;
+    Ok(Materials {
+        list: Arc::new(list),
+        source: source.to_string(),
+        origin: Origin::File {
+            text: text.to_string(),
+            base,
+        },
     })
 }
 
@@ -791,6 +822,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Materials>()?;
     m.add_function(wrap_pyfunction!(evaluate, m)?)?;
     m.add_function(wrap_pyfunction!(load_materials, m)?)?;
+    m.add_function(wrap_pyfunction!(materials_from_file_text, m)?)?;
     m.add_function(wrap_pyfunction!(parse_materials, m)?)?;
     m.add_function(wrap_pyfunction!(presets, m)?)?;
     m.add_function(wrap_pyfunction!(table_slice, m)?)?;

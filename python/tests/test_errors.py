@@ -54,7 +54,7 @@ def test_unknown_material_name(mats):
     [
         (np.zeros((4, 7), np.float32), "expected 10 columns .* found 7"),
         (np.zeros(10, np.float32), r"expected a 2-D array .* found shape \(10,\)"),
-        (np.zeros((2, 10), np.int32), "dtype int32 is not supported"),
+        (np.zeros((2, 10), np.complex64), "dtype complex64 is not supported"),
         (np.array([[0, 0, 1, 0, 0, 1, 0, 0, 1, 9]], np.float32), "row 0: material value 9 is not an integer index in 0..4"),
         (np.array([[0, 0, 1, 0, 0, 1, 0, 0, 1, 0.5]], np.float32), "row 0: material value 0.5"),
         (np.array([[0, 0, 1, 0, 0, 1, 0, 0, 1, np.nan]], np.float32), "row 0: material value NaN"),
@@ -125,12 +125,12 @@ def test_vulkan_unavailable_is_device_error(tmp_path):
         "import vkbrdf, numpy as np\n"
         "m = vkbrdf.presets()\n"
         "try:\n"
-        "    vkbrdf.evaluate(m, l=[0,0,1], v=[0,0,1], n=[0,0,1], backend='vulkan')\n"
+        "    vkbrdf.evaluate(m, l=[0,0,1], v=[0,0,1], n=[0,0,1], material='gold', backend='vulkan')\n"
         "except vkbrdf.DeviceError as e:\n"
         "    assert isinstance(e, RuntimeError)\n"
         "    print('DeviceError:', e)\n"
         # auto falls back to the native CPU engine, as the CLI does
-        "f = vkbrdf.evaluate(m, l=[0,0,1], v=[0,0,1], n=[0,0,1], backend='auto')\n"
+        "f = vkbrdf.evaluate(m, l=[0,0,1], v=[0,0,1], n=[0,0,1], material='gold', backend='auto')\n"
         "print('auto ok', f.shape)\n"
     )
     env = dict(os.environ, VK_DRIVER_FILES=str(tmp_path / "no-such-icd.json"), VK_ICD_FILENAMES=str(tmp_path / "no-such-icd.json"))
@@ -156,3 +156,37 @@ def test_check_with_a_filter_that_matches_nothing_is_an_error():
         vkbrdf.check(backend="cpu", only="nomatch")
     with pytest.raises(vkbrdf.UsageError, match="out of range"):
         vkbrdf.check(backend="cpu", tuples=10**12)
+
+
+def test_broadcast_form_needs_a_material_when_the_table_has_several(mats):
+    assert len(mats) > 1
+    with pytest.raises(vkbrdf.UsageError, match="say which with material="):
+        vkbrdf.evaluate(mats, l=[0, 0, 1], v=[0, 0, 1], n=[0, 0, 1], backend="cpu")
+    one = vkbrdf.parse_materials("[[material]]\nname = 'm'\nmodel = 'lambert'\ndiffuse = 0.5\n")
+    f = vkbrdf.evaluate(one, l=[0, 0, 1], v=[0, 0, 1], n=[0, 0, 1], backend="cpu")
+    assert np.allclose(f, 0.5 / np.pi)
+
+
+def test_integer_tuples_are_converted_as_numpy_would():
+    one = vkbrdf.parse_materials("[[material]]\nname = 'm'\nmodel = 'lambert'\ndiffuse = 0.5\n")
+    rows = [[0, 0, 1, 0, 0, 1, 0, 0, 1, 0]]
+    f = vkbrdf.evaluate(one, rows, backend="cpu")
+    g = vkbrdf.evaluate(one, np.asarray(rows, dtype=np.float32), backend="cpu")
+    assert np.array_equal(f, g)
+
+
+def test_help_shows_the_stubs_full_docstring():
+    assert "Two forms" in vkbrdf.evaluate.__doc__
+    assert len(vkbrdf.evaluate.__doc__.splitlines()) > 10
+
+
+def test_a_pickled_file_loaded_table_keeps_its_materials_when_the_file_changes(tmp_path):
+    import pickle
+
+    f = tmp_path / "m.toml"
+    f.write_text("[[material]]\nname = 'a'\nmodel = 'lambert'\ndiffuse = 0.5\n")
+    m = vkbrdf.load_materials(f)
+    data = pickle.dumps(m)
+    f.write_text("[[material]]\nname = 'b'\nmodel = 'lambert'\ndiffuse = 0.25\n")
+    back = pickle.loads(data)
+    assert back.names == ["a"]

@@ -71,7 +71,7 @@ def _rebuild_materials(kind, payload, source):
     if kind == "text":
         return _native.parse_materials(payload, source)
     if kind == "file":
-        return _native.load_materials(payload)
+        return _native.materials_from_file_text(payload, source)
     return _native.presets()
 
 
@@ -80,6 +80,10 @@ _FLOATS = (_np.dtype(_np.float32), _np.dtype(_np.float64))
 
 def _tuples_array(tuples):
     a = _np.asarray(tuples)
+    if a.dtype.kind in "iu":
+        # Integers (a list of ints, an int array), converted as NumPy converts them, as the
+        # l=, v=, n= form accepts them.
+        a = a.astype(_np.float32)
     if a.dtype not in _FLOATS:
         raise BatchError(
             f"tuples: dtype {a.dtype} is not supported; expected float32 or float64 "
@@ -127,6 +131,22 @@ def _broadcast_rows(materials, l, v, n, t, material):
     vecs = [_vectors("l", l), _vectors("v", v), _vectors("n", n)]
     if t is not None:
         vecs.append(_vectors("t", t))
+    try:
+        _np.broadcast_shapes(*(a.shape[:-1] for a in vecs))
+    except ValueError as e:
+        shapes = ", ".join(str(a.shape) for a in vecs)
+        raise BatchError(
+            f"l, v, n{', t' if t is not None else ''}: shapes {shapes} do not broadcast ({e})"
+        ) from None
+    if material is None:
+        # No silent material 0 of a table of several (the CLI's 6-column form refuses a
+        # multi-material file without --material too).
+        if len(materials) != 1:
+            raise UsageError(
+                f"materials holds {len(materials)} materials ({materials.source}); say which with "
+                "material=NAME, an index, or an array of them"
+            )
+        material = 0
     m = _material_indices(materials, material)
     try:
         shape = _np.broadcast_shapes(*(a.shape[:-1] for a in vecs), _np.shape(m))
@@ -154,7 +174,7 @@ def evaluate(
     v=None,
     n=None,
     t=None,
-    material=0,
+    material=None,
     backend="auto",
     terms=False,
     precision="exact",
@@ -194,3 +214,28 @@ def check(*, backend="vulkan", tuples=2000, seed=1, only=None):
     """Runs ``vkbrdf check`` (every legal model combination against the f64 reference) and
     returns its report as a list of dicts, one per combination."""
     return _native.check(str(backend), int(tuples), int(seed), only)
+
+
+
+def _docstrings_from_the_stub():
+    """The functions' full docstrings live in the stub (``__init__.pyi``, which type
+    checkers and IDEs read); ``help()`` shows them too."""
+    import ast
+    import pathlib
+
+    stub = pathlib.Path(__file__).with_name("__init__.pyi")
+    try:
+        tree = ast.parse(stub.read_text(encoding="utf-8"))
+    except OSError:
+        return
+    seen = set()
+    for node in tree.body:
+        if isinstance(node, ast.FunctionDef) and node.name not in seen:
+            doc = ast.get_docstring(node)
+            target = globals().get(node.name)
+            if doc and callable(target) and getattr(target, "__module__", "") == __name__:
+                seen.add(node.name)
+                target.__doc__ = doc
+
+
+_docstrings_from_the_stub()

@@ -173,9 +173,12 @@ def evaluate(
       ``Tx Ty Tz``), float32 or float64 (rounded to float32, as the CLI rounds a float64
       file), any memory layout. A C-contiguous float32 array is read in place, without a
       copy; any other is converted once. f has shape ``(n, 3)``.
-    * ``evaluate(materials, l=L, v=V, n=N, t=None, material=0)``: L, V, N (and T) are
+    * ``evaluate(materials, l=L, v=V, n=N, t=None, material=None)``: L, V, N (and T) are
       ``(..., 3)`` arrays that broadcast against each other and against ``material`` (an
-      index, a name, or an integer or name array); f has the broadcast shape + ``(3,)``.
+      index, a name, or an integer or name array; it may be left out only when
+      ``materials`` holds one material); f has the broadcast shape + ``(3,)``.
+
+    Integer arrays (a list of ints) are converted as NumPy converts them, in both forms.
 
     Directions need not be unit length. Invalid tuples (zero or non-finite L, V, N, a bad
     tangent) and tuples below the horizon give 0 and are counted; ``strict=True`` raises
