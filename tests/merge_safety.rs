@@ -252,3 +252,37 @@ fn a_second_writer_of_an_output_set_is_refused_and_sets_never_mix() {
     // No lock file is left behind.
     assert!(!lock_path.exists());
 }
+
+#[test]
+fn parts_from_different_instruction_sets_are_refused_or_named_with_allow_mixed() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let m = d.join("m.toml");
+    std::fs::write(&m, MATERIALS).unwrap();
+    let t = d.join("t.npy");
+    assert!(generate(&m, 1000, &t).status.success());
+    for (k, isa) in [(1, "scalar"), (2, vkbrdf::cpu::Isa::best().name())] {
+        let part = d.join(format!("part-{k}.npy"));
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_vkbrdf"))
+            .args(["eval", "--backend", "cpu", "-m", path(&m), "-i", path(&t)])
+            .args(["-o", path(&part), "--shard", &format!("{k}/2")])
+            .env("VKBRDF_CPU_ISA", isa)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", stderr(&o));
+    }
+    if vkbrdf::cpu::Isa::best() == vkbrdf::cpu::Isa::Scalar {
+        return; // one variant only on this machine
+    }
+    let out = d.join("o.npy");
+    let o = merge(&["-o", path(&out)], d);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("--allow-mixed"), "{}", stderr(&o));
+    let o = merge(&["-o", path(&out), "--allow-mixed"], d);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("scalar") && stderr(&o).contains("different engines"),
+        "{}",
+        stderr(&o)
+    );
+}

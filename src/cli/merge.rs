@@ -102,6 +102,22 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         args.allow_mixed,
         &cancel,
     )?;
+    // With --allow-mixed, say which engines (instruction sets, devices) the parts came
+    // from: their values may differ in the last bits, each within FORMULAS.md §1's rule.
+    let mut engines: Vec<String> = Vec::new();
+    for p in &args.parts {
+        if let Ok(car) = vkbrdf::stream::shard::Sidecar::read(p) {
+            if !engines.contains(&car.engine) {
+                engines.push(car.engine);
+            }
+        }
+    }
+    if engines.len() > 1 {
+        eprintln!(
+            "warning: the parts came from different engines or instruction sets ({}); their values may differ in the last bits, each within FORMULAS.md §1's rule of the reference",
+            engines.join("; ")
+        );
+    }
     eprintln!(
         "merged {} parts: {} tuples, {} evaluated, {} invalid{}, {} below the horizon, {} saturated",
         args.parts.len(),
