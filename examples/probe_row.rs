@@ -20,8 +20,8 @@ fn main() -> vkbrdf::Result<()> {
         let t = batch.tuple(0);
         let r = vkbrdf::reference::evaluate_tuple(&t, &materials[t.material]);
         println!(
-            "row {row} {:?} material {}: {:?}",
-            cases[0], materials[t.material].name, t
+            "row {row} {:?} material {:?}: {:?}",
+            cases[0], materials[t.material], t
         );
         println!(
             "  {} brdf {:?} terms {:?} counts {:?}",

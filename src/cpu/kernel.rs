@@ -398,7 +398,8 @@ fn rsqrt(x: f32) -> f32 {
 /// components cancel near grazing mirror geometry (`l ≈ −v`), but only by as much as the
 /// inputs' own rounding turns h there, and those lanes (`c` < [`FAST_MIN_C`]) take the f64
 /// frame; `c` is taken as `|l + v|/2` rather than `v · h`, which would cancel a second time
-/// (`v·l + 1`). The sines are sums of squares (cross products), never `1 − cos²`.
+/// (`v·l + 1`). The sines are sums of squares (cross products with the raw N in f64, from
+/// the unrounded l, v and l + v), never `1 − cos²`.
 #[inline(always)]
 fn frame<const Z: bool>(x: &[f32; 9]) -> Frame {
     // l, v and h in f64, each rounded once to f32 (see the bound above): |L|² and |V|²
@@ -420,16 +421,17 @@ fn frame<const Z: bool>(x: &[f32; 9]) -> Frame {
     // error, a few u, enters F no more than c's.)
     let (dx, dy, dz) = (lx - vx, ly - vy, lz - vz);
     let s2 = 0.25 * (dx * dx + dy * dy + dz * dz);
-    let [hx, hy, hz] = h64.map(|q| (q * ih) as f32);
+    let hz = (h64[2] * ih) as f32;
     let (cos_i, cos_o, cos_h, sin2_h, sin2_i, sin2_o, n_ok);
     if Z {
         // N = (0, 0, 1): |N|² = 1, `rsqrt(1)` = 1, each `n · w` is `0·wx + 0·wy + 1·wz =
         // wz` (a zero's sign aside, and a zero cosine is rescued either way) and each
         // `|n × w|²` is `(−wy)² + wx² + 0 = wy·wy + wx·wx`.
         (cos_i, cos_o, cos_h) = (lz, vz, hz);
-        sin2_h = hy * hy + hx * hx;
-        sin2_i = ly * ly + lx * lx;
-        sin2_o = vy * vy + vx * vx;
+        let side2 = |a: [f64; 3]| a[1] * a[1] + a[0] * a[0];
+        sin2_h = (side2(h64) * (ih * ih)) as f32;
+        sin2_i = side2(l64) as f32;
+        sin2_o = side2(v64) as f32;
         n_ok = true;
     } else {
         let (nx, ny, nz) = (x[6], x[7], x[8]);
@@ -448,14 +450,25 @@ fn frame<const Z: bool>(x: &[f32; 9]) -> Frame {
         // n · h = (n · l + n · v)/|l + v|: a sum of two cosines, which above the horizon
         // does not cancel; with N = (0, 0, 1) it is the local form's `hz`.
         cos_h = ((nl + nv) * ih) as f32 * inn;
-        let (nx, ny, nz) = (nx * inn, ny * inn, nz * inn);
-        let cross2 = |ax: f32, ay: f32, az: f32| {
-            let (cx, cy, cz) = (ny * az - nz * ay, nz * ax - nx * az, nx * ay - ny * ax);
-            cx * cx + cy * cy + cz * cz
+        // |N × w|² in f64 from the raw N and the f64 w (before w's rounding), scaled by
+        // 1/|N|² as the cosines are: near n (h at the peak, l or v near the normal) an f32
+        // cross product of unit vectors keeps only an absolute error of ~u, which is a
+        // relative error of u/sin — G of a tuple with sin θ_i = 3e-3 came out 1.1e-5 off.
+        // With N = (0, 0, 1) these are the local form's sums (the third term is +0 and
+        // `inn` is 1).
+        let n64 = [w(6), w(7), w(8)];
+        let cross2 = |a: [f64; 3]| {
+            let c = [
+                n64[1] * a[2] - n64[2] * a[1],
+                n64[2] * a[0] - n64[0] * a[2],
+                n64[0] * a[1] - n64[1] * a[0],
+            ];
+            c[0] * c[0] + c[1] * c[1] + c[2] * c[2]
         };
-        sin2_h = cross2(hx, hy, hz);
-        sin2_i = cross2(lx, ly, lz);
-        sin2_o = cross2(vx, vy, vz);
+        let i2 = inn * inn;
+        sin2_h = (cross2(h64) * (ih * ih)) as f32 * i2;
+        sin2_i = cross2(l64) as f32 * i2;
+        sin2_o = cross2(v64) as f32 * i2;
         n_ok = length2_ok(nn);
     }
     let g = GRAZING as f32;
@@ -867,11 +880,12 @@ impl Lane {
 /// tolerance each threshold used). Uniform directions fall below it in 0.09 % of lanes.
 pub const FAST_MIN_C: f32 = 0.1;
 
-/// Smallest roughness m for which a material may take the f32 frame: the frame turns h by
-/// at most ~5u (u = 2⁻²⁴), which near D's peak is a relative error of up to 10u/m, and the
-/// f32 terms add ≤ 25u more; at m = 0.075 the sum is 9.5e-6, inside the rule's 1e-5
-/// wherever the inputs determine the value (docs/CPU_ENGINE.md, "The f32 frame's error
-/// bound"). Below it the f64 frame takes the material.
+/// Smallest roughness m for which a material may take the f32 frame. With h formed in
+/// f64 and its cross product with N too, the frame no longer turns h (its D error is
+/// ~10u, u = 2⁻²⁴), and the f32 terms add ≤ 25u; the threshold was set from the earlier
+/// bound `10u/m + 25u ≤ 1e-5` (m ≥ 0.0687) and keeps D's f32 quantities far inside f32's
+/// normal range. Lowering it is a measured change still to make (docs/CPU_ENGINE.md, "The
+/// f32 frame's error bound"). Below it the f64 frame takes the material.
 pub const FAST_MIN_ROUGHNESS: f64 = 0.075;
 
 /// Isotropic Cook–Torrance on one block, specialised to one distribution, geometry and
