@@ -10,33 +10,34 @@ use std::path::{Path, PathBuf};
 
 const MATERIALS: &str = "[[material]]\nname = \"g\"\npreset = \"gold\"\n";
 
-/// A materials file, 1,000 tuples and the two shards of them with their own terms parts.
-fn sharded(dir: &Path) -> (PathBuf, PathBuf) {
+/// A materials file, 1,000 tuples and the two shards of them, shard K's terms part at
+/// `terms_of(K)`.
+fn sharded_with(dir: &Path, terms_of: impl Fn(u32) -> PathBuf) -> (PathBuf, PathBuf) {
     let m = dir.join("m.toml");
     std::fs::write(&m, MATERIALS).unwrap();
     let t = dir.join("t.npy");
     assert!(generate(&m, 1000, &t).status.success());
     for k in 1..=2 {
         let part = dir.join(format!("part-{k}.npy"));
-        let terms = dir.join(format!("terms-{k}.npy"));
+        let terms = terms_of(k);
         let shard = format!("{k}/2");
-        let o = eval(
-            &m,
-            &t,
-            &[
-                "--backend",
-                "cpu",
-                "-o",
-                path(&part),
-                "--terms",
-                path(&terms),
-                "--shard",
-                &shard,
-            ],
-        );
+        let args = [
+            "--backend",
+            "cpu",
+            "-o",
+            path(&part),
+            "--terms",
+            path(&terms),
+        ];
+        let o = eval(&m, &t, &[&args[..], &["--shard", &shard]].concat());
         assert!(o.status.success(), "{}", stderr(&o));
     }
     (m, t)
+}
+
+/// [`sharded_with`] each shard's own terms part, `terms-K.npy`.
+fn sharded(dir: &Path) -> (PathBuf, PathBuf) {
+    sharded_with(dir, |k| dir.join(format!("terms-{k}.npy")))
 }
 
 fn parts(dir: &Path) -> Vec<String> {
@@ -80,30 +81,7 @@ fn a_terms_part_named_by_a_sidecar_is_an_input_and_is_never_overwritten() {
 fn shards_that_shared_one_terms_file_are_refused() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let m = d.join("m.toml");
-    std::fs::write(&m, MATERIALS).unwrap();
-    let t = d.join("t.npy");
-    assert!(generate(&m, 1000, &t).status.success());
-    let shared = d.join("terms.npy");
-    for k in 1..=2 {
-        let part = d.join(format!("part-{k}.npy"));
-        let shard = format!("{k}/2");
-        let o = eval(
-            &m,
-            &t,
-            &[
-                "--backend",
-                "cpu",
-                "-o",
-                path(&part),
-                "--terms",
-                path(&shared),
-                "--shard",
-                &shard,
-            ],
-        );
-        assert!(o.status.success(), "{}", stderr(&o));
-    }
+    sharded_with(d, |_| d.join("terms.npy"));
     let out = d.join("o.npy");
     let all = d.join("all-terms.npy");
     let o = merge(&["-o", path(&out), "--terms", path(&all)], d);

@@ -3,6 +3,16 @@
 mod common;
 
 use common::{path, stderr, vkbrdf};
+use std::path::{Path, PathBuf};
+
+/// A one-material (gold) materials file and `n` tuples of it in `dir`.
+fn gold_tuples(dir: &Path, n: usize) -> (PathBuf, PathBuf) {
+    let m = dir.join("m.toml");
+    std::fs::write(&m, "[[material]]\nname = \"g\"\npreset = \"gold\"\n").unwrap();
+    let t = dir.join("t.npy");
+    assert!(common::generate(&m, n, &t).status.success());
+    (m, t)
+}
 
 #[test]
 fn a_table_named_as_another_format_is_refused_before_any_work() {
@@ -32,10 +42,7 @@ fn a_table_named_as_another_format_is_refused_before_any_work() {
 #[test]
 fn bytes_after_an_npy_arrays_data_are_refused() {
     let dir = tempfile::tempdir().unwrap();
-    let m = dir.path().join("m.toml");
-    std::fs::write(&m, "[[material]]\nname = \"g\"\npreset = \"gold\"\n").unwrap();
-    let t = dir.path().join("t.npy");
-    assert!(common::generate(&m, 10, &t).status.success());
+    let (m, t) = gold_tuples(dir.path(), 10);
     let mut bytes = std::fs::read(&t).unwrap();
     bytes.extend([0u8; 400]);
     std::fs::write(&t, &bytes).unwrap();
@@ -53,10 +60,7 @@ fn bytes_after_an_npy_arrays_data_are_refused() {
 #[test]
 fn sizes_in_tib_are_understood_and_a_garbage_validation_setting_is_an_error() {
     let dir = tempfile::tempdir().unwrap();
-    let m = dir.path().join("m.toml");
-    std::fs::write(&m, "[[material]]\nname = \"g\"\npreset = \"gold\"\n").unwrap();
-    let t = dir.path().join("t.npy");
-    assert!(common::generate(&m, 10, &t).status.success());
+    let (m, t) = gold_tuples(dir.path(), 10);
     let out = dir.path().join("o.npy");
     let o = common::eval(
         &m,
@@ -109,10 +113,7 @@ fn dev_stdout_is_written_directly_and_a_non_seekable_input_is_refused_by_name() 
     use std::io::Write;
     use std::process::{Command, Stdio};
     let dir = tempfile::tempdir().unwrap();
-    let m = dir.path().join("m.toml");
-    std::fs::write(&m, "[[material]]\nname = \"g\"\npreset = \"gold\"\n").unwrap();
-    let t = dir.path().join("t.npy");
-    assert!(common::generate(&m, 50, &t).status.success());
+    let (m, t) = gold_tuples(dir.path(), 50);
     // -o /dev/stdout into a pipe: the .npy arrives on the pipe.
     let o = Command::new(env!("CARGO_BIN_EXE_vkbrdf"))
         .args(["eval", "--backend", "cpu", "-m", path(&m), "-i", path(&t)])
