@@ -264,3 +264,33 @@ fn parts_from_different_instruction_sets_are_refused_or_named_with_allow_mixed()
         stderr(&o)
     );
 }
+
+#[test]
+fn table_parts_from_different_instruction_sets_are_named_with_allow_mixed() {
+    if vkbrdf::cpu::Isa::best() == vkbrdf::cpu::Isa::Scalar {
+        return; // one variant only on this machine
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let mut parts = Vec::new();
+    for (k, isa) in [(1, "scalar"), (2, vkbrdf::cpu::Isa::best().name())] {
+        let part = d.join(format!("dfg-{k}.npy"));
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_vkbrdf"))
+            .args(["table", "dfg", "--size", "4", "--backend", "cpu"])
+            .args(["-o", path(&part), "--shard", &format!("{k}/2")])
+            .env("VKBRDF_CPU_ISA", isa)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", stderr(&o));
+        parts.push(path(&part).to_string());
+    }
+    let out = d.join("dfg.exr");
+    let mut args = vec!["merge", "-o", path(&out)];
+    args.extend(parts.iter().map(String::as_str));
+    let o = vkbrdf(&args);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    args.push("--allow-mixed");
+    let o = vkbrdf(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("different engines"), "{}", stderr(&o));
+}

@@ -86,6 +86,13 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         for w in &m.warnings {
             eprintln!("warning: {w}");
         }
+        let engines = distinct(
+            args.parts
+                .iter()
+                .filter_map(|p| vkbrdf::table::shard::TableSidecar::read(p).ok())
+                .map(|c| c.engine),
+        );
+        warn_mixed(&engines);
         eprintln!(
             "merged {} parts of a {} table ({} rows) into {}",
             args.parts.len(),
@@ -102,22 +109,13 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         args.allow_mixed,
         &cancel,
     )?;
-    // With --allow-mixed, say which engines (instruction sets, devices) the parts came
-    // from: their values may differ in the last bits, each within FORMULAS.md §1's rule.
-    let mut engines: Vec<String> = Vec::new();
-    for p in &args.parts {
-        if let Ok(car) = vkbrdf::stream::shard::Sidecar::read(p) {
-            if !engines.contains(&car.engine) {
-                engines.push(car.engine);
-            }
-        }
-    }
-    if engines.len() > 1 {
-        eprintln!(
-            "warning: the parts came from different engines or instruction sets ({}); their values may differ in the last bits, each within FORMULAS.md §1's rule of the reference",
-            engines.join("; ")
-        );
-    }
+    let engines = distinct(
+        args.parts
+            .iter()
+            .filter_map(|p| vkbrdf::stream::shard::Sidecar::read(p).ok())
+            .map(|c| c.engine),
+    );
+    warn_mixed(&engines);
     eprintln!(
         "merged {} parts: {} tuples, {} evaluated, {} invalid{}, {} below the horizon, {} saturated",
         args.parts.len(),
@@ -130,4 +128,26 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         c.saturated
     );
     Ok(ExitCode::SUCCESS)
+}
+
+/// The distinct values of `it`, in first-seen order.
+fn distinct(it: impl Iterator<Item = String>) -> Vec<String> {
+    let mut out: Vec<String> = Vec::new();
+    for e in it {
+        if !out.contains(&e) {
+            out.push(e);
+        }
+    }
+    out
+}
+
+/// With --allow-mixed, says which engines (instruction sets, devices) the parts came from:
+/// their values may differ in the last bits, each within FORMULAS.md §1's rule.
+fn warn_mixed(engines: &[String]) {
+    if engines.len() > 1 {
+        eprintln!(
+            "warning: the parts came from different engines or instruction sets ({}); their values may differ in the last bits, each within FORMULAS.md §1's rule of the reference",
+            engines.join("; ")
+        );
+    }
 }
