@@ -233,7 +233,7 @@ fn untrack(temp: &Path) {
 /// no `/proc/PID`). A live process's files, and names of any other form (an older
 /// vkbrdf's `.vkbrdf-XXXXXX.partial`, which `vkbrdf eval --help` says may be deleted),
 /// are left alone. Each directory is swept once per process.
-pub fn remove_stale_temp_files(dir: &Path) {
+fn remove_stale_temp_files(dir: &Path) {
     static SWEPT: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
     if !Path::new("/proc/self").exists() {
         return; // no way to tell a live pid here

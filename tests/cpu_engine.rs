@@ -235,29 +235,7 @@ fn mixed_materials_give_the_reference_counts_and_values_for_any_thread_count() {
     assert_eq!(one.counts, reference.counts);
     assert!(one.counts.invalid > 0 && one.counts.below_horizon > 0);
     assert_eq!(one.counts.first_invalid, Some(7));
-    let terms = one.terms.as_ref().expect("terms");
-    let ref_terms = reference.terms.as_ref().expect("terms");
-    for i in 0..batch.len() {
-        let t = batch.tuple(i);
-        let s = check::f32_sensitivity(&t, &mats[t.material]);
-        for c in 0..3 {
-            let (x, r) = (
-                f64::from(one.brdf[i * 3 + c]),
-                f64::from(reference.brdf[i * 3 + c]),
-            );
-            assert!(
-                (x - r).abs() <= check::allowed_error(r, s[c]),
-                "row {i} ch {c}: {x} vs {r}"
-            );
-        }
-        for c in 0..6 {
-            let (x, r) = (f64::from(terms[i * 6 + c]), f64::from(ref_terms[i * 6 + c]));
-            assert!(
-                (x - r).abs() <= check::allowed_error(r, s[3 + c]),
-                "row {i} term {c}: {x} vs {r}"
-            );
-        }
-    }
+    common::rule::assert_within_rule("mixed batch", &batch, &mats, &one, &reference);
 }
 
 /// Anisotropic materials (and an isotropic one) on 13-column rows whose tangents include
@@ -357,25 +335,8 @@ fn anisotropic_lanes_give_the_reference_counts_and_values_with_and_without_tange
             // The lanes took all but the invalid, nearly parallel and below-horizon tuples.
             assert!(tally.rescued * 10 < tally.lanes, "{tally:?}");
         }
-        let terms = one.terms.as_ref().expect("terms");
-        let ref_terms = reference.terms.as_ref().expect("terms");
-        for i in 0..batch.len() {
-            let t = batch.tuple(i);
-            let sens = check::f32_sensitivity(&t, &mats[t.material]);
-            let got = (0..3)
-                .map(|c| one.brdf[i * 3 + c])
-                .chain((0..6).map(|c| terms[i * 6 + c]));
-            let want = (0..3)
-                .map(|c| reference.brdf[i * 3 + c])
-                .chain((0..6).map(|c| ref_terms[i * 6 + c]));
-            for (c, (x, r)) in got.zip(want).enumerate() {
-                let (x, r) = (f64::from(x), f64::from(r));
-                assert!(
-                    (x - r).abs() <= check::allowed_error(r, sens[c]),
-                    "{columns} columns, row {i} column {c}: {x} vs {r}"
-                );
-            }
-        }
+        let what = format!("{columns} columns");
+        common::rule::assert_within_rule(&what, &batch, &mats, &one, &reference);
     }
 }
 

@@ -14,7 +14,6 @@
 
 use numpy::ndarray::{Array2, Array3};
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3, PyReadonlyArray2, PyUntypedArrayMethods};
-use pyo3::exceptions::PyKeyboardInterrupt;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 use std::path::{Path, PathBuf};
@@ -32,11 +31,11 @@ use vkbrdf::table::albedo::{self, Lobe, Microfacet};
 use vkbrdf::table::{slice, texel_centre, Grid, Runner};
 use vkbrdf::Error;
 
+mod errors;
+use errors::{raise, to_py, TUPLES};
+
 /// How often the calling thread looks for Ctrl-C while an engine runs.
 const SIGNAL_POLL: Duration = Duration::from_millis(20);
-
-/// The name the tuple array has in error messages (the CLI names its `.npy` file there).
-const TUPLES: &str = "tuples";
 
 /// A table of materials: what `load_materials`, `parse_materials` and `presets` return.
 #[pyclass(frozen, module = "vkbrdf", name = "Materials")]
@@ -152,122 +151,6 @@ impl Materials {
             items.join(", ")
         )
     }
-}
-
-/// An instance of the package's exception class `class` (in `vkbrdf._errors`) with
-/// `message`, as a `PyErr`.
-fn raise(py: Python<'_>, class: &str, message: String) -> PyErr {
-    match error_instance(py, class, message, &[]) {
-        Ok(e) => e,
-        Err(e) => e,
-    }
-}
-
-/// The exception `class(message)` with the attributes `attrs` set; the error of the
-/// import or construction when that fails.
-fn error_instance(
-    py: Python<'_>,
-    class: &str,
-    message: String,
-    attrs: &[(&str, Py<PyAny>)],
-) -> PyResult<PyErr> {
-    let cls = py.import("vkbrdf._errors")?.getattr(class)?;
-    let value = cls.call1((message,))?;
-    for (k, v) in attrs {
-        value.setattr(*k, v)?;
-    }
-    Ok(PyErr::from_value(value))
-}
-
-/// The library's error as the package's exception: MaterialError, BatchError, FileError
-/// (an OSError: FileNotFoundError / PermissionError subclasses where they apply),
-/// DeviceError, TableError; `KeyboardInterrupt` for a cancelled call.
-fn to_py(py: Python<'_>, e: Error) -> PyErr {
-    let built = match &e {
-        Error::Material(m) => error_instance(
-            py,
-            "MaterialError",
-            e.to_string(),
-            &[
-                (
-                    "source",
-                    m.source_name
-                        .clone()
-                        .into_pyobject(py)
-                        .unwrap()
-                        .into_any()
-                        .unbind(),
-                ),
-                (
-                    "line",
-                    m.line.into_pyobject(py).unwrap().into_any().unbind(),
-                ),
-                (
-                    "material",
-                    m.material
-                        .clone()
-                        .into_pyobject(py)
-                        .unwrap()
-                        .into_any()
-                        .unbind(),
-                ),
-                (
-                    "key",
-                    m.key.clone().into_pyobject(py).unwrap().into_any().unbind(),
-                ),
-            ],
-        ),
-        Error::Batch { .. } => error_instance(py, "BatchError", e.to_string(), &[]),
-        Error::InvalidTuples {
-            invalid,
-            total,
-            first_row,
-        } => error_instance(
-            py,
-            "BatchError",
-            format!("{TUPLES}: {e} (strict=True)"),
-            &[
-                (
-                    "invalid",
-                    invalid.into_pyobject(py).unwrap().into_any().unbind(),
-                ),
-                (
-                    "total",
-                    total.into_pyobject(py).unwrap().into_any().unbind(),
-                ),
-                (
-                    "first_invalid",
-                    first_row.into_pyobject(py).unwrap().into_any().unbind(),
-                ),
-            ],
-        ),
-        Error::Io { path, source } => {
-            file_error(py, source.raw_os_error(), source.to_string(), path)
-        }
-        Error::Output { path, message } => file_error(py, None, message.clone(), path),
-        Error::Cancelled => Ok(PyKeyboardInterrupt::new_err("vkbrdf: cancelled")),
-        Error::Vulkan { .. } | Error::NoDevice(_) | Error::Shader(_) | Error::Unsupported(_) => {
-            error_instance(py, "DeviceError", e.to_string(), &[])
-        }
-        Error::Table(_) => error_instance(py, "TableError", e.to_string(), &[]),
-        Error::Memory(_) => Ok(pyo3::exceptions::PyMemoryError::new_err(e.to_string())),
-    };
-    match built {
-        Ok(err) => err,
-        Err(err) => err,
-    }
-}
-
-/// `FileError(errno, strerror, filename)` (or its FileNotFoundError / PermissionError
-/// subclass), so `.errno`, `.strerror` and `.filename` are set as on any OSError; `message`
-/// is used when the problem is not an OS error.
-fn file_error(py: Python<'_>, errno: Option<i32>, message: String, path: &Path) -> PyResult<PyErr> {
-    let value = py.import("vkbrdf._errors")?.getattr("file_error")?.call1((
-        errno,
-        message,
-        path.display().to_string(),
-    ))?;
-    Ok(PyErr::from_value(value))
 }
 
 /// The engine named `name` (`auto`, `vulkan`, `cpu`, `reference`), or a `UsageError`.

@@ -41,17 +41,6 @@ pub struct Args {
 /// Runs `vkbrdf merge`.
 pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
     let cancel = super::cancel();
-    let mut inputs: Vec<&std::path::Path> = args.parts.iter().map(PathBuf::as_path).collect();
-    let sidecars: Vec<PathBuf> = args
-        .parts
-        .iter()
-        .map(|p| vkbrdf::stream::shard::sidecar_path(p))
-        .collect();
-    inputs.extend(sidecars.iter().map(PathBuf::as_path));
-    let outputs: Vec<&std::path::Path> = std::iter::once(args.output.as_path())
-        .chain(args.terms.as_deref())
-        .collect();
-    vkbrdf::atomic::check_outputs(&outputs, &inputs)?;
     // Table parts or batch parts, never both.
     let mut kinds = Vec::with_capacity(args.parts.len());
     for p in &args.parts {
@@ -86,13 +75,6 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         for w in &m.warnings {
             eprintln!("warning: {w}");
         }
-        let engines = distinct(
-            args.parts
-                .iter()
-                .filter_map(|p| vkbrdf::table::shard::TableSidecar::read(p).ok())
-                .map(|c| c.engine),
-        );
-        warn_mixed(&engines);
         eprintln!(
             "merged {} parts of a {} table ({} rows) into {}",
             args.parts.len(),
@@ -102,20 +84,17 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         );
         return Ok(ExitCode::SUCCESS);
     }
-    let c = vkbrdf::stream::shard::merge(
+    let m = vkbrdf::stream::shard::merge(
         &args.parts,
         &args.output,
         args.terms.as_deref(),
         args.allow_mixed,
         &cancel,
     )?;
-    let engines = distinct(
-        args.parts
-            .iter()
-            .filter_map(|p| vkbrdf::stream::shard::Sidecar::read(p).ok())
-            .map(|c| c.engine),
-    );
-    warn_mixed(&engines);
+    for w in &m.warnings {
+        eprintln!("warning: {w}");
+    }
+    let c = m.counts;
     eprintln!(
         "merged {} parts: {} tuples, {} evaluated, {} invalid{}, {} below the horizon, {} saturated",
         args.parts.len(),
@@ -128,26 +107,4 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         c.saturated
     );
     Ok(ExitCode::SUCCESS)
-}
-
-/// The distinct values of `it`, in first-seen order.
-fn distinct(it: impl Iterator<Item = String>) -> Vec<String> {
-    let mut out: Vec<String> = Vec::new();
-    for e in it {
-        if !out.contains(&e) {
-            out.push(e);
-        }
-    }
-    out
-}
-
-/// With --allow-mixed, says which engines (instruction sets, devices) the parts came from:
-/// their values may differ in the last bits, each within FORMULAS.md §1's rule.
-fn warn_mixed(engines: &[String]) {
-    if engines.len() > 1 {
-        eprintln!(
-            "warning: the parts came from different engines or instruction sets ({}); their values may differ in the last bits, each within FORMULAS.md §1's rule of the reference",
-            engines.join("; ")
-        );
-    }
 }

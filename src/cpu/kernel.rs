@@ -403,7 +403,7 @@ fn rsqrt(x: f32) -> f32 {
 #[inline(always)]
 fn frame<const Z: bool>(x: &[f32; 9]) -> Frame {
     // l, v and h in f64, each rounded once to f32 (see the bound above): |L|² and |V|²
-    // are exact in f64 (squares of f32 values), 1/|x| by `rsqrt64` (~1e-16 relative).
+    // are exact in f64 (squares of f32 values), 1/|x| by `rsqrt64_fast` (~1e-14 relative).
     let w = |i: usize| f64::from(x[i]);
     let sq3 = |a: [f64; 3]| a[0] * a[0] + a[1] * a[1] + a[2] * a[2];
     let (l64, v64) = ([w(0), w(1), w(2)], [w(3), w(4), w(5)]);
@@ -452,10 +452,10 @@ fn frame<const Z: bool>(x: &[f32; 9]) -> Frame {
         cos_h = ((nl + nv) * ih) as f32 * inn;
         // |N × w|² in f64 from the raw N and the f64 w (before w's rounding), scaled by
         // 1/|N|² as the cosines are: near n (h at the peak, l or v near the normal) an f32
-        // cross product of unit vectors keeps only an absolute error of ~u, which is a
-        // relative error of u/sin — G of a tuple with sin θ_i = 3e-3 came out 1.1e-5 off.
-        // With N = (0, 0, 1) these are the local form's sums (the third term is +0 and
-        // `inn` is 1).
+        // cross product of unit vectors keeps only an absolute error of ~u, a relative
+        // error of u/sin θ that G's and D's 1/sin-like factors pass on whole. With
+        // N = (0, 0, 1) these are the local form's sums (the third term is +0 and `inn`
+        // is 1).
         let n64 = [w(6), w(7), w(8)];
         let cross2 = |a: [f64; 3]| {
             let c = [

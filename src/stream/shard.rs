@@ -205,7 +205,7 @@ pub fn merge(
     terms: Option<&Path>,
     allow_mixed: bool,
     cancel: &Cancel,
-) -> Result<Counts> {
+) -> Result<Merged> {
     let bad = |path: &Path, message: String| Error::Batch {
         path: path.to_owned(),
         message,
@@ -220,18 +220,10 @@ pub fn merge(
             }
         })
     };
-    // Every file merge reads is an input for the output checks: the parts, their
-    // sidecars, and the terms parts the sidecars name.
+    // The terms parts the sidecars name are inputs too.
     let terms_parts: Vec<PathBuf> = cars.iter().filter_map(terms_file).collect();
-    let sidecars: Vec<PathBuf> = parts.iter().map(|p| sidecar_path(p)).collect();
-    let inputs: Vec<&Path> = parts
-        .iter()
-        .chain(&sidecars)
-        .chain(&terms_parts)
-        .map(PathBuf::as_path)
-        .collect();
     let outputs: Vec<&Path> = std::iter::once(output).chain(terms).collect();
-    atomic::check_outputs(&outputs, &inputs)?;
+    check_merge_outputs(&outputs, parts, &terms_parts)?;
     for (p, c) in &cars {
         c.validate().map_err(|m| bad(&sidecar_path(p), m))?;
         let print = fingerprint(p)?;
@@ -246,7 +238,8 @@ pub fn merge(
         }
     }
     let base = cars[0].1.clone();
-    for (p, c) in &cars {
+    for car in &cars {
+        let (p, c) = car;
         let differs = |what: &str, a: &dyn std::fmt::Debug, b: &dyn std::fmt::Debug| {
             part_differs(p, first, what, a, b)
         };
@@ -282,7 +275,7 @@ pub fn merge(
         if terms.is_some() && c.terms.is_none() {
             return Err(bad(p, "this part has no terms part (eval --terms)".into()));
         }
-        if let (Some(_), Some(file)) = (terms, terms_file(&(p.clone(), c.clone()))) {
+        if let (Some(_), Some(file)) = (terms, terms_file(car)) {
             let print = fingerprint(&file)?;
             if Some(&print) != c.terms_part.as_ref() {
                 return Err(bad(
@@ -343,7 +336,51 @@ pub fn merge(
         }
     }
     atomic::commit(staged)?;
-    Ok(counts)
+    Ok(Merged {
+        counts,
+        warnings: mixed_engines_warning(cars.iter().map(|(_, c)| c.engine.as_str()))
+            .into_iter()
+            .collect(),
+    })
+}
+
+/// The output checks of a merge (see [`atomic::check_outputs`]): every file it reads is an
+/// input — the parts, their sidecars, and `named`, the files the sidecars point at.
+pub fn check_merge_outputs(outputs: &[&Path], parts: &[PathBuf], named: &[PathBuf]) -> Result<()> {
+    let sidecars: Vec<PathBuf> = parts.iter().map(|p| sidecar_path(p)).collect();
+    let inputs: Vec<&Path> = parts
+        .iter()
+        .chain(&sidecars)
+        .chain(named)
+        .map(PathBuf::as_path)
+        .collect();
+    atomic::check_outputs(outputs, &inputs)
+}
+
+/// The warning a merge with `--allow-mixed` gives when its parts came from several
+/// engines (instruction sets, devices): their values may differ in the last bits.
+pub fn mixed_engines_warning<'a>(engines: impl Iterator<Item = &'a str>) -> Option<String> {
+    let mut seen: Vec<&str> = Vec::new();
+    for e in engines {
+        if !seen.contains(&e) {
+            seen.push(e);
+        }
+    }
+    (seen.len() > 1).then(|| {
+        format!(
+            "the parts came from different engines or instruction sets ({}); their values may differ in the last bits, each within FORMULAS.md §1's rule of the reference",
+            seen.join("; ")
+        )
+    })
+}
+
+/// What [`merge`] joined: the counts, and the warnings to show.
+#[derive(Debug, Clone)]
+pub struct Merged {
+    /// The joined counts.
+    pub counts: Counts,
+    /// Warnings (parts of several engines, with `allow_mixed`).
+    pub warnings: Vec<String>,
 }
 
 impl Sidecar {

@@ -304,7 +304,8 @@ pub struct Merged {
     pub table: String,
     /// Rows of the table.
     pub rows: u64,
-    /// Warnings (float16 clamping), as the unsharded run prints them.
+    /// Warnings (float16 clamping, as the unsharded run prints them; parts of several
+    /// engines).
     pub warnings: Vec<String>,
 }
 
@@ -321,6 +322,7 @@ pub fn merge(
         path: path.to_owned(),
         message,
     };
+    crate::stream::shard::check_merge_outputs(&[output], parts, &[])?;
     let (first, mut cars) = crate::stream::shard::read_parts(parts, output, TableSidecar::read)?;
     let base = cars[0].1.clone();
     for (p, c) in &cars {
@@ -398,7 +400,10 @@ pub fn merge(
     }
     let whole = format!(" of the {} table", base.table);
     crate::stream::shard::check_complete(&mut cars, |c| c.shard, base.shard.n, output, &whole)?;
-    let mut warnings = Vec::new();
+    let mut warnings: Vec<String> =
+        crate::stream::shard::mixed_engines_warning(cars.iter().map(|(_, c)| c.engine.as_str()))
+            .into_iter()
+            .collect();
     if base.table == "merl" {
         merge_merl(&cars, output, cancel)?;
     } else {

@@ -2,6 +2,7 @@
 #![allow(dead_code)]
 
 pub mod quadrature;
+pub mod rule;
 pub mod strategies;
 
 use std::process::{Command, Output};
