@@ -506,8 +506,8 @@ fn hemisphere(rng: &mut Pcg64Mcg, t: [f64; 3], b: [f64; 3], n: [f64; 3]) -> [f64
 
 /// The angular width of a material's specular lobe (radians), used to aim half vectors.
 fn lobe_width(m: &Material) -> f64 {
-    use crate::material::terms::distribution::exponent_lobe_width;
     use crate::material::Model;
+    use crate::terms::d::exponent_lobe_width;
     match &m.model {
         Model::Lambert | Model::Measured(_) => 1.0,
         Model::Phong { exponent } | Model::BlinnPhong { exponent } | Model::Rtr { exponent } => {

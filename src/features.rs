@@ -60,7 +60,7 @@ features! {
     FAST_MATH = 27, "FAST_MATH";
 }
 
-/// The feature of a term (`material::terms` says its bit and name), under the name the
+/// The feature of a term (`terms` says its bit and name, in its family's list), under the name the
 /// code uses for it.
 macro_rules! term_features {
     ($($(#[$doc:meta])* $name:ident = $term:expr;)*) => {
@@ -120,9 +120,9 @@ impl FeatureSet {
     }
 
     /// Every feature with the preprocessor name the kernel tests (`#if HAS_...`), by bit:
-    /// the terms' (from `material::terms`) and the others.
+    /// the terms' (from `terms`) and the others.
     pub fn all_named() -> Vec<(FeatureSet, &'static str)> {
-        let mut named: Vec<(FeatureSet, &'static str)> = crate::material::terms::all_terms()
+        let mut named: Vec<(FeatureSet, &'static str)> = crate::terms::all_terms()
             .filter_map(|t| {
                 t.feature
                     .map(|(_, define)| (FeatureSet::of_term(t), define))
@@ -303,7 +303,7 @@ mod tests {
 
     #[test]
     fn every_feature_has_its_own_bit_and_name() {
-        // The terms say their bits in material::terms, the others here: a new term that
+        // The terms say their bits in their family lists (`terms`), the others here: a new term that
         // reused a bit would compile another term's code under its name.
         let named = FeatureSet::all_named();
         for (i, (a, an)) in named.iter().enumerate() {

@@ -8,8 +8,7 @@
 
 use crate::error::{Error, Result};
 use crate::material::DistributionKind;
-use crate::reference::distribution::{beckmann_d, ggx_d};
-use crate::reference::geometry::ggx_lambda;
+use crate::terms::d::{beckmann, ggx};
 use crate::vector::{cross, dot, normalize_reciprocal};
 use std::f64::consts::{PI, TAU};
 
@@ -163,7 +162,7 @@ impl View {
             alpha,
             v,
             vf,
-            g1: 1.0 / (1.0 + ggx_lambda(alpha * alpha * tan2_o)),
+            g1: 1.0 / (1.0 + ggx::lambda(alpha * alpha * tan2_o)),
             frame: [t1, cross(vh, t1), vh],
             s: 0.5 * (1.0 + vh[2]),
         }
@@ -256,12 +255,12 @@ impl View {
         let hf = normalize_reciprocal(std::array::from_fn(|i| lf[i] + vf[i]));
         let (cos_h, sin2_h, c) = (hf[2], hf[0] * hf[0] + hf[1] * hf[1], dot(vf, hf));
         let pdf = match (self.sampler, self.lobe) {
-            (Sampler::Engine, _) => ggx_d(cos_h, sin2_h, self.alpha) * cos_h / (4.0 * c),
+            (Sampler::Engine, _) => ggx::d(cos_h, sin2_h, self.alpha) * cos_h / (4.0 * c),
             (Sampler::Visible, Lobe::Ggx) => {
-                self.g1 * ggx_d(cos_h, sin2_h, self.alpha) / (4.0 * cos_o)
+                self.g1 * ggx::d(cos_h, sin2_h, self.alpha) / (4.0 * cos_o)
             }
             (Sampler::Visible, Lobe::Beckmann) => {
-                beckmann_d(cos_h, sin2_h, self.alpha, PI) * cos_h / (4.0 * c)
+                beckmann::d(cos_h, sin2_h, self.alpha, PI) * cos_h / (4.0 * c)
             }
         };
         let weight = cos_i / pdf;
@@ -302,7 +301,7 @@ impl View {
             let hf = unit(std::array::from_fn(|i| lf[i] + vf[i]));
             let (cos_h, sin2_h, c) = (hf[2], hf[0] * hf[0] + hf[1] * hf[1], dot3(vf, hf));
             let (pdf, redo) = if ggx {
-                (self.g1 * ggx_d(cos_h, sin2_h, a) / (4.0 * cos_o), false)
+                (self.g1 * ggx::d(cos_h, sin2_h, a) / (4.0 * cos_o), false)
             } else {
                 // Beckmann's D, exp(−tan²/α²)/(π α² cos⁴), in its direct form; where that
                 // form under- or overflows the lane is redone with the reference's guarded

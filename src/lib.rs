@@ -49,6 +49,7 @@ pub mod stats;
 pub mod stream;
 pub mod stress;
 pub mod table;
+pub mod terms;
 pub mod vector;
 
 pub use error::{Error, Result};

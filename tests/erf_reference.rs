@@ -1,16 +1,17 @@
 //! The judge, judged: the special functions inside the CPU reference checked against
 //! independent computations written here.
 //!
-//! - `geometry::beckmann_lambda` (which uses `libm::erfc`) against a Λ built from the
+//! - `beckmann::lambda` (which uses `libm::erfc`) against a Λ built from the
 //!   Maclaurin series of erf (small a) and Laplace's continued fraction of erfc (large a),
 //!   both carried to ~1e-16, for a ∈ [1e-3, 30] (FORMULAS.md §3).
-//! - `fresnel::conductor_f` at its exact limits: c = 1 gives `((n−1)² + k²)/((n+1)² + k²)`,
+//! - `conductor::f` at its exact limits: c = 1 gives `((n−1)² + k²)/((n+1)² + k²)`,
 //!   c → 0 gives 1 (FORMULAS.md §4).
-//! - `distribution::beckmann_d`: its log-domain guard against a direct evaluation (split so
+//! - `beckmann::d`: its log-domain guard against a direct evaluation (split so
 //!   that nothing under- or overflows) wherever both are representable (FORMULAS.md §2).
 
 use std::f64::consts::PI;
-use vkbrdf::reference::{distribution, fresnel, geometry};
+use vkbrdf::terms::d::beckmann;
+use vkbrdf::terms::f::conductor;
 
 const EPS: f64 = f64::EPSILON;
 
@@ -139,7 +140,7 @@ fn beckmann_lambda_matches_independent_lambda() {
         let a2_inv = 1.0 / (a * a);
         let a_exact = 1.0 / a2_inv.sqrt(); // the a the function is asked about (±1 ulp)
         let (want, kappa) = lambda_ref(a_exact);
-        let got = geometry::beckmann_lambda(a2_inv);
+        let got = beckmann::lambda(a2_inv);
         let ctx = format!(
             "beckmann_lambda(a2_inv = {a2_inv:e}) (a = {a_exact}): got {got:e}, \
              independent Λ = {want:e}, κ = {kappa:.3e}"
@@ -177,9 +178,9 @@ fn beckmann_lambda_matches_independent_lambda() {
 #[test]
 fn beckmann_lambda_limits() {
     // tan θ = 0 (the normal): nothing is hidden. a → 0 (grazing): Λ ~ 1/(2a√π) − 1/2.
-    assert_eq!(geometry::beckmann_lambda(0.0), 0.0, "beckmann_lambda(0)");
+    assert_eq!(beckmann::lambda(0.0), 0.0, "beckmann_lambda(0)");
     for &a in &[1e-6, 1e-8] {
-        let got = geometry::beckmann_lambda(1.0 / (a * a));
+        let got = beckmann::lambda(1.0 / (a * a));
         let asymptote = 1.0 / (2.0 * a * PI.sqrt()) - 0.5 + a / (2.0 * PI.sqrt());
         assert!(
             (got - asymptote).abs() <= 1e-12 * asymptote,
@@ -188,7 +189,7 @@ fn beckmann_lambda_limits() {
     }
     // Very large a: Λ underflows to exactly 0, never NaN.
     for &a in &[40.0, 1e3, 1e10, 1e200] {
-        let got = geometry::beckmann_lambda(1.0 / (a * a));
+        let got = beckmann::lambda(1.0 / (a * a));
         assert_eq!(
             got, 0.0,
             "beckmann_lambda at a = {a}: expected 0, got {got:e}"
@@ -222,7 +223,7 @@ const ETAS: &[(f64, f64)] = &[
 #[test]
 fn conductor_fresnel_at_normal_incidence() {
     for &(n, k) in ETAS {
-        let got = fresnel::conductor_f(1.0, n, k);
+        let got = conductor::f(1.0, n, k);
         let want = f0(n, k);
         assert!(
             (got - want).abs() <= 1e-14 * want,
@@ -235,19 +236,19 @@ fn conductor_fresnel_at_normal_incidence() {
 fn conductor_fresnel_at_grazing_incidence() {
     for &(n, k) in ETAS {
         // c = 0: both amplitudes are exactly −1.
-        let at_zero = fresnel::conductor_f(0.0, n, k);
+        let at_zero = conductor::f(0.0, n, k);
         assert!(
             (at_zero - 1.0).abs() <= 4.0 * EPS,
             "conductor_f(c = 0, n = {n}, k = {k}) = {at_zero:.17}, expected 1"
         );
         // c → 0: 1 − F is O(c), so (1 − F)/c settles to a constant slope.
-        let slope = |c: f64| (1.0 - fresnel::conductor_f(c, n, k)) / c;
+        let slope = |c: f64| (1.0 - conductor::f(c, n, k)) / c;
         let (s6, s7) = (slope(1e-6), slope(1e-7));
         assert!(
             s6 > 0.0 && (s6 - s7).abs() <= 1e-4 * s7,
             "conductor_f(n = {n}, k = {k}): (1 − F)/c = {s6:e} at c = 1e-6, {s7:e} at 1e-7"
         );
-        let f = fresnel::conductor_f(1e-12, n, k);
+        let f = conductor::f(1e-12, n, k);
         assert!(
             (1.0 - f).abs() <= 1e-10,
             "conductor_f(c = 1e-12, n = {n}, k = {k}) = {f:.17}, expected 1 to 1e-10"
@@ -320,7 +321,7 @@ fn beckmann_log_domain_matches_direct() {
         let sin2_h = (1.0 - cos_h) * (1.0 + cos_h);
         for k in [4.0, 1.0, PI] {
             let arg = beckmann_arg(cos_h, sin2_h, m);
-            let got = distribution::beckmann_d(cos_h, sin2_h, m, k);
+            let got = beckmann::d(cos_h, sin2_h, m, k);
             let ctx = format!(
                 "beckmann_d(cos_h = {cos_h:e}, sin2_h = {sin2_h}, m = {m:e}, k = {k}) = {got:e} \
                  (exp argument {arg:e})"
@@ -360,7 +361,7 @@ fn beckmann_aniso_log_domain_matches_direct() {
         for phi in [0.3f64, 1.1, 2.5] {
             let h = [sin_h * phi.cos(), sin_h * phi.sin(), cos_h];
             let arg = -((h[0] / mx).powi(2) + (h[1] / my).powi(2)) / (cos_h * cos_h);
-            let got = distribution::beckmann_aniso_d(h, mx, my);
+            let got = beckmann::d_aniso(h, mx, my);
             let ctx = format!(
                 "beckmann_aniso_d(h = {h:?}, mx = {mx:e}, my = {my:e}) = {got:e} \
                  (exp argument {arg:e})"

@@ -36,7 +36,8 @@ use vkbrdf::backend::{Backend, Request};
 use vkbrdf::batch::{Batch, Tuple};
 use vkbrdf::check::{allowed_error, f32_sensitivity};
 use vkbrdf::material::{parse_materials, Material};
-use vkbrdf::reference::{evaluate, fresnel, Evaluation, Status};
+use vkbrdf::reference::{evaluate, Evaluation, Status};
+use vkbrdf::terms::f::{conductor, dielectric};
 use vkbrdf::vector::scale;
 
 /// Relative tolerance of the hand-derived values: the inputs are f64 roundings of
@@ -999,7 +1000,7 @@ fn f_each_kind() {
 fn f_dielectric_normal_incidence_is_four_percent() {
     // c = 1, μ = 1.5: g = 1.5, ((g−c)/(g+c))² = 0.04, q = (2.5 − 1)/(0.5 + 1) = 1:
     // F = ½ · 0.04 · 2 = 0.04 (the seed's misprinted denominator gives 0.2).
-    let f = fresnel::dielectric_f(1.0, 1.5);
+    let f = dielectric::f(1.0, 1.5);
     assert!(
         (f - 0.04).abs() <= 1e-15,
         "dielectric_f(c = 1, μ = 1.5) = {f:.17}, want 0.04"
@@ -1025,14 +1026,14 @@ fn f_tends_to_one_at_grazing() {
         let g0 = sqrt(mu * mu - 1.0);
         let slope = 4.0 / g0 + 2.0 * g0;
         for c in [1e-5, 1e-7] {
-            let f = fresnel::dielectric_f(c, mu);
+            let f = dielectric::f(c, mu);
             let got = (1.0 - f) / c;
             assert!(
                 (got - slope).abs() <= 1e-3 * slope,
                 "dielectric_f(c = {c:e}, μ = {mu}) = {f:.17}: (1 − F)/c = {got}, want → {slope}"
             );
         }
-        let f0 = fresnel::dielectric_f(0.0, mu);
+        let f0 = dielectric::f(0.0, mu);
         assert!(
             (f0 - 1.0).abs() <= 1e-15,
             "dielectric_f(0, μ = {mu}) = {f0:.17}, want 1"
@@ -1047,14 +1048,14 @@ fn f_tends_to_one_at_grazing() {
         (2.0, 1.0),
     ] {
         for c in [1e-3, 1e-6, 1e-9] {
-            let f = fresnel::conductor_f(c, n, k);
+            let f = conductor::f(c, n, k);
             let want = conductor(c, n, k);
             assert!(
                 (f - want).abs() <= 1e-12 && (1.0 - f) <= 40.0 * c,
                 "conductor_f(c = {c:e}, n = {n}, k = {k}) = {f:.17}, want {want:.17} → 1"
             );
         }
-        let f0 = fresnel::conductor_f(0.0, n, k);
+        let f0 = conductor::f(0.0, n, k);
         assert!(
             (f0 - 1.0).abs() <= 1e-15,
             "conductor_f(0, n = {n}, k = {k}) = {f0:.17}, want 1"
@@ -1069,10 +1070,7 @@ fn f_conductor_without_extinction_is_dielectric() {
         // above the horizon).
         for i in 1..=20 {
             let c = f64::from(i) / 20.0;
-            let (fc, fd) = (
-                fresnel::conductor_f(c, mu, 0.0),
-                fresnel::dielectric_f(c, mu),
-            );
+            let (fc, fd) = (conductor::f(c, mu, 0.0), dielectric::f(c, mu));
             let want = dielectric(c, mu);
             assert!(
                 (fc - fd).abs() <= 1e-12 * fd + 1e-15 && (fd - want).abs() <= 1e-12 * want + 1e-15,
@@ -1090,14 +1088,14 @@ fn f_dielectric_total_internal_reflection() {
         let c_crit = sqrt(1.0 - mu * mu);
         for frac in [0.0, 0.1, 0.5, 0.9, 0.999] {
             let c = frac * c_crit;
-            let f = fresnel::dielectric_f(c, mu);
+            let f = dielectric::f(c, mu);
             assert_eq!(
                 f, 1.0,
                 "dielectric_f(c = {c}, μ = {mu}), below c_crit = {c_crit}: {f}"
             );
         }
         for c in [c_crit + 0.01, (c_crit + 1.0) / 2.0, 1.0] {
-            let (f, want) = (fresnel::dielectric_f(c, mu), dielectric(c, mu));
+            let (f, want) = (dielectric::f(c, mu), dielectric(c, mu));
             assert!(
                 f < 1.0 && (f - want).abs() <= 1e-12 * want,
                 "dielectric_f(c = {c}, μ = {mu}) = {f}, want {want} (< 1, above c_crit {c_crit})"

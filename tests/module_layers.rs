@@ -9,6 +9,7 @@ use std::path::Path;
 /// Lowest first; a module may import its own layer or any below (never above).
 const LAYERS: &[&[&str]] = &[
     &["error", "cancel", "stats", "vector"],
+    &["terms"],
     &["atomic", "material"],
     &["batch", "directions"],
     &["backend", "precision", "sample"],

@@ -7,9 +7,10 @@
 #![allow(clippy::needless_range_loop)]
 
 use super::kernel::{
-    frame64, geometry, lane_inputs, rsqrt64, Frame64, Inputs, Lane, Params, Stage, D_GGX, LANES,
+    frame64, geometry, lane_inputs, rsqrt64, Frame64, Inputs, Lane, Params, Stage, LANES,
 };
-use super::math::exp_neg;
+use crate::terms::d::{beckmann, ggx};
+use crate::terms::DistributionKind;
 
 /// `[1/mx², 1/my², mx², my²]`, the constants the lanes read ([`Params::aniso`]).
 pub fn roughness(mx: f64, my: f64) -> [f64; 4] {
@@ -77,7 +78,7 @@ pub(super) fn slope2(p: &Params, t: &Tangent) -> f64 {
     t.hx * t.hx * p.aniso[0] + t.hy * t.hy * p.aniso[1]
 }
 
-/// The first pass of an anisotropic GGX (`D` = `D_GGX`) or Beckmann group: D (modern
+/// The first pass of an anisotropic GGX or Beckmann group (`D`): D (modern
 /// convention, FORMULAS.md §2) and G into `st`, for `kernel::f_block`.
 #[inline(always)]
 pub fn dg_block64_aniso<const D: u8, const G: u8>(p: &Params, inp: &Inputs, st: &mut Stage) {
@@ -88,15 +89,14 @@ pub fn dg_block64_aniso<const D: u8, const G: u8>(p: &Params, inp: &Inputs, st: 
         fr.ok = fr.ok && t.ok;
         let s2 = slope2(p, &t);
         let ch2 = f.cos_h * f.cos_h;
-        let d = if D == D_GGX {
-            // 1/(π mx my ((hx/mx)² + (hy/my)² + hz²)²): no 1/hz⁴ to overflow.
-            let s = s2 + ch2;
-            (p.d_norm / (s * s)) as f32
-        } else {
-            // exp(−slope²/hz²)/(π mx my hz⁴) as (e·norm)·e, as the isotropic f64 D.
-            let e = exp_neg(-(s2 / ch2 * 0.5) as f32);
-            let norm = (p.d_norm / (ch2 * ch2)) as f32;
-            e * norm * e
+        let d = match const { DistributionKind::from_code(D) } {
+            DistributionKind::Ggx => ggx::d_aniso_lane(s2, ch2, p.d_norm),
+            DistributionKind::Beckmann => beckmann::d_aniso_lane(s2, ch2, p.d_norm),
+            // Anisotropic roughness exists for GGX and Beckmann only (their `anisotropic`
+            // rules), and the dispatch compiles no other group here.
+            DistributionKind::Gaussian | DistributionKind::Blinn | DistributionKind::Charlie => {
+                unreachable!("no anisotropic form of this distribution")
+            }
         };
         // q2 = (mx² (w·t)² + my² (w·b)²)/cos²θ for Smith's Λ.
         let [_, _, mx2, my2] = p.aniso;

@@ -40,8 +40,16 @@ struct Point<'a> {
 /// these variants are compiled for the sums.
 #[inline(always)]
 fn f_none_block(plan: &Plan, inp: &Inputs, out: &mut Outputs) -> bool {
+    use crate::terms::{DistributionKind as D, FresnelKind, Geometry as G};
     use kernel::*;
-    let Plan::Microfacet { d, g, f: F_NONE, p } = plan else {
+    let Plan::Microfacet {
+        d,
+        aniso: false,
+        g,
+        f: FresnelKind::None,
+        p,
+    } = plan
+    else {
         return false;
     };
     macro_rules! fused {
@@ -50,20 +58,22 @@ fn f_none_block(plan: &Plan, inp: &Inputs, out: &mut Outputs) -> bool {
         };
     }
     match (*d, *g) {
-        (D_GGX, G_NONE) => fused!(D_GGX, G_NONE),
-        (D_GGX, G_CT) => fused!(D_GGX, G_CT),
-        (D_GGX, G_SMITH) => fused!(D_GGX, G_SMITH),
-        (D_GGX, G_SMITH_CORRELATED) => fused!(D_GGX, G_SMITH_CORRELATED),
-        (D_BECKMANN, G_NONE) => fused!(D_BECKMANN, G_NONE),
-        (D_BECKMANN, G_CT) => fused!(D_BECKMANN, G_CT),
-        (D_BECKMANN, G_SMITH) => fused!(D_BECKMANN, G_SMITH),
-        (D_BECKMANN, G_SMITH_CORRELATED) => fused!(D_BECKMANN, G_SMITH_CORRELATED),
-        (D_BECKMANN, G_SMITH_FAST) => fused!(D_BECKMANN, G_SMITH_FAST),
-        (D_GGX, G_SCHLICK_SMITH) => two_pass::<D_GGX, G_SCHLICK_SMITH>(p, inp, out),
-        (D_GGX, G_NEUBELT) => two_pass::<D_GGX, G_NEUBELT>(p, inp, out),
-        (D_BECKMANN, G_SCHLICK_SMITH) => two_pass::<D_BECKMANN, G_SCHLICK_SMITH>(p, inp, out),
-        (D_BECKMANN, G_NEUBELT) => two_pass::<D_BECKMANN, G_NEUBELT>(p, inp, out),
-        _ => return false,
+        (D::Ggx, G::None) => fused!(D_GGX, G_NONE),
+        (D::Ggx, G::CookTorrance) => fused!(D_GGX, G_CT),
+        (D::Ggx, G::Smith) => fused!(D_GGX, G_SMITH),
+        (D::Ggx, G::SmithCorrelated) => fused!(D_GGX, G_SMITH_CORRELATED),
+        (D::Beckmann, G::None) => fused!(D_BECKMANN, G_NONE),
+        (D::Beckmann, G::CookTorrance) => fused!(D_BECKMANN, G_CT),
+        (D::Beckmann, G::Smith) => fused!(D_BECKMANN, G_SMITH),
+        (D::Beckmann, G::SmithCorrelated) => fused!(D_BECKMANN, G_SMITH_CORRELATED),
+        (D::Beckmann, G::SmithFast) => fused!(D_BECKMANN, G_SMITH_FAST),
+        (D::Ggx, G::SchlickSmith) => two_pass::<D_GGX, G_SCHLICK_SMITH>(p, inp, out),
+        (D::Ggx, G::Neubelt) => two_pass::<D_GGX, G_NEUBELT>(p, inp, out),
+        (D::Beckmann, G::SchlickSmith) => two_pass::<D_BECKMANN, G_SCHLICK_SMITH>(p, inp, out),
+        (D::Beckmann, G::Neubelt) => two_pass::<D_BECKMANN, G_NEUBELT>(p, inp, out),
+        // The tables' importance sampler exists for GGX and Beckmann only (`importance`),
+        // and smith-fast is Beckmann's.
+        (D::Ggx, G::SmithFast) | (D::Gaussian | D::Blinn | D::Charlie, _) => return false,
     }
     true
 }

@@ -14,8 +14,12 @@
 #![allow(clippy::needless_range_loop)]
 
 use crate::backend::TERM_COLUMNS;
-use crate::cpu::math::{atan2_positive, erfc, exp_neg, log_cos};
-use crate::material::{Convention, Distribution, Fresnel, Geometry, Material, Model, Roughness};
+use crate::material::{Distribution, Fresnel, Material, Model, Roughness};
+use crate::terms::d::{beckmann, blinn, charlie, gaussian, ggx};
+use crate::terms::f::{conductor, dielectric, schlick};
+use crate::terms::g::{cook_torrance, neubelt, schlick_smith, smith, smith_correlated, smith_fast};
+use crate::terms::k::LaneK;
+use crate::terms::{DistributionKind, FresnelKind, Geometry};
 use std::f64::consts::PI;
 
 /// Tuples per block: 16 f32 lanes fill one AVX-512 register (two AVX2 registers).
@@ -31,42 +35,39 @@ pub const GRAZING: f64 = 1e-4;
 /// f32 result this large may be a rounded value of an exact one above `f32::MAX`.
 pub const OUTPUT_LIMIT: f32 = 1e37;
 
+// The lanes' const parameters: each family's codes, from its list (`crate::terms`).
 /// Distribution: GGX.
-pub const D_GGX: u8 = 0;
+pub const D_GGX: u8 = DistributionKind::Ggx.code();
 /// Distribution: Beckmann.
-pub const D_BECKMANN: u8 = 1;
+pub const D_BECKMANN: u8 = DistributionKind::Beckmann.code();
 /// Distribution: Torrance–Sparrow Gaussian.
-pub const D_GAUSSIAN: u8 = 2;
+pub const D_GAUSSIAN: u8 = DistributionKind::Gaussian.code();
 /// Distribution: normalised Blinn–Phong NDF.
-pub const D_BLINN: u8 = 3;
+pub const D_BLINN: u8 = DistributionKind::Blinn.code();
 /// Distribution: Estevez–Kulla "Charlie" sheen.
-pub const D_CHARLIE: u8 = 4;
-/// Distribution: anisotropic GGX (needs the tangent frame, `src/cpu/aniso.rs`).
-pub const D_GGX_ANISO: u8 = 5;
-/// Distribution: anisotropic Beckmann (needs the tangent frame).
-pub const D_BECKMANN_ANISO: u8 = 6;
+pub const D_CHARLIE: u8 = DistributionKind::Charlie.code();
 /// Geometry: none.
-pub const G_NONE: u8 = 0;
+pub const G_NONE: u8 = Geometry::None.code();
 /// Geometry: Cook–Torrance V-cavity.
-pub const G_CT: u8 = 1;
+pub const G_CT: u8 = Geometry::CookTorrance.code();
 /// Geometry: separable Smith.
-pub const G_SMITH: u8 = 2;
+pub const G_SMITH: u8 = Geometry::Smith.code();
 /// Geometry: height-correlated Smith.
-pub const G_SMITH_CORRELATED: u8 = 3;
+pub const G_SMITH_CORRELATED: u8 = Geometry::SmithCorrelated.code();
 /// Geometry: Walter's rational Smith–Beckmann fit.
-pub const G_SMITH_FAST: u8 = 4;
+pub const G_SMITH_FAST: u8 = Geometry::SmithFast.code();
 /// Geometry: Schlick–Smith with Karis's k.
-pub const G_SCHLICK_SMITH: u8 = 5;
+pub const G_SCHLICK_SMITH: u8 = Geometry::SchlickSmith.code();
 /// Geometry: Neubelt–Pettineo cloth.
-pub const G_NEUBELT: u8 = 6;
+pub const G_NEUBELT: u8 = Geometry::Neubelt.code();
 /// Fresnel: none.
-pub const F_NONE: u8 = 0;
+pub const F_NONE: u8 = FresnelKind::None.code();
 /// Fresnel: Schlick.
-pub const F_SCHLICK: u8 = 1;
+pub const F_SCHLICK: u8 = FresnelKind::Schlick.code();
 /// Fresnel: exact dielectric.
-pub const F_DIELECTRIC: u8 = 2;
+pub const F_DIELECTRIC: u8 = FresnelKind::Dielectric.code();
 /// Fresnel: exact conductor.
-pub const F_CONDUCTOR: u8 = 3;
+pub const F_CONDUCTOR: u8 = FresnelKind::Conductor.code();
 
 /// The constants of one material, prepared once per batch (in f64 where the lanes use
 /// f64, then rounded once).
@@ -88,37 +89,20 @@ pub struct Params {
     pub inv_m2_f: f32,
     /// See `m2_f`.
     pub d_norm_f: f32,
-    /// K's numerator: 1/4 modern, 1/π Cook–Torrance 1982, 1 seed.
-    pub k_num: f32,
-    /// Whether K divides by `cos_i` too (all but the seed convention).
-    pub k_cos_i: bool,
+    /// K (the convention's lane form).
+    pub k: LaneK,
     /// Schlick's F0.
     pub f0: [f32; 3],
     /// Dielectric μ.
     pub ior: [f64; 3],
     /// Dielectric `μ² − 1`, as `(μ − 1)(μ + 1)`.
     pub mu2m1: [f64; 3],
-    /// Conductor n.
-    pub cn: [f32; 3],
-    /// Conductor k.
-    pub ck: [f32; 3],
-    /// Conductor `Re(η²) − 1 = n² − k² − 1`, formed in f64.
-    pub e2rm1: [f32; 3],
-    /// Conductor `Re(η²)/|η|²` (the constant factors of the scaled root, formed in f64:
-    /// the lanes then multiply where the kernel divides per tuple).
-    pub c_a: [f32; 3],
-    /// Conductor `Im(η²)²/|η|²`.
-    pub c_eb: [f32; 3],
-    /// Conductor `1/|η|²`.
-    pub c_iq: [f32; 3],
-    /// Conductor `Im(η²)/|η|⁴`.
-    pub c_bq: [f32; 3],
+    /// The conductor's constants.
+    pub conductor: conductor::LaneConstants,
     /// Whether the material may take the f32 frame (see [`microfacet_block`]): m ≥
     /// [`FAST_MIN_ROUGHNESS`] and a Fresnel term other than the dielectric (whose f64
     /// evaluation near total internal reflection wants the f64 `c`).
     pub fast_frame: bool,
-    /// Conductor `Re(η²) = n² − k²`, formed in f64.
-    pub e2r: [f32; 3],
     /// The exponent of a `cos^e` lobe: Blinn's and the empirical models' `e`, Charlie's
     /// `1/m`.
     pub exponent: f32,
@@ -133,14 +117,17 @@ pub struct Params {
 pub enum Plan {
     /// Lambert in the lanes.
     Lambert(Params),
-    /// Isotropic Cook–Torrance with GGX or Beckmann in the lanes.
+    /// Cook–Torrance in the lanes.
     Microfacet {
-        /// [`D_GGX`] or [`D_BECKMANN`].
-        d: u8,
-        /// One of the `G_*` constants.
-        g: u8,
-        /// One of the `F_*` constants.
-        f: u8,
+        /// The distribution.
+        d: DistributionKind,
+        /// Whether its roughness is anisotropic (GGX and Beckmann: the tangent frame,
+        /// `src/cpu/aniso.rs`).
+        aniso: bool,
+        /// The geometry term.
+        g: Geometry,
+        /// The Fresnel term.
+        f: FresnelKind,
         /// The material's constants.
         p: Params,
     },
@@ -179,22 +166,24 @@ impl Plan {
             _ => return crate::cpu::lobes::plan(m, p),
         };
         // m for the distributions with an rms slope (0 for Blinn; Charlie's m is not one).
-        let (d, mr) = match ct.distribution {
-            Distribution::Ggx(Roughness::Isotropic(mr)) => (D_GGX, mr),
-            Distribution::Beckmann(Roughness::Isotropic(mr)) => (D_BECKMANN, mr),
+        let d = ct.distribution.kind();
+        let mut aniso = false;
+        let mr = match ct.distribution {
+            Distribution::Ggx(Roughness::Isotropic(mr))
+            | Distribution::Beckmann(Roughness::Isotropic(mr)) => mr,
             Distribution::Gaussian { m } => {
                 p.inv_m2_f = (1.0 / (m * m)) as f32;
-                (D_GAUSSIAN, m)
+                m
             }
             Distribution::Blinn { exponent } => {
                 p.exponent = exponent as f32;
-                p.d_norm_f = ((exponent + 2.0) / (2.0 * PI)) as f32;
-                (D_BLINN, 0.0)
+                p.d_norm_f = blinn::norm(exponent) as f32;
+                0.0
             }
             Distribution::Charlie { m } => {
                 p.exponent = (1.0 / m) as f32;
-                p.d_norm_f = ((2.0 + 1.0 / m) / (2.0 * PI)) as f32;
-                (D_CHARLIE, 0.0)
+                p.d_norm_f = charlie::norm(m) as f32;
+                0.0
             }
             // Anisotropic GGX and Beckmann (modern convention only): D's normalisation
             // 1/(π mx my) for both.
@@ -202,83 +191,45 @@ impl Plan {
             | Distribution::Beckmann(Roughness::Anisotropic(mx, my)) => {
                 p.aniso = crate::cpu::aniso::roughness(mx, my);
                 p.d_norm = 1.0 / (PI * mx * my);
-                let ggx = matches!(ct.distribution, Distribution::Ggx(_));
-                (if ggx { D_GGX_ANISO } else { D_BECKMANN_ANISO }, 0.0)
+                aniso = true;
+                0.0
             }
         };
         // The rms-slope distributions' constants; the others set theirs above.
-        let slope = d == D_GGX || d == D_BECKMANN;
+        let slope = !aniso && matches!(d, DistributionKind::Ggx | DistributionKind::Beckmann);
         p.diffuse = f32x3(m.diffuse.map(|c| ct.diffuse_weight * c / PI));
         p.spec = f32x3(m.specular.map(|c| ct.specular_weight * c));
         if slope {
             p.m2 = mr * mr;
             p.inv_m2 = 1.0 / p.m2;
+            p.d_norm = match d {
+                DistributionKind::Ggx => p.m2 / PI,
+                _ => 1.0 / (ct.convention.beckmann_k() * p.m2),
+            };
         }
-        let beckmann_k = match ct.convention {
-            Convention::Seed => 4.0,
-            Convention::CookTorrance1982 => 1.0,
-            Convention::Modern => PI,
-        };
-        p.d_norm = match d {
-            D_GGX => p.m2 / PI,
-            D_BECKMANN => 1.0 / (beckmann_k * p.m2),
-            _ => p.d_norm,
-        };
-        (p.k_num, p.k_cos_i) = match ct.convention {
-            Convention::Seed => (1.0, false),
-            Convention::CookTorrance1982 => ((1.0 / PI) as f32, true),
-            Convention::Modern => (0.25, true),
-        };
-        let g = match ct.geometry {
-            Geometry::None => G_NONE,
-            Geometry::CookTorrance => G_CT,
-            Geometry::Smith => G_SMITH,
-            Geometry::SmithCorrelated => G_SMITH_CORRELATED,
-            Geometry::SmithFast => G_SMITH_FAST,
-            Geometry::SchlickSmith => {
-                // The parser allows it with GGX and Beckmann only.
-                p.schlick_k = if d == D_GGX {
-                    mr / 2.0
-                } else {
-                    mr * (2.0 / PI).sqrt()
-                } as f32;
-                G_SCHLICK_SMITH
-            }
-            Geometry::Neubelt => G_NEUBELT,
-        };
-        let f = match ct.fresnel {
-            Fresnel::None => F_NONE,
-            Fresnel::Schlick { f0 } => {
-                p.f0 = f32x3(f0);
-                F_SCHLICK
-            }
+        p.k = ct.convention.lane_k();
+        let g = ct.geometry;
+        if g == Geometry::SchlickSmith {
+            // The parser allows it with isotropic GGX and Beckmann only.
+            p.schlick_k = schlick_smith::k(d == DistributionKind::Ggx, mr) as f32;
+        }
+        match ct.fresnel {
+            Fresnel::None => {}
+            Fresnel::Schlick { f0 } => p.f0 = f32x3(f0),
             Fresnel::Dielectric { ior } => {
                 p.ior = ior;
-                p.mu2m1 = ior.map(|mu| (mu - 1.0) * (mu + 1.0));
-                F_DIELECTRIC
+                p.mu2m1 = ior.map(dielectric::mu2m1);
             }
             Fresnel::Conductor { ior, extinction } => {
-                p.cn = f32x3(ior);
-                p.ck = f32x3(extinction);
-                p.e2rm1 = f32x3(std::array::from_fn(|c| {
-                    (ior[c] - 1.0) * (ior[c] + 1.0) - extinction[c] * extinction[c]
-                }));
-                let (n, k) = (ior, extinction);
-                let q: [f64; 3] = std::array::from_fn(|c| n[c] * n[c] + k[c] * k[c]);
-                let e2i: [f64; 3] = std::array::from_fn(|c| 2.0 * n[c] * k[c]);
-                p.c_a = f32x3(std::array::from_fn(|c| (n[c] * n[c] - k[c] * k[c]) / q[c]));
-                p.c_eb = f32x3(std::array::from_fn(|c| e2i[c] * e2i[c] / q[c]));
-                p.c_iq = f32x3(q.map(|q| 1.0 / q));
-                p.c_bq = f32x3(std::array::from_fn(|c| e2i[c] / q[c] / q[c]));
-                p.e2r = f32x3(std::array::from_fn(|c| n[c] * n[c] - k[c] * k[c]));
-                F_CONDUCTOR
+                p.conductor = conductor::LaneConstants::new(ior, extinction);
             }
-        };
-        p.fast_frame = slope && mr >= FAST_MIN_ROUGHNESS && f != F_DIELECTRIC;
+        }
+        let f = ct.fresnel.kind();
+        p.fast_frame = slope && mr >= FAST_MIN_ROUGHNESS && f != FresnelKind::Dielectric;
         if slope {
             (p.m2_f, p.inv_m2_f, p.d_norm_f) = (p.m2 as f32, p.inv_m2 as f32, p.d_norm as f32);
         }
-        Plan::Microfacet { d, g, f, p }
+        Plan::Microfacet { d, aniso, g, f, p }
     }
 
     /// Whether the plan runs in the lanes.
@@ -290,7 +241,7 @@ impl Plan {
     /// columns then go to the reference, which counts them invalid.
     pub fn needs_tangent(&self) -> bool {
         match self {
-            Plan::Microfacet { d, .. } => *d == D_GGX_ANISO || *d == D_BECKMANN_ANISO,
+            Plan::Microfacet { aniso, .. } => *aniso,
             Plan::Lobe { model, .. } => *model == crate::cpu::lobes::L_WARD_ANISO,
             _ => false,
         }
@@ -647,120 +598,18 @@ pub(super) fn lane_inputs(inp: &Inputs, k: usize) -> [f32; 9] {
     std::array::from_fn(|j| inp.v[j][k])
 }
 
-#[inline(always)]
-fn min(a: f32, b: f32) -> f32 {
-    if a < b {
-        a
-    } else {
-        b
-    }
-}
-
-/// Smith Λ (FORMULAS.md §3) given `q2 = m² tan²θ`, for the distribution `D`.
+/// Smith's Λ (FORMULAS.md §3) given `q2 = m² tan²θ`: the distribution `D`'s own.
 #[inline(always)]
 fn lambda<const D: u8>(q2: f32) -> f32 {
-    if D == D_GGX {
-        // (−1 + √(1 + q2))/2, rewritten q2 / (2 (1 + √(1 + q2))) for q2 ≤ 1 where the
-        // direct form cancels.
-        let r = (1.0 + q2).sqrt();
-        if q2 <= 1.0 {
-            q2 / (2.0 * (1.0 + r))
-        } else {
-            0.5 * (r - 1.0)
-        }
-    } else {
-        // (erf(a) − 1)/2 + exp(−a²)/(2a√π) = (exp(−a²)/(a√π) − erfc(a))/2, a = 1/√q2;
-        // q2 = 0 (w = n) is Λ = 0, where a = ∞ would make inf·0 below.
-        let a = 1.0 / q2.sqrt();
-        let v = 0.5 * (exp_neg(-a * a) * (std::f32::consts::FRAC_2_SQRT_PI * 0.5) / a - erfc(a));
-        if q2 == 0.0 {
-            0.0
-        } else {
-            v
+    match const { DistributionKind::from_code(D) } {
+        DistributionKind::Ggx => ggx::lambda_lane(q2),
+        DistributionKind::Beckmann => beckmann::lambda_lane(q2),
+        // The Smith terms are not defined without a Λ (`Geometry::legality`), and the
+        // dispatch (`cpu::block`) compiles none of these groups with one.
+        DistributionKind::Gaussian | DistributionKind::Blinn | DistributionKind::Charlie => {
+            unreachable!("no Smith Λ for this distribution")
         }
     }
-}
-
-/// Walter et al. 2007's rational Smith–Beckmann G1 given `q2 = m² tan²θ`, as published.
-#[inline(always)]
-fn smith_fast_g1(q2: f32) -> f32 {
-    let a = 1.0 / q2.sqrt(); // q2 = 0: a = ∞ and G1 = 1
-    let r = (3.535 * a + 2.181 * a * a) / (1.0 + 2.276 * a + 2.577 * a * a);
-    if a < 1.6 {
-        r
-    } else {
-        1.0
-    }
-}
-
-/// Exact dielectric Fresnel (FORMULAS.md §4) in f64, the reference's grouping.
-#[inline(always)]
-fn dielectric(c: f64, s2: f64, mu: f64, mu2m1: f64) -> f32 {
-    let g2 = if mu2m1.abs() + c * c <= mu * mu + s2 {
-        mu2m1 + c * c
-    } else {
-        mu * mu - s2
-    };
-    let g = g2.max(0.0).sqrt();
-    let r = mu2m1 / (g + c) / (g + c);
-    let q = (c * g - s2) / (c * g + s2);
-    let f = 0.5 * r * r * (1.0 + q * q);
-    if g2 < 0.0 {
-        1.0
-    } else {
-        f as f32
-    }
-}
-
-/// Exact conductor Fresnel (FORMULAS.md §4) in f32, after the kernel's `F_Conductor`
-/// (`glsl/terms.glsl`): `η²` divided through `|η|²` so that large extinctions do not
-/// overflow — here by the per-material constants `c_a`, `c_eb`, `c_iq`, `c_bq` (formed
-/// once in f64) — and the complex root taken by its larger component, whose square root
-/// both sign cases share: 4 divisions and 2 square roots a channel instead of 9 and 3
-/// (division is the lanes' most expensive instruction). η = 1 (zi = 0) stays exactly 0.
-#[inline(always)]
-fn conductor(c: f32, s2: f32, p: &Params, ch: usize) -> f32 {
-    let (n, k) = (p.cn[ch], p.ck[ch]);
-    // Re(η² − sin²θ) = (n² − k² − 1) + c² = (n² − k²) − sin²θ: the form whose two terms
-    // are smaller, since their rounding is what remains where they cancel (n and k small
-    // near c = 1: the first form's error of 1 ulp of 1 made F 1.4e-5 wrong). η = 1 takes
-    // the first (0 + c²), which keeps its F exactly 0.
-    let ar = if p.e2rm1[ch].abs() + c * c <= p.e2r[ch].abs() + s2 {
-        p.e2rm1[ch] + c * c
-    } else {
-        p.e2r[ch] - s2
-    };
-    let zr = (ar * p.c_a[ch] + p.c_eb[ch]) * p.c_iq[ch];
-    let zi = s2 * p.c_bq[ch];
-    // Principal √(zr + i zi), scaled by the larger component (the squares underflow for
-    // |z| < 1e-19); the 1e-37 and 1e-30 floors keep z = 0 from 0/0.
-    // |z| = big·√(1 + (small/big)²): the larger component scaled by itself is exactly 1,
-    // as in the kernel's zr/m, zi/m, so a real z (zi = 0) gives r = |zr| exactly and the
-    // root √((r + zr)/2) = √(c²) the exact c; multiplying by 1/m instead (m·(1/m) ≠ 1)
-    // left F(η = 1) a rounding error of 1e-15, which a D of 1e13 turned into 0.3.
-    let (ar_, ai_) = (zr.abs(), zi.abs());
-    let big = ar_.max(ai_).max(1e-37);
-    let small = ar_.min(ai_);
-    let ratio = small / big;
-    let r = big * (1.0 + ratio * ratio).sqrt();
-    // The root's larger component is √((r + |zr|)/2) (the real part for zr ≥ 0, the
-    // imaginary one for zr < 0), the other zi/2 over it.
-    let t = (0.5 * (r + zr.abs())).sqrt();
-    let o = 0.5 * zi / t.max(1e-30);
-    let (ctr, cti) = if zr < 0.0 {
-        (o.abs(), if zi < 0.0 { -t } else { t })
-    } else {
-        (t, o)
-    };
-    let (ecr, eci) = (n * c, k * c);
-    let (pr, pi) = (ecr - ctr, eci - cti);
-    let (qr, qi) = (ecr + ctr, eci + cti);
-    let r_par = (pr * pr + pi * pi) / (qr * qr + qi * qi);
-    let ecr2 = n * ctr - k * cti;
-    let eci2 = n * cti + k * ctr;
-    let (ur, wr) = (c - ecr2, c + ecr2);
-    let r_perp = (ur * ur + eci2 * eci2) / (wr * wr + eci2 * eci2);
-    0.5 * (r_par + r_perp)
 }
 
 /// Lambert on one block (`Z`: N = (0, 0, 1), the local form): only the validity and the
@@ -977,8 +826,17 @@ fn microfacet_block64<const D: u8, const G: u8, const F: u8>(
 /// ([`microfacet_block`]): GGX and Beckmann with the V-cavity, a Smith geometry or none,
 /// and any Fresnel term but the dielectric (whose f64 evaluation wants the f64 frame) —
 /// the common groups. The others take the two-pass f64 path ([`dg_block64`]).
-pub fn fused(d: u8, g: u8, f: u8) -> bool {
-    (d == D_GGX || d == D_BECKMANN) && g <= G_SMITH_FAST && f != F_DIELECTRIC
+pub fn fused(d: DistributionKind, aniso: bool, g: Geometry, f: FresnelKind) -> bool {
+    let d = !aniso && matches!(d, DistributionKind::Ggx | DistributionKind::Beckmann);
+    let g = match g {
+        Geometry::None
+        | Geometry::CookTorrance
+        | Geometry::Smith
+        | Geometry::SmithCorrelated
+        | Geometry::SmithFast => true,
+        Geometry::SchlickSmith | Geometry::Neubelt => false,
+    };
+    d && g && f != FresnelKind::Dielectric
 }
 
 /// The f64-frame groups' lanes between their two passes (see [`dg_block64`]).
@@ -1086,56 +944,20 @@ fn microfacet_lane<const D: u8, const G: u8, const F: u8, const FAST: bool>(
 #[inline(always)]
 fn microfacet_dg<const D: u8, const G: u8, const FAST: bool>(p: &Params, fr: &Lane) -> (f32, f32) {
     let (cos_i, cos_o, cos_h) = (fr.cos_i, fr.cos_o, fr.cos_h);
-    // D (FORMULAS.md §2).
-    let d = if D == D_GAUSSIAN {
-        // Torrance & Sparrow 1967: exp(−(δ/m)²), δ = atan2(sin δ, cos δ), which keeps δ
-        // exact near the peak where acos(cos_h) loses half its digits.
-        let delta = atan2_positive(fr.sin2_h32.sqrt(), cos_h);
-        exp_neg(-(delta * delta) * p.inv_m2_f)
-    } else if D == D_BLINN {
-        // Blinn 1977, normalised: (e + 2)/(2π) cos_h^e as exp(e ln cos_h), ln cos_h from
-        // sin²_h near the peak (`log_cos`), where cos_h itself keeps only absolute
-        // precision that the exponent would multiply. e·ln cos_h ≤ 0: exp_neg suffices.
-        p.d_norm_f * exp_neg(p.exponent * log_cos(cos_h, fr.sin2_h32))
-    } else if D == D_CHARLIE {
-        // Estevez & Kulla 2017: (2 + 1/m)/(2π) sin_h^(1/m), ln sin_h as the log of the
-        // complementary angle's cosine (from cos²_h near grazing h). 0 at sin_h = 0.
-        let x = p.exponent * log_cos(fr.sin2_h32.sqrt(), fr.cos_h2 as f32);
-        let v = p.d_norm_f * exp_neg(x);
-        if fr.sin2_h32 == 0.0 {
-            0.0
-        } else {
-            v
+    // D (FORMULAS.md §2): the f32 frame's lanes (`FAST`) take GGX's and Beckmann's f32
+    // forms, the f64 frame's their f64 ones.
+    let d = match const { DistributionKind::from_code(D) } {
+        DistributionKind::Gaussian => gaussian::d_lane(cos_h, fr.sin2_h32, p.inv_m2_f),
+        DistributionKind::Blinn => blinn::d_lane(cos_h, fr.sin2_h32, p.exponent, p.d_norm_f),
+        DistributionKind::Charlie => {
+            charlie::d_lane(fr.cos_h2 as f32, fr.sin2_h32, p.exponent, p.d_norm_f)
         }
-    } else if FAST {
-        // The f32 frame's materials have m ≥ FAST_MIN_ROUGHNESS and its lanes cos_h ≥
-        // GRAZING, which keeps every quantity below inside f32's normal range (m²cos²_h ≥
-        // 5.6e-11, 1/cos²_h ≤ 1e8, the Beckmann norm ≤ 5.7e17): D in f32.
-        let cos_h2 = fr.cos_h * fr.cos_h;
-        let sin2_h = fr.sin2_h32;
-        if D == D_GGX {
-            let s = p.m2_f * cos_h2 + sin2_h;
-            p.d_norm_f / (s * s)
-        } else {
-            let ic = 1.0 / cos_h2;
-            let half_x = sin2_h * ic * p.inv_m2_f * 0.5;
-            let e = exp_neg(-half_x);
-            e * (p.d_norm_f * ic * ic) * e
+        DistributionKind::Ggx if FAST => ggx::d_lane32(cos_h, fr.sin2_h32, p.m2_f, p.d_norm_f),
+        DistributionKind::Ggx => ggx::d_lane64(fr.cos_h2, fr.sin2_h, p.m2, p.d_norm),
+        DistributionKind::Beckmann if FAST => {
+            beckmann::d_lane32(cos_h, fr.sin2_h32, p.inv_m2_f, p.d_norm_f)
         }
-    } else if D == D_GGX {
-        // m²/(π (m² cos_h² + sin²_h)²): no 1/cos_h⁴ to overflow; in f64 because the
-        // square of the sum leaves f32's normal range for m near its lower bound.
-        let s = p.m2 * fr.cos_h2 + fr.sin2_h;
-        (p.d_norm / (s * s)) as f32
-    } else {
-        // exp(−tan²/m²)/(k m² cos⁴) as (e·norm)·e with e = exp(−tan²/(2m²)): each
-        // factor stays in f32's range until tan²/m² ≈ 174, where the direct
-        // exp(−x)·norm would already have underflowed to 0 next to a large norm.
-        let ic = 1.0 / fr.cos_h2;
-        let half_x = (fr.sin2_h * ic * p.inv_m2 * 0.5) as f32;
-        let e = exp_neg(-half_x);
-        let norm = (p.d_norm * ic * ic) as f32;
-        e * norm * e
+        DistributionKind::Beckmann => beckmann::d_lane64(fr.cos_h2, fr.sin2_h, p.inv_m2, p.d_norm),
     };
     // G (FORMULAS.md §3) from q2 = m² tan²θ = m² |n × w|² / cos²θ: products and
     // quotients of positive numbers, which f32 carries to a few ulp (the cancelling
@@ -1156,24 +978,16 @@ pub(super) fn geometry<const D: u8, const G: u8>(
     q2_o: f32,
 ) -> f32 {
     let (cos_i, cos_o, cos_h, c) = (fr.cos_i, fr.cos_o, fr.cos_h, fr.c);
-    match G {
-        G_NONE => 1.0,
-        G_CT => {
-            let t = 2.0 * cos_h / c;
-            min(1.0, min(t * cos_o, t * cos_i))
+    match const { Geometry::from_code(G) } {
+        Geometry::None => 1.0,
+        Geometry::CookTorrance => cook_torrance::g_lane(cos_h, cos_i, cos_o, c),
+        Geometry::Smith => smith::g_lane(lambda::<D>(q2_o), lambda::<D>(q2_i)),
+        Geometry::SmithCorrelated => smith_correlated::g_lane(lambda::<D>(q2_o), lambda::<D>(q2_i)),
+        Geometry::SmithFast => smith_fast::g1_lane(q2_o) * smith_fast::g1_lane(q2_i),
+        Geometry::SchlickSmith => {
+            schlick_smith::g_lane(cos_o, fr.sin2_o, cos_i, fr.sin2_i, p.schlick_k)
         }
-        G_SMITH => 1.0 / (1.0 + lambda::<D>(q2_o)) * (1.0 / (1.0 + lambda::<D>(q2_i))),
-        G_SMITH_CORRELATED => 1.0 / (1.0 + lambda::<D>(q2_o) + lambda::<D>(q2_i)),
-        G_SMITH_FAST => smith_fast_g1(q2_o) * smith_fast_g1(q2_i),
-        G_SCHLICK_SMITH => {
-            // cos/(cos + k(1 − cos)), 1 − cos = sin²/(1 + cos): the subtraction would carry
-            // cos's absolute error, which k (up to 8e3) multiplies.
-            let k = p.schlick_k;
-            let (omc_o, omc_i) = (fr.sin2_o / (1.0 + cos_o), fr.sin2_i / (1.0 + cos_i));
-            cos_o / (cos_o + k * omc_o) * (cos_i / (cos_i + k * omc_i))
-        }
-        // Neubelt & Pettineo 2013, the denominator a sum of non-negative terms.
-        _ => cos_i * cos_o / (cos_i + cos_o * (1.0 - cos_i)),
+        Geometry::Neubelt => neubelt::g_lane(cos_i, cos_o),
     }
 }
 
@@ -1187,18 +1001,15 @@ fn finish_lane<const F: u8>(p: &Params, fr: &Lane, d: f32, g: f32, out: &mut Out
     // the conductor, which made every lane a call and nothing vectorised.
     let mut f = [1.0f32; 3];
     for ch in 0..3 {
-        f[ch] = match F {
-            F_NONE => 1.0,
-            F_SCHLICK => {
-                let x2 = one_minus_c * one_minus_c;
-                p.f0[ch] + (1.0 - p.f0[ch]) * (x2 * x2 * one_minus_c)
-            }
-            F_DIELECTRIC => dielectric(fr.c64, fr.s2_64, p.ior[ch], p.mu2m1[ch]),
-            _ => conductor(c, s2_f, p, ch),
+        f[ch] = match const { FresnelKind::from_code(F) } {
+            FresnelKind::None => 1.0,
+            FresnelKind::Schlick => schlick::f_lane(one_minus_c, p.f0[ch]),
+            FresnelKind::Dielectric => dielectric::f_lane(fr.c64, fr.s2_64, p.ior[ch], p.mu2m1[ch]),
+            FresnelKind::Conductor => conductor::f_lane(c, s2_f, &p.conductor, ch),
         };
     }
     // K (FORMULAS.md §5), one cosine at a time.
-    let kk = p.k_num / cos_o / if p.k_cos_i { cos_i } else { 1.0 };
+    let kk = p.k.k(cos_i, cos_o);
     // One test for every output: a sum of magnitudes is NaN if any is, and above
     // OUTPUT_LIMIT if any is (a sum that only rounds up past it sends a lane to the
     // reference needlessly, never the other way) — 18 operations where a test a value
@@ -1489,58 +1300,5 @@ mod tests {
             }
         }
         assert!(groups > 40, "{groups}");
-    }
-
-    /// Small n and k near `c² = 1 − (n² − k²)`, where Re(η² − sin²) cancels: the form
-    /// with the smaller terms keeps F to a few ulp (forming it from `n² − k² − 1` and
-    /// `c²` was 1.6e-5 wrong here, found by `check --seed 2`).
-    #[test]
-    fn the_conductor_keeps_its_digits_where_re_eta2_minus_sin2_vanishes() {
-        let (n, k) = (0.124521f64, 0.015284f64);
-        let m = &parse_materials(
-            &format!(
-                "[[material]]\nname = \"x\"\nmodel = \"cook-torrance\"\ndistribution = \"ggx\"\n\
-                 geometry = \"none\"\nfresnel = \"conductor\"\nior = {n}\nextinction = {k}\n\
-                 roughness = 0.3\n"
-            ),
-            "t",
-        )
-        .unwrap()[0];
-        let Plan::Microfacet { p, .. } = Plan::for_material(m) else {
-            panic!("in the lanes");
-        };
-        let mut worst = 0f64;
-        for i in 0..20_000 {
-            let c = (0.985 + 0.015 * f64::from(i) / 20_000.0) as f32;
-            let cc = f64::from(c);
-            let s2 = ((1.0 - cc) * (1.0 + cc)) as f32;
-            let want = crate::reference::fresnel::conductor_f(cc, n, k);
-            let got = f64::from(conductor(c, s2, &p, 0));
-            worst = worst.max((got - want).abs() / want);
-        }
-        assert!(worst < 2e-6, "worst relative error {worst}");
-    }
-
-    /// η = 1 reflects nothing: the conductor must give exactly 0 at every angle, since a
-    /// Beckmann D of 1e13 (roughness 1e-7 at the peak) multiplies any rounding left in it
-    /// (a stress-corpus tuple came out 0.37 instead of 0.032 when it did not).
-    #[test]
-    fn a_conductor_of_eta_one_reflects_exactly_nothing() {
-        let m = &parse_materials(
-            "[[material]]\nname = \"x\"\nmodel = \"cook-torrance\"\ndistribution = \"beckmann\"\n\
-             geometry = \"none\"\nfresnel = \"conductor\"\nior = 1.0\nextinction = 0.0\nroughness = 1e-7\n",
-            "t",
-        )
-        .unwrap()[0];
-        let Plan::Microfacet { p, .. } = Plan::for_material(m) else {
-            panic!("in the lanes");
-        };
-        for i in 1..=10_000 {
-            let c = i as f64 / 10_000.0;
-            let s2 = ((1.0 - c) * (1.0 + c)) as f32;
-            for ch in 0..3 {
-                assert_eq!(conductor(c as f32, s2, &p, ch), 0.0, "c = {c}");
-            }
-        }
     }
 }

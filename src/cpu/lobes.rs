@@ -10,8 +10,8 @@
 
 use super::aniso::{lane_tangent, slope2, tangent};
 use super::kernel::{frame64, lane_inputs, Inputs, Outputs, Params, Plan, LANES, OUTPUT_LIMIT};
-use super::math::{exp_neg, log_cos};
 use crate::material::{Material, Model, Roughness};
+use crate::terms::math::{exp_neg, log_cos};
 use std::f64::consts::PI;
 
 /// Lobe model: modified, normalised Phong.

@@ -16,9 +16,9 @@
 //! at `h = n`), and `l` within 1e-4 of `h` (φ_d of a nearly vertical `d`).
 
 use super::kernel::{Inputs, Outputs, LANES};
-use super::math::atan2_upper64;
 use crate::material::merl::{Lookup, MeasuredMerl};
 use crate::reference::to_output_f32;
+use crate::terms::math::atan2_upper64;
 use std::f64::consts::PI;
 
 /// Squared raw lengths the lanes take (the other engines' range, 1e-37 to 1e37 as a

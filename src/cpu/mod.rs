@@ -24,7 +24,7 @@ pub mod importance;
 pub mod isa;
 pub mod kernel;
 pub mod lobes;
-pub mod math;
+
 mod measured;
 pub mod transpose;
 
@@ -369,7 +369,7 @@ impl pulp::NullaryFnOnce for ChunkOp4<'_, '_> {
 pub(crate) fn block(plan: &Plan, inp: &Inputs, out: &mut Outputs, z: bool) {
     match plan {
         Plan::Lambert(_) => {}
-        Plan::Microfacet { d, g, f, .. } if kernel::fused(*d, *g, *f) => {}
+        Plan::Microfacet { d, aniso, g, f, .. } if kernel::fused(*d, *aniso, *g, *f) => {}
         _ => return f64_frame_block(plan, inp, out),
     }
     if z {
@@ -379,12 +379,19 @@ pub(crate) fn block(plan: &Plan, inp: &Inputs, out: &mut Outputs, z: bool) {
     }
 }
 
+/// Every lane of the block to the reference: the groups no lanes are compiled for, which
+/// the parser refuses (`terms::legality`), so a material never plans them.
+fn reference_block(out: &mut Outputs) {
+    out.rescue = [true; LANES];
+}
+
 /// Lambert and the fused microfacet groups ([`kernel::fused`]): the groups with an f32
-/// frame, compiled per form (`Z`: N = +z).
+/// frame, compiled per form (`Z`: N = +z). The others go on to [`f64_frame_block`].
 #[inline(always)]
 fn f32_frame_block<const Z: bool>(plan: &Plan, inp: &Inputs, out: &mut Outputs) {
+    use crate::terms::{DistributionKind as D, FresnelKind as F, Geometry as G};
     use kernel::*;
-    let Plan::Microfacet { d, g, f, p } = plan else {
+    let Plan::Microfacet { d, g, f, p, .. } = plan else {
         if let Plan::Lambert(p) = plan {
             lambert_block::<Z>(p, inp, out);
         }
@@ -392,36 +399,43 @@ fn f32_frame_block<const Z: bool>(plan: &Plan, inp: &Inputs, out: &mut Outputs) 
     };
     macro_rules! by_f {
         ($d:expr, $g:expr) => {
-            match *f {
-                F_NONE => microfacet_block::<$d, $g, F_NONE, Z>(p, inp, out),
-                F_SCHLICK => microfacet_block::<$d, $g, F_SCHLICK, Z>(p, inp, out),
-                _ => microfacet_block::<$d, $g, F_CONDUCTOR, Z>(p, inp, out),
+            match f {
+                F::None => microfacet_block::<$d, $g, F_NONE, Z>(p, inp, out),
+                F::Schlick => microfacet_block::<$d, $g, F_SCHLICK, Z>(p, inp, out),
+                F::Conductor => microfacet_block::<$d, $g, F_CONDUCTOR, Z>(p, inp, out),
+                F::Dielectric => f64_frame_block(plan, inp, out),
             }
         };
     }
-    // GGX has no smith-fast (Walter's fit is Beckmann's; the parser refuses it), so its
-    // variant is not compiled.
-    match (*d, *g) {
-        (D_GGX, G_NONE) => by_f!(D_GGX, G_NONE),
-        (D_GGX, G_CT) => by_f!(D_GGX, G_CT),
-        (D_GGX, G_SMITH) => by_f!(D_GGX, G_SMITH),
-        (D_GGX, _) => by_f!(D_GGX, G_SMITH_CORRELATED),
-        (_, G_NONE) => by_f!(D_BECKMANN, G_NONE),
-        (_, G_CT) => by_f!(D_BECKMANN, G_CT),
-        (_, G_SMITH) => by_f!(D_BECKMANN, G_SMITH),
-        (_, G_SMITH_CORRELATED) => by_f!(D_BECKMANN, G_SMITH_CORRELATED),
-        (_, _) => by_f!(D_BECKMANN, G_SMITH_FAST),
+    match (d, g) {
+        (D::Ggx, G::None) => by_f!(D_GGX, G_NONE),
+        (D::Ggx, G::CookTorrance) => by_f!(D_GGX, G_CT),
+        (D::Ggx, G::Smith) => by_f!(D_GGX, G_SMITH),
+        (D::Ggx, G::SmithCorrelated) => by_f!(D_GGX, G_SMITH_CORRELATED),
+        (D::Beckmann, G::None) => by_f!(D_BECKMANN, G_NONE),
+        (D::Beckmann, G::CookTorrance) => by_f!(D_BECKMANN, G_CT),
+        (D::Beckmann, G::Smith) => by_f!(D_BECKMANN, G_SMITH),
+        (D::Beckmann, G::SmithCorrelated) => by_f!(D_BECKMANN, G_SMITH_CORRELATED),
+        (D::Beckmann, G::SmithFast) => by_f!(D_BECKMANN, G_SMITH_FAST),
+        // Smith-fast is Beckmann's fit: no GGX variant is compiled.
+        (D::Ggx, G::SmithFast) => reference_block(out),
+        // Not fused (`kernel::fused`).
+        (D::Ggx | D::Beckmann, G::SchlickSmith | G::Neubelt)
+        | (D::Gaussian | D::Blinn | D::Charlie, _) => f64_frame_block(plan, inp, out),
     }
 }
 
 /// The groups whose frame is always the f64 one: the empirical lobes, and the microfacet
-/// groups [`kernel::fused`] leaves out, in two passes ([`kernel::dg_block64`]).
+/// groups [`kernel::fused`] leaves out, in two passes ([`kernel::dg_block64`]). Each
+/// distribution compiles the geometry terms its rules allow (`terms::legality`); the
+/// others take [`reference_block`].
 #[inline(always)]
 fn f64_frame_block(plan: &Plan, inp: &Inputs, out: &mut Outputs) {
+    use crate::terms::{DistributionKind as D, FresnelKind as F, Geometry as G};
     use kernel::*;
     use lobes::{lobe_block, L_BLINN_PHONG, L_PHONG, L_RTR};
-    let (d, g, f, p) = match plan {
-        Plan::Microfacet { d, g, f, p } => (*d, *g, *f, p),
+    let (d, aniso, g, f, p) = match plan {
+        Plan::Microfacet { d, aniso, g, f, p } => (*d, *aniso, *g, *f, p),
         Plan::Lobe { model, p } => {
             match *model {
                 L_PHONG => lobe_block::<L_PHONG>(p, inp, out),
@@ -432,7 +446,7 @@ fn f64_frame_block(plan: &Plan, inp: &Inputs, out: &mut Outputs) {
             }
             return;
         }
-        _ => return,
+        Plan::Lambert(_) | Plan::Measured | Plan::Reference => return,
     };
     let mut st = Stage::default();
     macro_rules! dg {
@@ -445,52 +459,60 @@ fn f64_frame_block(plan: &Plan, inp: &Inputs, out: &mut Outputs) {
             aniso::dg_block64_aniso::<$d, $g>(p, inp, &mut st)
         };
     }
-    // Gaussian, Blinn and Charlie have no Smith geometry (FORMULAS.md §3: no Λ to take).
-    macro_rules! by_g {
+    // Gaussian, Blinn and Charlie: no Smith Λ (so no Smith or Schlick–Smith geometry) and
+    // no anisotropic roughness.
+    macro_rules! no_lambda {
         ($d:expr) => {
             match g {
-                G_NONE => dg!($d, G_NONE),
-                G_CT => dg!($d, G_CT),
-                _ => dg!($d, G_NEUBELT),
+                G::None => dg!($d, G_NONE),
+                G::CookTorrance => dg!($d, G_CT),
+                G::Neubelt => dg!($d, G_NEUBELT),
+                G::Smith | G::SmithCorrelated | G::SmithFast | G::SchlickSmith => {
+                    return reference_block(out)
+                }
             }
         };
     }
-    match (d, g) {
-        (D_GGX, G_NONE) => dg!(D_GGX, G_NONE),
-        (D_GGX, G_CT) => dg!(D_GGX, G_CT),
-        (D_GGX, G_SMITH) => dg!(D_GGX, G_SMITH),
-        (D_GGX, G_SMITH_CORRELATED) => dg!(D_GGX, G_SMITH_CORRELATED),
-        (D_GGX, G_SCHLICK_SMITH) => dg!(D_GGX, G_SCHLICK_SMITH),
-        (D_GGX, _) => dg!(D_GGX, G_NEUBELT),
-        (D_BECKMANN, G_NONE) => dg!(D_BECKMANN, G_NONE),
-        (D_BECKMANN, G_CT) => dg!(D_BECKMANN, G_CT),
-        (D_BECKMANN, G_SMITH) => dg!(D_BECKMANN, G_SMITH),
-        (D_BECKMANN, G_SMITH_CORRELATED) => dg!(D_BECKMANN, G_SMITH_CORRELATED),
-        (D_BECKMANN, G_SMITH_FAST) => dg!(D_BECKMANN, G_SMITH_FAST),
-        (D_BECKMANN, G_SCHLICK_SMITH) => dg!(D_BECKMANN, G_SCHLICK_SMITH),
-        (D_BECKMANN, _) => dg!(D_BECKMANN, G_NEUBELT),
+    match (d, aniso, g) {
+        (D::Ggx, false, G::None) => dg!(D_GGX, G_NONE),
+        (D::Ggx, false, G::CookTorrance) => dg!(D_GGX, G_CT),
+        (D::Ggx, false, G::Smith) => dg!(D_GGX, G_SMITH),
+        (D::Ggx, false, G::SmithCorrelated) => dg!(D_GGX, G_SMITH_CORRELATED),
+        (D::Ggx, false, G::SchlickSmith) => dg!(D_GGX, G_SCHLICK_SMITH),
+        (D::Ggx, false, G::Neubelt) => dg!(D_GGX, G_NEUBELT),
+        (D::Beckmann, false, G::None) => dg!(D_BECKMANN, G_NONE),
+        (D::Beckmann, false, G::CookTorrance) => dg!(D_BECKMANN, G_CT),
+        (D::Beckmann, false, G::Smith) => dg!(D_BECKMANN, G_SMITH),
+        (D::Beckmann, false, G::SmithCorrelated) => dg!(D_BECKMANN, G_SMITH_CORRELATED),
+        (D::Beckmann, false, G::SmithFast) => dg!(D_BECKMANN, G_SMITH_FAST),
+        (D::Beckmann, false, G::SchlickSmith) => dg!(D_BECKMANN, G_SCHLICK_SMITH),
+        (D::Beckmann, false, G::Neubelt) => dg!(D_BECKMANN, G_NEUBELT),
         // Anisotropic roughness: no schlick-smith (FORMULAS.md §3), smith-fast with
         // Beckmann only.
-        (D_GGX_ANISO, G_NONE) => aniso!(D_GGX, G_NONE),
-        (D_GGX_ANISO, G_CT) => aniso!(D_GGX, G_CT),
-        (D_GGX_ANISO, G_SMITH) => aniso!(D_GGX, G_SMITH),
-        (D_GGX_ANISO, G_SMITH_CORRELATED) => aniso!(D_GGX, G_SMITH_CORRELATED),
-        (D_GGX_ANISO, _) => aniso!(D_GGX, G_NEUBELT),
-        (D_BECKMANN_ANISO, G_NONE) => aniso!(D_BECKMANN, G_NONE),
-        (D_BECKMANN_ANISO, G_CT) => aniso!(D_BECKMANN, G_CT),
-        (D_BECKMANN_ANISO, G_SMITH) => aniso!(D_BECKMANN, G_SMITH),
-        (D_BECKMANN_ANISO, G_SMITH_CORRELATED) => aniso!(D_BECKMANN, G_SMITH_CORRELATED),
-        (D_BECKMANN_ANISO, G_SMITH_FAST) => aniso!(D_BECKMANN, G_SMITH_FAST),
-        (D_BECKMANN_ANISO, _) => aniso!(D_BECKMANN, G_NEUBELT),
-        (D_GAUSSIAN, _) => by_g!(D_GAUSSIAN),
-        (D_BLINN, _) => by_g!(D_BLINN),
-        (_, _) => by_g!(D_CHARLIE),
+        (D::Ggx, true, G::None) => aniso!(D_GGX, G_NONE),
+        (D::Ggx, true, G::CookTorrance) => aniso!(D_GGX, G_CT),
+        (D::Ggx, true, G::Smith) => aniso!(D_GGX, G_SMITH),
+        (D::Ggx, true, G::SmithCorrelated) => aniso!(D_GGX, G_SMITH_CORRELATED),
+        (D::Ggx, true, G::Neubelt) => aniso!(D_GGX, G_NEUBELT),
+        (D::Beckmann, true, G::None) => aniso!(D_BECKMANN, G_NONE),
+        (D::Beckmann, true, G::CookTorrance) => aniso!(D_BECKMANN, G_CT),
+        (D::Beckmann, true, G::Smith) => aniso!(D_BECKMANN, G_SMITH),
+        (D::Beckmann, true, G::SmithCorrelated) => aniso!(D_BECKMANN, G_SMITH_CORRELATED),
+        (D::Beckmann, true, G::SmithFast) => aniso!(D_BECKMANN, G_SMITH_FAST),
+        (D::Beckmann, true, G::Neubelt) => aniso!(D_BECKMANN, G_NEUBELT),
+        (D::Ggx, false, G::SmithFast)
+        | (D::Ggx, true, G::SmithFast | G::SchlickSmith)
+        | (D::Beckmann, true, G::SchlickSmith)
+        | (D::Gaussian | D::Blinn | D::Charlie, true, _) => return reference_block(out),
+        (D::Gaussian, false, _) => no_lambda!(D_GAUSSIAN),
+        (D::Blinn, false, _) => no_lambda!(D_BLINN),
+        (D::Charlie, false, _) => no_lambda!(D_CHARLIE),
     }
     match f {
-        F_NONE => f_block::<F_NONE>(p, &st, out),
-        F_SCHLICK => f_block::<F_SCHLICK>(p, &st, out),
-        F_DIELECTRIC => f_block::<F_DIELECTRIC>(p, &st, out),
-        _ => f_block::<F_CONDUCTOR>(p, &st, out),
+        F::None => f_block::<F_NONE>(p, &st, out),
+        F::Schlick => f_block::<F_SCHLICK>(p, &st, out),
+        F::Dielectric => f_block::<F_DIELECTRIC>(p, &st, out),
+        F::Conductor => f_block::<F_CONDUCTOR>(p, &st, out),
     }
 }
 

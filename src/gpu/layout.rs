@@ -1,7 +1,7 @@
 //! The GPU data structures, mirrored field for field from `glsl/layout.glsl` (whose
 //! `material.glsl` reads `GpuMaterial`'s packed slots by name), and the integer codes and
 //! binding numbers the kernel reads, each said once (a term's code by its `Term` in
-//! `material::terms`, the others here) and injected into the GLSL as macros
+//! `terms`, the others here) and injected into the GLSL as macros
 //! ([`shader_codes`], [`SHADER_BINDINGS`]).
 //!
 //! Every GPU struct is `#[repr(C)]` + [`Pod`] built only from `[f32; 4]` and `[u32; 4]`, so
@@ -43,7 +43,7 @@ pub const DIST_NONE: u32 = 0;
 pub const CONV_NONE: u32 = 0;
 
 // The terms' codes (DIST_* in `kind.y`, GEOM_* `kind.z`, FRESNEL_* `kind.w & 0xff`, CONV_*
-// `(kind.w >> 8) & 0xff`) are said by each term in `material::terms` (`Term::gpu_code`)
+// `(kind.w >> 8) & 0xff`) are said by each family's list in `terms` (`Term::gpu_code`, the enum's discriminant)
 // and injected from there ([`shader_codes`]).
 /// `kind.w` bit: the material has anisotropic roughness (needs the tangent frame).
 pub const FLAG_ANISOTROPIC: u32 = 1 << 16;
@@ -72,7 +72,7 @@ pub const BINDING_MERL: u32 = 7;
 pub const BINDING_COUNT: u32 = 8;
 
 /// The integer codes the GLSL compares against, injected as `#define NAME <value>u`: the
-/// models', lookups' and flags' (here) and every term's (`material::terms`).
+/// models', lookups' and flags' (here) and every term's (`terms`).
 pub fn shader_codes() -> Vec<(&'static str, u32)> {
     let own = [
         ("MODEL_LAMBERT", MODEL_LAMBERT),
@@ -89,7 +89,7 @@ pub fn shader_codes() -> Vec<(&'static str, u32)> {
         ("FLAG_ANISOTROPIC", FLAG_ANISOTROPIC),
     ];
     own.into_iter()
-        .chain(crate::material::terms::all_terms().map(|t| t.gpu_code))
+        .chain(crate::terms::all_terms().map(|t| t.gpu_code))
         .collect()
 }
 
@@ -210,7 +210,7 @@ const _: () = {
     assert!(size_of::<PushConstants>() == 24);
 };
 
-/// A term's kernel code (`material::terms`).
+/// A term's kernel code (`terms`).
 fn code(term: Term) -> u32 {
     term.gpu_code.1
 }
@@ -322,7 +322,7 @@ pub fn gpu_material(m: &Material) -> GpuMaterial {
                     Distribution::Beckmann(r) => (false, r),
                     _ => unreachable!("schlick-smith needs beckmann/ggx (validated)"),
                 };
-                g.lobe[3] = crate::reference::geometry::schlick_smith_k(ggx, r.xy().0) as f32;
+                g.lobe[3] = crate::terms::g::schlick_smith::k(ggx, r.xy().0) as f32;
             }
             match ct.fresnel {
                 Fresnel::None => {}

@@ -8,17 +8,13 @@ pub mod merl;
 mod parse;
 pub mod precision;
 pub mod presets;
-pub mod terms;
 
-pub use terms::{
+pub use crate::terms::{
     legality, Convention, Distribution, DistributionKind, Fresnel, FresnelKind, Geometry, Illegal,
-    Term,
+    Rgb, Roughness, Term,
 };
 
 pub use parse::{load_materials, parse_materials, parse_materials_in, MAX_MATERIALS};
-
-/// An RGB triple (linear, per channel).
-pub type Rgb = [f64; 3];
 
 /// A validated material (FORMULAS.md §6).
 #[derive(Debug, Clone, PartialEq)]
@@ -113,37 +109,6 @@ pub struct CookTorrance {
     pub specular_weight: f64,
     /// `d`: diffuse weight (default 0).
     pub diffuse_weight: f64,
-}
-
-/// Roughness `m > 0` (rms slope; GGX calls it α), isotropic or per tangent axis.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Roughness {
-    /// One `m` for every direction.
-    Isotropic(f64),
-    /// `[mx, my]` along the tangent `t` and bitangent `b`.
-    Anisotropic(f64, f64),
-}
-
-impl Roughness {
-    /// `(mx, my)`, equal for an isotropic roughness.
-    pub fn xy(self) -> (f64, f64) {
-        match self {
-            Roughness::Isotropic(m) => (m, m),
-            Roughness::Anisotropic(x, y) => (x, y),
-        }
-    }
-    /// Whether the roughness is given per axis (needs a tangent).
-    pub fn is_anisotropic(self) -> bool {
-        matches!(self, Roughness::Anisotropic(..))
-    }
-
-    /// As `vkbrdf materials` lists it: `m=0.3` or `m=[0.1, 0.4]`.
-    pub fn describe(self) -> String {
-        match self {
-            Roughness::Isotropic(m) => format!("m={m}"),
-            Roughness::Anisotropic(x, y) => format!("m=[{x}, {y}]"),
-        }
-    }
 }
 
 impl Material {

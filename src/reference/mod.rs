@@ -1,16 +1,13 @@
 //! The CPU reference: FORMULAS.md evaluated in f64, term by term, written for clarity and
 //! exactness rather than speed. It is the judge every other backend is measured against.
 //!
-//! The submodules mirror FORMULAS.md section by section:
-//! §1 [`frame`] (inputs, validity, derived quantities), §2 [`distribution`] (D),
-//! §3 [`geometry`] (G), §4 [`fresnel`] (F), §5 [`convention`] (K), §6 [`models`] (f).
+//! The submodules follow FORMULAS.md: §1 [`frame`] (inputs, validity, derived quantities),
+//! §2–§5 [`terms`] (which term of each family a material names, on the frame: the
+//! formulas are the terms' own f64 forms in `crate::terms`), §6 [`models`] (f).
 
-pub mod convention;
-pub mod distribution;
 pub mod frame;
-pub mod fresnel;
-pub mod geometry;
 pub mod models;
+pub mod terms;
 
 use crate::backend::{Backend, Counts, Output, Request, TERM_COLUMNS};
 use crate::batch::{Batch, Tuple};

@@ -2,11 +2,11 @@
 //! and its terms. Non-microfacet models report D = the specular lobe per unit `c_spec`
 //! (0 for Lambert) and G = F = K = 1.
 
-pub use super::distribution::microfacet_d;
 use super::frame::Frame;
-pub use super::geometry::{microfacet_g, projected_roughness2};
-use super::{convention, distribution, fresnel, Evaluation, Status};
-use crate::material::{CookTorrance, Fresnel, Material, Model, Roughness};
+pub use super::terms::{fresnel_f, microfacet_d, microfacet_g, projected_roughness2};
+use super::{Evaluation, Status};
+use crate::material::{CookTorrance, Material, Model, Roughness};
+use crate::terms::math::cos_pow;
 use std::f64::consts::PI;
 
 /// Evaluates `m` on a valid, above-horizon frame.
@@ -32,7 +32,7 @@ pub fn evaluate_model(fr: &Frame, m: &Material) -> Evaluation {
         },
         Some(Terms { d, g, f, k }) => {
             let ct = m.cook_torrance().expect("matched above");
-            let ln_k = convention::glare_ln_k(ct.convention, fr.cos_i, fr.cos_o);
+            let ln_k = ct.convention.ln_k(fr.cos_i, fr.cos_o);
             Evaluation {
                 status: Status::Valid,
                 brdf: std::array::from_fn(|c| {
@@ -87,7 +87,7 @@ pub fn phong_lobe(fr: &Frame, e: f64) -> f64 {
     } else if half_d2 < 0.5 {
         // r·v = 1 − half_d2 > 1/2, and sin² of the angle between r and v is
         // 1 − (r·v)² = half_d2 (2 − half_d2).
-        distribution::cos_pow(1.0 - half_d2, half_d2 * (2.0 - half_d2), e)
+        cos_pow(1.0 - half_d2, half_d2 * (2.0 - half_d2), e)
     } else {
         // r·v = 2 cos_i cos_o − l·v, the same value without forming r.
         (2.0 * fr.cos_i * fr.cos_o - fr.l_dot_v).max(0.0).powf(e)
@@ -99,13 +99,13 @@ pub fn phong_lobe(fr: &Frame, e: f64) -> f64 {
 /// makes the shading equation's `cos_h^e` independent of the incident cosine; it also
 /// makes the model non-reciprocal.
 pub fn blinn_phong_lobe(fr: &Frame, e: f64) -> f64 {
-    distribution::cos_pow(fr.cos_h, fr.sin2_h, e) / (PI * fr.cos_i)
+    cos_pow(fr.cos_h, fr.sin2_h, e) / (PI * fr.cos_i)
 }
 
 /// Akenine-Möller, Haines & Hoffman, "Real-Time Rendering" 3rd ed. §5.5 (the seed's
 /// shading equation): `(e+8)/(8π) cos_h^e`.
 pub fn rtr_lobe(fr: &Frame, e: f64) -> f64 {
-    (e + 8.0) / (8.0 * PI) * distribution::cos_pow(fr.cos_h, fr.sin2_h, e)
+    (e + 8.0) / (8.0 * PI) * cos_pow(fr.cos_h, fr.sin2_h, e)
 }
 
 /// Ward 1992, "Measuring and modeling anisotropic reflection":
@@ -144,16 +144,6 @@ pub fn cook_torrance_terms(fr: &Frame, ct: &CookTorrance) -> Terms {
         d: microfacet_d(fr, ct),
         g: microfacet_g(fr, ct),
         f: [0, 1, 2].map(|c| fresnel_f(fr.c, fr.sin2_d, &ct.fresnel, c)),
-        k: convention::glare_k(ct.convention, fr.cos_i, fr.cos_o),
-    }
-}
-
-/// F of §4 for channel `ch` at `c = v·h`, given also `sin2_d = 1 − c²` (accurate).
-pub fn fresnel_f(c: f64, sin2_d: f64, f: &Fresnel, ch: usize) -> f64 {
-    match *f {
-        Fresnel::None => 1.0,
-        Fresnel::Dielectric { ior } => fresnel::dielectric_f_with_sin2(c, sin2_d, ior[ch]),
-        Fresnel::Conductor { ior, extinction } => fresnel::conductor_f(c, ior[ch], extinction[ch]),
-        Fresnel::Schlick { f0 } => fresnel::schlick_f(c, f0[ch]),
+        k: ct.convention.k(fr.cos_i, fr.cos_o),
     }
 }

@@ -1,31 +1,45 @@
-//! One home per term (FORMULAS.md §2–§5), as pbrt-v4 and Mitsuba 3 keep one class per
-//! distribution: a file per term family holds each term's parameters, its spelling in a
-//! materials file, its kernel code and its kernel feature ([`Term`]), and this module holds
-//! the rules that combine them ([`legality`]). The layers above ask these instead of
-//! naming the terms: the parser (names, ranges, rules), `features` (the feature bit and
-//! its `HAS_*` macro), `gpu::layout` (the codes injected into the GLSL), `check` and the
-//! test strategies (`ALL` and the rules). The formulas themselves stay in the layers that
-//! evaluate them: `reference/` (f64, the judge) and `glsl/terms.glsl` (f32), one function
-//! per term, same name and citation in both.
+//! The terms of FORMULAS.md §2–§5, one file each, as pbrt-v4 keeps one class per
+//! distribution and Mitsuba 3 one `MicrofacetDistribution`: a term's file holds its name in
+//! a materials file and its citation, its legality rule, its f64 form (the reference's,
+//! the judge) and its SIMD-lane form (the CPU engine's, f32 where the contract allows),
+//! under one name. Its GLSL form is the block of the same name in `glsl/terms.glsl`.
+//!
+//! Each family is one list ([`family!`](family)): `d/` the distributions D (§2), `g/` the
+//! geometry terms G (§3), `f/` the Fresnel terms F (§4), `k/` the conventions with their
+//! glare factor K (§5). The list numbers the terms (the codes both engines compare), names
+//! their kernel feature, and generates the tables from a term to its file; the dispatches
+//! over a family are exhaustive `match`es, so a term a table misses is a compile error.
+//! The layers above (the reference's frame, the CPU engine's blocks, the kernel's
+//! packing) ask these files instead of naming formulas themselves.
 
-pub mod convention;
-pub mod distribution;
-pub mod fresnel;
-pub mod geometry;
+mod family;
+pub(crate) use family::family;
 
-pub use convention::Convention;
-pub use distribution::{Distribution, DistributionKind};
-pub use fresnel::{Fresnel, FresnelKind};
-pub use geometry::Geometry;
+pub mod d;
+pub mod f;
+pub mod g;
+pub mod k;
+pub mod math;
 
-/// What the layers above the materials need to know about one term, said once.
+pub use d::{Distribution, DistributionKind, Roughness};
+pub use f::{Fresnel, FresnelKind};
+pub use g::Geometry;
+pub use k::Convention;
+
+/// An RGB triple (linear, per channel).
+pub type Rgb = [f64; 3];
+
+/// What the layers above need to know about one term, said once (in its family's list and
+/// its file).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Term {
     /// The spelling in a materials file.
     pub toml_name: &'static str,
-    /// The macro the kernel compares a material's code against and its value (the
-    /// `GpuMaterial` slot is the family's: `kind.y` D, `kind.z` G, `kind.w` F and
-    /// convention; `gpu::layout` injects every code into the GLSL).
+    /// The work the formula comes from, as the term's file and GLSL block cite it.
+    pub citation: &'static str,
+    /// The macro the kernel compares a material's code against and its value, the family
+    /// enum's discriminant (the `GpuMaterial` slot is the family's: `kind.y` D, `kind.z` G,
+    /// `kind.w` F and convention; `gpu::layout` injects every code into the GLSL).
     pub gpu_code: (&'static str, u32),
     /// The kernel feature that compiles the term's code: its bit in `FeatureSet` and its
     /// preprocessor name (`HAS_*`); `None` for a term with no code (`G = 1`, `F = 1`).
@@ -81,6 +95,7 @@ mod tests {
         ];
         for family in &families {
             for (i, a) in family.iter().enumerate() {
+                assert!(!a.citation.is_empty(), "{a:?} cites nothing");
                 for b in &family[i + 1..] {
                     assert_ne!(a.gpu_code.1, b.gpu_code.1, "{a:?} and {b:?} share a code");
                     assert_ne!(a.toml_name, b.toml_name);
@@ -89,15 +104,19 @@ mod tests {
         }
         for d in DistributionKind::ALL {
             assert_eq!(DistributionKind::from_toml_name(d.toml_name()), Some(d));
+            assert_eq!(DistributionKind::from_code(d.code()), d);
         }
         for g in Geometry::ALL {
             assert_eq!(Geometry::from_toml_name(g.toml_name()), Some(g));
+            assert_eq!(Geometry::from_code(g.code()), g);
         }
         for f in FresnelKind::ALL {
             assert_eq!(FresnelKind::from_toml_name(f.toml_name()), Some(f));
+            assert_eq!(FresnelKind::from_code(f.code()), f);
         }
         for c in Convention::ALL {
             assert_eq!(Convention::from_toml_name(c.toml_name()), Some(c));
+            assert_eq!(Convention::from_code(c.code()), c);
         }
     }
 }

@@ -1,9 +1,58 @@
-//! The microfacet distributions D of FORMULAS.md §2: each one's parameter, name, range,
-//! kernel code and feature. Their formulas: `reference::distribution` (f64) and
-//! `glsl/terms.glsl`; the rules that combine them with a geometry: [`super::legality`].
+//! The microfacet distributions D of FORMULAS.md §2, one file each. Each returns D in 1/sr
+//! (the normalised forms satisfy `∫ D cos_h dω_h = 1`); none includes G, F or the
+//! 1/(4 cos cos) factor. Smith's Λ belongs to the distribution (Heitz 2014), so the two
+//! that have one (Beckmann, GGX) define it in their file too.
 
-use super::{Convention, Illegal, Term};
-use crate::material::Roughness;
+use super::{family, Convention, Illegal};
+
+family! {
+    /// A distribution's name without its parameter (FORMULAS.md §2): what the legality rules
+    /// read, and what the check matrix and the test strategies enumerate. The discriminant
+    /// is the code of `GpuMaterial`'s `kind.y` and of the CPU lanes.
+    pub enum DistributionKind {
+        /// `gaussian`.
+        Gaussian = 1 => gaussian, "DIST_GAUSSIAN", Some((6, "HAS_D_GAUSSIAN"));
+        /// `beckmann`.
+        Beckmann = 2 => beckmann, "DIST_BECKMANN", Some((7, "HAS_D_BECKMANN"));
+        /// `ggx`.
+        Ggx = 3 => ggx, "DIST_GGX", Some((8, "HAS_D_GGX"));
+        /// `blinn`.
+        Blinn = 4 => blinn, "DIST_BLINN", Some((9, "HAS_D_BLINN"));
+        /// `charlie`.
+        Charlie = 5 => charlie, "DIST_CHARLIE", Some((30, "HAS_D_CHARLIE"));
+    }
+}
+
+/// Roughness `m > 0` (rms slope; GGX calls it α), isotropic or per tangent axis.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Roughness {
+    /// One `m` for every direction.
+    Isotropic(f64),
+    /// `[mx, my]` along the tangent `t` and bitangent `b`.
+    Anisotropic(f64, f64),
+}
+
+impl Roughness {
+    /// `(mx, my)`, equal for an isotropic roughness.
+    pub fn xy(self) -> (f64, f64) {
+        match self {
+            Roughness::Isotropic(m) => (m, m),
+            Roughness::Anisotropic(x, y) => (x, y),
+        }
+    }
+    /// Whether the roughness is given per axis (needs a tangent).
+    pub fn is_anisotropic(self) -> bool {
+        matches!(self, Roughness::Anisotropic(..))
+    }
+
+    /// As `vkbrdf materials` lists it: `m=0.3` or `m=[0.1, 0.4]`.
+    pub fn describe(self) -> String {
+        match self {
+            Roughness::Isotropic(m) => format!("m={m}"),
+            Roughness::Anisotropic(x, y) => format!("m=[{x}, {y}]"),
+        }
+    }
+}
 
 /// Microfacet distribution D (FORMULAS.md §2) with its parameter.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -29,75 +78,7 @@ pub enum Distribution {
     },
 }
 
-/// A distribution's name without its parameter (FORMULAS.md §2): what the legality rules
-/// read, and what the check matrix and the test strategies enumerate.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum DistributionKind {
-    /// `gaussian`.
-    Gaussian,
-    /// `beckmann`.
-    Beckmann,
-    /// `ggx`.
-    Ggx,
-    /// `blinn`.
-    Blinn,
-    /// `charlie`.
-    Charlie,
-}
-
 impl DistributionKind {
-    /// Every distribution, in the order the materials help lists them.
-    pub const ALL: [DistributionKind; 5] = [
-        DistributionKind::Gaussian,
-        DistributionKind::Beckmann,
-        DistributionKind::Ggx,
-        DistributionKind::Blinn,
-        DistributionKind::Charlie,
-    ];
-
-    /// The distribution's name, kernel code (`GpuMaterial` `kind.y`) and feature.
-    pub const fn term(self) -> Term {
-        match self {
-            DistributionKind::Gaussian => Term {
-                toml_name: "gaussian",
-                gpu_code: ("DIST_GAUSSIAN", 1),
-                feature: Some((6, "HAS_D_GAUSSIAN")),
-            },
-            DistributionKind::Beckmann => Term {
-                toml_name: "beckmann",
-                gpu_code: ("DIST_BECKMANN", 2),
-                feature: Some((7, "HAS_D_BECKMANN")),
-            },
-            DistributionKind::Ggx => Term {
-                toml_name: "ggx",
-                gpu_code: ("DIST_GGX", 3),
-                feature: Some((8, "HAS_D_GGX")),
-            },
-            DistributionKind::Blinn => Term {
-                toml_name: "blinn",
-                gpu_code: ("DIST_BLINN", 4),
-                feature: Some((9, "HAS_D_BLINN")),
-            },
-            DistributionKind::Charlie => Term {
-                toml_name: "charlie",
-                gpu_code: ("DIST_CHARLIE", 5),
-                feature: Some((30, "HAS_D_CHARLIE")),
-            },
-        }
-    }
-
-    /// The spelling in a materials file (`distribution = "..."`).
-    pub fn toml_name(self) -> &'static str {
-        self.term().toml_name
-    }
-
-    /// The distribution a materials file names, if any.
-    pub fn from_toml_name(name: &str) -> Option<DistributionKind> {
-        DistributionKind::ALL
-            .into_iter()
-            .find(|d| d.toml_name() == name)
-    }
-
     /// Whether its parameter is `exponent` (blinn) rather than `roughness`.
     pub fn takes_exponent(self) -> bool {
         self == DistributionKind::Blinn
@@ -122,39 +103,56 @@ impl DistributionKind {
     /// Whether it has Smith's Λ (and a Beckmann or GGX roughness), which the Smith and
     /// Schlick–Smith geometry terms need ([`Geometry::legality`](super::Geometry::legality)).
     pub fn has_lambda(self) -> bool {
-        matches!(self, DistributionKind::Beckmann | DistributionKind::Ggx)
+        match self {
+            DistributionKind::Gaussian => gaussian::HAS_LAMBDA,
+            DistributionKind::Beckmann => beckmann::HAS_LAMBDA,
+            DistributionKind::Ggx => ggx::HAS_LAMBDA,
+            DistributionKind::Blinn => blinn::HAS_LAMBDA,
+            DistributionKind::Charlie => charlie::HAS_LAMBDA,
+        }
     }
 
     /// Its own rule (FORMULAS.md §2), whatever the geometry: whether anisotropic roughness
-    /// (when `anisotropic`) is defined for it in `convention`.
+    /// (when `anisotropic`) is defined for it in `convention`. Each term's file says its own.
     pub fn legality(self, convention: Convention, anisotropic: bool) -> Result<(), Illegal> {
-        use DistributionKind as D;
-        let d = self.toml_name();
-        let illegal = |message: String| {
-            Err(Illegal {
-                key: "roughness",
-                message,
-            })
-        };
         if !anisotropic {
             return Ok(());
         }
-        match self {
-            D::Beckmann | D::Ggx if convention != Convention::Modern => illegal(format!(
-                "anisotropic `{d}` exists in the `modern` convention only"
-            )),
-            D::Beckmann | D::Ggx => Ok(()),
-            D::Blinn => illegal("distribution `blinn` takes an `exponent`, not a roughness".into()),
-            D::Gaussian | D::Charlie => illegal(format!(
-                "distribution `{d}` is isotropic only; give one number"
-            )),
-        }
+        let rule = match self {
+            DistributionKind::Gaussian => gaussian::anisotropic(convention),
+            DistributionKind::Beckmann => beckmann::anisotropic(convention),
+            DistributionKind::Ggx => ggx::anisotropic(convention),
+            DistributionKind::Blinn => blinn::anisotropic(convention),
+            DistributionKind::Charlie => charlie::anisotropic(convention),
+        };
+        rule.map_err(|message| Illegal {
+            key: "roughness",
+            message,
+        })
     }
 
     /// The largest roughness the formula is defined for (FORMULAS.md §2): `charlie`'s m is
     /// the paper's α = r² ≤ 1; the others are bounded only by the parser's general range.
     pub fn max_roughness(self) -> Option<f64> {
-        (self == DistributionKind::Charlie).then_some(1.0)
+        (self == DistributionKind::Charlie).then_some(charlie::MAX_M)
+    }
+}
+
+/// The rule of the distributions without anisotropic roughness, for their files.
+fn isotropic_only(name: &str) -> Result<(), String> {
+    Err(format!(
+        "distribution `{name}` is isotropic only; give one number"
+    ))
+}
+
+/// The rule of the distributions with anisotropic roughness in `modern` only.
+fn anisotropic_in_modern(name: &str, convention: Convention) -> Result<(), String> {
+    if convention == Convention::Modern {
+        Ok(())
+    } else {
+        Err(format!(
+            "anisotropic `{name}` exists in the `modern` convention only"
+        ))
     }
 }
 

@@ -1,0 +1,84 @@
+//! Trowbridge & Reitz 1975; Walter et al. 2007, "Microfacet models for refraction through
+//! rough surfaces" (GGX): `m² / (π cos⁴δ (m² + tan²δ)²)`; anisotropic (Burley 2012; Heitz
+//! 2014, modern convention only) `1 / (π mx my ((hx/mx)² + (hy/my)² + hz²)²)`; and its
+//! Smith Λ `(−1 + √(1 + m² tan²θ))/2` (Walter et al. 2007; Heitz 2014).
+
+use crate::terms::Convention;
+use std::f64::consts::PI;
+
+/// The spelling in a materials file.
+pub const NAME: &str = "ggx";
+/// The work the formula comes from.
+pub const CITATION: &str = "Trowbridge & Reitz 1975; Walter et al. 2007";
+/// It has Smith's Λ ([`lambda`]).
+pub const HAS_LAMBDA: bool = true;
+
+/// Its rule for anisotropic roughness: defined in the `modern` convention only.
+pub fn anisotropic(convention: Convention) -> Result<(), String> {
+    super::anisotropic_in_modern(NAME, convention)
+}
+
+/// D in f64, evaluated as `m² / (π (m² cos²δ + sin²δ)²)`, the same value with `cos⁴`
+/// multiplied through: it has no `tan²`, so nothing overflows as `cos δ → 0`.
+pub fn d(cos_h: f64, sin2_h: f64, m: f64) -> f64 {
+    let m2 = m * m;
+    let denom = m2 * cos_h * cos_h + sin2_h;
+    m2 / (PI * denom * denom)
+}
+
+/// D in f64, anisotropic, from h in the tangent frame.
+pub fn d_aniso(h_local: [f64; 3], mx: f64, my: f64) -> f64 {
+    let [hx, hy, hz] = h_local;
+    let s = (hx / mx).powi(2) + (hy / my).powi(2) + hz * hz;
+    1.0 / (PI * mx * my * s * s)
+}
+
+/// Smith's Λ in f64, given `x = m² tan²θ`.
+///
+/// Evaluated as `x / (2 (1 + √(1 + x)))` for `x ≤ 1`: the textbook form cancels for small
+/// `x` (near normal incidence or tiny m) and returns 0 for x < 1e-16. For `x > 1` the
+/// textbook form has no cancellation and stays ∞ (G = 0) where `x` overflows, where the
+/// quotient would be ∞/∞ = NaN.
+pub fn lambda(x: f64) -> f64 {
+    let r = (1.0 + x).sqrt();
+    if x <= 1.0 {
+        x / (2.0 * (1.0 + r))
+    } else {
+        0.5 * (r - 1.0)
+    }
+}
+
+/// D in a lane of the f32 frame, given `m²` and `m²/π` rounded once (the f32 frame's
+/// materials and lanes keep `m² cos²_h ≥ 5.6e-11`: the square stays normal).
+#[inline(always)]
+pub fn d_lane32(cos_h: f32, sin2_h: f32, m2: f32, norm: f32) -> f32 {
+    let s = m2 * (cos_h * cos_h) + sin2_h;
+    norm / (s * s)
+}
+
+/// D in a lane of the f64 frame: as [`d`], in f64 because the square of the sum leaves
+/// f32's normal range for m near its lower bound.
+#[inline(always)]
+pub fn d_lane64(cos_h2: f64, sin2_h: f64, m2: f64, norm: f64) -> f32 {
+    let s = m2 * cos_h2 + sin2_h;
+    (norm / (s * s)) as f32
+}
+
+/// Anisotropic D in a lane (f64 frame), given `(hx/mx)² + (hy/my)²`, `hz²` and
+/// `1/(π mx my)`: no 1/hz⁴ to overflow.
+#[inline(always)]
+pub fn d_aniso_lane(slope2: f64, cos_h2: f64, norm: f64) -> f32 {
+    let s = slope2 + cos_h2;
+    (norm / (s * s)) as f32
+}
+
+/// Smith's Λ in a lane, given `q2 = m² tan²θ`, rewritten for `q2 ≤ 1` as [`lambda`].
+#[inline(always)]
+pub fn lambda_lane(q2: f32) -> f32 {
+    let r = (1.0 + q2).sqrt();
+    if q2 <= 1.0 {
+        q2 / (2.0 * (1.0 + r))
+    } else {
+        0.5 * (r - 1.0)
+    }
+}

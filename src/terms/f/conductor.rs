@@ -1,0 +1,201 @@
+//! Born & Wolf, "Principles of Optics", §14.2: the exact conductor Fresnel term for
+//! complex `η = n + ik` (the form of pbrt-v4's `FrComplex`), unpolarised.
+
+use num_complex::Complex64;
+
+/// The spelling in a materials file.
+pub const NAME: &str = "conductor";
+/// The work the formula comes from.
+pub const CITATION: &str = "Born & Wolf 1999";
+
+/// Principal square root of `z` (Re ≥ 0, the sign of Im kept), computed from the larger of
+/// `(|z| + x)/2` and `(|z| − x)/2` with the other part by division: the polar form
+/// (`num_complex`'s) takes `cos(θ/2)` of a rounded angle, which has no relative precision
+/// when `z` is nearly a negative real (a conductor with n < 1 and small k at grazing c), and
+/// the direct formulas `√((|z| ± x)/2)` cancel there too.
+fn csqrt(z: Complex64) -> Complex64 {
+    let (x, y) = (z.re, z.im);
+    let r = x.hypot(y);
+    if r == 0.0 {
+        return Complex64::new(0.0, 0.0);
+    }
+    if x >= 0.0 {
+        let re = (0.5 * (r + x)).sqrt();
+        Complex64::new(re, 0.5 * y / re)
+    } else {
+        let im = (0.5 * (r - x)).sqrt();
+        Complex64::new(0.5 * y.abs() / im, if y < 0.0 { -im } else { im })
+    }
+}
+
+/// Exact conductor Fresnel for complex `η = n + ik` (Born & Wolf, "Principles of Optics",
+/// §14.2; the form of pbrt-v4's `FrComplex`): `sin²θt = (1 − c²)/η²`,
+/// `cos θt = √(1 − sin²θt)` (principal root), `r∥ = (ηc − cos θt)/(ηc + cos θt)`,
+/// `r⊥ = (c − η cos θt)/(c + η cos θt)`, `F = (|r∥|² + |r⊥|²)/2`.
+///
+/// Evaluated in the same values rearranged so that nothing cancels:
+/// - `cos²θt = 1 − (1 − c²)/η² = (η² − 1 + c²)/η²`, with `Re(η² − 1 + c²) = (n − 1)(n + 1) +
+///   (c − k)(c + k)` formed directly. The printed form rounds `c²` away next to 1: for
+///   η = 1 (F = 0 exactly) at c = 1e-8 it gave cos θt = 0 and F = 1, and f at a grazing
+///   mirror configuration was 201,302 instead of 0.0318.
+/// - `c − η cos θt = (c² − η² cos²θt)/(c + η cos θt) = (1 − η²)/(c + η cos θt)`, so
+///   `r⊥ = (1 − η²)/(c + η cos θt)²`: the difference of two nearly equal numbers (η ≈ 1,
+///   where F ≈ 0 and its relative error would be unbounded) becomes the exact factor
+///   `1 − η² = −((n − 1)(n + 1) − k²) − 2ink`.
+/// - likewise `ηc − cos θt = (η²c² − cos²θt)/(ηc + cos θt)` with
+///   `η²c² − cos²θt = (η² − 1)((η² + 1)c² − 1)/η²`, so
+///   `r∥ = (η² − 1)((η² + 1)c² − 1)/(η² (ηc + cos θt)²)`. Its second factor still vanishes
+///   at the (pseudo-)Brewster angle, as r∥ itself does; there |r∥|² ≪ |r⊥|² and F keeps its
+///   relative precision.
+///
+/// The denominators have positive real parts (`c > 0`, `n > 0`, `Re cos θt ≥ 0`), so they
+/// do not cancel.
+pub fn f(c: f64, ior: f64, extinction: f64) -> f64 {
+    let (n, k) = (ior, extinction);
+    let eta = Complex64::new(n, k);
+    let eta2 = eta * eta;
+    let n2m1 = (n - 1.0) * (n + 1.0); // n² − 1 without rounding n² first
+    let eta2m1 = Complex64::new(n2m1 - k * k, 2.0 * n * k); // η² − 1
+    let g2 = Complex64::new(n2m1 + (c - k) * (c + k), 2.0 * n * k); // η² − 1 + c²
+    let cos_t = csqrt(g2 / eta2);
+    let eta_cos_t = eta * cos_t;
+    let u = c + eta_cos_t;
+    let r_perp = -eta2m1 / (u * u);
+    let w = eta * c + cos_t;
+    // (η² + 1)c² − 1 = Re(η²)c² − (1 − c)(1 + c) + i Im(η²)c²
+    let brewster = Complex64::new(eta2.re * c * c - (1.0 - c) * (1.0 + c), eta2.im * c * c);
+    let r_par = (eta2m1 / eta2) * (brewster / (w * w));
+    (r_par.norm_sqr() + r_perp.norm_sqr()) / 2.0
+}
+
+/// A material's per-channel constants for [`f_lane`], formed once in f64 and rounded once.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct LaneConstants {
+    /// n.
+    pub n: [f32; 3],
+    /// k.
+    pub k: [f32; 3],
+    /// `Re(η²) − 1 = n² − k² − 1`.
+    pub e2rm1: [f32; 3],
+    /// `Re(η²) = n² − k²`.
+    pub e2r: [f32; 3],
+    /// `Re(η²)/|η|²` (the constant factors of the scaled root: the lanes then multiply
+    /// where the kernel divides per tuple).
+    pub c_a: [f32; 3],
+    /// `Im(η²)²/|η|²`.
+    pub c_eb: [f32; 3],
+    /// `1/|η|²`.
+    pub c_iq: [f32; 3],
+    /// `Im(η²)/|η|⁴`.
+    pub c_bq: [f32; 3],
+}
+
+impl LaneConstants {
+    /// The constants of `η = ior + i·extinction` per channel.
+    pub fn new(ior: [f64; 3], extinction: [f64; 3]) -> LaneConstants {
+        let r = |a: [f64; 3]| a.map(|x| x as f32);
+        let (n, k) = (ior, extinction);
+        let q: [f64; 3] = std::array::from_fn(|c| n[c] * n[c] + k[c] * k[c]);
+        let e2i: [f64; 3] = std::array::from_fn(|c| 2.0 * n[c] * k[c]);
+        LaneConstants {
+            n: r(ior),
+            k: r(extinction),
+            e2rm1: r(std::array::from_fn(|c| {
+                (ior[c] - 1.0) * (ior[c] + 1.0) - extinction[c] * extinction[c]
+            })),
+            e2r: r(std::array::from_fn(|c| n[c] * n[c] - k[c] * k[c])),
+            c_a: r(std::array::from_fn(|c| (n[c] * n[c] - k[c] * k[c]) / q[c])),
+            c_eb: r(std::array::from_fn(|c| e2i[c] * e2i[c] / q[c])),
+            c_iq: r(q.map(|q| 1.0 / q)),
+            c_bq: r(std::array::from_fn(|c| e2i[c] / q[c] / q[c])),
+        }
+    }
+}
+
+/// F in a lane (f32) for channel `ch`, after the kernel's GLSL form: `η²` divided through
+/// `|η|²` so that large extinctions do not overflow — here by the per-material constants
+/// `c_a`, `c_eb`, `c_iq`, `c_bq` — and the complex root taken by its larger component,
+/// whose square root both sign cases share: 4 divisions and 2 square roots a channel
+/// instead of 9 and 3 (division is the lanes' most expensive instruction). η = 1 (zi = 0)
+/// stays exactly 0.
+#[inline(always)]
+pub fn f_lane(c: f32, s2: f32, p: &LaneConstants, ch: usize) -> f32 {
+    let (n, k) = (p.n[ch], p.k[ch]);
+    // Re(η² − sin²θ) = (n² − k² − 1) + c² = (n² − k²) − sin²θ: the form whose two terms
+    // are smaller, since their rounding is what remains where they cancel (n and k small
+    // near c = 1: the first form's error of 1 ulp of 1 made F 1.4e-5 wrong). η = 1 takes
+    // the first (0 + c²), which keeps its F exactly 0.
+    let ar = if p.e2rm1[ch].abs() + c * c <= p.e2r[ch].abs() + s2 {
+        p.e2rm1[ch] + c * c
+    } else {
+        p.e2r[ch] - s2
+    };
+    let zr = (ar * p.c_a[ch] + p.c_eb[ch]) * p.c_iq[ch];
+    let zi = s2 * p.c_bq[ch];
+    // Principal √(zr + i zi), scaled by the larger component (the squares underflow for
+    // |z| < 1e-19); the 1e-37 and 1e-30 floors keep z = 0 from 0/0.
+    // |z| = big·√(1 + (small/big)²): the larger component scaled by itself is exactly 1,
+    // as in the kernel's zr/m, zi/m, so a real z (zi = 0) gives r = |zr| exactly and the
+    // root √((r + zr)/2) = √(c²) the exact c; multiplying by 1/m instead (m·(1/m) ≠ 1)
+    // would leave F(η = 1) a rounding error, which a large D would multiply.
+    let (ar_, ai_) = (zr.abs(), zi.abs());
+    let big = ar_.max(ai_).max(1e-37);
+    let small = ar_.min(ai_);
+    let ratio = small / big;
+    let r = big * (1.0 + ratio * ratio).sqrt();
+    // The root's larger component is √((r + |zr|)/2) (the real part for zr ≥ 0, the
+    // imaginary one for zr < 0), the other zi/2 over it.
+    let t = (0.5 * (r + zr.abs())).sqrt();
+    let o = 0.5 * zi / t.max(1e-30);
+    let (ctr, cti) = if zr < 0.0 {
+        (o.abs(), if zi < 0.0 { -t } else { t })
+    } else {
+        (t, o)
+    };
+    let (ecr, eci) = (n * c, k * c);
+    let (pr, pi) = (ecr - ctr, eci - cti);
+    let (qr, qi) = (ecr + ctr, eci + cti);
+    let r_par = (pr * pr + pi * pi) / (qr * qr + qi * qi);
+    let ecr2 = n * ctr - k * cti;
+    let eci2 = n * cti + k * ctr;
+    let (ur, wr) = (c - ecr2, c + ecr2);
+    let r_perp = (ur * ur + eci2 * eci2) / (wr * wr + eci2 * eci2);
+    0.5 * (r_par + r_perp)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Small n and k near `c² = 1 − (n² − k²)`, where Re(η² − sin²) cancels: the form
+    /// with the smaller terms keeps F to a few ulp (the other form is 1.6e-5 wrong here).
+    #[test]
+    fn the_lane_form_keeps_its_digits_where_re_eta2_minus_sin2_vanishes() {
+        let (n, k) = (0.124521f64, 0.015284f64);
+        let p = LaneConstants::new([n; 3], [k; 3]);
+        let mut worst = 0f64;
+        for i in 0..20_000 {
+            let c = (0.985 + 0.015 * f64::from(i) / 20_000.0) as f32;
+            let cc = f64::from(c);
+            let s2 = ((1.0 - cc) * (1.0 + cc)) as f32;
+            let want = f(cc, n, k);
+            let got = f64::from(f_lane(c, s2, &p, 0));
+            worst = worst.max((got - want).abs() / want);
+        }
+        assert!(worst < 2e-6, "worst relative error {worst}");
+    }
+
+    /// η = 1 reflects nothing: the lane form must give exactly 0 at every angle, since a
+    /// Beckmann D of 1e13 (roughness 1e-7 at the peak) multiplies any rounding left in it.
+    #[test]
+    fn the_lane_form_of_eta_one_reflects_exactly_nothing() {
+        let p = LaneConstants::new([1.0; 3], [0.0; 3]);
+        for i in 1..=10_000 {
+            let c = i as f64 / 10_000.0;
+            let s2 = ((1.0 - c) * (1.0 + c)) as f32;
+            for ch in 0..3 {
+                assert_eq!(f_lane(c as f32, s2, &p, ch), 0.0, "c = {c}");
+            }
+        }
+    }
+}

@@ -1,0 +1,19 @@
+//! Schlick 1994, "An inexpensive BRDF model for physically-based rendering":
+//! `F = F0 + (1 − F0)(1 − c)⁵`.
+
+/// The spelling in a materials file.
+pub const NAME: &str = "schlick";
+/// The work the formula comes from.
+pub const CITATION: &str = "Schlick 1994";
+
+/// F in f64.
+pub fn f(c: f64, f0: f64) -> f64 {
+    f0 + (1.0 - f0) * (1.0 - c).powi(5)
+}
+
+/// F in a lane (f32), given `1 − c` formed without cancelling (`sin²/(1 + c)`).
+#[inline(always)]
+pub fn f_lane(one_minus_c: f32, f0: f32) -> f32 {
+    let x2 = one_minus_c * one_minus_c;
+    f0 + (1.0 - f0) * (x2 * x2 * one_minus_c)
+}

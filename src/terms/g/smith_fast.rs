@@ -1,0 +1,41 @@
+//! Walter et al. 2007's rational fit of Smith–Beckmann G1 (≤ 0.35 % error), kept as
+//! published: `G = G1(v) G1(l)`, `G1 = a < 1.6 ? (3.535a + 2.181a²)/(1 + 2.276a + 2.577a²)
+//! : 1` with `a = 1/(m tan θ)`. Beckmann only.
+
+use crate::terms::DistributionKind;
+
+/// The spelling in a materials file.
+pub const NAME: &str = "smith-fast";
+/// The work the formula comes from.
+pub const CITATION: &str = "Walter et al. 2007";
+
+/// Its rule: a fit of Smith–Beckmann, so Beckmann only (and a Λ, as every Smith term).
+pub fn legality(d: DistributionKind, _anisotropic: bool) -> Result<(), String> {
+    super::needs_lambda(d)?;
+    if d != DistributionKind::Beckmann {
+        return Err("`smith-fast` is a fit of Smith–Beckmann (Beckmann only); use `smith` or `smith-correlated` with ggx".into());
+    }
+    Ok(())
+}
+
+/// G1 in f64, given `a2_inv = m² tan²θ`.
+pub fn g1(a2_inv: f64) -> f64 {
+    let a = (1.0 / a2_inv).sqrt(); // a2_inv = 0 gives a = ∞ and G1 = 1
+    if a < 1.6 {
+        (3.535 * a + 2.181 * a * a) / (1.0 + 2.276 * a + 2.577 * a * a)
+    } else {
+        1.0
+    }
+}
+
+/// G1 in a lane (f32), given `q2 = m² tan²θ`.
+#[inline(always)]
+pub fn g1_lane(q2: f32) -> f32 {
+    let a = 1.0 / q2.sqrt(); // q2 = 0: a = ∞ and G1 = 1
+    let r = (3.535 * a + 2.181 * a * a) / (1.0 + 2.276 * a + 2.577 * a * a);
+    if a < 1.6 {
+        r
+    } else {
+        1.0
+    }
+}
