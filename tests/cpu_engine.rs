@@ -8,7 +8,7 @@ use vkbrdf::backend::{Backend, Request};
 use vkbrdf::batch::{memory_source, Batch};
 use vkbrdf::cancel::Cancel;
 use vkbrdf::check::{self, CheckOptions};
-use vkbrdf::cpu::kernel::Plan;
+use vkbrdf::cpu::plan::Plan;
 use vkbrdf::cpu::CpuEngine;
 use vkbrdf::material::{parse_materials, Material};
 use vkbrdf::reference::CpuReference;

@@ -2,7 +2,7 @@
 //! structure code, tests and docs rely on — sections 1–7 in order, each with text, a
 //! non-empty table in each of §1–§6 — and against the code: every name the first column of
 //! §2–§5 defines is a term the materials parser knows (`ALL` and `toml_name` of each term
-//! family in `src/material/terms/`), and every term the parser knows is defined there, so
+//! family in `src/terms/`), and every term the parser knows is defined there, so
 //! the two cannot drift apart unnoticed. The section numbers and names are what code, tests
 //! and docs cite ("FORMULAS.md §n").
 

@@ -10,7 +10,8 @@
 //! core in turn; a point's block sums are added in block order, so the result does not
 //! depend on the thread count.
 
-use super::kernel::{self, Inputs, Outputs, Params, Plan, LANES};
+use super::kernel::{self, Inputs, Outputs, Params, LANES};
+use super::plan::Plan;
 use super::CpuEngine;
 use crate::batch::Tuple;
 use crate::directions::ImportanceJob;

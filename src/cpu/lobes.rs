@@ -9,7 +9,7 @@
 #![allow(clippy::needless_range_loop)]
 
 use super::aniso::{lane_tangent, slope2, tangent};
-use super::kernel::{frame64, lane_inputs, Inputs, Outputs, Params, Plan, LANES, OUTPUT_LIMIT};
+use super::kernel::{frame64, lane_inputs, Inputs, Outputs, Params, LANES, OUTPUT_LIMIT};
 use crate::material::{Material, Model, Roughness};
 use crate::terms::math::{exp_neg, log_cos};
 use std::f64::consts::PI;
@@ -25,9 +25,10 @@ pub const L_WARD: u8 = 3;
 /// Lobe model: anisotropic Ward (needs the tangent).
 pub const L_WARD_ANISO: u8 = 4;
 
-/// The plan for an empirical model (`p` holds its diffuse and specular colours): its
-/// lobe's exponent and normalisation, formed in f64 and rounded once.
-pub fn plan(m: &Material, mut p: Params) -> Plan {
+/// The lobe model and constants of an empirical model (`p` holds its diffuse and specular
+/// colours): its lobe's exponent and normalisation, formed in f64 and rounded once; `None`
+/// for a model that is not a lobe.
+pub fn params(m: &Material, mut p: Params) -> Option<(u8, Params)> {
     let model = match m.model {
         Model::Phong { exponent } => {
             p.exponent = exponent as f32;
@@ -58,9 +59,9 @@ pub fn plan(m: &Material, mut p: Params) -> Plan {
             p.d_norm_f = (1.0 / (4.0 * PI * mx * my)) as f32;
             L_WARD_ANISO
         }
-        _ => return Plan::Reference,
+        _ => return None,
     };
-    Plan::Lobe { model, p }
+    Some((model, p))
 }
 
 /// One block of lobe model `M` (one of the `L_*` constants). Writes the BRDF and D (the

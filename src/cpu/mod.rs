@@ -26,6 +26,7 @@ pub mod kernel;
 pub mod lobes;
 
 mod measured;
+pub mod plan;
 pub mod transpose;
 
 use crate::backend::{Backend, Counts, Output, Request, TERM_COLUMNS};
@@ -35,7 +36,8 @@ use crate::error::Result;
 use crate::material::{Material, Model};
 use crate::reference::{evaluate_tuple, to_output_f32, Status};
 pub use isa::Isa;
-use kernel::{Inputs, Outputs, Plan, LANES};
+use kernel::{Inputs, Outputs, LANES};
+use plan::Plan;
 use std::sync::{Arc, Mutex};
 
 /// Rows per chunk: the unit the workers take and between which they check the cancel token.

@@ -2,9 +2,9 @@
 //! and its terms. Non-microfacet models report D = the specular lobe per unit `c_spec`
 //! (0 for Lambert) and G = F = K = 1.
 
+use super::evaluation::{Evaluation, Status};
 use super::frame::Frame;
 pub use super::terms::{fresnel_f, microfacet_d, microfacet_g, projected_roughness2};
-use super::{Evaluation, Status};
 use crate::material::{CookTorrance, Material, Model, Roughness};
 use crate::terms::math::cos_pow;
 use std::f64::consts::PI;

@@ -1,7 +1,7 @@
 //! The one list a term family is written as: `family!` turns it into the family's enum,
 //! whose discriminants are the codes both engines compare against (the CPU lanes' const
 //! parameters and the kernel's `#define`s), its `ALL`, and the exhaustive tables from a
-//! variant to its term file's [`Term`](super::Term). A term that is in the list but has no
+//! variant to its term file's [`Term`](super::term::Term). A term that is in the list but has no
 //! file, or a file that says nothing the table reads, is a compile error; nothing is
 //! numbered anywhere else.
 
@@ -36,10 +36,10 @@ macro_rules! family {
             pub const ALL: [$family; [$($code),+].len()] = [$($family::$variant),+];
 
             /// The term's name, citation, kernel code and feature.
-            pub const fn term(self) -> $crate::terms::Term {
+            pub const fn term(self) -> $crate::terms::term::Term {
                 match self {
                     $(
-                        $family::$variant => $crate::terms::Term {
+                        $family::$variant => $crate::terms::term::Term {
                             toml_name: $module::NAME,
                             citation: $module::CITATION,
                             gpu_code: ($macro, $code),

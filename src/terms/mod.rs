@@ -13,7 +13,7 @@
 //! packing) ask these files instead of naming formulas themselves.
 
 mod family;
-pub(crate) use family::family;
+pub mod term;
 
 pub mod d;
 pub mod f;
@@ -25,26 +25,7 @@ pub use d::{Distribution, DistributionKind, Roughness};
 pub use f::{Fresnel, FresnelKind};
 pub use g::Geometry;
 pub use k::Convention;
-
-/// An RGB triple (linear, per channel).
-pub type Rgb = [f64; 3];
-
-/// What the layers above need to know about one term, said once (in its family's list and
-/// its file).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Term {
-    /// The spelling in a materials file.
-    pub toml_name: &'static str,
-    /// The work the formula comes from, as the term's file and GLSL block cite it.
-    pub citation: &'static str,
-    /// The macro the kernel compares a material's code against and its value, the family
-    /// enum's discriminant (the `GpuMaterial` slot is the family's: `kind.y` D, `kind.z` G,
-    /// `kind.w` F and convention; `gpu::layout` injects every code into the GLSL).
-    pub gpu_code: (&'static str, u32),
-    /// The kernel feature that compiles the term's code: its bit in `FeatureSet` and its
-    /// preprocessor name (`HAS_*`); `None` for a term with no code (`G = 1`, `F = 1`).
-    pub feature: Option<(u32, &'static str)>,
-}
+pub use term::{Illegal, Rgb, Term};
 
 /// Every term of every family, for the tables built from them (kernel codes, features).
 pub fn all_terms() -> impl Iterator<Item = Term> {
@@ -54,15 +35,6 @@ pub fn all_terms() -> impl Iterator<Item = Term> {
         .chain(Geometry::ALL.into_iter().map(Geometry::term))
         .chain(FresnelKind::ALL.into_iter().map(FresnelKind::term))
         .chain(Convention::ALL.into_iter().map(Convention::term))
-}
-
-/// A combination the contract does not define: the key to blame and why.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct Illegal {
-    /// The materials-file key the message is about (`roughness` or `geometry`).
-    pub key: &'static str,
-    /// What is wrong and what to use instead.
-    pub message: String,
 }
 
 /// The legality rules of FORMULAS.md §2–§3, written once, each in its term's file: whether

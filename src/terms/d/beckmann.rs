@@ -4,7 +4,7 @@
 //! (π mx my hz⁴)`; and its Smith Λ (Walter et al. 2007, eq. 25 via Heitz 2014).
 
 use crate::terms::math::{erfc, exp_neg};
-use crate::terms::Convention;
+use crate::terms::k::Convention;
 use std::f64::consts::PI;
 
 /// The spelling in a materials file.
@@ -16,7 +16,7 @@ pub const HAS_LAMBDA: bool = true;
 
 /// Its rule for anisotropic roughness: defined in the `modern` convention only.
 pub fn anisotropic(convention: Convention) -> Result<(), String> {
-    super::anisotropic_in_modern(NAME, convention)
+    super::rules::anisotropic_in_modern(NAME, convention)
 }
 
 /// D in f64, isotropic, `k` the convention's normalisation ([`Convention::beckmann_k`]).

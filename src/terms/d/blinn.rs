@@ -3,7 +3,7 @@
 //! Takes an exponent, not a roughness; no Smith Λ.
 
 use crate::terms::math::{cos_pow, exp_neg, log_cos};
-use crate::terms::Convention;
+use crate::terms::k::Convention;
 use std::f64::consts::PI;
 
 /// The spelling in a materials file.

@@ -3,7 +3,7 @@
 //! `∫ D cos_h dω = 1`. 0 at `sin_h = 0`. Isotropic only; no Smith Λ.
 
 use crate::terms::math::{cos_pow, exp_neg, log_cos};
-use crate::terms::Convention;
+use crate::terms::k::Convention;
 use std::f64::consts::PI;
 
 /// The spelling in a materials file.
@@ -17,7 +17,7 @@ pub const MAX_M: f64 = 1.0;
 
 /// Its rule for anisotropic roughness: none exists.
 pub fn anisotropic(_: Convention) -> Result<(), String> {
-    super::isotropic_only(NAME)
+    super::rules::isotropic_only(NAME)
 }
 
 /// The normalisation `(2 + 1/m)/(2π)`.

@@ -3,7 +3,7 @@
 //! Unnormalised: D = 1 at the peak. Isotropic only; no Smith Λ.
 
 use crate::terms::math::{atan2_positive, exp_neg};
-use crate::terms::Convention;
+use crate::terms::k::Convention;
 
 /// The spelling in a materials file.
 pub const NAME: &str = "gaussian";
@@ -14,7 +14,7 @@ pub const HAS_LAMBDA: bool = false;
 
 /// Its rule for anisotropic roughness: none exists.
 pub fn anisotropic(_: Convention) -> Result<(), String> {
-    super::isotropic_only(NAME)
+    super::rules::isotropic_only(NAME)
 }
 
 /// D in f64: `exp(−(δ/m)²)`, `δ = atan2(sin δ, cos δ)`.

@@ -3,7 +3,7 @@
 //! 2014, modern convention only) `1 / (π mx my ((hx/mx)² + (hy/my)² + hz²)²)`; and its
 //! Smith Λ `(−1 + √(1 + m² tan²θ))/2` (Walter et al. 2007; Heitz 2014).
 
-use crate::terms::Convention;
+use crate::terms::k::Convention;
 use std::f64::consts::PI;
 
 /// The spelling in a materials file.
@@ -15,7 +15,7 @@ pub const HAS_LAMBDA: bool = true;
 
 /// Its rule for anisotropic roughness: defined in the `modern` convention only.
 pub fn anisotropic(convention: Convention) -> Result<(), String> {
-    super::anisotropic_in_modern(NAME, convention)
+    super::rules::anisotropic_in_modern(NAME, convention)
 }
 
 /// D in f64, evaluated as `m² / (π (m² cos²δ + sin²δ)²)`, the same value with `cos⁴`

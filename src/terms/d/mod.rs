@@ -3,7 +3,11 @@
 //! 1/(4 cos cos) factor. Smith's Λ belongs to the distribution (Heitz 2014), so the two
 //! that have one (Beckmann, GGX) define it in their file too.
 
-use super::{family, Convention, Illegal};
+use super::family::family;
+use super::k::Convention;
+use super::term::Illegal;
+
+pub mod rules;
 
 family! {
     /// A distribution's name without its parameter (FORMULAS.md §2): what the legality rules
@@ -135,24 +139,6 @@ impl DistributionKind {
     /// the paper's α = r² ≤ 1; the others are bounded only by the parser's general range.
     pub fn max_roughness(self) -> Option<f64> {
         (self == DistributionKind::Charlie).then_some(charlie::MAX_M)
-    }
-}
-
-/// The rule of the distributions without anisotropic roughness, for their files.
-fn isotropic_only(name: &str) -> Result<(), String> {
-    Err(format!(
-        "distribution `{name}` is isotropic only; give one number"
-    ))
-}
-
-/// The rule of the distributions with anisotropic roughness in `modern` only.
-fn anisotropic_in_modern(name: &str, convention: Convention) -> Result<(), String> {
-    if convention == Convention::Modern {
-        Ok(())
-    } else {
-        Err(format!(
-            "anisotropic `{name}` exists in the `modern` convention only"
-        ))
     }
 }
 

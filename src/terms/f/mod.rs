@@ -1,6 +1,7 @@
 //! The Fresnel terms F of FORMULAS.md §4 at `c = v·h`, one channel at a time, one file each.
 
-use super::{family, Rgb};
+use super::family::family;
+use super::term::Rgb;
 
 family! {
     /// A Fresnel term's name without its parameters: what the parser offers and the check

@@ -1,7 +1,7 @@
 //! Blinn 1977 / Cook & Torrance 1982, the V-cavity geometry term:
 //! `min(1, 2 cos_h cos_o / c, 2 cos_h cos_i / c)`. Defined with every distribution.
 
-use crate::terms::DistributionKind;
+use crate::terms::d::DistributionKind;
 
 /// The spelling in a materials file.
 pub const NAME: &str = "cook-torrance";

@@ -2,7 +2,11 @@
 //! dimensionless in [0, 1] (except `smith-fast`, whose published fit peaks at 1.0000613 per
 //! direction), one file each. The Smith terms take Λ from the distribution's file.
 
-use super::{family, DistributionKind, Illegal};
+use super::d::DistributionKind;
+use super::family::family;
+use super::term::Illegal;
+
+pub mod rules;
 
 family! {
     /// Geometric attenuation G (FORMULAS.md §3). The discriminant is the code of
@@ -48,15 +52,5 @@ impl Geometry {
             key: "geometry",
             message,
         })
-    }
-}
-
-/// The rule every Smith term shares: it takes Λ from the distribution.
-fn needs_lambda(distribution: DistributionKind) -> Result<(), String> {
-    if distribution.has_lambda() {
-        Ok(())
-    } else {
-        let d = distribution.toml_name();
-        Err(format!("Smith G needs a Λ for the distribution, and `{d}` has none; use `cook-torrance`, `neubelt` or `none`, or distribution `beckmann`/`ggx`"))
     }
 }

@@ -1,7 +1,7 @@
 //! Neubelt & Pettineo 2013, "Crafting a Next-Gen Material Pipeline for The Order: 1886"
 //! (cloth): `G = cos_i cos_o/(cos_i + cos_o − cos_i cos_o)`. Defined with every distribution.
 
-use crate::terms::DistributionKind;
+use crate::terms::d::DistributionKind;
 
 /// The spelling in a materials file.
 pub const NAME: &str = "neubelt";

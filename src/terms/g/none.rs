@@ -1,6 +1,6 @@
 //! No geometric attenuation: `G = 1` (FORMULAS.md §3). Defined with every distribution.
 
-use crate::terms::DistributionKind;
+use crate::terms::d::DistributionKind;
 
 /// The spelling in a materials file.
 pub const NAME: &str = "none";

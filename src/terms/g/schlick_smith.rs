@@ -2,7 +2,7 @@
 //! Karis 2013, "Real Shading in Unreal Engine 4": separable `G1(w) = cos_w/(cos_w + k (1 −
 //! cos_w))`, `k = m/2` with GGX and `m √(2/π)` with Beckmann. Isotropic Beckmann or GGX only.
 
-use crate::terms::DistributionKind;
+use crate::terms::d::DistributionKind;
 use std::f64::consts::PI;
 
 /// The spelling in a materials file.

@@ -1,7 +1,7 @@
 //! Smith 1967, separable: `G = G1(v) · G1(l)`, `G1 = 1/(1 + Λ)`, Λ the distribution's
 //! (Walter et al. 2007; Heitz 2014). Needs a distribution with Λ (Beckmann, GGX).
 
-use crate::terms::DistributionKind;
+use crate::terms::d::DistributionKind;
 
 /// The spelling in a materials file.
 pub const NAME: &str = "smith";
@@ -10,7 +10,7 @@ pub const CITATION: &str = "Smith 1967; Walter et al. 2007";
 
 /// Its rule: the distribution must have a Λ.
 pub fn legality(d: DistributionKind, _anisotropic: bool) -> Result<(), String> {
-    super::needs_lambda(d)
+    super::rules::needs_lambda(d)
 }
 
 /// G in f64 from Λ of each direction.

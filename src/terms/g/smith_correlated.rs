@@ -2,7 +2,7 @@
 //! the height-correlated Smith term `1/(1 + Λ(v) + Λ(l))`, Λ the distribution's. Needs a
 //! distribution with Λ (Beckmann, GGX).
 
-use crate::terms::DistributionKind;
+use crate::terms::d::DistributionKind;
 
 /// The spelling in a materials file.
 pub const NAME: &str = "smith-correlated";
@@ -11,7 +11,7 @@ pub const CITATION: &str = "Heitz 2014";
 
 /// Its rule: the distribution must have a Λ.
 pub fn legality(d: DistributionKind, _anisotropic: bool) -> Result<(), String> {
-    super::needs_lambda(d)
+    super::rules::needs_lambda(d)
 }
 
 /// G in f64 from Λ of each direction.

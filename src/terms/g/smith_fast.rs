@@ -2,7 +2,7 @@
 //! published: `G = G1(v) G1(l)`, `G1 = a < 1.6 ? (3.535a + 2.181a²)/(1 + 2.276a + 2.577a²)
 //! : 1` with `a = 1/(m tan θ)`. Beckmann only.
 
-use crate::terms::DistributionKind;
+use crate::terms::d::DistributionKind;
 
 /// The spelling in a materials file.
 pub const NAME: &str = "smith-fast";
@@ -11,7 +11,7 @@ pub const CITATION: &str = "Walter et al. 2007";
 
 /// Its rule: a fit of Smith–Beckmann, so Beckmann only (and a Λ, as every Smith term).
 pub fn legality(d: DistributionKind, _anisotropic: bool) -> Result<(), String> {
-    super::needs_lambda(d)?;
+    super::rules::needs_lambda(d)?;
     if d != DistributionKind::Beckmann {
         return Err("`smith-fast` is a fit of Smith–Beckmann (Beckmann only); use `smith` or `smith-correlated` with ggx".into());
     }

@@ -1,7 +1,7 @@
 //! Cook & Torrance 1982, "A Reflectance Model for Computer Graphics": `K = 1/(π cos_i
 //! cos_o)` and the Beckmann normalisation `k = 1`.
 
-use super::LaneK;
+use super::lane::LaneK;
 use std::f64::consts::PI;
 
 /// The spelling in a materials file.

@@ -1,7 +1,10 @@
 //! The glare / normalisation conventions of FORMULAS.md §5, one file each: the factor K of
 //! `R_s = D·G·F·K` and the Beckmann normalisation constant `k` each pairs with it.
 
-use super::family;
+use super::family::family;
+pub use lane::LaneK;
+
+pub mod lane;
 
 family! {
     /// The glare / normalisation convention (FORMULAS.md §5). The discriminant is the code
@@ -13,24 +16,6 @@ family! {
         CookTorrance1982 = 2 => cook_torrance_1982, "CONV_CT1982", Some((18, "HAS_CONV_CT1982"));
         /// Walter et al. 2007 (default): `k = π`, `K = 1/(4 cos_i cos_o)`.
         Modern = 3 => modern, "CONV_MODERN", Some((19, "HAS_CONV_MODERN"));
-    }
-}
-
-/// K in a lane: `K = numerator / cos_o / (cos_i when divides_cos_i)`, one cosine at a
-/// time, the numerator rounded once.
-#[derive(Debug, Clone, Copy, Default)]
-pub struct LaneK {
-    /// 1/4 modern, 1/π Cook–Torrance 1982, 1 seed.
-    pub numerator: f32,
-    /// Whether K divides by `cos_i` too (all but the seed convention).
-    pub divides_cos_i: bool,
-}
-
-impl LaneK {
-    /// K of one lane.
-    #[inline(always)]
-    pub fn k(self, cos_i: f32, cos_o: f32) -> f32 {
-        self.numerator / cos_o / if self.divides_cos_i { cos_i } else { 1.0 }
     }
 }
 

@@ -2,7 +2,7 @@
 //! Mitsuba 3 and pbrt-v4): `K = 1/(4 cos_i cos_o)` and the Beckmann normalisation `k = π`
 //! that makes `∫ D cos_h dω = 1`.
 
-use super::LaneK;
+use super::lane::LaneK;
 use std::f64::consts::PI;
 
 /// The spelling in a materials file.

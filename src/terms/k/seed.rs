@@ -1,7 +1,7 @@
 //! The seed lecture's convention (Foley et al.'s D): the glare term `K = 1/cos_o` and the
 //! Beckmann normalisation `k = 4`.
 
-use super::LaneK;
+use super::lane::LaneK;
 
 /// The spelling in a materials file.
 pub const NAME: &str = "seed";

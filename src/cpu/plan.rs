@@ -1,0 +1,152 @@
+//! How the engine evaluates a material group ([`Plan`]): which lanes, with which
+//! constants, prepared once per batch from the material (in f64 where the lanes use f64,
+//! then rounded once). Below the engine's dispatch (`cpu::block`), above the lanes.
+
+use super::kernel::{Params, FAST_MIN_ROUGHNESS};
+use crate::material::{Distribution, Fresnel, Material, Model, Roughness};
+use crate::terms::d::{blinn, charlie};
+use crate::terms::f::{conductor, dielectric};
+use crate::terms::g::schlick_smith;
+use crate::terms::{DistributionKind, FresnelKind, Geometry};
+use std::f64::consts::PI;
+
+/// How a material group is evaluated.
+#[derive(Debug, Clone, Copy)]
+pub enum Plan {
+    /// Lambert in the lanes.
+    Lambert(Params),
+    /// Cook–Torrance in the lanes.
+    Microfacet {
+        /// The distribution.
+        d: DistributionKind,
+        /// Whether its roughness is anisotropic (GGX and Beckmann: the tangent frame,
+        /// `src/cpu/aniso.rs`).
+        aniso: bool,
+        /// The geometry term.
+        g: Geometry,
+        /// The Fresnel term.
+        f: FresnelKind,
+        /// The material's constants.
+        p: Params,
+    },
+    /// One of the empirical lobe models (Phong, Blinn–Phong, RTR, isotropic Ward) in the
+    /// lanes ([`super::lobes`]).
+    Lobe {
+        /// One of the `L_*` constants of [`crate::cpu::lobes`].
+        model: u8,
+        /// The material's constants.
+        p: Params,
+    },
+    /// A measured (MERL) material: the half/difference angles in f64 lanes, then the
+    /// table lookup (`src/cpu/measured.rs`; the data is the material's).
+    Measured,
+    /// Every tuple through the f64 reference.
+    Reference,
+}
+
+fn f32x3(a: [f64; 3]) -> [f32; 3] {
+    a.map(|x| x as f32)
+}
+
+impl Plan {
+    /// The plan for `m`: the lanes for Lambert and for isotropic Cook–Torrance with GGX or
+    /// Beckmann (any geometry, Fresnel and convention), the reference for everything else.
+    pub fn for_material(m: &Material) -> Plan {
+        let mut p = Params {
+            diffuse: f32x3(m.diffuse.map(|c| c / PI)),
+            spec: f32x3(m.specular),
+            ..Params::default()
+        };
+        let ct = match &m.model {
+            Model::Lambert => return Plan::Lambert(p),
+            Model::CookTorrance(ct) => ct,
+            Model::Measured(_) => return Plan::Measured,
+            _ => {
+                return match crate::cpu::lobes::params(m, p) {
+                    Some((model, p)) => Plan::Lobe { model, p },
+                    None => Plan::Reference,
+                }
+            }
+        };
+        // m for the distributions with an rms slope (0 for Blinn; Charlie's m is not one).
+        let d = ct.distribution.kind();
+        let mut aniso = false;
+        let mr = match ct.distribution {
+            Distribution::Ggx(Roughness::Isotropic(mr))
+            | Distribution::Beckmann(Roughness::Isotropic(mr)) => mr,
+            Distribution::Gaussian { m } => {
+                p.inv_m2_f = (1.0 / (m * m)) as f32;
+                m
+            }
+            Distribution::Blinn { exponent } => {
+                p.exponent = exponent as f32;
+                p.d_norm_f = blinn::norm(exponent) as f32;
+                0.0
+            }
+            Distribution::Charlie { m } => {
+                p.exponent = (1.0 / m) as f32;
+                p.d_norm_f = charlie::norm(m) as f32;
+                0.0
+            }
+            // Anisotropic GGX and Beckmann (modern convention only): D's normalisation
+            // 1/(π mx my) for both.
+            Distribution::Ggx(Roughness::Anisotropic(mx, my))
+            | Distribution::Beckmann(Roughness::Anisotropic(mx, my)) => {
+                p.aniso = crate::cpu::aniso::roughness(mx, my);
+                p.d_norm = 1.0 / (PI * mx * my);
+                aniso = true;
+                0.0
+            }
+        };
+        // The rms-slope distributions' constants; the others set theirs above.
+        let slope = !aniso && matches!(d, DistributionKind::Ggx | DistributionKind::Beckmann);
+        p.diffuse = f32x3(m.diffuse.map(|c| ct.diffuse_weight * c / PI));
+        p.spec = f32x3(m.specular.map(|c| ct.specular_weight * c));
+        if slope {
+            p.m2 = mr * mr;
+            p.inv_m2 = 1.0 / p.m2;
+            p.d_norm = match d {
+                DistributionKind::Ggx => p.m2 / PI,
+                _ => 1.0 / (ct.convention.beckmann_k() * p.m2),
+            };
+        }
+        p.k = ct.convention.lane_k();
+        let g = ct.geometry;
+        if g == Geometry::SchlickSmith {
+            // The parser allows it with isotropic GGX and Beckmann only.
+            p.schlick_k = schlick_smith::k(d == DistributionKind::Ggx, mr) as f32;
+        }
+        match ct.fresnel {
+            Fresnel::None => {}
+            Fresnel::Schlick { f0 } => p.f0 = f32x3(f0),
+            Fresnel::Dielectric { ior } => {
+                p.ior = ior;
+                p.mu2m1 = ior.map(dielectric::mu2m1);
+            }
+            Fresnel::Conductor { ior, extinction } => {
+                p.conductor = conductor::LaneConstants::new(ior, extinction);
+            }
+        }
+        let f = ct.fresnel.kind();
+        p.fast_frame = slope && mr >= FAST_MIN_ROUGHNESS && f != FresnelKind::Dielectric;
+        if slope {
+            (p.m2_f, p.inv_m2_f, p.d_norm_f) = (p.m2 as f32, p.inv_m2 as f32, p.d_norm as f32);
+        }
+        Plan::Microfacet { d, aniso, g, f, p }
+    }
+
+    /// Whether the plan runs in the lanes.
+    pub fn is_simd(&self) -> bool {
+        !matches!(self, Plan::Reference)
+    }
+
+    /// Whether the plan reads the tangent (anisotropic roughness): rows without tangent
+    /// columns then go to the reference, which counts them invalid.
+    pub fn needs_tangent(&self) -> bool {
+        match self {
+            Plan::Microfacet { aniso, .. } => *aniso,
+            Plan::Lobe { model, .. } => *model == crate::cpu::lobes::L_WARD_ANISO,
+            _ => false,
+        }
+    }
+}
