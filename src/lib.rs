@@ -38,6 +38,7 @@ pub mod check;
 pub mod cpu;
 pub mod directions;
 pub mod error;
+pub mod fit;
 pub mod features;
 pub mod gpu;
 pub mod importance;

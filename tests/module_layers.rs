@@ -21,6 +21,7 @@ const LAYERS: &[&[&str]] = &[
         "bench",
         "stream",
         "backend_choice",
+        "fit",
     ],
 ];
 
