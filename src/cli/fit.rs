@@ -30,8 +30,8 @@ Search: for --loss l2 (Ngan et al. 2005, the default) and e1 (Löw et al. 2012) 
 albedos and Schlick's F0 are solved exactly per channel (non-negative least squares)
 inside every evaluation; for e2 and rrms they join the nonlinear parameters. The
 nonlinear ones are searched by a bounded Nelder-Mead from --starts points (the start and
-random ones); data beyond 2 x 65,536 samples is subsampled for that phase and the best two
-results polished on all of it. Every metric is reported whichever is minimised. Each loss
+random ones); data beyond 2 x 65,536 samples is subsampled for that phase and the best
+result polished on all of it. Every metric is reported whichever is minimised. Each loss
 evaluation is one bulk evaluation on the engine (--backend; the kernel is compiled once).
 
 Outputs (all optional, written together, atomically): --out-materials FIT.toml (a

@@ -36,6 +36,11 @@ pub struct Options {
     pub ftol: f64,
     /// A restart that improves the best value by less than this fraction ends the run.
     pub restart_gain: f64,
+    /// Stop when the simplex's values differ by at most this much (the loss's scale
+    /// times a small number: values closer than the engine's f32 rounding mean nothing).
+    pub fatol: f64,
+    /// Stop when every vertex is within this fraction of its initial step of the best.
+    pub xtol: f64,
 }
 
 impl Default for Options {
@@ -44,6 +49,8 @@ impl Default for Options {
             max_evaluations: 2000,
             ftol: 1e-10,
             restart_gain: 1e-7,
+            fatol: 0.0,
+            xtol: 1e-7,
         }
     }
 }
@@ -89,7 +96,7 @@ pub fn minimise(
     let mut scale = 1.0;
     loop {
         let budget = options.max_evaluations.saturating_sub(evaluations);
-        let (x, v, used, stop) = simplex_run(f, &best, step, scale, lo, hi, budget, options.ftol);
+        let (x, v, used, stop) = simplex_run(f, &best, step, scale, lo, hi, budget, &options);
         evaluations += used;
         let gain = (best.1 - v) / best.1.abs().max(f64::MIN_POSITIVE);
         if v < best.1 {
@@ -120,7 +127,7 @@ fn simplex_run(
     lo: &[f64],
     hi: &[f64],
     budget: u64,
-    ftol: f64,
+    options: &Options,
 ) -> (Vec<f64>, f64, u64, Stop) {
     let n = start.0.len();
     let nf = n as f64;
@@ -156,7 +163,10 @@ fn simplex_run(
     loop {
         simplex.sort_by(|a, b| a.1.total_cmp(&b.1));
         let (fb, fw) = (simplex[0].1, simplex[n].1);
-        if fw - fb <= ftol * (fb.abs() + 1e-300) {
+        let small = (1..=n).all(|k| {
+            (0..n).all(|i| (simplex[k].0[i] - simplex[0].0[i]).abs() <= options.xtol * step[i])
+        });
+        if fw - fb <= options.ftol * fb.abs() + options.fatol || small {
             return best_of(simplex, used, Stop::Converged);
         }
         if used >= budget {

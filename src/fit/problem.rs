@@ -41,6 +41,8 @@ pub struct Problem<'a> {
     backend: &'a mut dyn Backend,
     out: Output,
     columns: Vec<Column>,
+    /// The quadratic loss's weight per sample, `w cos² θ_i`.
+    weights: Vec<f64>,
     /// Sample evaluations made (one per sample per loss evaluation).
     pub sample_evaluations: u64,
     /// Seconds in the engine.
@@ -77,6 +79,11 @@ impl<'a> Problem<'a> {
             backend,
             out: Output::default(),
             columns,
+            weights: if loss.is_quadratic() {
+                (0..data.len()).map(|i| loss.quadratic_weight(data, i)).collect()
+            } else {
+                Vec::new()
+            },
             sample_evaluations: 0,
             engine_seconds: 0.0,
         }
@@ -100,17 +107,9 @@ impl<'a> Problem<'a> {
         Ok(())
     }
 
-    /// `(A, B)` of sample `i` when F0 is free (`A + B = D·G·K`), else `(S_c, 0)`.
     #[inline]
     fn spec_parts(&self, i: usize, c: usize) -> (f64, f64) {
-        if self.space.f0_free() {
-            let t = self.out.terms.as_ref().expect("terms were requested");
-            let dgk = f64::from(t[6 * i]) * f64::from(t[6 * i + 1]) * f64::from(t[6 * i + 5]);
-            let g = (1.0 - self.data.cos_d[i]).powi(5);
-            (dgk * (1.0 - g), dgk * g)
-        } else {
-            (f64::from(self.out.brdf[3 * i + c]), 0.0)
-        }
+        spec_parts(self.data, &self.out, self.space.f0_free(), i, c)
     }
 
     /// The loss at `u` and the linear coefficients it was evaluated with (solved, for
@@ -124,34 +123,70 @@ impl<'a> Problem<'a> {
         }
         let fixed = self.space.linear_at(u, &self.space.start_linear());
         let k = self.columns.len();
+        let diffuse_col = self.columns.contains(&Column::Diffuse);
+        // The specular part not solved for, per channel: `b·B` (F0 solved, b fixed),
+        // `b·S` (nothing specular solved), or nothing.
+        let spec_rest = if !self.space.has_specular() || self.columns.contains(&Column::Dgk) {
+            0
+        } else if self.space.f0_free() {
+            1
+        } else if self.columns.contains(&Column::Spec) {
+            0
+        } else {
+            2
+        };
+        let n = self.data.len();
+        let threads = std::thread::available_parallelism().map_or(1, |t| t.get()).min(n.div_ceil(4096)).max(1);
+        let (data, out, f0_free, columns, weights) = (
+            self.data,
+            &self.out,
+            self.space.f0_free(),
+            &self.columns,
+            &self.weights,
+        );
+        let pass = |range: std::ops::Range<usize>| {
+            let mut normal = [Normal::new(k); 3];
+            for i in range {
+                let w = weights[i];
+                for (c, normal) in normal.iter_mut().enumerate() {
+                    let (a, b) = spec_parts(data, out, f0_free, i, c);
+                    let mut rest = data.values[i][c];
+                    if !diffuse_col {
+                        rest -= fixed.diffuse[c] * FRAC_1_PI;
+                    }
+                    match spec_rest {
+                        1 => rest -= fixed.specular[c] * b,
+                        2 => rest -= fixed.specular[c] * a,
+                        _ => {}
+                    }
+                    let mut phi = [0.0; MAX_UNKNOWNS];
+                    for (j, col) in columns.iter().enumerate() {
+                        phi[j] = match col {
+                            Column::Diffuse => FRAC_1_PI,
+                            Column::Dgk => a + b,
+                            Column::Grazing => b,
+                            Column::F0Scaled => fixed.specular[c] * a,
+                            Column::Spec => a,
+                        };
+                    }
+                    normal.add(w, &phi, rest);
+                }
+            }
+            normal
+        };
+        let parts: Vec<[Normal; 3]> = std::thread::scope(|scope| {
+            let handles: Vec<_> = (0..threads)
+                .map(|t| {
+                    let range = t * n / threads..(t + 1) * n / threads;
+                    scope.spawn(move || pass(range))
+                })
+                .collect();
+            handles.into_iter().map(|h| h.join().expect("no panic in the pass")).collect()
+        });
         let mut normal = [Normal::new(k); 3];
-        for i in 0..self.data.len() {
-            let w = self.loss.quadratic_weight(self.data, i);
-            for (c, normal) in normal.iter_mut().enumerate() {
-                let (a, b) = self.spec_parts(i, c);
-                let mut rest = self.data.values[i][c];
-                if !self.columns.contains(&Column::Diffuse) {
-                    rest -= fixed.diffuse[c] * FRAC_1_PI;
-                }
-                let mut phi = [0.0; MAX_UNKNOWNS];
-                for (j, col) in self.columns.iter().enumerate() {
-                    phi[j] = match col {
-                        Column::Diffuse => FRAC_1_PI,
-                        Column::Dgk => a + b,
-                        Column::Grazing => b,
-                        Column::F0Scaled => fixed.specular[c] * a,
-                        Column::Spec => a,
-                    };
-                }
-                if self.space.has_specular() {
-                    rest -= match (self.space.f0_free(), self.columns.contains(&Column::Spec)) {
-                        _ if self.columns.contains(&Column::Dgk) => 0.0,
-                        (true, _) => fixed.specular[c] * b,
-                        (false, true) => 0.0,
-                        (false, false) => fixed.specular[c] * a,
-                    };
-                }
-                normal.add(w, &phi, rest);
+        for part in &parts {
+            for c in 0..3 {
+                normal[c].absorb(&part[c]);
             }
         }
         let mut lin = fixed;
@@ -205,5 +240,18 @@ impl<'a> Problem<'a> {
         self.basis(u)?;
         let lin = self.space.linear_at(u, solved);
         Ok(self.values(&lin))
+    }
+}
+
+/// `(A, B)` of sample `i` when F0 is free (`A + B = D·G·K`), else `(S_c, 0)`.
+#[inline]
+fn spec_parts(data: &FitData, out: &Output, f0_free: bool, i: usize, c: usize) -> (f64, f64) {
+    if f0_free {
+        let t = out.terms.as_ref().expect("terms were requested");
+        let dgk = f64::from(t[6 * i]) * f64::from(t[6 * i + 1]) * f64::from(t[6 * i + 5]);
+        let g = (1.0 - data.cos_d[i]).powi(5);
+        (dgk * (1.0 - g), dgk * g)
+    } else {
+        (f64::from(out.brdf[3 * i + c]), 0.0)
     }
 }
