@@ -116,7 +116,13 @@ fn parse_bound(s: &str) -> anyhow::Result<(Param, f64, f64)> {
     let bad = || anyhow::anyhow!("--bound {s}: expected NAME=LO:HI, e.g. roughness=0.01:0.5");
     let (name, range) = s.split_once('=').ok_or_else(bad)?;
     let (lo, hi) = range.split_once(':').ok_or_else(bad)?;
-    let num = |t: &str| t.trim().parse::<f64>().ok().filter(|x| !x.is_nan()).ok_or_else(bad);
+    let num = |t: &str| {
+        t.trim()
+            .parse::<f64>()
+            .ok()
+            .filter(|x| !x.is_nan())
+            .ok_or_else(bad)
+    };
     Ok((name.parse()?, num(lo)?, num(hi)?))
 }
 
@@ -137,16 +143,25 @@ fn read_data(args: &Args) -> anyhow::Result<FitData> {
     let (tuples, tshape) = vkbrdf::batch::read_npy_f32(t)?;
     let (values, vshape) = vkbrdf::batch::read_npy_f32(v)?;
     if tshape.len() != 2 {
-        anyhow::bail!("{}: tuples must be 2-D (n, 6|10|13); shape {tshape:?}", t.display());
+        anyhow::bail!(
+            "{}: tuples must be 2-D (n, 6|10|13); shape {tshape:?}",
+            t.display()
+        );
     }
     if vshape.len() != 2 || vshape[1] != 3 {
-        anyhow::bail!("{}: values must be (n, 3) RGB; shape {vshape:?}", v.display());
+        anyhow::bail!(
+            "{}: values must be (n, 3) RGB; shape {vshape:?}",
+            v.display()
+        );
     }
     let weights = match &args.weights {
         Some(w) => {
             let (data, shape) = vkbrdf::batch::read_npy_f32(w)?;
             if !(shape.len() == 1 || (shape.len() == 2 && shape[1] == 1)) {
-                anyhow::bail!("{}: weights must be (n,) or (n, 1); shape {shape:?}", w.display());
+                anyhow::bail!(
+                    "{}: weights must be (n,) or (n, 1); shape {shape:?}",
+                    w.display()
+                );
             }
             Some(data)
         }
@@ -166,23 +181,42 @@ fn read_data(args: &Args) -> anyhow::Result<FitData> {
 pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
     let cancel = super::cancel();
     let loss: Loss = args.loss.parse()?;
-    let free: Vec<Param> = args.free.iter().map(|s| s.parse()).collect::<Result<_, _>>()?;
-    let bounds: Vec<_> = args.bounds.iter().map(|s| parse_bound(s)).collect::<anyhow::Result<_>>()?;
+    let free: Vec<Param> = args
+        .free
+        .iter()
+        .map(|s| s.parse())
+        .collect::<Result<_, _>>()?;
+    let bounds: Vec<_> = args
+        .bounds
+        .iter()
+        .map(|s| parse_bound(s))
+        .collect::<anyhow::Result<_>>()?;
     let start = vkbrdf::table::load_material(args.materials.as_deref(), &args.material)?;
     let space = Space::new(&start, &free, &bounds, loss.is_quadratic())?;
-    let mut inputs: Vec<&Path> = [&args.merl, &args.tuples, &args.values, &args.weights, &args.materials]
-        .into_iter()
-        .flatten()
-        .map(PathBuf::as_path)
-        .collect();
+    let mut inputs: Vec<&Path> = [
+        &args.merl,
+        &args.tuples,
+        &args.values,
+        &args.weights,
+        &args.materials,
+    ]
+    .into_iter()
+    .flatten()
+    .map(PathBuf::as_path)
+    .collect();
     if let vkbrdf::material::Model::Measured(d) = &start.model {
         inputs.push(d.path.as_path());
     }
-    let outputs: Vec<&Path> = [&args.out_materials, &args.report, &args.residual, &args.residual_png]
-        .into_iter()
-        .flatten()
-        .map(PathBuf::as_path)
-        .collect();
+    let outputs: Vec<&Path> = [
+        &args.out_materials,
+        &args.report,
+        &args.residual,
+        &args.residual_png,
+    ]
+    .into_iter()
+    .flatten()
+    .map(PathBuf::as_path)
+    .collect();
     vkbrdf::atomic::check_outputs(&outputs, &inputs)?;
     let data = read_data(args)?;
     eprintln!(
@@ -191,7 +225,12 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         data.read,
         data.masked,
         space.coords.len(),
-        space.coords.iter().map(|c| c.label()).collect::<Vec<_>>().join(", "),
+        space
+            .coords
+            .iter()
+            .map(|c| c.label())
+            .collect::<Vec<_>>()
+            .join(", "),
         loss.name()
     );
     let mut backend = backend_choice::open(&args.backend)?;
@@ -206,20 +245,35 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
     super::own_cancellation(true);
     let t0 = std::time::Instant::now();
     let mut last = 0.0;
-    let mut result = fit::fit(&data, &space, &options, backend.as_mut(), &cancel, &mut |p| {
-        let now = t0.elapsed().as_secs_f64();
-        let status = format!(
-            "{} start {}/{}: {} evaluations, best {} {:.6e}",
-            p.phase, p.start.0 + 1, p.start.1, p.evaluations, loss.name(), p.best
-        );
-        super::set_status(status.clone());
-        if now - last >= 1.0 {
-            last = now;
-            eprintln!("fit [{now:.1} s] {status}");
-        }
-    })
+    let mut result = fit::fit(
+        &data,
+        &space,
+        &options,
+        backend.as_mut(),
+        &cancel,
+        &mut |p| {
+            let now = t0.elapsed().as_secs_f64();
+            let status = format!(
+                "{} start {}/{}: {} evaluations, best {} {:.6e}",
+                p.phase,
+                p.start.0 + 1,
+                p.start.1,
+                p.evaluations,
+                loss.name(),
+                p.best
+            );
+            super::set_status(status.clone());
+            if now - last >= 1.0 {
+                last = now;
+                eprintln!("fit [{now:.1} s] {status}");
+            }
+        },
+    )
     .with_context(|| format!("fitting {}", data.source.display()))?;
-    result.material.name = args.name.clone().unwrap_or_else(|| format!("{}-fit", start.name));
+    result.material.name = args
+        .name
+        .clone()
+        .unwrap_or_else(|| format!("{}-fit", start.name));
     print_summary(&result);
     write_outputs(args, &result, &data, &start)?;
     super::own_cancellation(false);
@@ -245,11 +299,20 @@ fn print_summary(result: &fit::FitResult) {
         result.evaluations as f64 / result.seconds.max(1e-9),
         result.sample_evaluations as f64 / result.engine_seconds.max(1e-9) / 1e6,
         result.backend,
-        if result.interrupted { "; INTERRUPTED" } else { "" }
+        if result.interrupted {
+            "; INTERRUPTED"
+        } else {
+            ""
+        }
     );
 }
 
-fn write_outputs(args: &Args, result: &fit::FitResult, data: &FitData, start: &vkbrdf::material::Material) -> anyhow::Result<()> {
+fn write_outputs(
+    args: &Args,
+    result: &fit::FitResult,
+    data: &FitData,
+    start: &vkbrdf::material::Material,
+) -> anyhow::Result<()> {
     // Written with a token of their own: after a Ctrl-C they are the result.
     let token = vkbrdf::cancel::Cancel::new();
     let mut staged = Vec::new();
@@ -264,7 +327,10 @@ fn write_outputs(args: &Args, result: &fit::FitResult, data: &FitData, start: &v
     }
     if let Some(p) = &args.report {
         let command: Vec<String> = std::env::args().collect();
-        staged.push(text(p, report::markdown(result, data, start, &command.join(" ")))?);
+        staged.push(text(
+            p,
+            report::markdown(result, data, start, &command.join(" ")),
+        )?);
     }
     let slice = report::residual_slice(data, &result.model);
     if let Some(p) = &args.residual {
@@ -275,7 +341,10 @@ fn write_outputs(args: &Args, result: &fit::FitResult, data: &FitData, start: &v
             channels: ["R", "G", "B"]
                 .iter()
                 .zip(slice.iter())
-                .map(|(n, v)| Channel { name: (*n).into(), values: v.clone() })
+                .map(|(n, v)| Channel {
+                    name: (*n).into(),
+                    values: v.clone(),
+                })
                 .collect(),
         };
         let provenance = Provenance {
@@ -291,10 +360,15 @@ fn write_outputs(args: &Args, result: &fit::FitResult, data: &FitData, start: &v
     if let Some(p) = &args.residual_png {
         let canvas = report::residual_png(&slice, 0.5);
         let meta = vec![
-            ("vkbrdf.table", "fit residual (blue: model low, red: model high, +-50 %)".to_string()),
+            (
+                "vkbrdf.table",
+                "fit residual (blue: model low, red: model high, +-50 %)".to_string(),
+            ),
             ("vkbrdf.material", result.material.name.clone()),
         ];
-        staged.push(vkbrdf::table::preview::stage_png(p, &canvas, &meta, &token)?);
+        staged.push(vkbrdf::table::preview::stage_png(
+            p, &canvas, &meta, &token,
+        )?);
     }
     vkbrdf::atomic::commit(staged)?;
     Ok(())

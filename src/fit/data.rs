@@ -158,9 +158,7 @@ impl FitData {
                 Some(w) => {
                     let w = f64::from(w[r]);
                     if !(w.is_finite() && w >= 0.0) {
-                        return Err(bad(format!(
-                            "row {r}: weight {w} must be finite and >= 0"
-                        )));
+                        return Err(bad(format!("row {r}: weight {w} must be finite and >= 0")));
                     }
                     Some(w)
                 }
@@ -196,7 +194,11 @@ impl FitData {
     pub fn subsample(&self, step: usize) -> FitData {
         let step = step.max(1);
         let keep: Vec<usize> = (0..self.len()).step_by(step).collect();
-        let pick = |x: &[f64]| keep.iter().map(|&i| x[i] * step as f64).collect::<Vec<f64>>();
+        let pick = |x: &[f64]| {
+            keep.iter()
+                .map(|&i| x[i] * step as f64)
+                .collect::<Vec<f64>>()
+        };
         let rows: Vec<f32> = keep
             .iter()
             .flat_map(|&i| self.batch.as_slice()[6 * i..6 * i + 6].to_vec())

@@ -185,7 +185,10 @@ mod tests {
             })
             .collect();
         let (x, obj) = system(&rows, 2).solve(&[f64::INFINITY; 3]);
-        assert!((x[0] - 2.0).abs() < 1e-12 && (x[1] - 0.5).abs() < 1e-12, "{x:?}");
+        assert!(
+            (x[0] - 2.0).abs() < 1e-12 && (x[1] - 0.5).abs() < 1e-12,
+            "{x:?}"
+        );
         assert!(obj < 1e-20);
     }
 

@@ -58,11 +58,14 @@ impl Loss {
 impl std::str::FromStr for Loss {
     type Err = crate::Error;
     fn from_str(s: &str) -> crate::Result<Loss> {
-        Loss::ALL.into_iter().find(|l| l.name() == s).ok_or_else(|| {
-            crate::Error::Unsupported(format!(
-                "unknown loss `{s}`; expected one of: l2, e1, e2, rrms"
-            ))
-        })
+        Loss::ALL
+            .into_iter()
+            .find(|l| l.name() == s)
+            .ok_or_else(|| {
+                crate::Error::Unsupported(format!(
+                    "unknown loss `{s}`; expected one of: l2, e1, e2, rrms"
+                ))
+            })
     }
 }
 
@@ -114,7 +117,11 @@ pub fn metrics(data: &FitData, model: &[[f64; 3]]) -> Metrics {
             rel += we * r * r;
         }
     }
-    m.rrms = if total > 0.0 { (rel / total).sqrt() } else { 0.0 };
+    m.rrms = if total > 0.0 {
+        (rel / total).sqrt()
+    } else {
+        0.0
+    };
     m.l2_relative = if m.energy > 0.0 { m.l2 / m.energy } else { 0.0 };
     m
 }

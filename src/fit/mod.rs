@@ -273,7 +273,11 @@ pub fn fit(
         );
         let mut ranked: Vec<&StartResult> = c.iter().collect();
         ranked.sort_by(|a, b| a.minimum.value.total_cmp(&b.minimum.value));
-        let picks: Vec<Vec<f64>> = ranked.iter().take(FINE_STARTS).map(|s| s.minimum.x.clone()).collect();
+        let picks: Vec<Vec<f64>> = ranked
+            .iter()
+            .take(FINE_STARTS)
+            .map(|s| s.minimum.x.clone())
+            .collect();
         starts.extend(c);
         picks
     } else {
@@ -299,7 +303,9 @@ pub fn fit(
         .chain(starts.iter().filter(|s| s.phase == "coarse"))
         .filter(|s| s.minimum.value.is_finite())
         .min_by(|a, b| {
-            (a.phase != "fine", a.minimum.value).partial_cmp(&(b.phase != "fine", b.minimum.value)).unwrap_or(std::cmp::Ordering::Equal)
+            (a.phase != "fine", a.minimum.value)
+                .partial_cmp(&(b.phase != "fine", b.minimum.value))
+                .unwrap_or(std::cmp::Ordering::Equal)
         })
         .map_or(u0.clone(), |s| s.minimum.x.clone());
     if interrupted {

@@ -146,7 +146,11 @@ fn simplex_run(
         let mut x = start.0.clone();
         let s = step[i] * scale;
         // Step into the box: away from the bound the start sits on.
-        x[i] = if x[i] + s <= hi[i] { x[i] + s } else { x[i] - s };
+        x[i] = if x[i] + s <= hi[i] {
+            x[i] + s
+        } else {
+            x[i] - s
+        };
         let x = project(x);
         if used >= budget {
             break;
@@ -236,15 +240,32 @@ mod tests {
     #[test]
     fn finds_the_minimum_of_rosenbrock_in_its_box() {
         let mut f = |x: &[f64]| Some(100.0 * (x[1] - x[0] * x[0]).powi(2) + (1.0 - x[0]).powi(2));
-        let m = minimise(&mut f, &[-1.2, 1.0], &[0.5, 0.5], &[-2.0, -2.0], &[2.0, 2.0], Options::default());
-        assert!((m.x[0] - 1.0).abs() < 1e-4 && (m.x[1] - 1.0).abs() < 1e-4, "{m:?}");
+        let m = minimise(
+            &mut f,
+            &[-1.2, 1.0],
+            &[0.5, 0.5],
+            &[-2.0, -2.0],
+            &[2.0, 2.0],
+            Options::default(),
+        );
+        assert!(
+            (m.x[0] - 1.0).abs() < 1e-4 && (m.x[1] - 1.0).abs() < 1e-4,
+            "{m:?}"
+        );
     }
 
     #[test]
     fn a_minimum_outside_the_box_ends_on_its_boundary() {
         // (x − 3)² + (y + 1)² over [0, 1]²: the minimum is at (1, 0).
         let mut f = |x: &[f64]| Some((x[0] - 3.0).powi(2) + (x[1] + 1.0).powi(2));
-        let m = minimise(&mut f, &[0.5, 0.5], &[0.2, 0.2], &[0.0, 0.0], &[1.0, 1.0], Options::default());
+        let m = minimise(
+            &mut f,
+            &[0.5, 0.5],
+            &[0.2, 0.2],
+            &[0.0, 0.0],
+            &[1.0, 1.0],
+            Options::default(),
+        );
         assert!((m.x[0] - 1.0).abs() < 1e-6 && m.x[1].abs() < 1e-6, "{m:?}");
     }
 

@@ -197,7 +197,8 @@ impl Space {
         let unsupported = |m: String| Error::Unsupported(format!("material `{}`: {m}", start.name));
         if free.is_empty() {
             return Err(unsupported(
-                "no free parameter: name some with --free (e.g. --free roughness,diffuse,specular)".into(),
+                "no free parameter: name some with --free (e.g. --free roughness,diffuse,specular)"
+                    .into(),
             ));
         }
         let mut coords = Vec::new();
@@ -357,19 +358,34 @@ fn has(m: &Material, p: Param) -> std::result::Result<usize, String> {
         Model::Rtr { .. } => "rtr",
         Model::Ward { .. } => "ward",
         Model::CookTorrance(_) => "cook-torrance",
-        Model::Measured(_) => return Err("a measured (merl) material has no parameters to fit; start from an analytic material".into()),
+        Model::Measured(_) => return Err(
+            "a measured (merl) material has no parameters to fit; start from an analytic material"
+                .into(),
+        ),
     };
     if m.is_anisotropic() {
         return Err("anisotropic roughness cannot be fitted to isotropic data; start from an isotropic material".into());
     }
-    let no = |what: &str| Err(format!("`{}` is not a parameter of this {model} material ({what})", p.name()));
+    let no = |what: &str| {
+        Err(format!(
+            "`{}` is not a parameter of this {model} material ({what})",
+            p.name()
+        ))
+    };
     match p {
         Param::Diffuse => Ok(3),
         Param::Specular if matches!(m.model, Model::Lambert) => no("lambert has no specular part"),
         Param::Specular => Ok(3),
         Param::Roughness => match (&m.model, ct.map(|c| c.distribution)) {
             (Model::Ward { .. }, _) => Ok(1),
-            (_, Some(Distribution::Beckmann(_) | Distribution::Ggx(_) | Distribution::Gaussian { .. })) => Ok(1),
+            (
+                _,
+                Some(
+                    Distribution::Beckmann(_)
+                    | Distribution::Ggx(_)
+                    | Distribution::Gaussian { .. },
+                ),
+            ) => Ok(1),
             _ => no("roughness belongs to ward and cook-torrance with beckmann, ggx or gaussian"),
         },
         Param::Exponent => match (&m.model, ct.map(|c| c.distribution)) {
@@ -384,7 +400,10 @@ fn has(m: &Material, p: Param) -> std::result::Result<usize, String> {
         Param::Ior => match ct.map(|c| c.fresnel) {
             Some(Fresnel::Conductor { .. }) => Ok(3),
             Some(Fresnel::Dielectric { ior }) if ior[0] == ior[1] && ior[1] == ior[2] => Ok(1),
-            Some(Fresnel::Dielectric { .. }) => Err("a dielectric's ior is fitted as one η for R, G and B; start from a grey ior".into()),
+            Some(Fresnel::Dielectric { .. }) => Err(
+                "a dielectric's ior is fitted as one η for R, G and B; start from a grey ior"
+                    .into(),
+            ),
             _ => no("ior needs fresnel = \"dielectric\" or \"conductor\""),
         },
         Param::Extinction => match ct.map(|c| c.fresnel) {
@@ -409,7 +428,12 @@ pub fn get(m: &Material, p: Param) -> Vec<f64> {
             _ => vec![],
         },
         Param::Exponent => match (&m.model, ct.map(|c| c.distribution)) {
-            (Model::Phong { exponent } | Model::BlinnPhong { exponent } | Model::Rtr { exponent }, _) => vec![*exponent],
+            (
+                Model::Phong { exponent }
+                | Model::BlinnPhong { exponent }
+                | Model::Rtr { exponent },
+                _,
+            ) => vec![*exponent],
             (_, Some(Distribution::Blinn { exponent })) => vec![exponent],
             _ => vec![],
         },
@@ -433,12 +457,19 @@ fn set(m: &mut Material, p: Param, channel: Option<usize>, x: f64) {
     };
     match (&mut m.model, p) {
         (Model::Ward { roughness }, Param::Roughness) => *roughness = Roughness::Isotropic(x),
-        (Model::Phong { exponent } | Model::BlinnPhong { exponent } | Model::Rtr { exponent }, Param::Exponent) => *exponent = x,
+        (
+            Model::Phong { exponent } | Model::BlinnPhong { exponent } | Model::Rtr { exponent },
+            Param::Exponent,
+        ) => *exponent = x,
         (Model::CookTorrance(ct), _) => match (&mut ct.distribution, &mut ct.fresnel, p) {
-            (Distribution::Beckmann(r) | Distribution::Ggx(r), _, Param::Roughness) => *r = Roughness::Isotropic(x),
+            (Distribution::Beckmann(r) | Distribution::Ggx(r), _, Param::Roughness) => {
+                *r = Roughness::Isotropic(x)
+            }
             (Distribution::Gaussian { m }, _, Param::Roughness) => *m = x,
             (Distribution::Blinn { exponent }, _, Param::Exponent) => *exponent = x,
-            (_, Fresnel::Conductor { ior, .. } | Fresnel::Dielectric { ior }, Param::Ior) => put(ior),
+            (_, Fresnel::Conductor { ior, .. } | Fresnel::Dielectric { ior }, Param::Ior) => {
+                put(ior)
+            }
             (_, Fresnel::Conductor { extinction, .. }, Param::Extinction) => put(extinction),
             (_, Fresnel::Schlick { f0 }, Param::F0) => put(f0),
             _ => {}

@@ -80,7 +80,9 @@ impl<'a> Problem<'a> {
             out: Output::default(),
             columns,
             weights: if loss.is_quadratic() {
-                (0..data.len()).map(|i| loss.quadratic_weight(data, i)).collect()
+                (0..data.len())
+                    .map(|i| loss.quadratic_weight(data, i))
+                    .collect()
             } else {
                 Vec::new()
             },
@@ -136,7 +138,10 @@ impl<'a> Problem<'a> {
             2
         };
         let n = self.data.len();
-        let threads = std::thread::available_parallelism().map_or(1, |t| t.get()).min(n.div_ceil(4096)).max(1);
+        let threads = std::thread::available_parallelism()
+            .map_or(1, |t| t.get())
+            .min(n.div_ceil(4096))
+            .max(1);
         let (data, out, f0_free, columns, weights) = (
             self.data,
             &self.out,
@@ -181,7 +186,10 @@ impl<'a> Problem<'a> {
                     scope.spawn(move || pass(range))
                 })
                 .collect();
-            handles.into_iter().map(|h| h.join().expect("no panic in the pass")).collect()
+            handles
+                .into_iter()
+                .map(|h| h.join().expect("no panic in the pass"))
+                .collect()
         });
         let mut normal = [Normal::new(k); 3];
         for part in &parts {
@@ -202,9 +210,17 @@ impl<'a> Problem<'a> {
                 match col {
                     Column::Diffuse => lin.diffuse[c] = x[j],
                     Column::Dgk => {
-                        let q = self.columns.iter().position(|&x| x == Column::Grazing).map_or(0.0, |g| x[g]);
+                        let q = self
+                            .columns
+                            .iter()
+                            .position(|&x| x == Column::Grazing)
+                            .map_or(0.0, |g| x[g]);
                         lin.specular[c] = x[j] + q;
-                        lin.f0[c] = if x[j] + q > 0.0 { x[j] / (x[j] + q) } else { fixed.f0[c] };
+                        lin.f0[c] = if x[j] + q > 0.0 {
+                            x[j] / (x[j] + q)
+                        } else {
+                            fixed.f0[c]
+                        };
                     }
                     Column::Grazing => {}
                     Column::F0Scaled => lin.f0[c] = x[j],

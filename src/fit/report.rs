@@ -6,8 +6,8 @@ use super::data::FitData;
 use super::losses::{Loss, Metrics, RRMS_FLOOR};
 use super::FitResult;
 use crate::error::{Error, Result};
-use crate::material::{Distribution, Fresnel, Material, Model, Rgb};
 use crate::material::merl::{bin_of, THETA_D_BINS, THETA_H_BINS};
+use crate::material::{Distribution, Fresnel, Material, Model, Rgb};
 use std::fmt::Write as _;
 
 fn rgb(x: Rgb) -> String {
@@ -39,8 +39,16 @@ pub fn material_toml(material: &Material) -> Result<String> {
         }
         Model::CookTorrance(ct) => {
             key(&mut s, "model", "\"cook-torrance\"".into());
-            key(&mut s, "convention", format!("{:?}", ct.convention.toml_name()));
-            key(&mut s, "distribution", format!("{:?}", ct.distribution.kind().toml_name()));
+            key(
+                &mut s,
+                "convention",
+                format!("{:?}", ct.convention.toml_name()),
+            );
+            key(
+                &mut s,
+                "distribution",
+                format!("{:?}", ct.distribution.kind().toml_name()),
+            );
             match ct.distribution {
                 Distribution::Beckmann(r) | Distribution::Ggx(r) => {
                     key(&mut s, "roughness", format!("{:?}", r.xy().0))
@@ -48,10 +56,16 @@ pub fn material_toml(material: &Material) -> Result<String> {
                 Distribution::Gaussian { m } | Distribution::Charlie { m } => {
                     key(&mut s, "roughness", format!("{m:?}"))
                 }
-                Distribution::Blinn { exponent } => key(&mut s, "exponent", format!("{exponent:?}")),
+                Distribution::Blinn { exponent } => {
+                    key(&mut s, "exponent", format!("{exponent:?}"))
+                }
             }
             key(&mut s, "geometry", format!("{:?}", ct.geometry.toml_name()));
-            key(&mut s, "fresnel", format!("{:?}", ct.fresnel.kind().toml_name()));
+            key(
+                &mut s,
+                "fresnel",
+                format!("{:?}", ct.fresnel.kind().toml_name()),
+            );
             match ct.fresnel {
                 Fresnel::None => {}
                 Fresnel::Dielectric { ior } => key(&mut s, "ior", rgb(ior)),
@@ -62,7 +76,11 @@ pub fn material_toml(material: &Material) -> Result<String> {
                 Fresnel::Schlick { f0 } => key(&mut s, "f0", rgb(f0)),
             }
             key(&mut s, "diffuse_weight", format!("{:?}", ct.diffuse_weight));
-            key(&mut s, "specular_weight", format!("{:?}", ct.specular_weight));
+            key(
+                &mut s,
+                "specular_weight",
+                format!("{:?}", ct.specular_weight),
+            );
         }
         Model::Measured(_) => {
             return Err(Error::Unsupported(
@@ -98,8 +116,14 @@ pub fn conventions(material: &Material) -> Vec<(String, String)> {
         _ => None,
     };
     if let Some(a) = alpha {
-        out.push(("α (vkbrdf `roughness`, pbrt-v4 `alpha`)".into(), format!("{a:.6}")));
-        out.push(("perceptual roughness √α (UE4, Filament)".into(), format!("{:.6}", a.sqrt())));
+        out.push((
+            "α (vkbrdf `roughness`, pbrt-v4 `alpha`)".into(),
+            format!("{a:.6}"),
+        ));
+        out.push((
+            "perceptual roughness √α (UE4, Filament)".into(),
+            format!("{:.6}", a.sqrt()),
+        ));
         out.push(("Mitsuba 3 `alpha`".into(), format!("{a:.6}")));
     }
     if let Some(ct) = material.cook_torrance() {
@@ -119,14 +143,23 @@ pub fn conventions(material: &Material) -> Vec<(String, String)> {
         } else if let Some(f0) = f0 {
             out.push(("F0".into(), format!("{f0:.6?}")));
             let s: Rgb = std::array::from_fn(|c| ct.specular_weight * material.specular[c] * f0[c]);
-            out.push(("specular · F0 (normal-incidence reflectance)".into(), format!("{s:.6?}")));
+            out.push((
+                "specular · F0 (normal-incidence reflectance)".into(),
+                format!("{s:.6?}"),
+            ));
         }
         let d: Rgb = material.diffuse.map(|x| x * ct.diffuse_weight);
         out.push(("diffuse albedo d·c_diff".into(), format!("{d:.6?}")));
     } else {
-        out.push(("diffuse albedo c_diff".into(), format!("{:.6?}", material.diffuse)));
+        out.push((
+            "diffuse albedo c_diff".into(),
+            format!("{:.6?}", material.diffuse),
+        ));
         if !matches!(material.model, Model::Lambert) {
-            out.push(("specular albedo c_spec".into(), format!("{:.6?}", material.specular)));
+            out.push((
+                "specular albedo c_spec".into(),
+                format!("{:.6?}", material.specular),
+            ));
         }
     }
     out
@@ -212,7 +245,12 @@ pub fn markdown(result: &FitResult, data: &FitData, start: &Material, command: &
             super::data::Measure::AngleGrid => "sin θ_i sin θ_o (L2), sin θ_i (E1, E2, relative RMS)",
         }
     );
-    let _ = writeln!(s, "Start: material `{}`; loss minimised: `{}`.\n", start.name, result.loss.name());
+    let _ = writeln!(
+        s,
+        "Start: material `{}`; loss minimised: `{}`.\n",
+        start.name,
+        result.loss.name()
+    );
     let _ = writeln!(s, "## Metrics\n\n| metric | start | fit |\n|---|---|---|");
     let row = |s: &mut String, name: &str, a: f64, b: f64| {
         let _ = writeln!(s, "| {name} | {a:.6e} | {b:.6e} |");
@@ -228,8 +266,15 @@ pub fn markdown(result: &FitResult, data: &FitData, start: &Material, command: &
     for (k, v) in conventions(&result.material) {
         let _ = writeln!(s, "| {k} | {v} |");
     }
-    let _ = writeln!(s, "\n## Materials file\n\n```toml\n{}```\n", material_toml(&result.material).unwrap_or_default());
-    let _ = writeln!(s, "## Search\n\n| phase | start | loss | evaluations | stop |\n|---|---|---|---|---|");
+    let _ = writeln!(
+        s,
+        "\n## Materials file\n\n```toml\n{}```\n",
+        material_toml(&result.material).unwrap_or_default()
+    );
+    let _ = writeln!(
+        s,
+        "## Search\n\n| phase | start | loss | evaluations | stop |\n|---|---|---|---|---|"
+    );
     for (k, st) in result.starts.iter().enumerate() {
         let _ = writeln!(
             s,
