@@ -91,7 +91,7 @@ enum Command {
     Table(table::Args),
     /// Fit an analytic material to measured data (a MERL binary or tuples with values):
     /// its parameters, every published metric, a report and a residual slice.
-    Fit(fit::Args),
+    Fit(Box<fit::Args>),
 }
 
 /// Ends the process after a failed write to standard output: quietly with 141 (as a

@@ -36,6 +36,7 @@ impl Normal {
 
     /// Adds sample `y` with basis values `phi` (the first `k` used) and weight `w`.
     #[inline]
+    #[allow(clippy::needless_range_loop)] // the upper triangle: b from a
     pub fn add(&mut self, w: f64, phi: &[f64; MAX_UNKNOWNS], y: f64) {
         for a in 0..self.k {
             let wa = w * phi[a];
@@ -137,6 +138,7 @@ impl Normal {
 /// by Gaussian elimination with partial pivoting; `None` when it is singular (a pivot below
 /// 1e-12 of the largest diagonal entry: the column is, in f64, a combination of the others,
 /// and a smaller active set describes the same minimum).
+#[allow(clippy::needless_range_loop)] // row operations read two rows at once
 fn gauss(a: &mut [[f64; MAX_UNKNOWNS + 1]; MAX_UNKNOWNS], n: usize) -> Option<Vec<f64>> {
     let scale = (0..n).map(|i| a[i][i].abs()).fold(0.0, f64::max);
     if scale <= 0.0 || !scale.is_finite() {

@@ -219,7 +219,7 @@ pub fn fit(
                         if v < best {
                             best = v;
                         }
-                        if *evaluations % 25 == 0 {
+                        if (*evaluations).is_multiple_of(25) {
                             progress(&Progress {
                                 phase,
                                 start: (k, points.len()),

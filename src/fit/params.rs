@@ -214,7 +214,7 @@ impl Space {
                 None => p.default_bounds(is_conductor(start)),
             };
             let (dlo, dhi) = p.default_bounds(is_conductor(start));
-            if !(lo <= hi) || lo < dlo || hi > dhi {
+            if lo.is_nan() || hi.is_nan() || lo > hi || lo < dlo || hi > dhi {
                 return Err(unsupported(format!(
                     "--bound {}={lo}:{hi}: give LO <= HI within the default bounds {dlo}:{dhi} (they may only narrow them)",
                     p.name()
@@ -413,7 +413,7 @@ fn has(m: &Material, p: Param) -> std::result::Result<usize, String> {
     }
 }
 
-/// The values of `p` in `m` (1 or 3; [`has`] said it exists).
+/// The values of `p` in `m` (1 or 3; none when the model lacks it).
 pub fn get(m: &Material, p: Param) -> Vec<f64> {
     let ct = m.cook_torrance();
     let lin = linear_of(m);
