@@ -39,6 +39,7 @@ pub mod cpu;
 pub mod directions;
 pub mod error;
 pub mod features;
+pub mod fit;
 pub mod gpu;
 pub mod importance;
 pub mod material;

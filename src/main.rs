@@ -28,9 +28,11 @@ fn main() -> ExitCode {
     let watched = cancel.clone();
     std::thread::spawn(move || loop {
         std::thread::sleep(std::time::Duration::from_millis(50));
-        if watched.is_cancelled() {
+        if watched.is_cancelled() && !cli::owns_cancellation() {
             std::thread::sleep(CANCEL_GRACE);
-            vkbrdf::atomic::exit_cancelled();
+            if !cli::owns_cancellation() {
+                vkbrdf::atomic::exit_cancelled();
+            }
         }
     });
     match cli::run(args, cancel) {

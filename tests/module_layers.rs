@@ -22,6 +22,7 @@ const LAYERS: &[&[&str]] = &[
         "bench",
         "stream",
         "backend_choice",
+        "fit",
     ],
 ];
 

@@ -28,6 +28,7 @@ mod check;
 mod demo;
 mod devices;
 mod eval;
+mod fit;
 mod generate;
 mod materials;
 mod merge;
@@ -88,6 +89,9 @@ enum Command {
     Devices(devices::Args),
     /// Generate tables to EXR (slice, albedo, dfg), MERL binaries and preview pictures.
     Table(table::Args),
+    /// Fit an analytic material to measured data (a MERL binary or tuples with values):
+    /// its parameters, every published metric, a report and a residual slice.
+    Fit(Box<fit::Args>),
 }
 
 /// Ends the process after a failed write to standard output: quietly with 141 (as a
@@ -120,6 +124,7 @@ pub fn run(cli: Cli, cancel: Cancel) -> anyhow::Result<ExitCode> {
         Command::Eval(_) => Some("eval"),
         Command::Demo(_) => Some("demo"),
         Command::Merge(_) => Some("merge"),
+        Command::Fit(_) => Some("fit"),
         _ => None,
     };
     if let Some(name) = long {
@@ -137,7 +142,22 @@ pub fn run(cli: Cli, cancel: Cancel) -> anyhow::Result<ExitCode> {
         Command::Check(a) => check::run(&a),
         Command::Devices(a) => devices::run(&a),
         Command::Table(a) => table::run(&a),
+        Command::Fit(a) => fit::run(&a),
     }
+}
+
+/// Set while a command handles a cancellation itself (`fit` writes its best result so
+/// far): `main`'s watchdog then leaves the exit to it (a second signal still exits at once).
+static OWNS_CANCEL: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// Says whether the running command handles a cancellation itself ([`OWNS_CANCEL`]).
+pub(crate) fn own_cancellation(own: bool) {
+    OWNS_CANCEL.store(own, std::sync::atomic::Ordering::SeqCst);
+}
+
+/// Whether the running command handles a cancellation itself.
+pub fn owns_cancellation() -> bool {
+    OWNS_CANCEL.load(std::sync::atomic::Ordering::SeqCst)
 }
 
 /// The environment variables vkbrdf reads whose values are not free text, checked before
