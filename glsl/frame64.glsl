@@ -41,7 +41,7 @@ uint frame_scalars_f64(Row r, GpuMaterial m, inout Frame f) {
     //   on the wrong side (the stress corpus's grazing regime).
     // - h, |l + v|, cos_h, c and |n x h|^2: in f32, l + v of two rounded unit vectors
     //   carries ~u absolute error, which near l = -v (grazing mirror geometry) is a relative
-    //   error of u/|l + v| in |l + v| and in h's direction: D_GGX, which reads
+    //   error of u/|l + v| in |l + v| and in h's direction: ggx_d, which reads
     //   cos_h^2 + slope2 rather than a logarithm, was 1e-4 off at |l + v| = 2e-3 even at
     //   m = 1, where D is constant (found by tests/vulkan_properties.rs).
     // Cost on lavapipe: 1.05-1.4x the f32 frame's time (examples/kernel_time.rs).

@@ -203,7 +203,7 @@ float atan2_positive(float y, float x) {
 // whose bound 1.5e-7 is absolute). Evaluated in f32, measured against an f64 erfc
 // (tests/conformance.rs, `math_helpers_are_accurate`): relative error <= 5e-7 for z < 1,
 // growing as ~2 z^2 u (u = 6e-8) from the rounding of -z^2 in the exponent: 1.8e-6 at
-// z = 4, 9e-6 at z = 9 (erfc is below 1e-36 there). Lambda_Beckmann needs erfc(a) in
+// z = 4, 9e-6 at z = 9 (erfc is below 1e-36 there). beckmann_lambda needs erfc(a) in
 // absolute terms next to exp(-a^2)/(a sqrt(pi)), so this costs G less than 1e-7. Beyond
 // z = 9.2 the result is 0 (the true value is subnormal in f32).
 float erfc_nr(float z) {

@@ -149,11 +149,11 @@ float smith_q2(GpuMaterial m, vec2 w_tb, float sin2_w, float cos_w) {
 float smith_lambda(GpuMaterial m, float q2) {
 #if defined(HAS_LAMBDA_BECKMANN)
     if (material_distribution(m) == DIST_BECKMANN) {
-        return Lambda_Beckmann(q2);
+        return beckmann_lambda(q2);
     }
 #endif
 #if defined(HAS_LAMBDA_GGX)
-    return Lambda_GGX(q2);
+    return ggx_lambda(q2);
 #else
     return 0.0;
 #endif
@@ -287,11 +287,11 @@ double smith_lambda_f64(GpuMaterial m, vec2 w_tb, float sin2_w, double cos_w) {
     return 0.5 * (sqrt(1.0 + q2) - 1.0);
 }
 
-// G1 of Walter et al. 2007's rational fit (G1_SmithFast) in f64 for one direction.
+// G1 of Walter et al. 2007's rational fit (smith_fast_g1) in f64 for one direction.
 double smith_fast_g1_f64(GpuMaterial m, vec2 w_tb, float sin2_w, double cos_w) {
 #if defined(HAS_G_SMITH_FAST)
     if (cos_w >= TINY_COS) {
-        return double(G1_SmithFast(smith_q2(m, w_tb, sin2_w, float(cos_w))));
+        return double(smith_fast_g1(smith_q2(m, w_tb, sin2_w, float(cos_w))));
     }
     double a = cos_w / sqrt(double(smith_q2(m, w_tb, sin2_w, 1.0))); // < 1.6 here
     return (3.535 * a + 2.181 * a * a) / (1.0 + 2.276 * a + 2.577 * a * a);
@@ -418,7 +418,7 @@ vec2 smith_one_plus_lambda(GpuMaterial m, vec2 w_tb, float sin2_w, float cos_w, 
 vec2 smith_fast_g1_xf(GpuMaterial m, vec2 w_tb, float sin2_w, float cos_w, vec2 cos_w_xf) {
 #if defined(HAS_G_SMITH_FAST)
     if (cos_w >= TINY_COS) {
-        return xf(G1_SmithFast(smith_q2(m, w_tb, sin2_w, cos_w)));
+        return xf(smith_fast_g1(smith_q2(m, w_tb, sin2_w, cos_w)));
     }
     return xf_mul(xf(3.535), xf_div(cos_w_xf, xf(sqrt(smith_q2(m, w_tb, sin2_w, 1.0)))));
 #else
@@ -526,16 +526,16 @@ Eval model_cook_torrance(Frame f, GpuMaterial m) {
     e.d = 0.0;
     switch (material_distribution(m)) {
 #if defined(HAS_D_GAUSSIAN)
-    case DIST_GAUSSIAN: e.d = D_Gaussian(f.cos_h, f.sin2_h, material_inv_roughness2(m).x); break;
+    case DIST_GAUSSIAN: e.d = gaussian_d(f.cos_h, f.sin2_h, material_inv_roughness2(m).x); break;
 #endif
 #if defined(HAS_D_BECKMANN)
-    case DIST_BECKMANN: e.d = D_Beckmann(slope2_h(f, m), f.cos_h, f.sin2_h, material_norm(m)); break;
+    case DIST_BECKMANN: e.d = beckmann_d(slope2_h(f, m), f.cos_h, f.sin2_h, material_norm(m)); break;
 #endif
 #if defined(HAS_D_GGX)
-    case DIST_GGX: e.d = D_GGX(slope2_h(f, m), f.cos_h, material_norm(m)); break;
+    case DIST_GGX: e.d = ggx_d(slope2_h(f, m), f.cos_h, material_norm(m)); break;
 #endif
 #if defined(HAS_D_BLINN)
-    case DIST_BLINN: e.d = D_Blinn(f.cos_h, f.sin2_h, material_exponent(m), material_norm(m)); break;
+    case DIST_BLINN: e.d = blinn_d(f.cos_h, f.sin2_h, material_exponent(m), material_norm(m)); break;
 #endif
 #if defined(HAS_D_CHARLIE)
     case DIST_CHARLIE: e.d = charlie_d(f.cos_h, f.sin2_h, material_exponent(m), material_norm(m)); break;
@@ -546,23 +546,23 @@ Eval model_cook_torrance(Frame f, GpuMaterial m) {
     e.g = 1.0;
     switch (material_geometry(m)) {
 #if defined(HAS_G_COOK_TORRANCE)
-    case GEOM_COOK_TORRANCE: e.g = G_CookTorrance(f.cos_i, f.cos_o, f.cos_h, f.c); break;
+    case GEOM_COOK_TORRANCE: e.g = cook_torrance_g(f.cos_i, f.cos_o, f.cos_h, f.c); break;
 #endif
 #if defined(HAS_G_SMITH)
     case GEOM_SMITH:
-        e.g = G_Smith(smith_lambda(m, smith_q2(m, f.v_tb, f.sin2_o, f.cos_o)),
+        e.g = smith_g(smith_lambda(m, smith_q2(m, f.v_tb, f.sin2_o, f.cos_o)),
                       smith_lambda(m, smith_q2(m, f.l_tb, f.sin2_i, f.cos_i)));
         break;
 #endif
 #if defined(HAS_G_SMITH_CORRELATED)
     case GEOM_SMITH_CORRELATED:
-        e.g = G_SmithCorrelated(smith_lambda(m, smith_q2(m, f.v_tb, f.sin2_o, f.cos_o)),
+        e.g = smith_correlated_g(smith_lambda(m, smith_q2(m, f.v_tb, f.sin2_o, f.cos_o)),
                                 smith_lambda(m, smith_q2(m, f.l_tb, f.sin2_i, f.cos_i)));
         break;
 #endif
 #if defined(HAS_G_SMITH_FAST)
     case GEOM_SMITH_FAST:
-        e.g = G1_SmithFast(smith_q2(m, f.v_tb, f.sin2_o, f.cos_o)) * G1_SmithFast(smith_q2(m, f.l_tb, f.sin2_i, f.cos_i));
+        e.g = smith_fast_g1(smith_q2(m, f.v_tb, f.sin2_o, f.cos_o)) * smith_fast_g1(smith_q2(m, f.l_tb, f.sin2_i, f.cos_i));
         break;
 #endif
 #if defined(HAS_G_SCHLICK_SMITH)
@@ -584,26 +584,26 @@ Eval model_cook_torrance(Frame f, GpuMaterial m) {
     e.f = vec3(1.0);
     switch (fresnel) {
 #if defined(HAS_F_DIELECTRIC)
-    case FRESNEL_DIELECTRIC: e.f = F_Dielectric(f.c, m.fresnel0.rgb, material_fresnel_lo(m), f.c_exact); break;
+    case FRESNEL_DIELECTRIC: e.f = dielectric_f(f.c, m.fresnel0.rgb, material_fresnel_lo(m), f.c_exact); break;
 #endif
 #if defined(HAS_F_CONDUCTOR)
     case FRESNEL_CONDUCTOR:
 #if defined(HAS_FLOAT64)
         if (f.c_exact < 1e-12) {
-            e.f = F_Conductor_f64(f.c_exact, m.fresnel0.rgb, m.fresnel1.rgb, material_fresnel_lo(m));
+            e.f = conductor_f_f64(f.c_exact, m.fresnel0.rgb, m.fresnel1.rgb, material_fresnel_lo(m));
             break;
         }
 #else
         if (xf_less(f.c_xf, xf(1e-12))) {
-            e.f = F_Conductor_tiny(f.c_xf, m.fresnel0.rgb, m.fresnel1.rgb, material_fresnel_lo(m));
+            e.f = conductor_f_tiny(f.c_xf, m.fresnel0.rgb, m.fresnel1.rgb, material_fresnel_lo(m));
             break;
         }
 #endif
-        e.f = F_Conductor(f.c, m.fresnel0.rgb, m.fresnel1.rgb, material_fresnel_lo(m));
+        e.f = conductor_f(f.c, m.fresnel0.rgb, m.fresnel1.rgb, material_fresnel_lo(m));
         break;
 #endif
 #if defined(HAS_F_SCHLICK)
-    case FRESNEL_SCHLICK: e.f = F_Schlick(f.c, m.fresnel0.rgb); break;
+    case FRESNEL_SCHLICK: e.f = schlick_f(f.c, m.fresnel0.rgb); break;
 #endif
     default: break;
     }
@@ -611,13 +611,13 @@ Eval model_cook_torrance(Frame f, GpuMaterial m) {
     e.k = 1.0;
     switch (convention) {
 #if defined(HAS_CONV_SEED)
-    case CONV_SEED: e.k = K_Seed(f.cos_i, f.cos_o); break;
+    case CONV_SEED: e.k = seed_k(f.cos_i, f.cos_o); break;
 #endif
 #if defined(HAS_CONV_CT1982)
-    case CONV_CT1982: e.k = K_CookTorrance1982(f.cos_i, f.cos_o); break;
+    case CONV_CT1982: e.k = cook_torrance_1982_k(f.cos_i, f.cos_o); break;
 #endif
 #if defined(HAS_CONV_MODERN)
-    case CONV_MODERN: e.k = K_Modern(f.cos_i, f.cos_o); break;
+    case CONV_MODERN: e.k = modern_k(f.cos_i, f.cos_o); break;
 #endif
     default: break;
     }

@@ -1,8 +1,11 @@
-// terms.glsl — one function per term of FORMULAS.md §2–§5, each citing its source and saying
-// what it includes. The CPU reference (src/reference/{distribution,geometry,fresnel,
-// convention}.rs) mirrors these term for term; the term outputs (D, G, F_rgb, K) compare
-// them one by one. Every function is compiled only when its feature is in the batch's
-// FeatureSet (the HAS_* macros), so a GGX + Schlick kernel has no erf, no complex Fresnel.
+// terms.glsl — the GLSL form of every term of FORMULAS.md §2–§5, one block each, in the
+// order of the family lists (src/terms/{d,g,f,k}/mod.rs). A block starts with the line
+// `// term <family>/<name>: <citation>`, the term's Rust file (src/terms/<family>/<name>.rs)
+// and its CITATION; its functions are named `<name>_...` as the Rust file's forms are
+// (tests/term_homes.rs holds the two together). Every function is compiled only when its
+// feature is in the batch's FeatureSet (the HAS_* macros), so a GGX + Schlick kernel has no
+// erf, no complex Fresnel. The f64 and float-float forms the frame's slow paths take are
+// still in models.glsl (`d_f64`, `d_xf`, ...), by family.
 
 #ifndef VKBRDF_TERMS_GLSL
 #define VKBRDF_TERMS_GLSL
@@ -45,17 +48,19 @@ struct Frame {
 // ===================================================================== D (FORMULAS.md §2)
 // Arguments: slope2 = (hx/mx)^2 + (hy/my)^2 (= sin2_h / m^2 when isotropic), so that
 // tan2_h / m^2 = slope2 / cos_h^2; `norm` is the normalisation constant precomputed in f64
-// on the host (src/gpu/layout.rs).
+// on the host (src/gpu/layout.rs). Smith's Lambda is the distribution's, in its block.
 
+// term d/gaussian: Torrance & Sparrow 1967
 #if defined(HAS_D_GAUSSIAN)
 // Torrance & Sparrow 1967, "Theory for Off-Specular Reflection from Roughened Surfaces".
 // exp(-(delta/m)^2), delta = angle between n and h. Unnormalised: no 1/pi, no 1/cos_h^4.
-float D_Gaussian(float cos_h, float sin2_h, float inv_m2) {
+float gaussian_d(float cos_h, float sin2_h, float inv_m2) {
     float delta = atan2_positive(sqrt(sin2_h), cos_h);
     return exp_acc(-delta * delta * inv_m2);
 }
 #endif
 
+// term d/beckmann: Beckmann 1963; Cook & Torrance 1982
 #if defined(HAS_D_BECKMANN)
 // Beckmann & Spizzichino 1963, "The Scattering of Electromagnetic Waves from Rough
 // Surfaces"; anisotropic form from Walter et al. 2007. exp(-tan2_h/m^2) / (k m^2 cos_h^4):
@@ -63,32 +68,61 @@ float D_Gaussian(float cos_h, float sin2_h, float inv_m2) {
 // 4 seed), the latter inside `norm`.
 // Evaluated in the log domain: at grazing h, exp(-tan2_h/m^2) underflows to 0 while
 // 1/cos_h^4 overflows to inf, and the direct product would be 0 * inf = NaN.
-float D_Beckmann(float slope2, float cos_h, float sin2_h, float norm) {
+float beckmann_d(float slope2, float cos_h, float sin2_h, float norm) {
     // slope2 / cos_h^2 is +inf when cos_h^2 underflows; exp_acc(-inf) is 0, not NaN.
     float x = slope2 / (cos_h * cos_h);
     return norm * exp_acc(-x - 4.0 * log_cos(cos_h, sin2_h));
 }
 #endif
 
+#if defined(HAS_LAMBDA_BECKMANN)
+// Smith 1967, "Geometrical Shadowing of a Random Rough Surface"; Lambda for Beckmann as in
+// Walter et al. 2007: (erf(a) - 1)/2 + exp(-a^2)/(2 a sqrt(pi)), a = 1/(m tan), written with
+// erfc (erf(a) - 1 = -erfc(a)). q2 = m^2 tan^2(w). tan = 0 (w = n) gives Lambda = 0.
+float beckmann_lambda(float q2) {
+    // a = 1/sqrt(0) would be inf and inf * 0 below NaN; the limit is 0.
+    if (q2 == 0.0) {
+        return 0.0;
+    }
+    float a = inversesqrt(q2);
+    // For large a both terms are ~exp(-a^2)/(a sqrt(pi)) and cancel: the result is tiny in
+    // absolute terms, which is all G = 1/(1 + Lambda) needs.
+    return 0.5 * (exp_acc(-a * a) * INV_SQRT_PI / a - erfc_nr(a));
+}
+#endif
+
+// term d/ggx: Trowbridge & Reitz 1975; Walter et al. 2007
 #if defined(HAS_D_GGX)
 // Walter, Marschner, Li & Torrance 2007, "Microfacet Models for Refraction through Rough
 // Surfaces" (GGX; the Trowbridge & Reitz 1975 ellipsoid NDF). m^2 / (pi cos_h^4 (m^2 +
 // tan2_h)^2), includes the 1/pi. Written 1/(pi mx my (slope2 + cos_h^2)^2), which has no
 // 1/cos_h^4 to overflow and is the anisotropic form too (norm = 1/(pi mx my)).
-float D_GGX(float slope2, float cos_h, float norm) {
+float ggx_d(float slope2, float cos_h, float norm) {
     float d = slope2 + cos_h * cos_h;
     return norm / (d * d);
 }
 #endif
 
+#if defined(HAS_LAMBDA_GGX)
+// Walter et al. 2007: Smith Lambda for GGX, (-1 + sqrt(1 + m^2 tan^2))/2. For q2 <= 1 it is
+// rewritten q2 / (2 (1 + sqrt(1 + q2))) (no cancellation at small q2); for q2 > 1 the direct
+// form is exact enough and stays finite (inf) when q2 = inf, where the quotient is inf/inf.
+float ggx_lambda(float q2) {
+    float r = sqrt(1.0 + q2);
+    return q2 <= 1.0 ? q2 / (2.0 * (1.0 + r)) : 0.5 * (r - 1.0);
+}
+#endif
+
+// term d/blinn: Blinn 1977
 #if defined(HAS_D_BLINN)
 // Blinn 1977, "Models of Light Reflection for Computer Synthesized Pictures", normalised so
 // that its projected integral is 1: (e+2)/(2 pi) cos_h^e, includes the 1/(2 pi) (in norm).
-float D_Blinn(float cos_h, float sin2_h, float e, float norm) {
+float blinn_d(float cos_h, float sin2_h, float e, float norm) {
     return norm * exp_acc(e * log_cos(cos_h, sin2_h));
 }
 #endif
 
+// term d/charlie: Estevez & Kulla 2017
 #if defined(HAS_D_CHARLIE)
 // Estevez & Kulla 2017, "Production Friendly Microfacet Sheen BRDF" (Charlie sheen):
 // (2 + 1/m)/(2 pi) sin_h^(1/m), 0 < m <= 1; inv_m = 1/m and norm = (2 + 1/m)/(2 pi) from
@@ -105,45 +139,41 @@ float charlie_d(float cos_h, float sin2_h, float inv_m, float norm) {
 
 // ===================================================================== G (FORMULAS.md §3)
 
+// term g/none: FORMULAS.md §3
+// G = 1: no code (the geometry slot is skipped).
+
+// term g/cook_torrance: Blinn 1977; Cook & Torrance 1982
 #if defined(HAS_G_COOK_TORRANCE)
 // Blinn 1977 (the V-cavity shadowing/masking), as used by Cook & Torrance 1982, "A
 // Reflectance Model for Computer Graphics": min(1, 2 cos_h cos_o / c, 2 cos_h cos_i / c).
-float G_CookTorrance(float cos_i, float cos_o, float cos_h, float c) {
+float cook_torrance_g(float cos_i, float cos_o, float cos_h, float c) {
     float k = 2.0 * cos_h / c;
     return min(1.0, min(k * cos_o, k * cos_i));
 }
 #endif
 
-#if defined(HAS_LAMBDA_BECKMANN)
-// Smith 1967, "Geometrical Shadowing of a Random Rough Surface"; Lambda for Beckmann as in
-// Walter et al. 2007: (erf(a) - 1)/2 + exp(-a^2)/(2 a sqrt(pi)), a = 1/(m tan), written with
-// erfc (erf(a) - 1 = -erfc(a)). q2 = m^2 tan^2(w). tan = 0 (w = n) gives Lambda = 0.
-float Lambda_Beckmann(float q2) {
-    // a = 1/sqrt(0) would be inf and inf * 0 below NaN; the limit is 0.
-    if (q2 == 0.0) {
-        return 0.0;
-    }
-    float a = inversesqrt(q2);
-    // For large a both terms are ~exp(-a^2)/(a sqrt(pi)) and cancel: the result is tiny in
-    // absolute terms, which is all G = 1/(1 + Lambda) needs.
-    return 0.5 * (exp_acc(-a * a) * INV_SQRT_PI / a - erfc_nr(a));
+// term g/smith: Smith 1967; Walter et al. 2007
+#if defined(HAS_G_SMITH)
+// Smith 1967, separable form: G1(v) G1(l), G1 = 1 / (1 + Lambda).
+float smith_g(float lambda_o, float lambda_i) {
+    return 1.0 / ((1.0 + lambda_o) * (1.0 + lambda_i));
 }
 #endif
 
-#if defined(HAS_LAMBDA_GGX)
-// Walter et al. 2007: Smith Lambda for GGX, (-1 + sqrt(1 + m^2 tan^2))/2. For q2 <= 1 it is
-// rewritten q2 / (2 (1 + sqrt(1 + q2))) (no cancellation at small q2); for q2 > 1 the direct
-// form is exact enough and stays finite (inf) when q2 = inf, where the quotient is inf/inf.
-float Lambda_GGX(float q2) {
-    float r = sqrt(1.0 + q2);
-    return q2 <= 1.0 ? q2 / (2.0 * (1.0 + r)) : 0.5 * (r - 1.0);
+// term g/smith_correlated: Heitz 2014
+#if defined(HAS_G_SMITH_CORRELATED)
+// Heitz 2014, "Understanding the Masking-Shadowing Function in Microfacet-Based BRDFs",
+// eq. 99 (height-correlated Smith): 1 / (1 + Lambda(v) + Lambda(l)).
+float smith_correlated_g(float lambda_o, float lambda_i) {
+    return 1.0 / (1.0 + lambda_o + lambda_i);
 }
 #endif
 
+// term g/smith_fast: Walter et al. 2007
 #if defined(HAS_G_SMITH_FAST)
 // Walter et al. 2007, eq. 27: rational fit of the Smith–Beckmann G1 (<= 0.35 % error), kept
 // as published: it exceeds 1 by up to 6.1e-5 for a in (1.548, 1.6).
-float G1_SmithFast(float q2) {
+float smith_fast_g1(float q2) {
     if (q2 == 0.0) {
         return 1.0; // a = inf: G1 = 1 (and inversesqrt(0) is not needed)
     }
@@ -152,21 +182,7 @@ float G1_SmithFast(float q2) {
 }
 #endif
 
-#if defined(HAS_G_SMITH)
-// Smith 1967, separable form: G1(v) G1(l), G1 = 1 / (1 + Lambda).
-float G_Smith(float lambda_o, float lambda_i) {
-    return 1.0 / ((1.0 + lambda_o) * (1.0 + lambda_i));
-}
-#endif
-
-#if defined(HAS_G_SMITH_CORRELATED)
-// Heitz 2014, "Understanding the Masking-Shadowing Function in Microfacet-Based BRDFs",
-// eq. 99 (height-correlated Smith): 1 / (1 + Lambda(v) + Lambda(l)).
-float G_SmithCorrelated(float lambda_o, float lambda_i) {
-    return 1.0 / (1.0 + lambda_o + lambda_i);
-}
-#endif
-
+// term g/schlick_smith: Schlick 1994; Karis 2013
 #if defined(HAS_G_SCHLICK_SMITH)
 // Schlick 1994, "An Inexpensive BRDF Model for Physically-based Rendering", with the k of
 // Karis 2013, "Real Shading in Unreal Engine 4" (m sqrt(2/pi) Beckmann, m/2 GGX; from the
@@ -177,6 +193,7 @@ float schlick_smith_g1(float cos_w, float one_minus_cos_w, float k) {
 }
 #endif
 
+// term g/neubelt: Neubelt & Pettineo 2013
 #if defined(HAS_G_NEUBELT)
 // Neubelt & Pettineo 2013, "Crafting a Next-Gen Material Pipeline for The Order: 1886"
 // (cloth): cos_i cos_o / (cos_i + cos_o - cos_i cos_o), the denominator written
@@ -188,12 +205,16 @@ float neubelt_g(float cos_i, float cos_o) {
 
 // ===================================================================== F (FORMULAS.md §4)
 
+// term f/none: FORMULAS.md §4
+// F = 1: no code (the Fresnel slot is skipped).
+
+// term f/dielectric: Cook & Torrance 1982
 #if defined(HAS_F_DIELECTRIC)
 // Cook & Torrance 1982 (exact unpolarised dielectric Fresnel), with the seed's typo fixed:
 // g^2 = mu^2 + c^2 - 1, F = 1/2 ((g-c)/(g+c))^2 (1 + ((c(g+c) - 1)/(c(g-c) + 1))^2), F = 1
 // under total internal reflection (g^2 < 0). mu2m1 = mu^2 - 1 is formed in f64 on the host;
 // g - c is computed as (mu^2 - 1)/(g + c), which does not cancel when mu is near 1.
-vec3 F_Dielectric(float c, vec3 mu2m1, vec3 mu2m1_lo, double_or_float c_exact) {
+vec3 dielectric_f(float c, vec3 mu2m1, vec3 mu2m1_lo, double_or_float c_exact) {
 #if defined(HAS_FLOAT64)
     // g^2 = mu^2 - 1 + c^2 in f64, from c before its rounding to f32 and mu^2 - 1 to ~48
     // bits: near the critical angle of total internal reflection g^2 -> 0 is a difference
@@ -241,6 +262,7 @@ vec3 F_Dielectric(float c, vec3 mu2m1, vec3 mu2m1_lo, double_or_float c_exact) {
 }
 #endif
 
+// term f/conductor: Born & Wolf 1999
 #if defined(HAS_F_CONDUCTOR)
 // Complex helpers for three channels at once: (re, im) pairs.
 vec3 cmul_re(vec3 ar, vec3 ai, vec3 br, vec3 bi) { return ar * br - ai * bi; }
@@ -274,14 +296,14 @@ void csqrt(vec3 x, vec3 y, out vec3 re, out vec3 im) {
 // conductor with complex eta = n + ik, unpolarised: (|r_par|^2 + |r_perp|^2)/2 with
 // sin2_t = (1 - c^2)/eta^2, cos_t = sqrt(1 - sin2_t), r_par = (eta c - cos_t)/(eta c + cos_t),
 // r_perp = (c - eta cos_t)/(c + eta cos_t). |r|^2 is taken as |num|^2/|den|^2 (no complex
-// division). With k = 0, n >= 1 it equals F_Dielectric.
+// division). With k = 0, n >= 1 it equals dielectric_f.
 // cos_t^2 = 1 - sin2_t = (eta^2 - 1 + c^2)/eta^2, with Re(eta^2) - 1 = e2rm1 formed in f64
 // on the host: 1 - (1 - c^2)/eta^2 in f32 loses c^2 below ~6e-8 when eta is near 1, and
 // F then came out 1 instead of ~0 at grazing c (the stress corpus's eta = 1 conductor).
 // The division by eta^2 goes through q = |eta|^2 = n^2 + k^2, one factor at a time: the
 // direct 1/|eta^2|^2 = 1/q^2 overflows float32 for |eta| > 4e9, and with extinction 1e10 it
 // was inf * 0 = NaN (issue 10). The parser bounds n and k by 1e18, so q <= 2e36.
-vec3 F_Conductor(float c, vec3 n, vec3 k, vec3 e2rm1) {
+vec3 conductor_f(float c, vec3 n, vec3 k, vec3 e2rm1) {
     vec3 e2r = n * n - k * k;                   // eta^2
     vec3 e2i = 2.0 * n * k;
     vec3 q = n * n + k * k;                     // |eta|^2 = |eta^2|
@@ -311,13 +333,13 @@ vec3 abs2_ratio(vec3 pr, vec3 pi_, vec3 qr, vec3 qi) {
     return (pr * pr + pi_ * pi_) / (qr * qr + qi * qi);
 }
 
-// F_Conductor for c below 1e-12 without f64 (the f64 frame takes F_Conductor_f64 there),
+// conductor_f for c below 1e-12 without f64 (the f64 frame takes conductor_f_f64 there),
 // given c = m 2^e (ff.glsl, xf). Where eta^2 - 1 is within 1e30 c^2 of 0 (index-matched:
 // cos_t is then of the order of c, and in float32 c^2 and (eta c)^2 underflow) the
 // formula is taken in units of c: u = cos_t/c, u^2 = (e2rm1/c^2 + 1 + i e2i/c^2)/eta^2,
 // r_par = |eta - u|^2/|eta + u|^2, r_perp = |1 - eta u|^2/|1 + eta u|^2 (c cancels).
 // Elsewhere cos_t is far above c and the float32 formula holds, with its quotients scaled.
-vec3 F_Conductor_tiny(vec2 c_xf, vec3 n, vec3 k, vec3 e2rm1) {
+vec3 conductor_f_tiny(vec2 c_xf, vec3 n, vec3 k, vec3 e2rm1) {
     float c = xf_float(c_xf);
     vec2 c2 = xf_mul(c_xf, c_xf);
     vec3 e2r = n * n - k * k, e2i = 2.0 * n * k, q = n * n + k * k;
@@ -337,7 +359,7 @@ vec3 F_Conductor_tiny(vec2 c_xf, vec3 n, vec3 k, vec3 e2rm1) {
     vec3 par_u = abs2_ratio(n - ur, k - ui, n + ur, k + ui);
     vec3 eur = cmul_re(n, k, ur, ui), eui = cmul_im(n, k, ur, ui); // eta u
     vec3 perp_u = abs2_ratio(1.0 - eur, -eui, 1.0 + eur, eui);
-    // The others: F_Conductor's lines with c^2 dropped (below 1e-30 of eta^2 - 1).
+    // The others: conductor_f's lines with c^2 dropped (below 1e-30 of eta^2 - 1).
     vec3 zr = (e2rm1 * a + e2i * b) / q;
     vec3 zi = (1.0 - c) * (1.0 + c) * b / q;
     vec3 ctr, cti;
@@ -351,10 +373,10 @@ vec3 F_Conductor_tiny(vec2 c_xf, vec3 n, vec3 k, vec3 e2rm1) {
 #endif
 
 #if defined(HAS_F_CONDUCTOR) && defined(HAS_FLOAT64)
-// F_Conductor in f64, for c below 1e-12 (the kernel takes it there): in float32, c^2 and
+// conductor_f in f64, for c below 1e-12 (the kernel takes it there): in float32, c^2 and
 // (eta c)^2 underflow, and an index-matched conductor (eta = 1, F = 0 exactly) gave
 // r_par = 0/0 = NaN at c = 1e-45 (stress corpus). Same formula, line for line.
-vec3 F_Conductor_f64(double c, vec3 n32, vec3 k32, vec3 e2rm1) {
+vec3 conductor_f_f64(double c, vec3 n32, vec3 k32, vec3 e2rm1) {
     dvec3 n = dvec3(n32), k = dvec3(k32);
     dvec3 e2r = n * n - k * k, e2i = 2.0 * n * k, q = n * n + k * k;
     dvec3 a = e2r / q, b = e2i / q;
@@ -380,10 +402,11 @@ vec3 F_Conductor_f64(double c, vec3 n32, vec3 k32, vec3 e2rm1) {
 }
 #endif
 
+// term f/schlick: Schlick 1994
 #if defined(HAS_F_SCHLICK)
 // Schlick 1994, "An Inexpensive BRDF Model for Physically-based Rendering":
 // F0 + (1 - F0)(1 - c)^5, F0 given or derived from ior/extinction at parse time.
-vec3 F_Schlick(float c, vec3 f0) {
+vec3 schlick_f(float c, vec3 f0) {
     float x = 1.0 - c;
     float x2 = x * x;
     return f0 + (1.0 - f0) * (x2 * x2 * x);
@@ -392,26 +415,29 @@ vec3 F_Schlick(float c, vec3 f0) {
 
 // ===================================================================== K (FORMULAS.md §5)
 
+// term k/seed: the seed lecture; Foley et al. 1990
 #if defined(HAS_CONV_SEED)
 // The seed lecture's glare term (Foley et al. 1990, "Computer Graphics: Principles and
 // Practice", 2nd ed., §16.7, R_s = DGF/(N.V)): 1/cos_o.
-float K_Seed(float cos_i, float cos_o) {
+float seed_k(float cos_i, float cos_o) {
     return 1.0 / cos_o;
 }
 #endif
 
+// term k/cook_torrance_1982: Cook & Torrance 1982
 #if defined(HAS_CONV_CT1982)
 // Cook & Torrance 1982: R_s = DGF / (pi (N.L)(N.V)): includes the 1/pi.
-float K_CookTorrance1982(float cos_i, float cos_o) {
+float cook_torrance_1982_k(float cos_i, float cos_o) {
     return INV_PI / cos_i / cos_o;
 }
 #endif
 
+// term k/modern: Walter et al. 2007
 #if defined(HAS_CONV_MODERN)
 // Walter et al. 2007: 1/(4 cos_i cos_o) (the Jacobian of the half vector), as in Mitsuba 3
 // and pbrt-v4. Divided one cosine at a time: the product cos_i cos_o can underflow where
 // each quotient is finite.
-float K_Modern(float cos_i, float cos_o) {
+float modern_k(float cos_i, float cos_o) {
     return 0.25 / cos_i / cos_o;
 }
 #endif

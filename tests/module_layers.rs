@@ -446,11 +446,7 @@ fn no_two_files_use_each_other_even_through_others() {
                     .iter()
                     .map(|f| (f.clone(), g[f].intersection(group).cloned().collect()))
                     .collect();
-                format!(
-                    "{:?}: {}",
-                    group,
-                    find_cycle(&sub).unwrap().join(" → ")
-                )
+                format!("{:?}: {}", group, find_cycle(&sub).unwrap().join(" → "))
             })
             .collect::<Vec<_>>()
             .join("\n")

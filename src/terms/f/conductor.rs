@@ -1,5 +1,5 @@
-//! Born & Wolf, "Principles of Optics", §14.2: the exact conductor Fresnel term for
-//! complex `η = n + ik` (the form of pbrt-v4's `FrComplex`), unpolarised.
+//! Born & Wolf 1999, "Principles of Optics", 7th ed., §14.2: the exact conductor Fresnel
+//! term for complex `η = n + ik` (the form of pbrt-v4's `FrComplex`), unpolarised.
 
 use num_complex::Complex64;
 

@@ -1,5 +1,6 @@
-//! The seed lecture's convention (Foley et al.'s D): the glare term `K = 1/cos_o` and the
-//! Beckmann normalisation `k = 4`.
+//! The seed lecture's convention, after Foley et al. 1990 ("Computer Graphics: Principles
+//! and Practice", 2nd ed., §16.7): the glare term `K = 1/cos_o` and the Beckmann
+//! normalisation `k = 4`.
 
 use super::lane::LaneK;
 
