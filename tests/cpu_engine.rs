@@ -39,8 +39,11 @@ fn every_combination_matches_the_reference(mut engine: CpuEngine, tuples: usize)
     };
     let mut tally = vkbrdf::cpu::Tally::default();
     let reports = check::run(&mut engine.clone(), &options, &mut |_| {}).expect("check run");
-    assert_eq!(reports.len(), 316); // every legal combination (derived in src/check.rs)
-                                    // The lanes made the numbers: in the groups they run, the reference re-did few tuples.
+    assert_eq!(
+        reports.len(),
+        common::combinations::check_combination_count()
+    );
+    // The lanes made the numbers: in the groups they run, the reference re-did few tuples.
     for c in check::combinations(options.seed).expect("combinations") {
         let batch = check::generate(&c, 2000, 1).expect("batch");
         engine
@@ -67,9 +70,10 @@ fn every_combination_matches_the_reference(mut engine: CpuEngine, tuples: usize)
         .collect();
     assert!(
         failures.is_empty(),
-        "{}: {} of 316 combinations fail:\n{}",
+        "{}: {} of {} combinations fail:\n{}",
         engine.name(),
         failures.len(),
+        reports.len(),
         failures.join("\n")
     );
     let well = reports
@@ -92,7 +96,10 @@ fn every_group_runs_in_the_lanes_measured_ones_included() {
             assert!(Plan::for_material(m).is_simd(), "{}: {}", c.name, m.name);
         }
     }
-    assert_eq!(combos.len(), 316);
+    assert_eq!(
+        combos.len(),
+        common::combinations::check_combination_count()
+    );
 }
 
 #[test]

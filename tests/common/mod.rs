@@ -1,6 +1,7 @@
 //! Shared test helpers: every backend, so one test body runs on each.
 #![allow(dead_code)]
 
+pub mod combinations;
 pub mod quadrature;
 pub mod rule;
 pub mod strategies;

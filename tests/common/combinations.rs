@@ -1,0 +1,27 @@
+//! How many combinations `vkbrdf check` runs, derived from the term lists and the legality
+//! rules — not from `check::combinations`, whose count it checks.
+
+use vkbrdf::terms::{legality, Convention, DistributionKind, FresnelKind, Geometry};
+
+/// The models `check` runs without terms: Lambert, Phong, Blinn–Phong, RTR, and Ward
+/// isotropic and anisotropic.
+const PLAIN_MODELS: usize = 6;
+/// The measured combinations: a MERL table looked up `nearest` and `linear`.
+const MERL_LOOKUPS: usize = 2;
+
+/// Every legal Cook–Torrance shape (convention × distribution × isotropic or anisotropic ×
+/// geometry, as `terms::legality` allows) with each Fresnel term, the plain models and the
+/// MERL lookups.
+pub fn check_combination_count() -> usize {
+    let mut shapes = 0;
+    for c in Convention::ALL {
+        for d in DistributionKind::ALL {
+            for anisotropic in [false, true] {
+                for g in Geometry::ALL {
+                    shapes += usize::from(legality(c, d, anisotropic, g).is_ok());
+                }
+            }
+        }
+    }
+    PLAIN_MODELS + shapes * FresnelKind::ALL.len() + MERL_LOOKUPS
+}
