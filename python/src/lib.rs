@@ -64,18 +64,6 @@ enum Origin {
     Presets,
 }
 
-fn model_name(m: &Material) -> &'static str {
-    match m.model {
-        Model::Lambert => "lambert",
-        Model::Phong { .. } => "phong",
-        Model::BlinnPhong { .. } => "blinn-phong",
-        Model::Rtr { .. } => "rtr",
-        Model::Ward { .. } => "ward",
-        Model::CookTorrance(_) => "cook-torrance",
-        Model::Measured(_) => "merl",
-    }
-}
-
 #[pymethods]
 impl Materials {
     /// The material names, in table order (a tuple row's material column indexes them).
@@ -88,7 +76,7 @@ impl Materials {
     /// `cook-torrance`, `merl`).
     #[getter]
     fn models(&self) -> Vec<&'static str> {
-        self.list.iter().map(model_name).collect()
+        self.list.iter().map(|m| m.model.toml_name()).collect()
     }
 
     /// Where the table came from (a file name, `<string>`, `the presets`).
@@ -143,7 +131,7 @@ impl Materials {
         let items: Vec<String> = self
             .list
             .iter()
-            .map(|m| format!("{}: {}", m.name, model_name(m)))
+            .map(|m| format!("{}: {}", m.name, m.model.toml_name()))
             .collect();
         format!(
             "<vkbrdf.Materials from {}: {}>",

@@ -351,18 +351,13 @@ fn is_conductor(m: &Material) -> bool {
 /// How many values `p` has in `m` (1 or 3), or why `m` does not have it.
 fn has(m: &Material, p: Param) -> std::result::Result<usize, String> {
     let ct = m.cook_torrance();
-    let model = match &m.model {
-        Model::Lambert => "lambert",
-        Model::Phong { .. } => "phong",
-        Model::BlinnPhong { .. } => "blinn-phong",
-        Model::Rtr { .. } => "rtr",
-        Model::Ward { .. } => "ward",
-        Model::CookTorrance(_) => "cook-torrance",
-        Model::Measured(_) => return Err(
+    if let Model::Measured(_) = m.model {
+        return Err(
             "a measured (merl) material has no parameters to fit; start from an analytic material"
                 .into(),
-        ),
-    };
+        );
+    }
+    let model = m.model.toml_name();
     if m.is_anisotropic() {
         return Err("anisotropic roughness cannot be fitted to isotropic data; start from an isotropic material".into());
     }

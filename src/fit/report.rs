@@ -25,12 +25,7 @@ pub fn material_toml(material: &Material) -> Result<String> {
     match &material.model {
         Model::Lambert => key(&mut s, "model", "\"lambert\"".into()),
         Model::Phong { exponent } | Model::BlinnPhong { exponent } | Model::Rtr { exponent } => {
-            let name = match material.model {
-                Model::Phong { .. } => "phong",
-                Model::BlinnPhong { .. } => "blinn-phong",
-                _ => "rtr",
-            };
-            key(&mut s, "model", format!("{name:?}"));
+            key(&mut s, "model", format!("{:?}", material.model.toml_name()));
             key(&mut s, "exponent", format!("{exponent:?}"));
         }
         Model::Ward { roughness } => {

@@ -111,6 +111,21 @@ pub struct CookTorrance {
     pub diffuse_weight: f64,
 }
 
+impl Model {
+    /// The model's spelling in a materials file (`model = "..."`).
+    pub fn toml_name(&self) -> &'static str {
+        match self {
+            Model::Lambert => "lambert",
+            Model::Phong { .. } => "phong",
+            Model::BlinnPhong { .. } => "blinn-phong",
+            Model::Rtr { .. } => "rtr",
+            Model::Ward { .. } => "ward",
+            Model::CookTorrance(_) => "cook-torrance",
+            Model::Measured(_) => "merl",
+        }
+    }
+}
+
 impl Material {
     /// The Cook–Torrance parameters, when this is a microfacet material.
     pub fn cook_torrance(&self) -> Option<&CookTorrance> {
