@@ -32,6 +32,7 @@ use vkbrdf::table::{slice, texel_centre, Grid, Runner};
 use vkbrdf::Error;
 
 mod errors;
+mod fit;
 use errors::{raise, to_py, TUPLES};
 
 /// How often the calling thread looks for Ctrl-C while an engine runs.
@@ -40,7 +41,7 @@ const SIGNAL_POLL: Duration = Duration::from_millis(20);
 /// A table of materials: what `load_materials`, `parse_materials` and `presets` return.
 #[pyclass(frozen, module = "vkbrdf", name = "Materials")]
 pub struct Materials {
-    list: Arc<Vec<Material>>,
+    pub(crate) list: Arc<Vec<Material>>,
     source: String,
     origin: Origin,
 }
@@ -93,7 +94,7 @@ impl Materials {
 
     /// The index of the material called `name`; a `MaterialError` naming the defined
     /// ones when there is none.
-    fn index(&self, py: Python<'_>, name: &str) -> PyResult<usize> {
+    pub(crate) fn index(&self, py: Python<'_>, name: &str) -> PyResult<usize> {
         self.list
             .iter()
             .position(|m| m.name == name)
@@ -142,7 +143,7 @@ impl Materials {
 }
 
 /// The engine named `name` (`auto`, `vulkan`, `cpu`, `reference`), or a `UsageError`.
-fn parse_backend(py: Python<'_>, name: &str) -> PyResult<Kind> {
+pub(crate) fn parse_backend(py: Python<'_>, name: &str) -> PyResult<Kind> {
     name.parse::<Kind>()
         .map_err(|e| raise(py, "UsageError", format!("backend: {e}")))
 }
@@ -252,7 +253,7 @@ fn with_engine<T>(
 /// Runs `work` on an engine of `kind` on a worker thread, with the GIL released; Ctrl-C
 /// (a pending `KeyboardInterrupt`) cancels it. Calls from several threads share nothing
 /// but the immutable inputs (a pooled Vulkan engine serves one call at a time).
-fn run_engine<T: Send>(
+pub(crate) fn run_engine<T: Send>(
     py: Python<'_>,
     kind: Kind,
     work: impl FnOnce(&mut dyn Backend, &Cancel) -> vkbrdf::Result<T> + Send,
@@ -700,6 +701,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(table_albedo, m)?)?;
     m.add_function(wrap_pyfunction!(table_dfg, m)?)?;
     m.add_function(wrap_pyfunction!(check, m)?)?;
+    m.add_function(wrap_pyfunction!(fit::fit, m)?)?;
     m.add("DEFAULT_SAMPLES", albedo::DEFAULT_SAMPLES)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())

@@ -40,6 +40,7 @@ __all__ = [
     "UsageError",
     "check",
     "evaluate",
+    "fit",
     "load_materials",
     "parse_materials",
     "presets",
@@ -215,6 +216,52 @@ def check(*, backend="vulkan", tuples=2000, seed=1, only=None):
     returns its report as a list of dicts, one per combination."""
     return _native.check(str(backend), int(tuples), int(seed), only)
 
+
+
+def fit(
+    materials,
+    material,
+    *,
+    free,
+    merl=None,
+    tuples=None,
+    values=None,
+    loss="l2",
+    backend="auto",
+    starts=8,
+    seed=1,
+    max_theta=None,
+):
+    """Fits a material's free parameters to measured data; see the stub (``vkbrdf/__init__.pyi``)."""
+    if not isinstance(materials, Materials):
+        raise UsageError(
+            f"materials: expected a vkbrdf.Materials (load_materials, parse_materials, presets), "
+            f"found {type(materials).__name__}"
+        )
+    if isinstance(free, str):
+        free = [p for p in free.split(",") if p.strip()]
+    arrays = []
+    for name, a in (("tuples", tuples), ("values", values)):
+        if a is not None:
+            a = _np.ascontiguousarray(a, dtype=_np.float32)
+            if a.ndim != 2:
+                raise BatchError(f"{name}: must be 2-D; shape {a.shape}")
+        arrays.append(a)
+    result = _native.fit(
+        materials,
+        str(material),
+        [str(p).strip() for p in free],
+        None if merl is None else _os.fspath(merl),
+        arrays[0],
+        arrays[1],
+        str(loss),
+        str(backend),
+        int(starts),
+        int(seed),
+        None if max_theta is None else float(max_theta),
+    )
+    result["material"] = parse_materials(result["toml"], source="vkbrdf.fit")
+    return result
 
 
 def _docstrings_from_the_stub():

@@ -243,3 +243,47 @@ def check(
     >>> all(r["pass"] for r in report)
     True
     """
+
+def fit(
+    materials: Materials,
+    material: Union[str, int],
+    *,
+    free: Union[str, Sequence[str]],
+    merl: Optional[Union[str, "os.PathLike[str]"]] = None,
+    tuples: Optional[npt.ArrayLike] = None,
+    values: Optional[npt.ArrayLike] = None,
+    loss: str = "l2",
+    backend: str = "auto",
+    starts: int = 8,
+    seed: int = 1,
+    max_theta: Optional[float] = None,
+) -> Dict[str, Any]:
+    """``vkbrdf fit``: fits the ``free`` parameters of ``materials[material]`` (the start;
+    the others stay fixed) to measured data — a MERL binary (``merl=``), or tuples (``(n,
+    6)`` local rows or ``(n, 10|13)`` rows) with measured RGB values ``(n, 3)`` — on an
+    engine (``backend``). ``free``: any of ``roughness``, ``f0``, ``diffuse``,
+    ``specular``, ``ior``, ``extinction``, ``exponent`` (a list or a comma-separated
+    string). ``loss``: ``l2`` (Ngan et al.), ``e1``, ``e2`` (Löw et al.) or ``rrms``; every
+    metric is reported whichever is minimised. ``max_theta`` (degrees) masks samples
+    beyond it. Ctrl-C raises ``KeyboardInterrupt`` (the command line, unlike this
+    function, writes the best parameters so far).
+
+    Returns a dict: ``material`` (a :class:`Materials` of the fitted material), ``toml``
+    (its materials-file text, which ``vkbrdf eval`` takes as is), ``parameters`` (each free
+    parameter's values), ``metrics`` (``l2``, ``l2_relative``, ``e1``, ``e2``, ``rrms``,
+    ``energy``), ``loss``, ``evaluations``, ``seconds``, ``backend``, ``samples``.
+    See docs/FITTING.md.
+
+    >>> toml = ('[[material]]\\nname = "s"\\nmodel = "cook-torrance"\\ndistribution = "ggx"\\n'
+    ...         'fresnel = "schlick"\\nf0 = 0.04\\nroughness = {}\\n')
+    >>> rng = np.random.default_rng(1)
+    >>> rows = np.zeros((20000, 10), np.float32); rows[:, 8] = 1       # N = +z, material 0
+    >>> for k in (0, 3):                                               # L, V: upper hemisphere
+    ...     d = rng.normal(size=(20000, 3)); d[:, 2] = abs(d[:, 2]); rows[:, k:k + 3] = d
+    >>> f = vkbrdf.evaluate(vkbrdf.parse_materials(toml.format(0.3)), rows, backend="cpu")
+    >>> r = vkbrdf.fit(vkbrdf.parse_materials(toml.format(0.6)), "s", free="roughness,specular",
+    ...                tuples=rows, values=f, backend="cpu")
+    >>> round(r["parameters"]["roughness"][0], 3)
+    0.3
+    """
+    ...
