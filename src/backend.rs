@@ -156,6 +156,13 @@ pub trait Backend {
     /// default ignores it (an engine that never checks still finishes correctly).
     fn set_cancel(&mut self, _cancel: crate::cancel::Cancel) {}
 
+    /// A hint: the next batches draw their materials from `materials` (empty: no hint). An
+    /// engine that compiles a kernel per set of features may then compile one for all of
+    /// them and share it, where the caller runs many small related batches (`check`'s
+    /// combinations); each batch still evaluates only its own materials. The default
+    /// ignores it.
+    fn share_kernels(&mut self, _materials: &[crate::material::Material]) {}
+
     /// The engine's own direction generators, if it has them ([`GeneratedDirections`]):
     /// the tables then send a material and a grid or sampling plan instead of tuples. The
     /// default is none, and the tables build the tuples on the host.

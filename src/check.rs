@@ -810,16 +810,23 @@ pub fn run_with_skips(
             )));
         }
     }
+    let selected = |c: &Combination| options.only.as_deref().is_none_or(|o| c.name.contains(o));
+    // One kernel per group of combinations ([`kernel_group`]): every kernel a check
+    // compiles is compiled cold on a fresh machine, and 316 of them took minutes there.
+    let mut groups: std::collections::HashMap<String, Vec<Material>> = Default::default();
+    for c in all.iter().filter(|c| selected(c)) {
+        groups
+            .entry(kernel_group(c))
+            .or_default()
+            .extend(c.materials.iter().cloned());
+    }
     let mut reports = Vec::new();
     let mut skipped = Vec::new();
     for (i, c) in all.iter().enumerate() {
-        if options
-            .only
-            .as_deref()
-            .is_some_and(|only| !c.name.contains(only))
-        {
+        if !selected(c) {
             continue;
         }
+        backend.share_kernels(&groups[&kernel_group(c)]);
         let measured = c
             .materials
             .iter()
@@ -839,7 +846,26 @@ pub fn run_with_skips(
         progress(&r);
         reports.push(r);
     }
+    backend.share_kernels(&[]);
     Ok((reports, skipped))
+}
+
+/// The combinations that share a kernel in [`run`]: a Cook–Torrance combination's
+/// distribution, anisotropy and geometry (its conventions and Fresnel terms share one
+/// kernel, as a material table mixing them would); the plain models by anisotropy; each
+/// measured combination alone (a backend may refuse it).
+fn kernel_group(c: &Combination) -> String {
+    let m = &c.materials[0];
+    match &m.model {
+        crate::material::Model::CookTorrance(ct) => format!(
+            "{} {} {}",
+            ct.distribution.kind().toml_name(),
+            c.anisotropic,
+            ct.geometry.toml_name()
+        ),
+        crate::material::Model::Measured(_) => c.name.clone(),
+        _ => format!("plain {}", c.anisotropic),
+    }
 }
 
 #[cfg(test)]

@@ -238,6 +238,8 @@ pub struct VulkanBackend {
     _commands: CommandPool,
     kernels: Kernels,
     last_features: Option<FeatureSet>,
+    /// The features [`Backend::share_kernels`] asked every kernel to include.
+    shared_features: FeatureSet,
     options: VulkanOptions,
     /// Checked before each chunk is submitted.
     cancel: crate::cancel::Cancel,
@@ -301,6 +303,7 @@ impl VulkanBackend {
             last_features: None,
             options,
             cancel: crate::cancel::Cancel::new(),
+            shared_features: FeatureSet::EMPTY,
             stages: HostStages::default(),
             device,
         })
@@ -1012,8 +1015,19 @@ impl Backend for VulkanBackend {
         materials: &[Material],
         request: &Request,
     ) -> Result<Output> {
-        let features = self.grouping(FeatureSet::of_batch(batch, materials, request));
+        let features = if self.shared_features == FeatureSet::EMPTY {
+            FeatureSet::of_batch(batch, materials, request)
+        } else {
+            Self::features_with(batch, materials, request, self.shared_features)
+        };
+        let features = self.grouping(features);
         self.run(batch, materials, features)
+    }
+
+    fn share_kernels(&mut self, materials: &[Material]) {
+        self.shared_features = materials
+            .iter()
+            .fold(FeatureSet::EMPTY, |f, m| f | FeatureSet::of_material(m));
     }
 
     fn generated_directions(&mut self) -> Option<&mut dyn crate::backend::GeneratedDirections> {
