@@ -342,3 +342,56 @@ fn cli_fits_a_full_merl_table_and_its_material_evaluates() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("not a MERL BRDF"));
     assert!(!p("bad.toml").exists());
 }
+
+/// A MERL table made by `vkbrdf table merl` from `case.truth`, every 17th valid bin (about
+/// 65,000; the bins' own solid angles keep the loss's scale), fitted back within `tol`;
+/// with `noise` the values are multiplied by `1 + noise·u` (u uniform in [−1, 1]).
+fn merl_round_trip(case: &Case, noise: f64, tol: f64) {
+    use rand::{Rng, SeedableRng};
+    let dir = tempfile::tempdir().unwrap();
+    let (toml, table) = (dir.path().join("m.toml"), dir.path().join("t.binary"));
+    std::fs::write(
+        &toml,
+        format!("[[material]]\nname = \"truth\"\n{}\n", case.truth),
+    )
+    .unwrap();
+    let ok = vkbrdf_cmd()
+        .args(["table", "merl", "--backend", "cpu", "-m"])
+        .arg(&toml)
+        .args(["--material", "truth", "-o"])
+        .arg(&table)
+        .status()
+        .unwrap();
+    assert!(ok.success());
+    let merl = vkbrdf::material::merl::read(&table).unwrap();
+    let mut data = FitData::from_merl(&merl, None).unwrap().subsample(17);
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(11);
+    for v in &mut data.values {
+        for c in v.iter_mut() {
+            *c *= 1.0 + noise * rng.random_range(-1.0..=1.0);
+        }
+    }
+    let (truth, start) = (material(case.truth), material(case.start));
+    let r = run_fit(&start, case.free, &data, Loss::L2, 2);
+    let (got, want) = (roughness(&r.material), roughness(&truth));
+    assert!(close(got, want, tol), "roughness {got} vs {want}");
+    let (a, b) = (f0(&r.material), f0(&truth));
+    for c in 0..3 {
+        assert!(close(a[c], b[c], tol), "F0 {a:?} vs {b:?}");
+    }
+    if noise == 0.0 {
+        assert!(
+            r.metrics.l2_relative <= 1e-6,
+            "L2/energy {}",
+            r.metrics.l2_relative
+        );
+    }
+}
+
+#[test]
+fn merl_round_trips_of_a_ggx_conductor_and_a_beckmann_plastic() {
+    for case in [&GGX_CONDUCTOR, &BECKMANN_PLASTIC] {
+        merl_round_trip(case, 0.0, 0.01);
+        merl_round_trip(case, 0.01, 0.05);
+    }
+}
