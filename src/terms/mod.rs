@@ -4,7 +4,7 @@
 //! the judge) and its SIMD-lane form (the CPU engine's, f32 where the contract allows),
 //! under one name. Its GLSL form is the block of the same name in `glsl/terms.glsl`.
 //!
-//! Each family is one list ([`family!`](family)): `d/` the distributions D (§2), `g/` the
+//! Each family is one list (`family!`, in `terms/family.rs`): `d/` the distributions D (§2), `g/` the
 //! geometry terms G (§3), `f/` the Fresnel terms F (§4), `k/` the conventions with their
 //! glare factor K (§5). The list numbers the terms (the codes both engines compare), names
 //! their kernel feature, and generates the tables from a term to its file; the dispatches
