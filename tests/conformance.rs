@@ -389,17 +389,17 @@ fn a_ggx_schlick_batch_runs_a_kernel_without_erf_conductor_or_ward() {
     let names = spirv_names(&gpu.spirv(features).expect("spirv"));
     let has = |prefix: &str| names.iter().any(|n| n.starts_with(prefix));
     assert!(
-        has("D_GGX(") && has("F_Schlick(") && has("Lambda_GGX("),
+        has("ggx_d(") && has("schlick_f(") && has("ggx_lambda("),
         "{names:?}"
     );
     for absent in [
         "erfc_nr(",
-        "Lambda_Beckmann(",
-        "F_Conductor(",
+        "beckmann_lambda(",
+        "conductor_f(",
         "csqrt(",
         "model_ward(",
-        "D_Beckmann(",
-        "D_Gaussian(",
+        "beckmann_d(",
+        "gaussian_d(",
         "atan2_positive(",
         "Terms",
     ] {
@@ -407,7 +407,7 @@ fn a_ggx_schlick_batch_runs_a_kernel_without_erf_conductor_or_ward() {
     }
     // The all-features kernel does have them, so the test above is not vacuous.
     let all = spirv_names(&gpu.spirv(FeatureSet::all()).expect("spirv"));
-    for present in ["erfc_nr(", "F_Conductor(", "model_ward(", "Terms"] {
+    for present in ["erfc_nr(", "conductor_f(", "model_ward(", "Terms"] {
         assert!(
             all.iter().any(|n| n.starts_with(present)),
             "{present} missing from the all-features kernel"
