@@ -3,8 +3,7 @@
 //! to `.npy` with the `npyz` crate; and the local-frame form [`LocalBatch`], `n × 6` rows
 //! `Lx Ly Lz Vx Vy Vz` with N = +z and one material for the whole batch.
 
-mod rows;
-pub use rows::NpyRows;
+pub mod rows;
 
 use crate::cancel::Cancel;
 use crate::error::{Error, Result};
@@ -123,7 +122,7 @@ impl<'a> Batch<'a> {
         Ok(batch)
     }
 
-    /// The row-major data, for reuse (see [`NpyRows::next_chunk_reusing`]).
+    /// The row-major data, for reuse (see [`rows::NpyRows::next_chunk_reusing`]).
     /// (A borrowed batch gives a copy.)
     pub fn into_data(self) -> Vec<f32> {
         self.data.into_owned()
@@ -670,6 +669,27 @@ pub fn stage_npy_f32(
         writer.extend(data.iter().copied())?;
         writer.finish()
     })
+}
+
+/// The header of a C-order float32 `.npy` of shape `(rows, columns)`, version 1.0, padded
+/// so that the data starts at a multiple of 64 bytes (as NumPy writes it).
+pub fn npy_header_f32(rows: u64, columns: usize) -> Vec<u8> {
+    npy_header_f32_shape(&format!("{rows}, {columns}"))
+}
+
+/// The header of a C-order float32 `.npy` of shape `(shape)` (its comma-separated
+/// dimensions), padded so that the data starts at a multiple of 64 bytes.
+pub fn npy_header_f32_shape(shape: &str) -> Vec<u8> {
+    let dict = format!("{{'descr': '<f4', 'fortran_order': False, 'shape': ({shape}), }}");
+    let unpadded = 10 + dict.len() + 1; // magic, version, length; the dict; '\n'
+    let total = unpadded.div_ceil(64) * 64;
+    let mut h = Vec::with_capacity(total);
+    h.extend_from_slice(b"\x93NUMPY\x01\x00");
+    h.extend_from_slice(&((total - 10) as u16).to_le_bytes());
+    h.extend_from_slice(dict.as_bytes());
+    h.resize(total - 1, b' ');
+    h.push(b'\n');
+    h
 }
 
 /// The path as a `PathBuf` for in-memory batches in errors.

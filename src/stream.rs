@@ -12,7 +12,8 @@ pub mod shard;
 
 use crate::atomic::{self, StagedWriter};
 use crate::backend::{Backend, Counts, Output, Request, TERM_COLUMNS};
-use crate::batch::{check_tangent_rows, local_material, Batch, LocalBatch, NpyRows, COLUMNS_LOCAL};
+use crate::batch::rows::NpyRows;
+use crate::batch::{check_tangent_rows, local_material, Batch, LocalBatch, COLUMNS_LOCAL};
 use crate::cancel::Cancel;
 use crate::error::{Error, Result};
 use crate::material::Material;
@@ -311,7 +312,7 @@ impl NpyOut {
     fn start(path: &Path, rows: u64, columns: usize, cancel: &Cancel) -> Result<NpyOut> {
         let mut writer = atomic::stage_writer(path, cancel)?;
         writer
-            .write_all(&npy_header_f32(rows, columns))
+            .write_all(&crate::batch::npy_header_f32(rows, columns))
             .map_err(|e| writer.error(e))?;
         Ok(NpyOut {
             writer,
@@ -352,27 +353,6 @@ impl NpyOut {
         }
         self.writer.finish()
     }
-}
-
-/// The header of a C-order float32 `.npy` of shape `(rows, columns)`, version 1.0, padded
-/// so that the data starts at a multiple of 64 bytes (as NumPy writes it).
-pub fn npy_header_f32(rows: u64, columns: usize) -> Vec<u8> {
-    npy_header_f32_shape(&format!("{rows}, {columns}"))
-}
-
-/// The header of a C-order float32 `.npy` of shape `(shape)` (its comma-separated
-/// dimensions), padded so that the data starts at a multiple of 64 bytes.
-pub fn npy_header_f32_shape(shape: &str) -> Vec<u8> {
-    let dict = format!("{{'descr': '<f4', 'fortran_order': False, 'shape': ({shape}), }}");
-    let unpadded = 10 + dict.len() + 1; // magic, version, length; the dict; '\n'
-    let total = unpadded.div_ceil(64) * 64;
-    let mut h = Vec::with_capacity(total);
-    h.extend_from_slice(b"\x93NUMPY\x01\x00");
-    h.extend_from_slice(&((total - 10) as u16).to_le_bytes());
-    h.extend_from_slice(dict.as_bytes());
-    h.resize(total - 1, b' ');
-    h.push(b'\n');
-    h
 }
 
 /// `path` relative to `base`'s directory when it lies in it (its file name), else as given.

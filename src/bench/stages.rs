@@ -9,7 +9,8 @@
 //! from the page cache.
 
 use crate::backend::{Backend, Request};
-use crate::batch::{write_npy_f32, Batch, NpyRows};
+use crate::batch::rows::NpyRows;
+use crate::batch::{write_npy_f32, Batch};
 use crate::cancel::Cancel;
 use crate::error::Result;
 use crate::material::Material;

@@ -437,7 +437,7 @@ fn join(
 ) -> Result<(atomic::Staged, Vec<u64>)> {
     let mut saturated = Vec::with_capacity(cars.len());
     let mut w = atomic::stage_writer(output, cancel)?;
-    w.write_all(&super::npy_header_f32(total, columns))
+    w.write_all(&crate::batch::npy_header_f32(total, columns))
         .map_err(|e| w.error(e))?;
     for car in cars {
         let file = file_of(car);

@@ -434,8 +434,8 @@ pub struct AlbedoJob {
     pub grid: Grid,
     /// Samples per texel.
     pub samples: u32,
-    /// The axes (default [`super::dfg::Axes::DEFAULT`]).
-    pub axes: super::dfg::Axes,
+    /// The axes (default [`super::axes::Axes::DEFAULT`]).
+    pub axes: super::axes::Axes,
     /// Write float16.
     pub half: bool,
     /// The E table.

@@ -17,6 +17,7 @@
 //! no partial file and never clobbers an existing one.
 
 pub mod albedo;
+pub mod axes;
 pub mod dfg;
 pub mod exr_out;
 pub mod font;

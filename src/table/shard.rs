@@ -220,7 +220,7 @@ pub fn stage_exr_part(
         engine: provenance.backend.clone(),
         version: super::VERSION.to_string(),
     };
-    let header = crate::stream::npy_header_f32_shape(&format!(
+    let header = crate::batch::npy_header_f32_shape(&format!(
         "{}, {row_texels}, {}",
         band.len(),
         channels.len()
