@@ -14,7 +14,7 @@
 
 use super::albedo::{self, Microfacet, Sampler};
 use super::exr_out::{self, Channel, Layer, Provenance};
-use super::{texel_centre, Grid, Runner};
+use super::{Grid, Runner};
 use crate::error::{Error, Result};
 use crate::material::Geometry;
 use std::path::PathBuf;
