@@ -14,57 +14,88 @@ use crate::material::{Material, Model, Roughness};
 use crate::terms::math::{exp_neg, log_cos};
 use std::f64::consts::PI;
 
+/// An empirical lobe model; the discriminant is the lanes' const parameter ([`lobe_block`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[repr(u8)]
+pub enum Lobe {
+    /// Modified, normalised Phong.
+    Phong = 0,
+    /// The seed's Blinn–Phong.
+    BlinnPhong = 1,
+    /// RTR's shading equation.
+    Rtr = 2,
+    /// Isotropic Ward.
+    Ward = 3,
+    /// Anisotropic Ward (needs the tangent).
+    WardAniso = 4,
+}
+
+impl Lobe {
+    /// The lobe whose code is `code`, in a `const` block (an unknown code is then a
+    /// compile error).
+    pub const fn from_code(code: u8) -> Lobe {
+        match code {
+            0 => Lobe::Phong,
+            1 => Lobe::BlinnPhong,
+            2 => Lobe::Rtr,
+            3 => Lobe::Ward,
+            4 => Lobe::WardAniso,
+            _ => panic!("no lobe has this code"),
+        }
+    }
+}
+
 /// Lobe model: modified, normalised Phong.
-pub const L_PHONG: u8 = 0;
+pub const L_PHONG: u8 = Lobe::Phong as u8;
 /// Lobe model: the seed's Blinn–Phong.
-pub const L_BLINN_PHONG: u8 = 1;
+pub const L_BLINN_PHONG: u8 = Lobe::BlinnPhong as u8;
 /// Lobe model: RTR's shading equation.
-pub const L_RTR: u8 = 2;
+pub const L_RTR: u8 = Lobe::Rtr as u8;
 /// Lobe model: isotropic Ward.
-pub const L_WARD: u8 = 3;
+pub const L_WARD: u8 = Lobe::Ward as u8;
 /// Lobe model: anisotropic Ward (needs the tangent).
-pub const L_WARD_ANISO: u8 = 4;
+pub const L_WARD_ANISO: u8 = Lobe::WardAniso as u8;
 
 /// The lobe model and constants of an empirical model (`p` holds its diffuse and specular
 /// colours): its lobe's exponent and normalisation, formed in f64 and rounded once; `None`
 /// for a model that is not a lobe.
-pub fn params(m: &Material, mut p: Params) -> Option<(u8, Params)> {
+pub fn params(m: &Material, mut p: Params) -> Option<(Lobe, Params)> {
     let model = match m.model {
         Model::Phong { exponent } => {
             p.exponent = exponent as f32;
             p.d_norm_f = ((exponent + 2.0) / (2.0 * PI)) as f32;
-            L_PHONG
+            Lobe::Phong
         }
         Model::BlinnPhong { exponent } => {
             p.exponent = exponent as f32;
             p.d_norm_f = (1.0 / PI) as f32;
-            L_BLINN_PHONG
+            Lobe::BlinnPhong
         }
         Model::Rtr { exponent } => {
             p.exponent = exponent as f32;
             p.d_norm_f = ((exponent + 8.0) / (8.0 * PI)) as f32;
-            L_RTR
+            Lobe::Rtr
         }
         Model::Ward {
             roughness: Roughness::Isotropic(r),
         } => {
             p.inv_m2 = 1.0 / (r * r);
             p.d_norm_f = (1.0 / (4.0 * PI * r * r)) as f32;
-            L_WARD
+            Lobe::Ward
         }
         Model::Ward {
             roughness: Roughness::Anisotropic(mx, my),
         } => {
             p.aniso = super::aniso::roughness(mx, my);
             p.d_norm_f = (1.0 / (4.0 * PI * mx * my)) as f32;
-            L_WARD_ANISO
+            Lobe::WardAniso
         }
         _ => return None,
     };
     Some((model, p))
 }
 
-/// One block of lobe model `M` (one of the `L_*` constants). Writes the BRDF and D (the
+/// One block of lobe model `M` (a [`Lobe`]'s code). Writes the BRDF and D (the
 /// caller sets G = F = K = 1 once a chunk, `kernel::lambert_terms`, whose D the block
 /// overwrites).
 #[inline(always)]
@@ -81,8 +112,8 @@ pub fn lobe_block<const M: u8>(p: &Params, inp: &Inputs, out: &mut Outputs) {
         let mut hard = false;
         // The anisotropic Ward's tangent frame (the others' variants do not compute it).
         let t = tangent(&f, lane_tangent(inp, k));
-        let lobe = match M {
-            L_PHONG => {
+        let lobe = match const { Lobe::from_code(M) } {
+            Lobe::Phong => {
                 // Lewis 1994: (e + 2)/(2π) max(0, r·v)^e; pow(0, e) is 0, or 1 for e = 0.
                 let rv = f.rv as f32;
                 let pow = exp_neg(p.exponent * log_cos(rv, f.sin2_rv as f32));
@@ -99,10 +130,10 @@ pub fn lobe_block<const M: u8>(p: &Params, inp: &Inputs, out: &mut Outputs) {
                 p.d_norm_f * pow
             }
             // Blinn 1977 as the seed writes it: cos_h^e/(π cos_i).
-            L_BLINN_PHONG => p.d_norm_f * cos_h_e / cos_i,
+            Lobe::BlinnPhong => p.d_norm_f * cos_h_e / cos_i,
             // RTR 3rd ed. §5.5: (e + 8)/(8π) cos_h^e.
-            L_RTR => p.d_norm_f * cos_h_e,
-            _ => {
+            Lobe::Rtr => p.d_norm_f * cos_h_e,
+            Lobe::Ward | Lobe::WardAniso => {
                 // Ward 1992: exp(−((hx/mx)² + (hy/my)²)/hz²)/(4π mx my √(cos_i cos_o)),
                 // isotropic exp(−tan²δ/m²)/(4π m² …), the exponent and the root in f64
                 // (tan² of a grazing h and m up to 1e-7 leave f32).

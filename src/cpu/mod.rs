@@ -435,16 +435,16 @@ fn f32_frame_block<const Z: bool>(plan: &Plan, inp: &Inputs, out: &mut Outputs) 
 fn f64_frame_block(plan: &Plan, inp: &Inputs, out: &mut Outputs) {
     use crate::terms::{DistributionKind as D, FresnelKind as F, Geometry as G};
     use kernel::*;
-    use lobes::{lobe_block, L_BLINN_PHONG, L_PHONG, L_RTR};
+    use lobes::{lobe_block, Lobe, L_BLINN_PHONG, L_PHONG, L_RTR, L_WARD, L_WARD_ANISO};
     let (d, aniso, g, f, p) = match plan {
         Plan::Microfacet { d, aniso, g, f, p } => (*d, *aniso, *g, *f, p),
         Plan::Lobe { model, p } => {
             match *model {
-                L_PHONG => lobe_block::<L_PHONG>(p, inp, out),
-                L_BLINN_PHONG => lobe_block::<L_BLINN_PHONG>(p, inp, out),
-                L_RTR => lobe_block::<L_RTR>(p, inp, out),
-                lobes::L_WARD => lobe_block::<{ lobes::L_WARD }>(p, inp, out),
-                _ => lobe_block::<{ lobes::L_WARD_ANISO }>(p, inp, out),
+                Lobe::Phong => lobe_block::<L_PHONG>(p, inp, out),
+                Lobe::BlinnPhong => lobe_block::<L_BLINN_PHONG>(p, inp, out),
+                Lobe::Rtr => lobe_block::<L_RTR>(p, inp, out),
+                Lobe::Ward => lobe_block::<L_WARD>(p, inp, out),
+                Lobe::WardAniso => lobe_block::<L_WARD_ANISO>(p, inp, out),
             }
             return;
         }

@@ -32,8 +32,8 @@ pub enum Plan {
     /// One of the empirical lobe models (Phong, Blinn–Phong, RTR, isotropic Ward) in the
     /// lanes ([`super::lobes`]).
     Lobe {
-        /// One of the `L_*` constants of [`crate::cpu::lobes`].
-        model: u8,
+        /// The lobe model ([`crate::cpu::lobes::Lobe`]).
+        model: crate::cpu::lobes::Lobe,
         /// The material's constants.
         p: Params,
     },
@@ -145,7 +145,7 @@ impl Plan {
     pub fn needs_tangent(&self) -> bool {
         match self {
             Plan::Microfacet { aniso, .. } => *aniso,
-            Plan::Lobe { model, .. } => *model == crate::cpu::lobes::L_WARD_ANISO,
+            Plan::Lobe { model, .. } => *model == crate::cpu::lobes::Lobe::WardAniso,
             _ => false,
         }
     }
