@@ -25,9 +25,11 @@ pub mod isa;
 pub mod kernel;
 pub mod lobes;
 
+mod dispatch;
 mod measured;
 pub mod plan;
 pub mod transpose;
+pub(crate) use dispatch::block;
 
 use crate::backend::{Backend, Counts, Output, Request, TERM_COLUMNS};
 use crate::batch::{Batch, LocalBatch, Tuple, COLUMNS_LOCAL, COLUMNS_PLAIN, COLUMNS_TANGENT};
@@ -360,161 +362,6 @@ impl pulp::NullaryFnOnce for ChunkOp4<'_, '_> {
     fn call(self) -> (Counts, Tally) {
         let o = self.op;
         run_chunk(self.simd, o.plan, o.batch, o.order, o.work, o.material)
-    }
-}
-
-/// One block of `plan`'s lanes; `z`: every lane's N is (0, 0, 1) (the local form), which
-/// the groups with an f32 frame run without N's arithmetic, to the same bits. The groups
-/// whose frame is always the f64 one (which serves both forms: the local form's lanes
-/// carry N) are compiled once, not once per form.
-#[inline(always)]
-pub(crate) fn block(plan: &Plan, inp: &Inputs, out: &mut Outputs, z: bool) {
-    match plan {
-        Plan::Lambert(_) => {}
-        Plan::Microfacet { d, aniso, g, f, .. } if kernel::fused(*d, *aniso, *g, *f) => {}
-        _ => return f64_frame_block(plan, inp, out),
-    }
-    if z {
-        f32_frame_block::<true>(plan, inp, out)
-    } else {
-        f32_frame_block::<false>(plan, inp, out)
-    }
-}
-
-/// Every lane of the block to the reference: the groups no lanes are compiled for, which
-/// the parser refuses (`terms::legality`), so a material never plans them.
-fn reference_block(out: &mut Outputs) {
-    out.rescue = [true; LANES];
-}
-
-/// Lambert and the fused microfacet groups ([`kernel::fused`]): the groups with an f32
-/// frame, compiled per form (`Z`: N = +z). The others go on to [`f64_frame_block`].
-#[inline(always)]
-fn f32_frame_block<const Z: bool>(plan: &Plan, inp: &Inputs, out: &mut Outputs) {
-    use crate::terms::{DistributionKind as D, FresnelKind as F, Geometry as G};
-    use kernel::*;
-    let Plan::Microfacet { d, g, f, p, .. } = plan else {
-        if let Plan::Lambert(p) = plan {
-            lambert_block::<Z>(p, inp, out);
-        }
-        return;
-    };
-    macro_rules! by_f {
-        ($d:expr, $g:expr) => {
-            match f {
-                F::None => microfacet_block::<$d, $g, F_NONE, Z>(p, inp, out),
-                F::Schlick => microfacet_block::<$d, $g, F_SCHLICK, Z>(p, inp, out),
-                F::Conductor => microfacet_block::<$d, $g, F_CONDUCTOR, Z>(p, inp, out),
-                F::Dielectric => f64_frame_block(plan, inp, out),
-            }
-        };
-    }
-    match (d, g) {
-        (D::Ggx, G::None) => by_f!(D_GGX, G_NONE),
-        (D::Ggx, G::CookTorrance) => by_f!(D_GGX, G_CT),
-        (D::Ggx, G::Smith) => by_f!(D_GGX, G_SMITH),
-        (D::Ggx, G::SmithCorrelated) => by_f!(D_GGX, G_SMITH_CORRELATED),
-        (D::Beckmann, G::None) => by_f!(D_BECKMANN, G_NONE),
-        (D::Beckmann, G::CookTorrance) => by_f!(D_BECKMANN, G_CT),
-        (D::Beckmann, G::Smith) => by_f!(D_BECKMANN, G_SMITH),
-        (D::Beckmann, G::SmithCorrelated) => by_f!(D_BECKMANN, G_SMITH_CORRELATED),
-        (D::Beckmann, G::SmithFast) => by_f!(D_BECKMANN, G_SMITH_FAST),
-        // Smith-fast is Beckmann's fit: no GGX variant is compiled.
-        (D::Ggx, G::SmithFast) => reference_block(out),
-        // Not fused (`kernel::fused`).
-        (D::Ggx | D::Beckmann, G::SchlickSmith | G::Neubelt)
-        | (D::Gaussian | D::Blinn | D::Charlie, _) => f64_frame_block(plan, inp, out),
-    }
-}
-
-/// The groups whose frame is always the f64 one: the empirical lobes, and the microfacet
-/// groups [`kernel::fused`] leaves out, in two passes ([`kernel::dg_block64`]). Each
-/// distribution compiles the geometry terms its rules allow (`terms::legality`); the
-/// others take [`reference_block`].
-#[inline(always)]
-fn f64_frame_block(plan: &Plan, inp: &Inputs, out: &mut Outputs) {
-    use crate::terms::{DistributionKind as D, FresnelKind as F, Geometry as G};
-    use kernel::*;
-    use lobes::{lobe_block, Lobe, L_BLINN_PHONG, L_PHONG, L_RTR, L_WARD, L_WARD_ANISO};
-    let (d, aniso, g, f, p) = match plan {
-        Plan::Microfacet { d, aniso, g, f, p } => (*d, *aniso, *g, *f, p),
-        Plan::Lobe { model, p } => {
-            match *model {
-                Lobe::Phong => lobe_block::<L_PHONG>(p, inp, out),
-                Lobe::BlinnPhong => lobe_block::<L_BLINN_PHONG>(p, inp, out),
-                Lobe::Rtr => lobe_block::<L_RTR>(p, inp, out),
-                Lobe::Ward => lobe_block::<L_WARD>(p, inp, out),
-                Lobe::WardAniso => lobe_block::<L_WARD_ANISO>(p, inp, out),
-            }
-            return;
-        }
-        Plan::Lambert(_) | Plan::Measured | Plan::Reference => return,
-    };
-    let mut st = Stage::default();
-    macro_rules! dg {
-        ($d:expr, $g:expr) => {
-            dg_block64::<$d, $g>(p, inp, &mut st)
-        };
-    }
-    macro_rules! aniso {
-        ($d:expr, $g:expr) => {
-            aniso::dg_block64_aniso::<$d, $g>(p, inp, &mut st)
-        };
-    }
-    // Gaussian, Blinn and Charlie: no Smith Λ (so no Smith or Schlick–Smith geometry) and
-    // no anisotropic roughness.
-    macro_rules! no_lambda {
-        ($d:expr) => {
-            match g {
-                G::None => dg!($d, G_NONE),
-                G::CookTorrance => dg!($d, G_CT),
-                G::Neubelt => dg!($d, G_NEUBELT),
-                G::Smith | G::SmithCorrelated | G::SmithFast | G::SchlickSmith => {
-                    return reference_block(out)
-                }
-            }
-        };
-    }
-    match (d, aniso, g) {
-        (D::Ggx, false, G::None) => dg!(D_GGX, G_NONE),
-        (D::Ggx, false, G::CookTorrance) => dg!(D_GGX, G_CT),
-        (D::Ggx, false, G::Smith) => dg!(D_GGX, G_SMITH),
-        (D::Ggx, false, G::SmithCorrelated) => dg!(D_GGX, G_SMITH_CORRELATED),
-        (D::Ggx, false, G::SchlickSmith) => dg!(D_GGX, G_SCHLICK_SMITH),
-        (D::Ggx, false, G::Neubelt) => dg!(D_GGX, G_NEUBELT),
-        (D::Beckmann, false, G::None) => dg!(D_BECKMANN, G_NONE),
-        (D::Beckmann, false, G::CookTorrance) => dg!(D_BECKMANN, G_CT),
-        (D::Beckmann, false, G::Smith) => dg!(D_BECKMANN, G_SMITH),
-        (D::Beckmann, false, G::SmithCorrelated) => dg!(D_BECKMANN, G_SMITH_CORRELATED),
-        (D::Beckmann, false, G::SmithFast) => dg!(D_BECKMANN, G_SMITH_FAST),
-        (D::Beckmann, false, G::SchlickSmith) => dg!(D_BECKMANN, G_SCHLICK_SMITH),
-        (D::Beckmann, false, G::Neubelt) => dg!(D_BECKMANN, G_NEUBELT),
-        // Anisotropic roughness: no schlick-smith (FORMULAS.md §3), smith-fast with
-        // Beckmann only.
-        (D::Ggx, true, G::None) => aniso!(D_GGX, G_NONE),
-        (D::Ggx, true, G::CookTorrance) => aniso!(D_GGX, G_CT),
-        (D::Ggx, true, G::Smith) => aniso!(D_GGX, G_SMITH),
-        (D::Ggx, true, G::SmithCorrelated) => aniso!(D_GGX, G_SMITH_CORRELATED),
-        (D::Ggx, true, G::Neubelt) => aniso!(D_GGX, G_NEUBELT),
-        (D::Beckmann, true, G::None) => aniso!(D_BECKMANN, G_NONE),
-        (D::Beckmann, true, G::CookTorrance) => aniso!(D_BECKMANN, G_CT),
-        (D::Beckmann, true, G::Smith) => aniso!(D_BECKMANN, G_SMITH),
-        (D::Beckmann, true, G::SmithCorrelated) => aniso!(D_BECKMANN, G_SMITH_CORRELATED),
-        (D::Beckmann, true, G::SmithFast) => aniso!(D_BECKMANN, G_SMITH_FAST),
-        (D::Beckmann, true, G::Neubelt) => aniso!(D_BECKMANN, G_NEUBELT),
-        (D::Ggx, false, G::SmithFast)
-        | (D::Ggx, true, G::SmithFast | G::SchlickSmith)
-        | (D::Beckmann, true, G::SchlickSmith)
-        | (D::Gaussian | D::Blinn | D::Charlie, true, _) => return reference_block(out),
-        (D::Gaussian, false, _) => no_lambda!(D_GAUSSIAN),
-        (D::Blinn, false, _) => no_lambda!(D_BLINN),
-        (D::Charlie, false, _) => no_lambda!(D_CHARLIE),
-    }
-    match f {
-        F::None => f_block::<F_NONE>(p, &st, out),
-        F::Schlick => f_block::<F_SCHLICK>(p, &st, out),
-        F::Dielectric => f_block::<F_DIELECTRIC>(p, &st, out),
-        F::Conductor => f_block::<F_CONDUCTOR>(p, &st, out),
     }
 }
 
