@@ -59,6 +59,9 @@ Eval evaluate(Frame f, GpuMaterial m) {
 #if defined(HAS_COOK_TORRANCE)
     case MODEL_COOK_TORRANCE: return model_cook_torrance(f, m);
 #endif
+#if defined(HAS_HTSG)
+    case MODEL_HTSG: return model_htsg(f, m);
+#endif
     default: return eval_zero();
     }
 }

@@ -327,7 +327,7 @@ uint frame_scalars_f32(Row r, GpuMaterial m, inout Frame f) {
     }
 #endif
 #if defined(HAS_G_SMITH) || defined(HAS_G_SMITH_CORRELATED) || defined(HAS_G_SMITH_FAST) \
-    || defined(HAS_G_SCHLICK_SMITH)
+    || defined(HAS_G_SCHLICK_SMITH) || defined(HAS_HTSG)
     cross_ff3(n_hi, n_lo, l_hi, l_lo, x_hi, x_lo);
     f.sin2_i = ff_round(length2_ff3(x_hi, x_lo));
     cross_ff3(n_hi, n_lo, v_hi, v_lo, x_hi, x_lo);

@@ -84,7 +84,7 @@ uint frame_scalars_f64(Row r, GpuMaterial m, inout Frame f) {
     }
 #endif
 #if defined(HAS_G_SMITH) || defined(HAS_G_SMITH_CORRELATED) || defined(HAS_G_SMITH_FAST) \
-    || defined(HAS_G_SCHLICK_SMITH)
+    || defined(HAS_G_SCHLICK_SMITH) || defined(HAS_HTSG)
     dvec3 nxl = cross(dn, dl), nxv = cross(dn, dv); // Smith's tan^2, Schlick-Smith's 1 - cos
     f.sin2_i = f32_of(dot(nxl, nxl));
     f.sin2_o = f32_of(dot(nxv, nxv));

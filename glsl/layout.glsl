@@ -17,7 +17,8 @@
 struct GpuMaterial {
     // rgb: the whole diffuse term, d * c_diff / pi (d = 1 outside cook-torrance). a: 0.
     vec4 diffuse;
-    // rgb: s * c_spec (s = 1 outside cook-torrance). a: 0.
+    // rgb: s * c_spec (s = 1 outside cook-torrance; htsg: T = 2 pi tau / lambda per
+    // channel, glsl/htsg.glsl). a: 0.
     vec4 specular;
     // rgb: dielectric mu^2 - 1 (formed in f64: it cancels for mu near 1) | conductor n |
     // schlick F0. a: 0.

@@ -196,7 +196,7 @@ float atan2_positive(float y, float x) {
     return swap ? (PI / 2.0 - a) : a;
 }
 
-#if defined(HAS_LAMBDA_BECKMANN)
+#if defined(HAS_LAMBDA_BECKMANN) || defined(HAS_HTSG)
 // erfc(z) for z >= 0. Press, Teukolsky, Vetterling & Flannery 1992, "Numerical Recipes in C",
 // 2nd ed., §6.2 `erfcc`: a Chebyshev fit with fractional error < 1.2e-7 everywhere (so it
 // stays accurate in relative terms where erfc is tiny, unlike Abramowitz–Stegun 7.1.26,

@@ -515,6 +515,23 @@ void cook_torrance_gk_xf(Frame f, GpuMaterial m, uint convention, out vec2 g, ou
 }
 #endif
 
+#if defined(HAS_F_CONDUCTOR)
+// The conductor's F at the frame's c, in the form each range of c needs: below c = 1e-12
+// from the frame's f64 (or m 2^e) c, where c^2 leaves float32's range.
+vec3 conductor_f_frame(Frame f, GpuMaterial m) {
+#if defined(HAS_FLOAT64)
+    if (f.c_exact < 1e-12) {
+        return conductor_f_f64(f.c_exact, m.fresnel0.rgb, m.fresnel1.rgb, material_fresnel_lo(m));
+    }
+#else
+    if (xf_less(f.c_xf, xf(1e-12))) {
+        return conductor_f_tiny(f.c_xf, m.fresnel0.rgb, m.fresnel1.rgb, material_fresnel_lo(m));
+    }
+#endif
+    return conductor_f(f.c, m.fresnel0.rgb, m.fresnel1.rgb, material_fresnel_lo(m));
+}
+#endif
+
 #if defined(HAS_COOK_TORRANCE)
 // Cook & Torrance 1982, "A Reflectance Model for Computer Graphics":
 // d c_diff/pi + s c_spec (x) D G F K (d c_diff/pi is m.diffuse, s c_spec is m.specular).
@@ -587,20 +604,7 @@ Eval model_cook_torrance(Frame f, GpuMaterial m) {
     case FRESNEL_DIELECTRIC: e.f = dielectric_f(f.c, m.fresnel0.rgb, material_fresnel_lo(m), f.c_exact); break;
 #endif
 #if defined(HAS_F_CONDUCTOR)
-    case FRESNEL_CONDUCTOR:
-#if defined(HAS_FLOAT64)
-        if (f.c_exact < 1e-12) {
-            e.f = conductor_f_f64(f.c_exact, m.fresnel0.rgb, m.fresnel1.rgb, material_fresnel_lo(m));
-            break;
-        }
-#else
-        if (xf_less(f.c_xf, xf(1e-12))) {
-            e.f = conductor_f_tiny(f.c_xf, m.fresnel0.rgb, m.fresnel1.rgb, material_fresnel_lo(m));
-            break;
-        }
-#endif
-        e.f = conductor_f(f.c, m.fresnel0.rgb, m.fresnel1.rgb, material_fresnel_lo(m));
-        break;
+    case FRESNEL_CONDUCTOR: e.f = conductor_f_frame(f, m); break;
 #endif
 #if defined(HAS_F_SCHLICK)
     case FRESNEL_SCHLICK: e.f = schlick_f(f.c, m.fresnel0.rgb); break;
@@ -668,5 +672,7 @@ Eval model_cook_torrance(Frame f, GpuMaterial m) {
     return e;
 }
 #endif
+
+#include "htsg.glsl"
 
 #endif

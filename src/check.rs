@@ -9,7 +9,7 @@
 //! `schlick-smith` only with beckmann/ggx, `smith-fast` with beckmann only, anisotropic
 //! beckmann/ggx in the modern convention only, `schlick-smith` isotropic); and `merl
 //! nearest`, `merl linear`: measured materials over two analytic materials exported to MERL
-//! in memory, read by each lookup. 316 in all. Each combination is
+//! in memory, read by each lookup. 317 in all. Each combination is
 //! one batch over a table of [`MATERIALS_PER_COMBINATION`] materials with seeded random
 //! parameters (one always at the sharpest lobe allowed: roughness 0.01 or exponent 20000).
 //!
@@ -260,12 +260,13 @@ fn roughness_key(rng: &mut Pcg64Mcg, i: usize, aniso: bool) -> String {
 fn body(rng: &mut Pcg64Mcg, shape: &Shape, i: usize) -> String {
     let mut k = vec![format!("model = \"{}\"", shape.model)];
     k.push(format!("diffuse = {}", rgb(rng, 0.0, 1.0)));
-    if shape.model != "lambert" {
+    if shape.model != "lambert" && shape.model != crate::terms::htsg::NAME {
         k.push(format!("specular = {}", rgb(rng, 0.2, 1.0)));
     }
     match shape.model {
         "phong" | "blinn-phong" | "rtr" => k.push(format!("exponent = {:.4}", exponent(rng, i))),
         "ward" => k.push(roughness_key(rng, i, shape.anisotropic)),
+        "htsg" => k.extend(htsg_keys(rng, i)),
         "cook-torrance" => {
             k.push(format!("convention = \"{}\"", shape.convention));
             k.push(format!(
@@ -302,6 +303,34 @@ fn body(rng: &mut Pcg64Mcg, shape: &Shape, i: usize) -> String {
         _ => {}
     }
     k.join("\n")
+}
+
+/// An HTSG material's keys (FORMULAS.md §8): the smoothest surface accepted with a long
+/// correlation length (the sharpest lobe, g far below the switch), the bbm aluminium, a
+/// rough one (σ0/τ = 0.5, the Beckmann-form side of g = 18.5), then log-uniform σ0/τ with a
+/// dielectric (k = 0) among them; wavelengths across the accepted visible-to-infrared span.
+fn htsg_keys(rng: &mut Pcg64Mcg, i: usize) -> Vec<String> {
+    let (sigma0, tau) = match i {
+        0 => (0.01, 10.0),
+        1 => (0.0318, 0.3),
+        2 => (0.5, 1.0),
+        _ => {
+            let tau = log_uniform(rng, 0.1, 10.0);
+            (tau * log_uniform(rng, 1e-3, 2.0), tau)
+        }
+    };
+    let mut k = vec![format!("sigma0 = {sigma0:.6e}"), format!("tau = {tau:.6e}")];
+    if i == 1 {
+        k.push("ior = [1.3211, 0.88045, 0.59765]".into());
+        k.push("extinction = [7.41785, 6.1455, 5.2337]".into());
+    } else {
+        k.push(format!("ior = {}", rgb(rng, 0.2, 3.0)));
+        if i != 3 {
+            k.push(format!("extinction = {}", rgb(rng, 0.0, 8.0)));
+        }
+        k.push(format!("wavelengths = {}", rgb(rng, 300.0, 2000.0)));
+    }
+    k
 }
 
 /// The structural choices of one combination.
@@ -345,6 +374,7 @@ fn shapes() -> Vec<Shape> {
         .collect();
     v.push(plain("ward", false));
     v.push(plain("ward", true));
+    v.push(plain(crate::terms::htsg::NAME, false));
     // Every combination the contract defines: the legality rules are material::legality's.
     for convention in Convention::ALL {
         for distribution in DistributionKind::ALL {
@@ -515,6 +545,9 @@ fn lobe_width(m: &Material) -> f64 {
         }
         Model::Ward { roughness } => roughness.xy().0.max(roughness.xy().1),
         Model::CookTorrance(ct) => ct.distribution.lobe_width(),
+        // The rough limit's Beckmann m, or the diffraction width 1/T of a smooth surface.
+        Model::Htsg(p) => crate::terms::htsg::beckmann_m(p)
+            .max(p.wavelengths[1] / (2.0 * std::f64::consts::PI * p.tau)),
     }
 }
 

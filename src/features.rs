@@ -56,6 +56,8 @@ features! {
     /// material (a host-side counting sort), so a subgroup's lanes share one material's
     /// code path (mixed-8 kernel 3.3x on lavapipe).
     BUCKETED = 29, "BUCKETED";
+    /// An `htsg` material (FORMULAS.md §8; with the conductor Fresnel's code).
+    HTSG = 33, "HAS_HTSG";
     /// Every material is the fast precision variant: the device's own exp/log/atan2.
     FAST_MATH = 27, "FAST_MATH";
 }
@@ -174,6 +176,7 @@ impl FeatureSet {
             Model::Rtr { .. } => FeatureSet::RTR,
             Model::Ward { .. } => FeatureSet::WARD,
             Model::Measured(_) => FeatureSet::MEASURED,
+            Model::Htsg(_) => FeatureSet::HTSG | FeatureSet::F_CONDUCTOR,
             Model::CookTorrance(ct) => {
                 let mut f = FeatureSet::COOK_TORRANCE;
                 f |= FeatureSet::of_term(ct.distribution.kind().term());

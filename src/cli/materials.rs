@@ -81,6 +81,16 @@ pub fn summary(m: &Material) -> String {
         Model::Rtr { exponent } => format!("rtr e={exponent}"),
         Model::Ward { roughness } => format!("ward {}", roughness.describe()),
         Model::Measured(m) => format!("merl {}", m.path.display()),
+        Model::Htsg(p) => format!(
+            "htsg sigma0={} µm tau={} µm (Beckmann m≈{:.3}), n={} k={}, λ={} nm, diffuse={}",
+            p.sigma0,
+            p.tau,
+            vkbrdf::terms::htsg::beckmann_m(p),
+            rgb(p.ior),
+            rgb(p.extinction),
+            rgb(p.wavelengths.map(|l| (l * 1000.0 * 1e6).round() / 1e6)),
+            rgb(m.diffuse)
+        ),
         Model::CookTorrance(ct) => {
             let d = ct.distribution.describe();
             let f = match ct.fresnel {
@@ -105,7 +115,10 @@ pub fn summary(m: &Material) -> String {
     } else {
         body
     };
-    if matches!(m.model, Model::Lambert | Model::Measured(_)) {
+    if matches!(
+        m.model,
+        Model::Lambert | Model::Measured(_) | Model::Htsg(_)
+    ) {
         body
     } else if m.diffuse != [0.0; 3] || m.specular != [1.0; 3] {
         format!(

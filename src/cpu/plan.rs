@@ -61,6 +61,8 @@ impl Plan {
             Model::Lambert => return Plan::Lambert(p),
             Model::CookTorrance(ct) => ct,
             Model::Measured(_) => return Plan::Measured,
+            // Its series and Newton solve run in f64 (terms/htsg.rs): no lanes yet.
+            Model::Htsg(_) => return Plan::Reference,
             _ => {
                 return match crate::cpu::lobes::params(m, p) {
                     Some((model, p)) => Plan::Lobe { model, p },

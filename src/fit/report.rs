@@ -82,9 +82,21 @@ pub fn material_toml(material: &Material) -> Result<String> {
                 "a measured material is not a fit's result".into(),
             ))
         }
+        Model::Htsg(p) => {
+            key(&mut s, "model", format!("{:?}", crate::terms::htsg::NAME));
+            key(&mut s, "sigma0", format!("{:?}", p.sigma0));
+            key(&mut s, "tau", format!("{:?}", p.tau));
+            key(&mut s, "ior", rgb(p.ior));
+            key(&mut s, "extinction", rgb(p.extinction));
+            key(
+                &mut s,
+                "wavelengths",
+                rgb(p.wavelengths.map(|l| l * 1000.0)),
+            );
+        }
     }
     key(&mut s, "diffuse", rgb(material.diffuse));
-    if !matches!(material.model, Model::Lambert) {
+    if !matches!(material.model, Model::Lambert | Model::Htsg(_)) {
         key(&mut s, "specular", rgb(material.specular));
     }
     if material.precision == crate::material::precision::Precision::Fast {

@@ -28,6 +28,7 @@ pub const SOURCES: &[(&str, &str)] = &[
     ("ff.glsl", include_str!("../../glsl/ff.glsl")),
     ("terms.glsl", include_str!("../../glsl/terms.glsl")),
     ("models.glsl", include_str!("../../glsl/models.glsl")),
+    ("htsg.glsl", include_str!("../../glsl/htsg.glsl")),
     ("measured.glsl", include_str!("../../glsl/measured.glsl")),
     ("material.glsl", include_str!("../../glsl/material.glsl")),
     ("bindings.glsl", include_str!("../../glsl/bindings.glsl")),

@@ -32,6 +32,9 @@ pub const MODEL_COOK_TORRANCE: u32 = 5;
 /// `kind.x`: measured (MERL); `kind.y` is the table's index in the batch's MERL buffer
 /// ([`measured_tables`]), `kind.z` the lookup ([`LOOKUP_NEAREST`], [`LOOKUP_LINEAR`]).
 pub const MODEL_MEASURED: u32 = 6;
+/// `kind.x`: `htsg` (FORMULAS.md §8; its packing in [`gpu_material`], its code in
+/// `glsl/htsg.glsl`).
+pub const MODEL_HTSG: u32 = 7;
 /// `kind.z` of a measured material: MERL's nearest-bin lookup.
 pub const LOOKUP_NEAREST: u32 = 0;
 /// `kind.z` of a measured material: trilinear between sample points.
@@ -82,6 +85,7 @@ pub fn shader_codes() -> Vec<(&'static str, u32)> {
         ("MODEL_WARD", MODEL_WARD),
         ("MODEL_COOK_TORRANCE", MODEL_COOK_TORRANCE),
         ("MODEL_MEASURED", MODEL_MEASURED),
+        ("MODEL_HTSG", MODEL_HTSG),
         ("LOOKUP_NEAREST", LOOKUP_NEAREST),
         ("LOOKUP_LINEAR", LOOKUP_LINEAR),
         ("DIST_NONE", DIST_NONE),
@@ -261,6 +265,30 @@ pub fn gpu_material(m: &Material) -> GpuMaterial {
             };
             g.kind = [MODEL_MEASURED, 0, lookup, code(FresnelKind::None.term())];
             g.diffuse = [0.0; 4];
+        }
+        // glsl/htsg.glsl reads: lobe.x = τ/(2σ0), lobe.y = σ0/τ; specular.rgb = T = 2πτ/λ per
+        // channel; fresnel0/fresnel1/scale.yzw as the conductor's (n, k, n² − k² − 1, in
+        // f64); diffuse = a/π. Every constant formed in f64 and rounded once.
+        Model::Htsg(p) => {
+            g.kind = [
+                MODEL_HTSG,
+                DIST_NONE,
+                code(Geometry::None.term()),
+                code(FresnelKind::Conductor.term()),
+            ];
+            g.lobe = [
+                (p.tau / (2.0 * p.sigma0)) as f32,
+                (p.sigma0 / p.tau) as f32,
+                0.0,
+                0.0,
+            ];
+            g.specular = v4(p.wavelengths.map(|l| 2.0 * PI * p.tau / l));
+            g.fresnel0 = v4(p.ior);
+            g.fresnel1 = v4(p.extinction);
+            for ch in 0..3 {
+                let (n, k) = (p.ior[ch], p.extinction[ch]);
+                g.scale[ch + 1] = (n * n - k * k - 1.0) as f32;
+            }
         }
         Model::Phong { exponent } => {
             g.kind[0] = MODEL_PHONG;

@@ -62,6 +62,9 @@ pub enum Model {
     /// Measured data: a MERL binary (Matusik et al. 2003), looked up by half/difference
     /// angles (FORMULAS.md §7), nearest-bin or linear.
     Measured(Measured),
+    /// He, Torrance, Sillion & Greenberg 1991: the wave-optical model of FORMULAS.md §8
+    /// (`diffuse` is its uniform-diffuse albedo `a`; `specular` does not apply).
+    Htsg(crate::terms::htsg::Htsg),
 }
 
 /// A measured material's data and where it came from.
@@ -122,6 +125,7 @@ impl Model {
             Model::Ward { .. } => "ward",
             Model::CookTorrance(_) => "cook-torrance",
             Model::Measured(_) => "merl",
+            Model::Htsg(_) => crate::terms::htsg::NAME,
         }
     }
 }

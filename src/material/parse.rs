@@ -29,6 +29,9 @@ const KEYS: &[&str] = &[
     "file",
     "lookup",
     "precision",
+    "sigma0",
+    "tau",
+    "wavelengths",
 ];
 
 #[derive(serde::Deserialize)]
@@ -471,6 +474,7 @@ impl Fields<'_, '_> {
                 "ward",
                 "cook-torrance",
                 "merl",
+                "htsg",
             ],
             "every material states its model",
         )?;
@@ -491,6 +495,17 @@ impl Fields<'_, '_> {
             });
         }
         let diffuse = self.rgb("diffuse", colour_range)?.unwrap_or([0.0; 3]);
+        if model == crate::terms::htsg::NAME {
+            // "exact" is its only variant: a "fast" fails here, naming the choice.
+            self.string("precision", &["exact"])?;
+            return Ok(Material {
+                name: self.name.clone(),
+                model: Model::Htsg(self.htsg()?),
+                diffuse,
+                specular: [1.0; 3],
+                precision: super::precision::Precision::Exact,
+            });
+        }
         let specular = if model == "lambert" {
             [1.0; 3]
         } else {
@@ -524,6 +539,38 @@ impl Fields<'_, '_> {
             precision: super::precision::Precision::Exact,
         };
         Ok(super::precision::apply(&material, precision))
+    }
+
+    /// The parameters of an `htsg` material (FORMULAS.md §8): `sigma0` and `tau` in µm,
+    /// `ior` and `extinction` per channel, `wavelengths` in nm.
+    fn htsg(&mut self) -> Result<crate::terms::htsg::Htsg, MaterialError> {
+        use crate::terms::htsg;
+        let why = "model `htsg` needs `sigma0` and `tau` (µm), `ior` and `extinction`";
+        let sigma0 = self
+            .scalar("sigma0", sigma0_range)?
+            .ok_or_else(|| self.err("sigma0", format!("missing; {why}")))?;
+        let tau = self
+            .scalar("tau", tau_range)?
+            .ok_or_else(|| self.err("tau", format!("missing; {why}")))?;
+        if let Some((key, message)) = htsg::legality(sigma0, tau) {
+            return Err(self.err(key, message));
+        }
+        let ior = self
+            .rgb("ior", ior_range)?
+            .ok_or_else(|| self.err("ior", format!("missing; {why} (n per channel)")))?;
+        let extinction = self
+            .rgb("extinction", extinction_range)?
+            .unwrap_or([0.0; 3]);
+        let nm = self
+            .rgb("wavelengths", wavelength_range)?
+            .unwrap_or(htsg::DEFAULT_WAVELENGTHS_NM);
+        Ok(htsg::Htsg {
+            sigma0,
+            tau,
+            ior,
+            extinction,
+            wavelengths: nm.map(|x| x / 1000.0),
+        })
     }
 
     /// `file = "x.binary"`: a MERL file, relative to the materials file's directory.
@@ -743,6 +790,28 @@ fn extinction_range(x: f64) -> Option<&'static str> {
 fn colour_range(x: f64) -> Option<&'static str> {
     (!(x.is_finite() && (0.0..=1e18).contains(&x)))
         .then_some("must be a finite number ≥ 0, in [0, 1e18]")
+}
+/// HTSG's `sigma0` (µm), [`crate::terms::htsg::SIGMA0_RANGE`]: from a polished surface's
+/// 0.1 nm to 10 µm.
+fn sigma0_range(x: f64) -> Option<&'static str> {
+    let (lo, hi) = crate::terms::htsg::SIGMA0_RANGE;
+    (!(x.is_finite() && (lo..=hi).contains(&x)))
+        .then_some("must be a finite number in [1e-4, 10] (µm)")
+}
+/// HTSG's `tau` (µm), [`crate::terms::htsg::TAU_RANGE`]: with λ ≥ 200 nm, `T = 2πτ/λ` and
+/// the lobe's exponent `v_xy² T²/4` stay within float32's exp range where the lobe is
+/// above the conformance floor.
+fn tau_range(x: f64) -> Option<&'static str> {
+    let (lo, hi) = crate::terms::htsg::TAU_RANGE;
+    (!(x.is_finite() && (lo..=hi).contains(&x)))
+        .then_some("must be a finite number in [1e-3, 100] (µm)")
+}
+/// HTSG's wavelengths (nm), [`crate::terms::htsg::WAVELENGTH_RANGE_NM`]: the near UV to the
+/// mid infrared.
+fn wavelength_range(x: f64) -> Option<&'static str> {
+    let (lo, hi) = crate::terms::htsg::WAVELENGTH_RANGE_NM;
+    (!(x.is_finite() && (lo..=hi).contains(&x)))
+        .then_some("must be a finite number in [200, 5000] (nm)")
 }
 fn unit_interval(x: f64) -> Option<&'static str> {
     (!(x.is_finite() && (0.0..=1.0).contains(&x))).then_some("must be in [0, 1]")

@@ -24,6 +24,7 @@ pub const NAMES: &[&str] = &[
     "glass",
     "water",
     "shiny-plastic",
+    "htsg-aluminium",
 ];
 
 /// The TOML body (keys without `name`) of a preset, or `None` for an unknown name.
@@ -48,6 +49,7 @@ pub fn body(name: &str) -> Option<String> {
         "glass" => DIELECTRIC.trim_end().to_owned() + "\nior = 1.5\n",
         "water" => DIELECTRIC.trim_end().to_owned() + "\nior = 1.33\n",
         "shiny-plastic" => SHINY_PLASTIC.to_owned(),
+        "htsg-aluminium" => HTSG_ALUMINIUM.to_owned(),
         _ => return None,
     })
 }
@@ -83,6 +85,17 @@ ior = 1.5
 diffuse = [0.8, 0.1, 0.1]
 diffuse_weight = 0.9
 specular_weight = 0.1
+"#;
+
+/// He–Torrance–Sillion–Greenberg (FORMULAS.md §8) with the bbm benchmark's aluminium-like
+/// surface: σ0 = 0.0318 µm, τ = 0.3 µm, η at Westin's wavelengths 645, 526 and 444 nm.
+const HTSG_ALUMINIUM: &str = r#"
+model = "htsg"
+sigma0 = 0.0318
+tau = 0.3
+ior = [1.3211, 0.88045, 0.59765]
+extinction = [7.41785, 6.1455, 5.2337]
+wavelengths = [645, 526, 444]
 "#;
 
 /// A preset as a validated material named `name`.

@@ -19,6 +19,7 @@ pub fn evaluate_model(fr: &Frame, m: &Material) -> Evaluation {
         Model::Ward { roughness } => (ward_lobe(fr, *roughness), None),
         Model::CookTorrance(ct) => (0.0, Some(cook_torrance_terms(fr, ct))),
         Model::Measured(data) => return measured(fr, data),
+        Model::Htsg(p) => return htsg(fr, p, m.diffuse),
     };
     let diffuse = m.diffuse.map(|c| c / PI);
     match rs {
@@ -58,6 +59,35 @@ pub fn measured(fr: &Frame, m: &crate::material::Measured) -> Evaluation {
         g: 1.0,
         f: [1.0; 3],
         k: 1.0,
+    }
+}
+
+/// The geometry HTSG reads (FORMULAS.md §8), from the frame: `sin θ = |n × w|` of the
+/// unit vectors (absolute error ~1e-16; S1 and K(θ) depend on it only where `x = τ cot
+/// θ/(2σ0)` is O(1), i.e. sin θ ≥ ~0.05 for the accepted σ0/τ ≤ 10).
+pub fn htsg_angles(fr: &Frame) -> crate::terms::htsg::Angles {
+    let sin = |w: [f64; 3]| super::frame::length_squared(super::frame::cross(fr.n, w)).sqrt();
+    crate::terms::htsg::Angles {
+        cos_i: fr.cos_i,
+        cos_o: fr.cos_o,
+        sin_i: sin(fr.l),
+        sin_o: sin(fr.v),
+        c: fr.c,
+        sin2_h: fr.sin2_h,
+    }
+}
+
+/// He, Torrance, Sillion & Greenberg 1991 (FORMULAS.md §8): `ρ_dd + a/π` per channel, the
+/// terms as §8's "Outputs" defines them.
+pub fn htsg(fr: &Frame, p: &crate::terms::htsg::Htsg, a: crate::material::Rgb) -> Evaluation {
+    let t = crate::terms::htsg::evaluate(p, &htsg_angles(fr));
+    Evaluation {
+        status: Status::Valid,
+        brdf: std::array::from_fn(|c| t.rho_dd[c] + a[c] / PI),
+        d: t.d,
+        g: t.g,
+        f: t.f,
+        k: t.k,
     }
 }
 

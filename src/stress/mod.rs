@@ -73,6 +73,8 @@ pub fn regime(m: &Material, case: Case) -> Regime {
             Distribution::Blinn { exponent } => exponent >= 1000.0,
         },
         Model::Lambert | Model::Measured(_) => false,
+        // σ0/τ at the accepted bounds (1e-3: the sharpest diffraction lobe; 10).
+        Model::Htsg(p) => !(2e-3..=5.0).contains(&(p.sigma0 / p.tau)),
     };
     let ior = match m.cook_torrance().map(|ct| ct.fresnel) {
         Some(Fresnel::Dielectric { ior }) => ior.iter().any(|&n| n <= 1.0 || n >= 50.0),
@@ -133,6 +135,7 @@ fn model_label(m: &Material) -> &'static str {
         Model::Rtr { .. } => "f: rtr",
         Model::Ward { .. } => "f: ward",
         Model::CookTorrance(_) => "f: cook-torrance",
+        Model::Htsg(_) => "f: htsg",
     }
 }
 

@@ -18,6 +18,7 @@ pub mod term;
 pub mod d;
 pub mod f;
 pub mod g;
+pub mod htsg;
 pub mod k;
 pub mod math;
 
