@@ -102,6 +102,22 @@ float htsg_ln_cos(Frame f, bool incident) {
 #endif
 }
 
+// G = (|l + v|^2 / n.(l + v))^2 = (4c^2/(cos_i + cos_r))^2. Below TINY_COS the f32 cosines
+// may be flushed to 0 (c too, at a grazing mirror geometry, where 0/0 made NaN), so the
+// quotient is formed from the frame's extended forms: f64, or m 2^e.
+float htsg_g(Frame f, float s2, float ns) {
+    if (ns >= TINY_COS) {
+        return (s2 / ns) * (s2 / ns);
+    }
+#if defined(HAS_FLOAT64)
+    double q = 4.0 * f.c_exact * f.c_exact / (f.cos_i_exact + f.cos_o_exact);
+    return float_or_inf(q * q);
+#else
+    vec2 q = xf_div(xf_mul(xf(4.0), xf_mul(f.c_xf, f.c_xf)), xf_add(f.cos_i_xf, f.cos_o_xf));
+    return xf_float(xf_mul(q, q));
+#endif
+}
+
 Eval model_htsg(Frame f, GpuMaterial m) {
     float half_cot = m.lobe.x;
     float q_i, q_o, ln_k_i, ln_k_o;
@@ -117,7 +133,7 @@ Eval model_htsg(Frame f, GpuMaterial m) {
     float vxy2 = s2 * f.sin2_h;
     Eval e;
     e.k = q_i * q_o * INV_PI;
-    e.g = (s2 / ns) * (s2 / ns);
+    e.g = htsg_g(f, s2, ns);
     e.f = conductor_f_frame(f, m);
     for (int ch = 0; ch < 3; ch++) {
         float t = m.specular[ch];

@@ -13,6 +13,11 @@
 #include "math.glsl"
 #include "ff.glsl"
 
+// HTSG (htsg.glsl) evaluates the conductor's F: its code is compiled with the model's.
+#if defined(HAS_HTSG) && !defined(HAS_F_CONDUCTOR)
+#define HAS_F_CONDUCTOR
+#endif
+
 // The derived quantities of FORMULAS.md §1 for one valid, above-horizon tuple.
 // The *_exact fields: f64 where the device has it, else a float-float pair (hi, lo).
 #if defined(HAS_FLOAT64)
@@ -353,9 +358,20 @@ vec3 conductor_f_tiny(vec2 c_xf, vec3 n, vec3 k, vec3 e2rm1) {
         A[ch] = (e2rm1[ch] < 0.0 ? -ra : ra) + 1.0;
         B[ch] = e2i[ch] < 0.0 ? -rb : rb;
     }
-    // Index-matched channels, in units of c.
-    vec3 ur, ui;
-    csqrt((A * a + B * b) / q, (B * a - A * b) / q, ur, ui);
+    // Index-matched channels, in units of c: u = sqrt(A + iB)/eta, the root of A + iB
+    // first. Forming u^2 = (A + iB) conj(eta^2)/|eta|^4 overflowed for |eta| near the
+    // parser's 1e-6 (|eta|^4 = 1e-24 under A ~ 1e29: NaN for HTSG's bounds material at
+    // c = 2.6e-15, stress corpus); 1/eta = conj(eta)/|eta|^2 stays below 1e6.
+    vec3 sr, si;
+    csqrt(A, B, sr, si);
+    vec3 ir = n / q, ii = -k / q;
+    vec3 ur = cmul_re(sr, si, ir, ii), ui = cmul_im(sr, si, ir, ii);
+    // The principal root (Re u >= 0, as csqrt gives it): -u where the product left Re < 0.
+    bvec3 flip = bvec3(ur.x < 0.0 || (ur.x == 0.0 && ui.x < 0.0),
+                       ur.y < 0.0 || (ur.y == 0.0 && ui.y < 0.0),
+                       ur.z < 0.0 || (ur.z == 0.0 && ui.z < 0.0));
+    ur = mix(ur, -ur, flip);
+    ui = mix(ui, -ui, flip);
     vec3 par_u = abs2_ratio(n - ur, k - ui, n + ur, k + ui);
     vec3 eur = cmul_re(n, k, ur, ui), eui = cmul_im(n, k, ur, ui); // eta u
     vec3 perp_u = abs2_ratio(1.0 - eur, -eui, 1.0 + eur, eui);

@@ -907,14 +907,14 @@ mod tests {
     use crate::reference::CpuReference;
 
     #[test]
-    fn there_are_316_legal_combinations_and_all_parse() {
+    fn there_are_317_legal_combinations_and_all_parse() {
         // Per convention, G per distribution (isotropic): gaussian, blinn and charlie 3
         // (none, cook-torrance, neubelt); beckmann 7 (those, smith, smith-correlated,
         // smith-fast, schlick-smith); ggx 6 (no smith-fast). Modern adds anisotropic
-        // beckmann 6 and ggx 5 (no schlick-smith). Times 4 Fresnel terms, plus 6 plain,
-        // plus the 2 measured lookups.
+        // beckmann 6 and ggx 5 (no schlick-smith). Times 4 Fresnel terms, plus 7 plain
+        // (htsg among them), plus the 2 measured lookups.
         let c = combinations(1).unwrap();
-        assert_eq!(c.len(), 6 + 4 * (2 * 22 + (22 + 11)) + 2);
+        assert_eq!(c.len(), 7 + 4 * (2 * 22 + (22 + 11)) + 2);
         assert!(c.iter().any(|c| c.name == "merl nearest"));
         assert!(c.iter().any(|c| c.name == "merl linear"));
         assert_eq!(c.iter().filter(|c| c.anisotropic).count(), 1 + 4 * 11);

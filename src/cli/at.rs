@@ -16,6 +16,7 @@ all angles in degrees. Each --dir is θ_i,φ_i,θ_o,φ_o (L at (θ_i, φ_i), V a
 each --rus is Rusinkiewicz's θ_h,θ_d,φ_d with φ_h = 0. Without either, a small default set
 (normal incidence, 45° mirror, 45° back-scatter, 80° grazing mirror, a half/difference
 pair). Printed per direction: f (RGB, 1/sr, no cosine) and the terms D, G, F (RGB), K;
+for an HTSG material also ρ_dd and the mirror spike's weight ρ_s (FORMULAS.md §8);
 --json prints the same as a JSON array.
 
 MATERIAL is a preset (gold, glass, shiny-plastic, … — `vkbrdf materials` lists them) or,
@@ -173,17 +174,45 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         &Request { terms: true },
     )?;
     let terms = out.terms.unwrap_or_default();
+    // HTSG: ρ_dd (f less the uniform diffuse a/π) and the spike's weight ρ_s (FORMULAS.md
+    // §8), the latter from the reference (it is not a BRDF value an engine returns).
+    let htsg: Option<Vec<([f64; 3], [f64; 3])>> = matches!(
+        material.model,
+        vkbrdf::material::Model::Htsg(_)
+    )
+    .then(|| {
+        (0..qs.len())
+            .map(|i| {
+                let rho_s = vkbrdf::reference::htsg_spike(&batch.tuple(i), &material)
+                    .unwrap_or_default();
+                let f = &out.brdf[3 * i..3 * i + 3];
+                let rho_dd = std::array::from_fn(|c| {
+                    if f[c] == 0.0 {
+                        0.0
+                    } else {
+                        f64::from(f[c]) - material.diffuse[c] / std::f64::consts::PI
+                    }
+                });
+                (rho_dd, rho_s)
+            })
+            .collect()
+    });
     if args.json {
         let items: Vec<serde_json::Value> = qs
             .iter()
             .enumerate()
             .map(|(i, q)| {
                 let t = &terms[i * TERM_COLUMNS..(i + 1) * TERM_COLUMNS];
-                serde_json::json!({
+                let mut item = serde_json::json!({
                     "at": q.label, "l": q.l, "v": q.v,
                     "f": &out.brdf[3 * i..3 * i + 3],
                     "D": t[0], "G": t[1], "F": &t[2..5], "K": t[5],
-                })
+                });
+                if let Some(h) = &htsg {
+                    item["rho_dd"] = serde_json::json!(h[i].0);
+                    item["rho_s"] = serde_json::json!(h[i].1);
+                }
+                item
             })
             .collect();
         let doc = serde_json::json!({
@@ -217,6 +246,33 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
             "{:<30} {:>11.5e} {:>11.5e} {:>11.5e} {:>11.5e} {:>9.5} {:>9.5} {:>9.5} {:>9.5} {:>11.5e}",
             q.label, f[0], f[1], f[2], t[0], t[1], t[2], t[3], t[4], t[5]
         );
+    }
+    if let Some(h) = &htsg {
+        outln!(
+            "\nHTSG (FORMULAS.md §8): f = ρ_dd + a/π; the mirror spike ρ_s δ(ω − ω_mirror)/cos_i is not in f"
+        );
+        outln!(
+            "{:<30} {:>11} {:>11} {:>11} {:>11} {:>11} {:>11}",
+            "directions (degrees)",
+            "ρ_dd r",
+            "ρ_dd g",
+            "ρ_dd b",
+            "ρ_s r",
+            "ρ_s g",
+            "ρ_s b"
+        );
+        for (q, (dd, s)) in qs.iter().zip(h) {
+            outln!(
+                "{:<30} {:>11.5e} {:>11.5e} {:>11.5e} {:>11.5} {:>11.5} {:>11.5}",
+                q.label,
+                dd[0],
+                dd[1],
+                dd[2],
+                s[0],
+                s[1],
+                s[2]
+            );
+        }
     }
     let c = out.counts;
     if c.below_horizon > 0 || c.invalid > 0 {

@@ -45,6 +45,25 @@ pub fn evaluate(
     models::evaluate_model(&frame, m)
 }
 
+/// The mirror spike's weight `ρ_s` per channel (FORMULAS.md §8) of an HTSG material for
+/// one tuple: `None` for any other model; 0 where the tuple is invalid or below the horizon
+/// (as its BRDF is). It reads L and N only (`ρ_s` is a function of `θ_i`); V decides the
+/// tuple's status like every output's.
+pub fn htsg_spike(t: &Tuple, m: &Material) -> Option<crate::material::Rgb> {
+    let crate::material::Model::Htsg(p) = &m.model else {
+        return None;
+    };
+    let w = |a: [f32; 3]| a.map(f64::from);
+    let Some(fr) = frame::Frame::new(w(t.l), w(t.v), w(t.n), None, false) else {
+        return Some([0.0; 3]);
+    };
+    if fr.cos_i <= 0.0 || fr.cos_o <= 0.0 {
+        return Some([0.0; 3]);
+    }
+    let angles = models::htsg_angles(&fr);
+    Some(crate::terms::htsg::spike(p, angles.cos_i, angles.sin_i))
+}
+
 /// Evaluates one batch tuple (its f32 inputs widened exactly to f64).
 pub fn evaluate_tuple(t: &Tuple, m: &Material) -> Evaluation {
     let w = |a: [f32; 3]| a.map(f64::from);

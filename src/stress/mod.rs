@@ -76,7 +76,12 @@ pub fn regime(m: &Material, case: Case) -> Regime {
         // σ0/τ at the accepted bounds (1e-3: the sharpest diffraction lobe; 10).
         Model::Htsg(p) => !(2e-3..=5.0).contains(&(p.sigma0 / p.tau)),
     };
-    let ior = match m.cook_torrance().map(|ct| ct.fresnel) {
+    let ior = match (&m.model, m.cook_torrance().map(|ct| ct.fresnel)) {
+        // HTSG's η is the conductor's, with n near the parser's 1e-6 as extreme too.
+        (Model::Htsg(p), _) => {
+            p.ior.iter().any(|&n| n <= 1e-3 || n >= 50.0) || p.extinction.iter().any(|&k| k >= 20.0)
+        }
+        (_, f) => match f {
         Some(Fresnel::Dielectric { ior }) => ior.iter().any(|&n| n <= 1.0 || n >= 50.0),
         Some(Fresnel::Conductor { ior, extinction }) => {
             ior.iter().any(|&n| n >= 50.0)
@@ -84,6 +89,7 @@ pub fn regime(m: &Material, case: Case) -> Regime {
                 || (ior == [1.0; 3] && extinction == [0.0; 3])
         }
         _ => false,
+        },
     };
     match case {
         _ if rough => Regime::ExtremeRoughness,

@@ -3,9 +3,9 @@
 
 use vkbrdf::terms::{legality, Convention, DistributionKind, FresnelKind, Geometry};
 
-/// The models `check` runs without terms: Lambert, Phong, Blinn–Phong, RTR, and Ward
-/// isotropic and anisotropic.
-const PLAIN_MODELS: usize = 6;
+/// The models `check` runs without terms: Lambert, Phong, Blinn–Phong, RTR, Ward
+/// isotropic and anisotropic, and HTSG (FORMULAS.md §8).
+const PLAIN_MODELS: usize = 7;
 /// The measured combinations: a MERL table looked up `nearest` and `linear`.
 const MERL_LOOKUPS: usize = 2;
 
