@@ -23,53 +23,59 @@ fn vkbrdf_f32_env(args: &[&str], env: &[(&str, &str)]) -> Output {
 
 /// The float64 frame's maximum relative error per (quantity, regime) over the 10M-tuple
 /// stress corpus, copied from docs/stress-10m-float64.md (written by `vkbrdf stress
-/// --tuples 10000000 --backend vulkan` on lavapipe with shaderFloat64). The corpus is
+/// --tuples 10000000 --backend vulkan` on lavapipe with shaderFloat64; HTSG's rows since it
+/// joined the corpus, 2026-12-02). The corpus is
 /// chunkable (tests/stress.rs), so its first 200,000 rows are rows of that run.
-const FLOAT64_MAX: [(&str, &str, f64); 44] = [
-    ("D", "well-conditioned", 5.03e-6),
-    ("D", "grazing", 1.31e-5),
-    ("D", "near-peak", 2.81e-7),
-    ("D", "extreme roughness", 8.26e-6),
+const FLOAT64_MAX: [(&str, &str, f64); 49] = [
+    ("D", "well-conditioned", 6.77e-6),
+    ("D", "grazing", 8.65e-6),
+    ("D", "near-peak", 9.60e-7),
+    ("D", "extreme roughness", 6.69e-6),
     ("D", "extreme IOR", 4.60e-6),
-    ("F", "well-conditioned", 5.38e-7),
-    ("F", "grazing", 5.46e-7),
-    ("F", "near-peak", 5.89e-7),
-    ("F", "extreme roughness", 7.51e-7),
-    ("F", "extreme IOR", 7.76e-7),
-    ("G", "well-conditioned", 2.47e-7),
-    ("G", "grazing", 3.96e-7),
-    ("G", "near-peak", 2.29e-7),
-    ("G", "extreme roughness", 1.11e-6),
-    ("G", "extreme IOR", 4.74e-7),
-    ("K", "well-conditioned", 2.23e-7),
-    ("K", "grazing", 7.39e-6),
-    ("K", "near-peak", 2.22e-7),
-    ("K", "extreme roughness", 2.19e-4),
-    ("K", "extreme IOR", 3.12e-6),
-    ("f: blinn-phong", "well-conditioned", 2.66e-6),
-    ("f: blinn-phong", "grazing", 1.31e-5),
-    ("f: blinn-phong", "near-peak", 1.82e-7),
-    ("f: blinn-phong", "extreme roughness", 1.12e-6),
-    ("f: cook-torrance", "well-conditioned", 1.34e-6),
-    ("f: cook-torrance", "grazing", 1.00e0),
-    ("f: cook-torrance", "near-peak", 7.11e-7),
-    ("f: cook-torrance", "extreme roughness", 2.93e-1),
-    ("f: cook-torrance", "extreme IOR", 1.00e0),
+    ("F", "well-conditioned", 5.36e-7),
+    ("F", "grazing", 5.34e-7),
+    ("F", "near-peak", 5.62e-7),
+    ("F", "extreme roughness", 7.80e-7),
+    ("F", "extreme IOR", 7.65e-7),
+    ("G", "well-conditioned", 5.43e-7),
+    ("G", "grazing", 5.08e-7),
+    ("G", "near-peak", 4.92e-7),
+    ("G", "extreme roughness", 1.40e-6),
+    ("G", "extreme IOR", 4.99e-7),
+    ("K", "well-conditioned", 5.30e-7),
+    ("K", "grazing", 3.41e-6),
+    ("K", "near-peak", 5.46e-7),
+    ("K", "extreme roughness", 1.57e-5),
+    ("K", "extreme IOR", 1.30e-6),
+    ("f: blinn-phong", "well-conditioned", 2.51e-6),
+    ("f: blinn-phong", "grazing", 8.65e-6),
+    ("f: blinn-phong", "near-peak", 2.00e-7),
+    ("f: blinn-phong", "extreme roughness", 1.75e-6),
+    ("f: cook-torrance", "well-conditioned", 1.24e-6),
+    ("f: cook-torrance", "grazing", 1.43e-5),
+    ("f: cook-torrance", "near-peak", 7.01e-7),
+    ("f: cook-torrance", "extreme roughness", 1.33e-5),
+    ("f: cook-torrance", "extreme IOR", 2.14e-6),
+    ("f: htsg", "well-conditioned", 8.31e-6),
+    ("f: htsg", "grazing", 7.52e-6),
+    ("f: htsg", "near-peak", 1.41e-6),
+    ("f: htsg", "extreme roughness", 2.92e-6),
+    ("f: htsg", "extreme IOR", 8.72e-8),
     ("f: lambert", "well-conditioned", 4.03e-8),
     ("f: lambert", "grazing", 4.03e-8),
     ("f: lambert", "near-peak", 4.03e-8),
-    ("f: phong", "well-conditioned", 6.27e-7),
-    ("f: phong", "grazing", 5.45e-7),
-    ("f: phong", "near-peak", 1.60e-7),
-    ("f: phong", "extreme roughness", 3.92e-6),
-    ("f: rtr", "well-conditioned", 3.28e-6),
-    ("f: rtr", "grazing", 2.70e-6),
-    ("f: rtr", "near-peak", 8.99e-8),
-    ("f: rtr", "extreme roughness", 3.70e-6),
-    ("f: ward", "well-conditioned", 3.46e-6),
-    ("f: ward", "grazing", 1.16e-5),
-    ("f: ward", "near-peak", 2.81e-7),
-    ("f: ward", "extreme roughness", 8.26e-6),
+    ("f: phong", "well-conditioned", 7.87e-7),
+    ("f: phong", "grazing", 6.15e-7),
+    ("f: phong", "near-peak", 1.63e-7),
+    ("f: phong", "extreme roughness", 2.05e-6),
+    ("f: rtr", "well-conditioned", 2.75e-6),
+    ("f: rtr", "grazing", 1.85e-6),
+    ("f: rtr", "near-peak", 9.25e-8),
+    ("f: rtr", "extreme roughness", 3.46e-6),
+    ("f: ward", "well-conditioned", 3.26e-6),
+    ("f: ward", "grazing", 7.75e-6),
+    ("f: ward", "near-peak", 2.55e-7),
+    ("f: ward", "extreme roughness", 2.87e-6),
 ];
 
 const FF_PROBE: &str = r#"#version 450
@@ -159,7 +165,13 @@ fn conformance_passes_with_the_f32_frame() {
         "vkbrdf check fails with the f32 frame:\n{text}\n{}",
         common::stderr(&out)
     );
-    assert!(text.contains("314 pass, 0 fail"), "{text}");
+    // Every combination but the two measured (MERL) ones, which the kernel reads from
+    // tables the f32 frame does not change.
+    let expected = format!(
+        "{} pass, 0 fail",
+        common::combinations::check_combination_count() - 2
+    );
+    assert!(text.contains(&expected), "{expected}:\n{text}");
 }
 
 #[test]

@@ -222,7 +222,9 @@ fn check_structure(repo: &BTreeMap<u32, Section>) {
         ),
         (
             8,
-            &["f", "ρ_dd", "F", "G", "S", "S1", "K(θ)", "σ", "g", "D", "ρ_s"][..],
+            &[
+                "f", "ρ_dd", "F", "G", "S", "S1", "K(θ)", "σ", "g", "D", "ρ_s",
+            ][..],
         ),
     ] {
         for name in names {

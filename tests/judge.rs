@@ -640,9 +640,7 @@ fn htsg_direction(fr: &Fr, w: &V3, cos: &X, p: &vkbrdf::terms::htsg::Htsg) -> (X
         .div(&xx.mul(&pi().sqrt()))
         .sub(&erfc_x)
         .div(&x(2.0));
-    let s1 = x(1.0)
-        .sub(&erfc_x.div(&x(2.0)))
-        .div(&lambda.add(&x(1.0)));
+    let s1 = x(1.0).sub(&erfc_x.div(&x(2.0))).div(&lambda.add(&x(1.0)));
     let k = sin.div(cos).mul(&erfc_x);
     (s1, k)
 }
@@ -678,9 +676,7 @@ fn htsg(fr: &Fr, p: &vkbrdf::terms::htsg::Htsg, diffuse: &[X; 3]) -> Exact {
     let g = s2.div(&ns).sq();
     let (s1_i, k_i) = htsg_direction(fr, &fr.l, &fr.cos_i, p);
     let (s1_o, k_o) = htsg_direction(fr, &fr.v, &fr.cos_o, p);
-    let k = s1_i
-        .mul(&s1_o)
-        .div(&pi().mul(&fr.cos_i).mul(&fr.cos_o));
+    let k = s1_i.mul(&s1_o).div(&pi().mul(&fr.cos_i).mul(&fr.cos_o));
     let r = k_i.add(&k_o).div(&x(8.0).mul(&pi()).sqrt());
     let sigma = htsg_sigma(p.sigma0, &r);
     let vxy2 = s2.sub(&ns.sq());
@@ -717,9 +713,7 @@ fn htsg(fr: &Fr, p: &vkbrdf::terms::htsg::Htsg, diffuse: &[X; 3]) -> Exact {
             norm.mul(&sum)
         };
     }
-    let brdf = std::array::from_fn(|ch| {
-        f[ch].mul(&g).mul(&d[ch]).mul(&k).add(&diffuse[ch])
-    });
+    let brdf = std::array::from_fn(|ch| f[ch].mul(&g).mul(&d[ch]).mul(&k).add(&diffuse[ch]));
     Exact {
         status: Status::Valid,
         brdf,

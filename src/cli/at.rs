@@ -176,27 +176,24 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
     let terms = out.terms.unwrap_or_default();
     // HTSG: ρ_dd (f less the uniform diffuse a/π) and the spike's weight ρ_s (FORMULAS.md
     // §8), the latter from the reference (it is not a BRDF value an engine returns).
-    let htsg: Option<Vec<([f64; 3], [f64; 3])>> = matches!(
-        material.model,
-        vkbrdf::material::Model::Htsg(_)
-    )
-    .then(|| {
-        (0..qs.len())
-            .map(|i| {
-                let rho_s = vkbrdf::reference::htsg_spike(&batch.tuple(i), &material)
-                    .unwrap_or_default();
-                let f = &out.brdf[3 * i..3 * i + 3];
-                let rho_dd = std::array::from_fn(|c| {
-                    if f[c] == 0.0 {
-                        0.0
-                    } else {
-                        f64::from(f[c]) - material.diffuse[c] / std::f64::consts::PI
-                    }
-                });
-                (rho_dd, rho_s)
-            })
-            .collect()
-    });
+    let htsg: Option<Vec<([f64; 3], [f64; 3])>> =
+        matches!(material.model, vkbrdf::material::Model::Htsg(_)).then(|| {
+            (0..qs.len())
+                .map(|i| {
+                    let rho_s = vkbrdf::reference::htsg_spike(&batch.tuple(i), &material)
+                        .unwrap_or_default();
+                    let f = &out.brdf[3 * i..3 * i + 3];
+                    let rho_dd = std::array::from_fn(|c| {
+                        if f[c] == 0.0 {
+                            0.0
+                        } else {
+                            f64::from(f[c]) - material.diffuse[c] / std::f64::consts::PI
+                        }
+                    });
+                    (rho_dd, rho_s)
+                })
+                .collect()
+        });
     if args.json {
         let items: Vec<serde_json::Value> = qs
             .iter()

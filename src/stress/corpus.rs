@@ -223,6 +223,15 @@ pub fn materials() -> Vec<Material> {
         "ct-blinn-dim",
         "model = \"cook-torrance\"\nconvention = \"seed\"\ndistribution = \"blinn\"\nexponent = 1e18\ngeometry = \"none\"\nfresnel = \"none\"\nspecular_weight = 0",
     );
+    toml += &htsg_materials();
+    parse_materials(&toml, "stress corpus").expect("the stress materials are legal")
+}
+
+/// The HTSG materials of the corpus (FORMULAS.md §8), after [`materials`]'s others: every
+/// eighth row is theirs ([`corpus_rows`]), so the other rows are the tuples they were
+/// before HTSG joined.
+fn htsg_materials() -> String {
+    let mut toml = String::new();
     // HTSG (FORMULAS.md §8): σ0/τ at both bounds (1e-3, 10) and between, wavelengths from
     // the near UV to the infrared (0.2 … 5 µm), the parameters' bounds, a dielectric (k = 0),
     // and a surface whose green channel sits just above D's switch (g = 18.5 + 4e-4, far
@@ -234,13 +243,16 @@ pub fn materials() -> Vec<Material> {
         ("htsg-aluminium", format!("sigma0 = 0.0318\ntau = 0.3\n{alu}")),
         ("htsg-switch", format!("sigma0 = {}\ntau = 0.5\n{alu}", 18.5004f64.sqrt() * 0.526 / (4.0 * std::f64::consts::PI))),
         ("htsg-rough-dielectric", "sigma0 = 5\ntau = 0.5\nior = 1.5\nwavelengths = [300, 1000, 2000]\ndiffuse = 0.2".into()),
-        ("htsg-bounds", "sigma0 = 1e-4\ntau = 1e-2\nior = [1e-6, 1, 1e18]\nextinction = [1e-3, 1e18, 50]\nwavelengths = [200, 5000, 200]\ndiffuse = [1e18, 0, 1]".into()),
+        ("htsg-bounds", "sigma0 = 1e-4\ntau = 1e-2\nior = [1e-6, 1, 1e18]\nextinction = [0.5, 1e18, 50]\nwavelengths = [200, 5000, 200]\ndiffuse = [1e18, 0, 1]".into()),
         ("htsg-roughest", format!("sigma0 = 10\ntau = 100\nwavelengths = [200, 526, 5000]\n{alu}")),
     ] {
-        add(name, &format!("model = \"htsg\"\n{body}"));
+        toml += &format!("[[material]]\nname = \"{name}\"\nmodel = \"htsg\"\n{body}\n");
     }
-    parse_materials(&toml, "stress corpus").expect("the stress materials are legal")
+    toml
 }
+
+/// How many of [`materials`] are HTSG's (the last ones).
+const HTSG_MATERIALS: usize = 6;
 
 /// A random unit vector within the hemisphere of `n` with `n·w ≥ min_cos`.
 fn hemisphere(rng: &mut Pcg64Mcg, n: [f64; 3], min_cos: f64) -> [f64; 3] {
@@ -390,8 +402,10 @@ fn tuple(rng: &mut Pcg64Mcg, case: Case, material: usize) -> [f32; 13] {
     row
 }
 
-/// The corpus: `n` tuples with tangents over [`materials`]; row `i` uses material
-/// `i % M` and case `CASES[(i / M) % 10]`. Returns the batch and each row's case.
+/// The corpus: `n` tuples with tangents over [`materials`]. Every eighth row (`i % 8 == 7`,
+/// k = i/8) uses HTSG material `k % 6` in case `CASES[(k / 6) % 11]`; the others are row
+/// `j` of the rest (j counts them), material `j % M` in case `CASES[(j / M) % 11]`.
+/// Returns the batch and each row's case.
 pub fn corpus(n: usize, seed: u64) -> (Vec<Material>, Batch<'static>, Vec<Case>) {
     corpus_rows(0..n, seed)
 }
@@ -403,17 +417,30 @@ pub fn corpus_rows(
     seed: u64,
 ) -> (Vec<Material>, Batch<'static>, Vec<Case>) {
     let materials = materials();
-    let m = materials.len();
+    let m = materials.len() - HTSG_MATERIALS;
     let mut data = Vec::with_capacity(range.len() * COLUMNS_TANGENT);
     let mut cases = Vec::with_capacity(range.len());
     for i in range {
-        let mut rng =
-            Pcg64Mcg::seed_from_u64(seed ^ (i as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15));
-        let case = CASES[(i / m) % CASES.len()];
-        data.extend_from_slice(&tuple(&mut rng, case, i % m));
+        // Every eighth row is an HTSG material's (its own sequence k, seeded apart); the
+        // others are the rows j = 0, 1, 2, … of the other materials, as before HTSG.
+        let (j, case, material) = if i % 8 == 7 {
+            let k = i / 8;
+            let case = CASES[(k / HTSG_MATERIALS) % CASES.len()];
+            (k as u64 | 1 << 62, case, m + k % HTSG_MATERIALS)
+        } else {
+            let j = i / 8 * 7 + i % 8;
+            (j as u64, CASES[(j / m) % CASES.len()], j % m)
+        };
+        let mut rng = Pcg64Mcg::seed_from_u64(seed ^ j.wrapping_mul(0x9E37_79B9_7F4A_7C15));
+        data.extend_from_slice(&tuple(&mut rng, case, material));
         cases.push(case);
     }
-    let batch = Batch::new(data, COLUMNS_TANGENT, m, &crate::batch::memory_source())
-        .expect("corpus rows are valid");
+    let batch = Batch::new(
+        data,
+        COLUMNS_TANGENT,
+        materials.len(),
+        &crate::batch::memory_source(),
+    )
+    .expect("corpus rows are valid");
     (materials, batch, cases)
 }

@@ -82,13 +82,13 @@ pub fn regime(m: &Material, case: Case) -> Regime {
             p.ior.iter().any(|&n| n <= 1e-3 || n >= 50.0) || p.extinction.iter().any(|&k| k >= 20.0)
         }
         (_, f) => match f {
-        Some(Fresnel::Dielectric { ior }) => ior.iter().any(|&n| n <= 1.0 || n >= 50.0),
-        Some(Fresnel::Conductor { ior, extinction }) => {
-            ior.iter().any(|&n| n >= 50.0)
-                || extinction.iter().any(|&k| k >= 20.0)
-                || (ior == [1.0; 3] && extinction == [0.0; 3])
-        }
-        _ => false,
+            Some(Fresnel::Dielectric { ior }) => ior.iter().any(|&n| n <= 1.0 || n >= 50.0),
+            Some(Fresnel::Conductor { ior, extinction }) => {
+                ior.iter().any(|&n| n >= 50.0)
+                    || extinction.iter().any(|&k| k >= 20.0)
+                    || (ior == [1.0; 3] && extinction == [0.0; 3])
+            }
+            _ => false,
         },
     };
     match case {

@@ -136,7 +136,11 @@ pub fn effective_sigma(p: &Htsg, k_sum: f64) -> f64 {
     let ln_r = r.ln();
     // The start: z = R for R ≤ 1, √(2 ln(1 + R)) above (Westin's √(2 ln R) lies near 0
     // just above R = 1, far from the root z ≈ 0.75; FORMULAS.md §8).
-    let mut z = if r <= 1.0 { r } else { (2.0 * r.ln_1p()).sqrt() };
+    let mut z = if r <= 1.0 {
+        r
+    } else {
+        (2.0 * r.ln_1p()).sqrt()
+    };
     for _ in 0..100 {
         let h = z.ln() + 0.5 * z * z - ln_r;
         let step = z * h / (1.0 + z * z);
