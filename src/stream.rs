@@ -37,6 +37,11 @@ pub struct StreamJob<'a> {
     pub output: &'a Path,
     /// Where the terms go (`.npy`, float32 `(n, 6)`), if wanted.
     pub terms: Option<&'a Path>,
+    /// Where the mirror spike's weight `ρ_s` of HTSG materials goes (`.npy`, float32
+    /// `(n, 3)`, FORMULAS.md §8), if wanted: every material of the table must be HTSG's.
+    /// Computed on the host from the f64 form for each chunk the engine evaluates, and
+    /// written with the other outputs (all or none).
+    pub spike: Option<&'a Path>,
     /// Host memory for the chunk buffers, in bytes (see [`chunk_rows`]).
     pub max_memory: u64,
     /// Write nothing when any tuple is invalid (the counts are still returned).
@@ -106,6 +111,9 @@ pub fn evaluate(
     } else {
         None
     };
+    if job.spike.is_some() {
+        spike_allowed(job)?;
+    }
     let total = rows.rows();
     let part = job.shard.map_or(0..total, |s| s.rows(total));
     rows.restrict(part.clone())?;
@@ -124,6 +132,10 @@ pub fn evaluate(
         Some(path) => Some(NpyOut::start(path, n, TERM_COLUMNS, cancel)?),
         None => None,
     };
+    let mut spike = match job.spike {
+        Some(path) => Some(NpyOut::start(path, n, 3, cancel)?),
+        None => None,
+    };
     let mut summary = StreamSummary {
         chunk_rows: chunk,
         ..StreamSummary::default()
@@ -135,7 +147,7 @@ pub fn evaluate(
     // The writer hands each written output back, and the engine evaluates into it again:
     // a few buffers serve the whole batch, faulted in and zeroed once.
     let (read_tx, read_rx) = std::sync::mpsc::sync_channel::<Result<(u64, Chunk, f64)>>(1);
-    let (write_tx, write_rx) = std::sync::mpsc::sync_channel::<Output>(1);
+    let (write_tx, write_rx) = std::sync::mpsc::sync_channel::<(Output, Vec<f32>)>(1);
     let (recycle_tx, recycle_rx) = std::sync::mpsc::channel::<Output>();
     // Spent input buffers go back to the reader, which reads the next chunk into one.
     let (spent_tx, spent_rx) = std::sync::mpsc::sync_channel::<Vec<f32>>(2);
@@ -171,20 +183,25 @@ pub fn evaluate(
                 break; // the evaluator stopped, or this was the error it will report
             }
         });
-        let writer = scope.spawn(move || -> Result<(NpyOut, Option<NpyOut>, f64)> {
-            let mut write_s = 0.0;
-            for out in write_rx {
-                let t = std::time::Instant::now();
-                brdf.rows(&out.brdf)?;
-                if let (Some(w), Some(v)) = (terms.as_mut(), out.terms.as_ref()) {
-                    w.rows(v)?;
+        let writer = scope.spawn(
+            move || -> Result<(NpyOut, Option<NpyOut>, Option<NpyOut>, f64)> {
+                let mut write_s = 0.0;
+                for (out, spikes) in write_rx {
+                    let t = std::time::Instant::now();
+                    brdf.rows(&out.brdf)?;
+                    if let (Some(w), Some(v)) = (terms.as_mut(), out.terms.as_ref()) {
+                        w.rows(v)?;
+                    }
+                    if let Some(w) = spike.as_mut() {
+                        w.rows(&spikes)?;
+                    }
+                    write_s += t.elapsed().as_secs_f64();
+                    // The evaluator may have stopped; then the buffer is simply dropped.
+                    let _ = recycle_tx.send(out);
                 }
-                write_s += t.elapsed().as_secs_f64();
-                // The evaluator may have stopped; then the buffer is simply dropped.
-                let _ = recycle_tx.send(out);
-            }
-            Ok((brdf, terms, write_s))
-        });
+                Ok((brdf, terms, spike, write_s))
+            },
+        );
         let evaluated = (|| -> Result<()> {
             for message in read_rx {
                 cancel.check()?;
@@ -202,6 +219,13 @@ pub fn evaluate(
                         b.len()
                     }
                 };
+                // The spike's weights, when asked for: the host's f64 form (cheap next to
+                // the BRDF's series), in the same chunk, so all outputs advance together.
+                let spikes = match (&batch, job.spike.is_some()) {
+                    (_, false) => Vec::new(),
+                    (Chunk::Rows(b), true) => spike_rows(b, job.materials),
+                    (Chunk::Local(b), true) => spike_rows(&b.rows(0..b.len()), job.materials),
+                };
                 summary.eval_s += t.elapsed().as_secs_f64();
                 let mut counted = out.counts;
                 counted.first_invalid = counted.first_invalid.map(|r| r + first);
@@ -211,7 +235,7 @@ pub fn evaluate(
                 if let Chunk::Rows(b) = batch {
                     let _ = spent_tx.try_send(b.into_data()); // full: the reader has spares
                 }
-                if write_tx.send(out).is_err() {
+                if write_tx.send((out, spikes)).is_err() {
                     break; // the writer failed: its error is reported below
                 }
             }
@@ -223,13 +247,16 @@ pub fn evaluate(
         (written, evaluated)
     });
     evaluated?;
-    let (brdf, terms, write_s) = written?;
+    let (brdf, terms, spike, write_s) = written?;
     summary.write_s = write_s;
     if job.strict && summary.counts.invalid > 0 {
         return Ok(summary); // the writers drop: their temporary files go
     }
     let mut staged = vec![brdf.finish()?];
     if let Some(w) = terms {
+        staged.push(w.finish()?);
+    }
+    if let Some(w) = spike {
         staged.push(w.finish()?);
     }
     if let Some(s) = job.shard {
@@ -361,4 +388,39 @@ fn relative_to_dir_of(path: &Path, base: &Path) -> PathBuf {
         (Some(a), Some(b), Some(name)) if a == b => PathBuf::from(name),
         _ => path.to_owned(),
     }
+}
+
+/// `--spike` asks for a quantity only HTSG defines (FORMULAS.md §8): every material of the
+/// table must be HTSG's, and a shard's part would have no place for it in `merge`.
+fn spike_allowed(job: &StreamJob) -> Result<()> {
+    if job.shard.is_some() {
+        return Err(Error::Unsupported(
+            "--spike with --shard: merge joins BRDF and terms parts only; evaluate the spike's weights unsharded"
+                .into(),
+        ));
+    }
+    if let Some((i, m)) = job
+        .materials
+        .iter()
+        .enumerate()
+        .find(|(_, m)| !matches!(m.model, crate::material::Model::Htsg(_)))
+    {
+        return Err(Error::Unsupported(format!(
+            "--spike: material `{}` (index {i}) is {}; the mirror spike's weight ρ_s is defined for htsg materials only (FORMULAS.md §8)",
+            m.name,
+            m.model.toml_name()
+        )));
+    }
+    Ok(())
+}
+
+/// `ρ_s` per channel of each row of `batch` (float32, row-major `(n, 3)`).
+fn spike_rows(batch: &crate::batch::Batch, materials: &[Material]) -> Vec<f32> {
+    let mut v = Vec::with_capacity(3 * batch.len());
+    for i in 0..batch.len() {
+        let t = batch.tuple(i);
+        let s = crate::reference::htsg_spike(&t, &materials[t.material]).unwrap_or_default();
+        v.extend(s.map(|x| x as f32));
+    }
+    v
 }

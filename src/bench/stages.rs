@@ -129,6 +129,7 @@ pub fn measure(
         write_s.push(t.elapsed().as_secs_f64());
 
         let job = StreamJob {
+            spike: None,
             input: &input,
             materials,
             output: &output,

@@ -23,7 +23,9 @@ Lx Ly Lz Vx Vy Vz 0 0 1 material means, in 24 bytes instead of 40; `cpu` evaluat
 it is, the other engines expand it to rows chunk by chunk.
 
 Output: BRDF.npy, float32 (n, 3): RGB f in 1/sr (no cosine); TERMS.npy, float32 (n, 6):
-D, G, F_r, F_g, F_b, K. Invalid tuples (zero or non-finite vectors, a bad tangent) and
+D, G, F_r, F_g, F_b, K; for HTSG materials SPIKE.npy, float32 (n, 3): the mirror spike's
+weight ρ_s per channel (a reflectance: the spike is ρ_s δ(ω − ω_mirror)/cos_i, not in f;
+FORMULAS.md §8). Invalid tuples (zero or non-finite vectors, a bad tangent) and
 tuples below the horizon give 0; both are counted.
 
 Streaming: the input is read, evaluated and written in chunks, so host memory stays
@@ -45,6 +47,7 @@ anything that runs N commands (docs/STREAMING.md: xargs, Slurm, Kubernetes).
 Examples:
   vkbrdf generate --materials m.toml --tuples 1000000 --output t.npy
   vkbrdf eval --materials m.toml --input t.npy --output brdf.npy --terms terms.npy
+  vkbrdf eval -m htsg.toml -i t.npy -o brdf.npy --spike spike.npy
   seq 1 4 | xargs -P 4 -I K vkbrdf eval -m m.toml -i t.npy -o part-K.npy --shard K/4
   vkbrdf merge -o brdf.npy part-1.npy part-2.npy part-3.npy part-4.npy")]
 pub struct Args {
@@ -64,6 +67,10 @@ pub struct Args {
     /// Also write the terms D, G, F_r, F_g, F_b, K (.npy, float32 (n, 6)).
     #[arg(long, value_name = "TERMS.npy")]
     pub terms: Option<PathBuf>,
+    /// Also write the mirror spike's weight ρ_s of HTSG materials (.npy, float32 (n, 3),
+    /// FORMULAS.md §8; every material of the file must be htsg).
+    #[arg(long, value_name = "SPIKE.npy")]
+    pub spike: Option<PathBuf>,
     /// Fail (exit 1, no output written) if any tuple is invalid.
     #[arg(long)]
     pub strict: bool,
@@ -127,6 +134,7 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         .map(|_| vkbrdf::stream::shard::sidecar_path(&args.output));
     let outputs: Vec<&std::path::Path> = std::iter::once(args.output.as_path())
         .chain(args.terms.as_deref())
+        .chain(args.spike.as_deref())
         .chain(sidecar.as_deref())
         .collect();
     vkbrdf::atomic::check_outputs(&outputs, &inputs)?;
@@ -139,6 +147,7 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         materials: &materials,
         output: &args.output,
         terms: args.terms.as_deref(),
+        spike: args.spike.as_deref(),
         max_memory: args.max_memory,
         strict: args.strict,
         shard: args.shard,
