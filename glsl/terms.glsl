@@ -313,7 +313,13 @@ vec3 conductor_f(float c, vec3 n, vec3 k, vec3 e2rm1) {
     vec3 e2i = 2.0 * n * k;
     vec3 q = n * n + k * k;                     // |eta|^2 = |eta^2|
     vec3 a = e2r / q, b = e2i / q;              // eta^2 / |eta^2|, components in [-1, 1]
-    vec3 ar = e2rm1 + c * c;                    // eta^2 - 1 + c^2 = ar + i e2i
+    // eta^2 - 1 + c^2 = ar + i e2i, as (n^2 - k^2 - 1) + c^2, or as (n^2 - k^2) - (1 - c^2)
+    // where that form's terms are far smaller (|eta| << 1 near c = 1: the first rounds
+    // n^2 - k^2 - 1 to f32 next to 1, and F at n = 1e-6, k = 0, c = 1 came out 9e-5 off).
+    float s2 = (1.0 - c) * (1.0 + c);
+    vec3 nk = (n - k) * (n + k);
+    vec3 ar = mix(e2rm1 + c * c, nk - s2,
+                  lessThan(4.0 * (abs(nk) + s2), abs(e2rm1) + c * c));
     vec3 zr = (ar * a + e2i * b) / q;           // (ar + i e2i) / eta^2
     vec3 zi = (1.0 - c) * (1.0 + c) * b / q;    // = (e2i e2r - ar e2i) / q^2, uncancelled
     vec3 ctr, cti;
@@ -396,7 +402,11 @@ vec3 conductor_f_f64(double c, vec3 n32, vec3 k32, vec3 e2rm1) {
     dvec3 n = dvec3(n32), k = dvec3(k32);
     dvec3 e2r = n * n - k * k, e2i = 2.0 * n * k, q = n * n + k * k;
     dvec3 a = e2r / q, b = e2i / q;
-    dvec3 ar = dvec3(e2rm1) + c * c;
+    // As conductor_f: the form with the smaller terms.
+    double s2 = (1.0 - c) * (1.0 + c);
+    dvec3 nk = (n - k) * (n + k);
+    dvec3 ar = mix(dvec3(e2rm1) + c * c, nk - s2,
+                   lessThan(4.0 * (abs(nk) + s2), abs(dvec3(e2rm1)) + c * c));
     dvec3 zr = (ar * a + e2i * b) / q;
     dvec3 zi = (1.0 - c) * (1.0 + c) * b / q;
     // Principal square root of zr + i zi (as csqrt; here q >= 1e-12 and c >= 1.4e-45 keep

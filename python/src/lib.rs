@@ -373,6 +373,46 @@ fn evaluate<'py>(
     ))
 }
 
+/// The mirror spike's weight ρ_s (FORMULAS.md §8) of each row of a C-contiguous float32
+/// `(n, 10)` or `(n, 13)` array, `(n, 3)`: every row's material must be HTSG's (a
+/// `UsageError` names the first that is not); invalid and below-horizon rows give 0.
+#[pyfunction]
+fn spike<'py>(
+    py: Python<'py>,
+    materials: &Materials,
+    tuples: PyReadonlyArray2<'py, f32>,
+) -> PyResult<Bound<'py, PyArray2<f32>>> {
+    let columns = tuples.shape()[1];
+    let data: &[f32] = tuples.as_slice().map_err(|e| {
+        raise(
+            py,
+            "BatchError",
+            format!("{TUPLES}: the array must be C-contiguous float32 here ({e})"),
+        )
+    })?;
+    let list = &materials.list;
+    let source = Path::new(TUPLES);
+    let batch = Batch::borrowed(data, columns, list.len(), source).map_err(|e| to_py(py, e))?;
+    let mut v = Vec::with_capacity(3 * batch.len());
+    for i in 0..batch.len() {
+        let t = batch.tuple(i);
+        let m = &list[t.material];
+        let Some(s) = vkbrdf::reference::htsg_spike(&t, m) else {
+            return Err(raise(
+                py,
+                "UsageError",
+                format!(
+                    "spike=True: row {i} uses material `{}`, a {} material; the mirror spike's weight is defined for htsg materials only (FORMULAS.md §8)",
+                    m.name,
+                    m.model.toml_name()
+                ),
+            ));
+        };
+        v.extend(s.map(|x| x as f32));
+    }
+    rows(py, v, batch.len(), 3)
+}
+
 /// `values` as an `(n, columns)` array, without a copy.
 fn rows(
     py: Python<'_>,
@@ -693,6 +733,7 @@ fn check<'py>(
 fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Materials>()?;
     m.add_function(wrap_pyfunction!(evaluate, m)?)?;
+    m.add_function(wrap_pyfunction!(spike, m)?)?;
     m.add_function(wrap_pyfunction!(load_materials, m)?)?;
     m.add_function(wrap_pyfunction!(materials_from_file_text, m)?)?;
     m.add_function(wrap_pyfunction!(parse_materials, m)?)?;

@@ -163,3 +163,25 @@ def test_check_report_is_data():
     assert "lambert" in r["combination"] and r["tuples"] == 50 and r["counts_match"]
     assert set(r["column_max_rel"]) == {"brdf_r", "brdf_g", "brdf_b", "D", "G", "F_r", "F_g", "F_b", "K"}
     assert r["max_used"] <= 1.0
+
+
+def test_htsg_spike_weights():
+    # FORMULAS.md §8: rho_s of the htsg-aluminium preset at theta_i = 30 and 60 degrees,
+    # computed independently at 50 digits (docs/HTSG.md).
+    p = vkbrdf.presets()
+    th = np.radians([30.0, 60.0])
+    light = np.stack([np.sin(th), np.zeros(2), np.cos(th)], axis=-1)
+    view = light * [-1, -1, 1]
+    f, rho_s = vkbrdf.evaluate(
+        p, l=light, v=view, n=[0, 0, 1], material="htsg-aluminium", backend="cpu", spike=True
+    )
+    expected = np.array(
+        [[0.683702224937, 0.592876646924, 0.50085854041],
+         [0.814313178572, 0.779055711571, 0.741062561454]]
+    )
+    assert rho_s.shape == (2, 3)
+    assert np.allclose(rho_s, expected, rtol=1e-6, atol=0)
+    # f is rho_dd here (no diffuse): the mirror value at 30 degrees, green 0.293621038044.
+    assert abs(f[0, 1] - 0.293621038044) < 3e-6
+    with pytest.raises(vkbrdf.UsageError, match="htsg materials only"):
+        vkbrdf.evaluate(p, l=light, v=view, n=[0, 0, 1], material="gold", spike=True)

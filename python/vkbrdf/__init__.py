@@ -181,6 +181,7 @@ def evaluate(
     precision="exact",
     strict=False,
     return_counts=False,
+    spike=False,
 ):
     """Evaluates the BRDF; see the stub (``vkbrdf/__init__.pyi``) for the full description."""
     if not isinstance(materials, Materials):
@@ -206,6 +207,9 @@ def evaluate(
     result = [f]
     if terms:
         result.append(term_values)
+    if spike:
+        weights = _native.spike(materials, rows)
+        result.append(weights if shape is None else weights.reshape(shape + (3,)))
     if return_counts:
         result.append(Counts(*counts))
     return result[0] if len(result) == 1 else tuple(result)

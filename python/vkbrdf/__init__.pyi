@@ -163,6 +163,7 @@ def evaluate(
     precision: str = ...,
     strict: bool = ...,
     return_counts: bool = ...,
+    spike: bool = ...,
 ) -> Any:
     """Evaluates the BRDF f (1/sr, RGB, without the cosine) of each tuple.
 
@@ -192,10 +193,14 @@ def evaluate(
         precision: ``"exact"`` or ``"fast"`` (Schlick for exact Fresnel, smith-fast for
             Smith-Beckmann), as ``vkbrdf eval --precision``.
         return_counts: also return a :class:`Counts`.
+        spike: also return the mirror spike's weight rho_s ``(..., 3)`` of HTSG materials
+            (FORMULAS.md §8: the spike is rho_s delta(w - w_mirror)/cos_i and is not in f);
+            every tuple's material must be ``htsg`` (else ``UsageError``).
 
     Returns:
-        f, then terms when ``terms``, then Counts when ``return_counts``: ``f``,
-        ``(f, terms)``, ``(f, counts)`` or ``(f, terms, counts)``.
+        f, then terms when ``terms``, then rho_s when ``spike``, then Counts when
+        ``return_counts``: ``f``, ``(f, terms)``, ``(f, counts)``, ``(f, terms, counts)``,
+        ``(f, rho_s)`` and so on.
 
     The GIL is released while the engine runs (other Python threads go on; several threads
     may call evaluate at once), and Ctrl-C stops a long evaluation (KeyboardInterrupt).
@@ -226,6 +231,7 @@ def evaluate(
     precision: str = ...,
     strict: bool = ...,
     return_counts: bool = ...,
+    spike: bool = ...,
 ) -> Any: ...
 
 def check(

@@ -243,7 +243,7 @@ fn htsg_materials() -> String {
         ("htsg-aluminium", format!("sigma0 = 0.0318\ntau = 0.3\n{alu}")),
         ("htsg-switch", format!("sigma0 = {}\ntau = 0.5\n{alu}", 18.5004f64.sqrt() * 0.526 / (4.0 * std::f64::consts::PI))),
         ("htsg-rough-dielectric", "sigma0 = 5\ntau = 0.5\nior = 1.5\nwavelengths = [300, 1000, 2000]\ndiffuse = 0.2".into()),
-        ("htsg-bounds", "sigma0 = 1e-4\ntau = 1e-2\nior = [1e-6, 1, 1e18]\nextinction = [0.5, 1e18, 50]\nwavelengths = [200, 5000, 200]\ndiffuse = [1e18, 0, 1]".into()),
+        ("htsg-bounds", "sigma0 = 1e-4\ntau = 1e-2\nior = [1e-6, 1, 1e18]\nextinction = [0, 1e18, 50]\nwavelengths = [200, 5000, 200]\ndiffuse = [1e18, 0, 1]".into()),
         ("htsg-roughest", format!("sigma0 = 10\ntau = 100\nwavelengths = [200, 526, 5000]\n{alu}")),
     ] {
         toml += &format!("[[material]]\nname = \"{name}\"\nmodel = \"htsg\"\n{body}\n");

@@ -255,7 +255,12 @@ pub fn polar(runner: &mut Runner, material: &Material, incidence_deg: f64) -> Re
     let f = evaluate_chunked(runner, rows, materials, angles.len())?;
     runner.finish();
     let mut canvas = draw_polar(&angles, &f, ti);
-    label_polar(&mut canvas, &material.name, incidence_deg, &f);
+    // HTSG's mirror spike is a delta (FORMULAS.md §8): f is ρ_dd + a/π, and the title says so.
+    let name = match material.model {
+        crate::material::Model::Htsg(_) => format!("{} (HTSG; spike not drawn)", material.name),
+        _ => material.name.clone(),
+    };
+    label_polar(&mut canvas, &name, incidence_deg, &f);
     Ok(canvas)
 }
 
@@ -366,7 +371,7 @@ pub fn stage_png(
 
 /// Provenance text chunks for a preview of `material`.
 pub fn provenance(material: &Material, what: &str, backend: &str) -> Vec<(&'static str, String)> {
-    vec![
+    let mut text = vec![
         ("vkbrdf.table", what.to_string()),
         ("vkbrdf.material", material.name.clone()),
         (
@@ -375,5 +380,12 @@ pub fn provenance(material: &Material, what: &str, backend: &str) -> Vec<(&'stat
         ),
         ("vkbrdf.backend", backend.to_string()),
         ("vkbrdf.version", super::VERSION.to_string()),
-    ]
+    ];
+    if let crate::material::Model::Htsg(_) = material.model {
+        text.push((
+            "vkbrdf.spike",
+            "HTSG (FORMULAS.md §8): f = rho_dd + a/pi; the mirror spike (a delta, weight rho_s) is not drawn".to_string(),
+        ));
+    }
+    text
 }
