@@ -113,7 +113,8 @@ def test_bad_keyword_values(mats):
         vkbrdf.tables.slice("gold", size="4y4")
     with pytest.raises(vkbrdf.UsageError, match="samples"):
         vkbrdf.tables.albedo(samples=0, size=2)
-    with pytest.raises(vkbrdf.UsageError, match="material index -1 is out of range 0..7"):
+    presets = len(vkbrdf.presets())
+    with pytest.raises(vkbrdf.UsageError, match=f"material index -1 is out of range 0..{presets}"):
         vkbrdf.tables.slice(-1)
     with pytest.raises(vkbrdf.MaterialError, match="`tin` is not defined in the presets"):
         vkbrdf.tables.slice("tin")

@@ -256,16 +256,22 @@ pub fn polar(runner: &mut Runner, material: &Material, incidence_deg: f64) -> Re
     runner.finish();
     let mut canvas = draw_polar(&angles, &f, ti);
     // HTSG's mirror spike is a delta (FORMULAS.md §8): f is ρ_dd + a/π, and the title says so.
-    let name = match material.model {
-        crate::material::Model::Htsg(_) => format!("{} (HTSG; spike not drawn)", material.name),
-        _ => material.name.clone(),
+    let title = match material.model {
+        crate::material::Model::Htsg(_) => format!(
+            "{}: f (1/sr), plane of incidence, light at {incidence_deg}°; spike not drawn",
+            material.name
+        ),
+        _ => format!(
+            "{}: f (1/sr) in the plane of incidence, light at {incidence_deg}°",
+            material.name
+        ),
     };
-    label_polar(&mut canvas, &name, incidence_deg, &f);
+    label_polar(&mut canvas, &title, &f);
     Ok(canvas)
 }
 
 /// The polar plot's title and axis labels.
-fn label_polar(canvas: &mut Canvas, name: &str, incidence_deg: f64, f: &[f32]) {
+fn label_polar(canvas: &mut Canvas, title: &str, f: &[f32]) {
     use super::font;
     let (w, h) = (canvas.width as i64, canvas.height as i64);
     let text = [200, 200, 200];
@@ -274,7 +280,7 @@ fn label_polar(canvas: &mut Canvas, name: &str, incidence_deg: f64, f: &[f32]) {
         canvas,
         6,
         4,
-        &format!("{name}: f (1/sr) in the plane of incidence, light at {incidence_deg}°"),
+        title,
         text,
     );
     font::draw(
