@@ -173,6 +173,11 @@ fn all_kinds() -> Vec<String> {
         "preset = \"glass\"",
         "preset = \"water\"",
         "preset = \"shiny-plastic\"",
+        // HTSG (FORMULAS.md §8): the bbm surface, a rough dielectric past D's switch, and
+        // the smoothest surface accepted with a long correlation length.
+        "preset = \"htsg-aluminium\"",
+        "model = \"htsg\"\nsigma0 = 0.6\ntau = 1.5\nior = 1.5\ndiffuse = 0.1",
+        "model = \"htsg\"\nsigma0 = 0.01\ntau = 10\nior = [0.2, 1.0, 1.5]\nextinction = [3.0, 0.0, 7.0]\nwavelengths = [400, 700, 1500]",
     ]
     .map(String::from)
     .to_vec();

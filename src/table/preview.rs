@@ -276,13 +276,7 @@ fn label_polar(canvas: &mut Canvas, title: &str, f: &[f32]) {
     let (w, h) = (canvas.width as i64, canvas.height as i64);
     let text = [200, 200, 200];
     let max = f.iter().fold(0.0f32, |m, &x| m.max(x));
-    font::draw(
-        canvas,
-        6,
-        4,
-        title,
-        text,
-    );
+    font::draw(canvas, 6, 4, title, text);
     font::draw(
         canvas,
         6,
