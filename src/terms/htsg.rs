@@ -155,10 +155,11 @@ pub fn effective_sigma(p: &Htsg, k_sum: f64) -> f64 {
 /// D of Eq. 78 per unit `(πτ/(2λ))²` (Westin's formulation): for `g ≤ 18.5` the series
 /// `Σ_{m≥1} e^{−g} g^m/(m!·m) · e^{−a/m}`, `a = v_xy² T²/4`; above, `e^{−a/g}/g`.
 ///
-/// Each term is formed in the log domain (`ln(e^{−g} g^m/m!)` accumulated, then one exp):
-/// `e^{−g} g^m` alone underflows long before the term does when g is small and a is
-/// large. The sum stops once the tail's bound — the next weight `p_m/m` (e^{−a/m} ≤ 1)
-/// times the geometric series of `g/(m+1)` — is below 2⁻⁵³ of the sum, or is 0.
+/// The weights `e^{−g} g^m/m!` grow by `g/m` (relative rounding ~m·2⁻⁵³, under 1e-14 at the
+/// m ≈ 60 the sum needs at g = 18.5), one exp a term. A weight that underflows makes a term
+/// below 1e-308, beneath every output's floor even after G and K (≤ 1e91) multiply it. The
+/// sum stops once the tail's bound — the current weight over m (e^{−a/m} ≤ 1) times the
+/// geometric series of `g/(m+1)` — is below 2⁻⁵³ of the sum, or is 0.
 pub fn series(g: f64, a: f64) -> f64 {
     if g > G_SWITCH {
         return (-a / g).exp() / g;
@@ -166,15 +167,15 @@ pub fn series(g: f64, a: f64) -> f64 {
     if g <= 0.0 {
         return 0.0;
     }
-    let ln_g = g.ln();
-    let mut ln_p = -g; // ln(e^{−g} g^m / m!) at m = 0
+    let mut weight = (-g).exp(); // e^{−g} g^m / m! at m = 0
     let mut sum = 0.0f64;
     for m in 1..=2000u32 {
         let mf = f64::from(m);
-        ln_p += ln_g - mf.ln();
-        sum += (ln_p - mf.ln() - a / mf).exp();
+        weight *= g / mf;
+        let t = weight / mf;
+        sum += t * (-a / mf).exp();
         if mf > g {
-            let tail = (ln_p - mf.ln()).exp() / (1.0 - g / (mf + 1.0));
+            let tail = t / (1.0 - g / (mf + 1.0));
             if tail <= sum * f64::EPSILON * 0.5 || tail == 0.0 {
                 break;
             }
