@@ -92,6 +92,7 @@ fn f64_frame_block(plan: &Plan, inp: &Inputs, out: &mut Outputs) {
             }
             return;
         }
+        Plan::Htsg { p, h } => return super::htsg::htsg_block(p, h, inp, out),
         Plan::Lambert(_) | Plan::Measured | Plan::Reference => return,
     };
     let mut st = Stage::default();

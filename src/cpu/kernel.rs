@@ -312,10 +312,10 @@ pub(crate) struct Frame64 {
     pub(super) cos_i: f64,
     pub(super) cos_o: f64,
     pub(super) cos_h: f64,
-    c: f64,
+    pub(super) c: f64,
     pub(super) sin2_h: f64,
-    sin2_i: f64,
-    sin2_o: f64,
+    pub(super) sin2_i: f64,
+    pub(super) sin2_o: f64,
     /// `r · v` with `r = 2 cos_i n − l` (Phong), and `sin²` of the angle between r and v:
     /// near the peak `1 − |r − v|²/2` and `|r − v|²/2 (2 − |r − v|²/2)`, which keep the
     /// relative precision that `cos^e` needs (the reference's `phong_lobe`); elsewhere

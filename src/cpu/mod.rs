@@ -20,6 +20,7 @@
 
 pub mod aniso;
 mod generated;
+pub mod htsg;
 pub mod importance;
 pub mod isa;
 pub mod kernel;

@@ -37,6 +37,14 @@ pub enum Plan {
         /// The material's constants.
         p: Params,
     },
+    /// An HTSG material in the lanes ([`crate::cpu::htsg`]); `p` holds its diffuse `a/π`
+    /// and the conductor's constants.
+    Htsg {
+        /// The diffuse and conductor constants.
+        p: Params,
+        /// The model's own constants.
+        h: crate::terms::htsg::LaneConstants,
+    },
     /// A measured (MERL) material: the half/difference angles in f64 lanes, then the
     /// table lookup (`src/cpu/measured.rs`; the data is the material's).
     Measured,
@@ -61,8 +69,13 @@ impl Plan {
             Model::Lambert => return Plan::Lambert(p),
             Model::CookTorrance(ct) => ct,
             Model::Measured(_) => return Plan::Measured,
-            // Its series and Newton solve run in f64 (terms/htsg.rs): no lanes yet.
-            Model::Htsg(_) => return Plan::Reference,
+            Model::Htsg(h) => {
+                p.conductor = conductor::LaneConstants::new(h.ior, h.extinction);
+                return Plan::Htsg {
+                    p,
+                    h: crate::terms::htsg::LaneConstants::new(h),
+                };
+            }
             _ => {
                 return match crate::cpu::lobes::params(m, p) {
                     Some((model, p)) => Plan::Lobe { model, p },

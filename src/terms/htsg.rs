@@ -230,6 +230,182 @@ pub fn spike(p: &Htsg, cos_i: f64, sin_i: f64) -> Rgb {
     })
 }
 
+/// An HTSG material's constants for the CPU engine's lanes, formed in f64 and rounded once
+/// (the kernel's packing, `gpu::layout`, holds the same numbers).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct LaneConstants {
+    /// `τ/(2σ0)`: `x = half_cot · cot θ`.
+    pub half_cot: f32,
+    /// `σ0/τ`: `w = 2πσ/λ = T · (σ/τ)`.
+    pub ratio: f32,
+    /// `T = 2πτ/λ` per channel.
+    pub t: [f32; 3],
+}
+
+impl LaneConstants {
+    /// The constants of `p`.
+    pub fn new(p: &Htsg) -> LaneConstants {
+        LaneConstants {
+            half_cot: (p.tau / (2.0 * p.sigma0)) as f32,
+            ratio: (p.sigma0 / p.tau) as f32,
+            t: p.wavelengths.map(|l| (2.0 * PI * p.tau / l) as f32),
+        }
+    }
+}
+
+/// A block of lanes' HTSG terms but F (the conductor's lane form gives F per channel).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LaneTerms<const N: usize> {
+    /// `K = S/(π cos_i cos_r)`.
+    pub k: [f32; N],
+    /// G.
+    pub g: [f32; N],
+    /// D of the green channel.
+    pub d: [f32; N],
+    /// `G·D` per channel (formed together: see [`lanes`]).
+    pub gd: [[f32; N]; 3],
+}
+
+/// The geometry of a block of lanes, from the CPU engine's f64 frame rounded once.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LaneAngles<const N: usize> {
+    /// `cos θ_i`, at least 1e-4 (the frame sends smaller cosines to the reference).
+    pub cos_i: [f32; N],
+    /// `cos θ_r`, at least 1e-4.
+    pub cos_o: [f32; N],
+    /// `|n × l|²`.
+    pub sin2_i: [f32; N],
+    /// `|n × v|²`.
+    pub sin2_o: [f32; N],
+    /// `c = |l + v|/2`, at least 1e-4.
+    pub c: [f32; N],
+    /// `|n × h|²`.
+    pub sin2_h: [f32; N],
+}
+
+/// `S1/cos θ` and `ln K(θ)` of one direction in f32 (`glsl/htsg.glsl`'s `htsg_direction`),
+/// branch-free: past `x = 4.5`, S1 = 1 to f32's resolution and K < 2.2e-8 is dropped (the
+/// kernel's comment gives the bound; `ln K` = −1e30 then), and the other branch's values
+/// (NaN at normal incidence, where x = ∞) are selected away.
+#[inline(always)]
+fn lane_direction(cos: f32, sin2: f32, half_cot: f32) -> (f32, f32) {
+    use super::math::{erfc, exp_neg, log_acc};
+    let sin = sin2.sqrt();
+    let x = half_cot * cos / sin;
+    let e = erfc(x);
+    let one_plus_erf = 2.0 - e;
+    let sqrt_pi = PI.sqrt() as f32;
+    let den = exp_neg(-x * x) + x * sqrt_pi * one_plus_erf;
+    let q = sqrt_pi * one_plus_erf * half_cot / (sin * den);
+    let ln_k = log_acc(sin * e) - log_acc(cos);
+    let flat = half_cot * cos > 4.5 * sin;
+    (
+        if flat { 1.0 / cos } else { q },
+        if flat { -1e30 } else { ln_k },
+    )
+}
+
+/// FORMULAS.md §8 but F, in f32, for a block of lanes whose cosines are at least 1e-4 (the
+/// CPU engine's f64 frame sends the others to the reference): the kernel's form
+/// (`glsl/htsg.glsl`) without its extended-range paths, written lane-parallel so that it
+/// vectorises — Newton five steps from `z = R` or `√(2 ln(1 + R))` (1.1e-7 of σ over ln R
+/// ∈ [−9.3, 104]), and the series run for every lane until each has its tail bound below
+/// 2⁻²⁵ of its sum (a lane that is done earlier only adds terms smaller still); lanes past
+/// D's switch take Beckmann's form by a select. `G·D` is formed together in the series'
+/// range (there `g = (w (cos_i + cos_r))²` divides out of G).
+#[inline(always)]
+pub fn lanes<const N: usize>(k: &LaneConstants, w: &LaneAngles<N>) -> LaneTerms<N> {
+    use super::math::{exp_neg, log1p_acc, log_acc};
+    let mut out = LaneTerms {
+        k: [0.0; N],
+        g: [0.0; N],
+        d: [0.0; N],
+        gd: [[0.0; N]; 3],
+    };
+    let mut ratio = [0.0f32; N];
+    let mut ns = [0.0f32; N];
+    let mut s2 = [0.0f32; N];
+    let ln_sqrt_8pi = (0.5 * (8.0 * PI).ln()) as f32;
+    for j in 0..N {
+        let (q_i, ln_k_i) = lane_direction(w.cos_i[j], w.sin2_i[j], k.half_cot);
+        let (q_o, ln_k_o) = lane_direction(w.cos_o[j], w.sin2_o[j], k.half_cot);
+        let (hi, lo) = (ln_k_i.max(ln_k_o), ln_k_i.min(ln_k_o));
+        // ln R = ln(K_i + K_r) − ln √(8π); −1e30 when both K are 0.
+        let ln_r = hi + log1p_acc(exp_neg(lo - hi)) - ln_sqrt_8pi;
+        // Below ln R = −9.3, z < 1e-4 and σ = σ0 to f32 precision (also the K = 0 lanes).
+        let small = ln_r < -9.3;
+        let lr = if small { 0.0 } else { ln_r };
+        let mut z = if lr <= 0.0 {
+            exp_neg(lr)
+        } else {
+            (2.0 * (lr + log1p_acc(exp_neg(-lr)))).sqrt()
+        };
+        for _ in 0..5 {
+            let h = log_acc(z) + 0.5 * z * z - lr;
+            z -= z * h / (1.0 + z * z);
+        }
+        ratio[j] = if small {
+            k.ratio
+        } else {
+            k.ratio / (1.0 + z * z).sqrt()
+        };
+        ns[j] = w.cos_i[j] + w.cos_o[j];
+        s2[j] = 4.0 * w.c[j] * w.c[j];
+        out.g[j] = (s2[j] / ns[j]) * (s2[j] / ns[j]);
+        out.k[j] = q_i * q_o / PI as f32;
+    }
+    for ch in 0..3 {
+        let t = k.t[ch];
+        let norm = 0.0625 * t * t;
+        let mut gg = [0.0f32; N];
+        let mut a = [0.0f32; N];
+        let mut q = [0.0f32; N];
+        let mut sum = [0.0f32; N];
+        for j in 0..N {
+            let wv = t * ratio[j];
+            gg[j] = wv * ns[j] * wv * ns[j];
+            a[j] = 0.25 * s2[j] * w.sin2_h[j] * t * t;
+            // Lanes past the switch run the series on 0 weights (their result is replaced).
+            q[j] = if gg[j] > G_SWITCH as f32 {
+                0.0
+            } else {
+                exp_neg(-gg[j])
+            };
+        }
+        for m in 1..=80u32 {
+            let mf = m as f32;
+            let mut done = true;
+            for j in 0..N {
+                q[j] /= mf;
+                let wt = q[j] / mf;
+                sum[j] += wt * exp_neg(-a[j] / mf);
+                q[j] *= gg[j];
+                done &= mf > gg[j] && wt * gg[j] / (1.0 - gg[j] / (mf + 1.0)) <= sum[j] * 3e-8
+                    || q[j] == 0.0;
+            }
+            if done {
+                break;
+            }
+        }
+        for j in 0..N {
+            let rough = gg[j] > G_SWITCH as f32;
+            let s = norm * sum[j];
+            let d_rough = norm * exp_neg(-a[j] / gg[j]) / gg[j];
+            let wv = t * ratio[j];
+            let d = if rough { d_rough } else { gg[j] * s };
+            out.gd[ch][j] = if rough {
+                out.g[j] * d_rough
+            } else {
+                s2[j] * s2[j] * wv * wv * s
+            };
+            if ch == 1 {
+                out.d[j] = d;
+            }
+        }
+    }
+    out
+}
+
 /// The equivalent Beckmann roughness of the rough limit, `m = 2σ0/τ` (S1's `x = cot θ/m`).
 pub fn beckmann_m(p: &Htsg) -> f64 {
     2.0 * p.sigma0 / p.tau
