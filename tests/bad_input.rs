@@ -493,3 +493,50 @@ fn a_measured_material_has_no_fast_variant() {
         ],
     );
 }
+
+#[test]
+fn htsg_parameters_are_checked() {
+    let m = |body: &str| format!("[[material]]\nname = \"h\"\nmodel = \"htsg\"\n{body}\n");
+    // FORMULAS.md §8's ranges, each naming its key.
+    assert_material_error(
+        &m("tau = 1\nior = 1.5"),
+        &["`sigma0`", "missing", "m.toml:1:"],
+    );
+    assert_material_error(&m("sigma0 = 0.1\nior = 1.5"), &["`tau`", "missing"]);
+    assert_material_error(&m("sigma0 = 0.1\ntau = 1"), &["`ior`", "missing"]);
+    assert_material_error(
+        &m("sigma0 = 0\ntau = 1\nior = 1.5"),
+        &["`sigma0`", "[1e-4, 10]"],
+    );
+    assert_material_error(
+        &m("sigma0 = 0.1\ntau = 1e3\nior = 1.5"),
+        &["`tau`", "[1e-3, 100]"],
+    );
+    assert_material_error(
+        &m("sigma0 = 5\ntau = 0.1\nior = 1.5"),
+        &["`sigma0`", "sigma0 / tau", "5e1"],
+    );
+    assert_material_error(
+        &m("sigma0 = 0.1\ntau = 1\nior = 1.5\nwavelengths = [100, 500, 600]"),
+        &["`wavelengths`", "[200, 5000]", "m.toml:7:"],
+    );
+    assert_material_error(
+        &m("sigma0 = 0.1\ntau = 1\nior = 1.5\nextinction = -1"),
+        &["`extinction`"],
+    );
+    // Keys the model never reads, and the fast variant it does not have.
+    assert_material_error(
+        &m("sigma0 = 0.1\ntau = 1\nior = 1.5\nspecular = 1"),
+        &["`specular`", "does not apply"],
+    );
+    assert_material_error(
+        &m("sigma0 = 0.1\ntau = 1\nior = 1.5\nroughness = 0.1"),
+        &["`roughness`", "does not apply"],
+    );
+    assert_material_error(
+        &m("sigma0 = 0.1\ntau = 1\nior = 1.5\nprecision = \"fast\""),
+        &["`precision`", "exact"],
+    );
+    // A dielectric (no extinction) is legal.
+    assert!(parse_materials(&m("sigma0 = 0.1\ntau = 1\nior = 1.5"), "m.toml").is_ok());
+}

@@ -13,6 +13,7 @@ use vkbrdf::material::{self, Fresnel, Material, Model};
   name = "brushed"            # required, unique
   preset = "aluminium"        # optional: start from a preset, then override keys
   model = "cook-torrance"     # lambert | phong | blinn-phong | rtr | ward | cook-torrance | merl
+                              # | htsg
   convention = "modern"       # seed | cook-torrance-1982 | modern (default)
   distribution = "ggx"        # gaussian | beckmann | ggx | blinn | charlie (sheen, 0 < m <= 1)
   roughness = [0.1, 0.4]      # m > 0 (rms slope; GGX alpha), or [mx, my] (anisotropic)
@@ -35,6 +36,18 @@ use vkbrdf::material::{self, Fresnel, Material, Model};
   model = "merl"              # measured data (every backend)
   file = "gold.binary"        # a MERL binary, relative to this file
   lookup = "nearest"          # nearest (default: MERL's own bin lookup) | linear
+
+  [[material]]
+  name = "wave-optical"
+  model = "htsg"              # He, Torrance, Sillion & Greenberg 1991 (docs/HTSG.md)
+  sigma0 = 0.0318             # rms height, µm, in [1e-4, 10]
+  tau = 0.3                   # autocorrelation length, µm, in [1e-3, 100]; sigma0/tau in
+                              # [1e-3, 10] (Beckmann m ≈ 2 sigma0/tau)
+  ior = [1.3211, 0.88045, 0.59765]       # n per channel
+  extinction = [7.41785, 6.1455, 5.2337] # k per channel (default 0: a dielectric)
+  wavelengths = [645, 526, 444]          # nm per channel (the default)
+  diffuse = 0.0               # uniform-diffuse albedo a: f = rho_dd + a/pi (the mirror
+                              # spike's weight rho_s: `vkbrdf at`, `eval --spike`)
 
 Keys a model does not read are errors, as are negative colours or weights, roughness <= 0,
 smith* or schlick-smith with gaussian/blinn/charlie, smith-fast with anything but beckmann,

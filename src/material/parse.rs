@@ -545,7 +545,8 @@ impl Fields<'_, '_> {
     /// `ior` and `extinction` per channel, `wavelengths` in nm.
     fn htsg(&mut self) -> Result<crate::terms::htsg::Htsg, MaterialError> {
         use crate::terms::htsg;
-        let why = "model `htsg` needs `sigma0` and `tau` (µm), `ior` and `extinction`";
+        let why =
+            "model `htsg` needs `sigma0` and `tau` (µm) and `ior` (`extinction` defaults to 0)";
         let sigma0 = self
             .scalar("sigma0", sigma0_range)?
             .ok_or_else(|| self.err("sigma0", format!("missing; {why}")))?;
