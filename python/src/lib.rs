@@ -310,6 +310,24 @@ type Evaluated<'py> = (
     bool,
 );
 
+/// A C-contiguous float32 `(n, 10)` or `(n, 13)` array as a batch over `materials`
+/// materials, read in place (no copy); a `BatchError` for any other layout.
+fn borrowed_batch<'a>(
+    py: Python<'_>,
+    tuples: &'a PyReadonlyArray2<'_, f32>,
+    materials: usize,
+) -> PyResult<Batch<'a>> {
+    let columns = tuples.shape()[1];
+    let data: &[f32] = tuples.as_slice().map_err(|e| {
+        raise(
+            py,
+            "BatchError",
+            format!("{TUPLES}: the array must be C-contiguous float32 here ({e})"),
+        )
+    })?;
+    Batch::borrowed(data, columns, materials, Path::new(TUPLES)).map_err(|e| to_py(py, e))
+}
+
 /// Evaluates a C-contiguous float32 `(n, 10)` or `(n, 13)` tuple array in place.
 #[pyfunction]
 #[pyo3(signature = (materials, tuples, backend, terms, precision, strict))]
@@ -324,14 +342,6 @@ fn evaluate<'py>(
 ) -> PyResult<Evaluated<'py>> {
     let mut kind = parse_backend(py, backend)?;
     let precision = parse_precision(py, precision)?;
-    let columns = tuples.shape()[1];
-    let data: &[f32] = tuples.as_slice().map_err(|e| {
-        raise(
-            py,
-            "BatchError",
-            format!("{TUPLES}: the array must be C-contiguous float32 here ({e})"),
-        )
-    })?;
     let list = precision::apply_all(&materials.list, precision);
     // As `vkbrdf eval` does: measured materials go to the reference unless a backend is
     // named (only it evaluates them).
@@ -339,7 +349,7 @@ fn evaluate<'py>(
         kind = Kind::Reference;
     }
     let source = Path::new(TUPLES);
-    let batch = Batch::borrowed(data, columns, list.len(), source).map_err(|e| to_py(py, e))?;
+    let batch = borrowed_batch(py, &tuples, list.len())?;
     batch
         .check_tangents(&list, source)
         .map_err(|e| to_py(py, e))?;
@@ -382,17 +392,8 @@ fn spike<'py>(
     materials: &Materials,
     tuples: PyReadonlyArray2<'py, f32>,
 ) -> PyResult<Bound<'py, PyArray2<f32>>> {
-    let columns = tuples.shape()[1];
-    let data: &[f32] = tuples.as_slice().map_err(|e| {
-        raise(
-            py,
-            "BatchError",
-            format!("{TUPLES}: the array must be C-contiguous float32 here ({e})"),
-        )
-    })?;
     let list = &materials.list;
-    let source = Path::new(TUPLES);
-    let batch = Batch::borrowed(data, columns, list.len(), source).map_err(|e| to_py(py, e))?;
+    let batch = borrowed_batch(py, &tuples, list.len())?;
     let mut v = Vec::with_capacity(3 * batch.len());
     for i in 0..batch.len() {
         let t = batch.tuple(i);
