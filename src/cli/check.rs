@@ -12,7 +12,7 @@ use vkbrdf::gpu::{DeviceSelector, VulkanBackend, VulkanOptions};
 #[derive(clap::Args, Debug, Clone)]
 #[command(after_help = "\
 Every legal combination of model, distribution, geometry, Fresnel term, convention and
-anisotropy (314), and measured (MERL) materials with each lookup (merl nearest, merl
+anisotropy (315, the HTSG model among them), and measured (MERL) materials with each lookup (merl nearest, merl
 linear: two analytic materials exported to MERL in memory; skipped, with the reason, on a
 device without 64-bit floats), is evaluated on seeded random tuples (random lengths, cos_i and cos_o at
 least 1e-3, roughness at least 0.01, exponents up to 20000) and compared with the f64 CPU
