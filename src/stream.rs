@@ -414,13 +414,8 @@ fn spike_allowed(job: &StreamJob) -> Result<()> {
     Ok(())
 }
 
-/// `ρ_s` per channel of each row of `batch` (float32, row-major `(n, 3)`).
+/// `ρ_s` of each row of `batch` ([`crate::reference::htsg_spike_rows`]); every material is
+/// HTSG's ([`spike_allowed`] checked it before any work), so no row can fail.
 fn spike_rows(batch: &crate::batch::Batch, materials: &[Material]) -> Vec<f32> {
-    let mut v = Vec::with_capacity(3 * batch.len());
-    for i in 0..batch.len() {
-        let t = batch.tuple(i);
-        let s = crate::reference::htsg_spike(&t, &materials[t.material]).unwrap_or_default();
-        v.extend(s.map(|x| x as f32));
-    }
-    v
+    crate::reference::htsg_spike_rows(batch, materials).unwrap_or_default()
 }

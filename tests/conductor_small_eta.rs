@@ -58,10 +58,11 @@ fn every_engine_meets_the_closed_form_at_normal_incidence() {
         for (i, (n, k)) in ETAS.iter().enumerate() {
             let want = closed_form(*n, *k);
             let got = f64::from(terms[6 * i + 2]);
-            // FORMULAS.md §1's 1e-5 (L = V = N: one rounding of the inputs moves c by
-            // ~1e-15, far below what moves F).
+            // L = V = N: one rounding of the inputs moves c by ~1e-15, far below what moves
+            // F; measured 1.0e-7 on cpu and lavapipe (the f32 output's rounding), 9.3e-5
+            // before the fix.
             assert!(
-                (got - want).abs() <= 1e-5 * want,
+                (got - want).abs() <= 1e-6 * want,
                 "{}: η = {n} + {k}i: F = {got}, closed form {want}",
                 backend.name()
             );

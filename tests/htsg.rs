@@ -106,9 +106,9 @@ fn the_spike_weight_is_the_independent_value() {
         };
         let s = reference::htsg_spike(&t, &m).expect("an HTSG material");
         for c in 0..3 {
-            // f32 directions: θ_i moves by ~1e-8 rad.
+            // f32 directions move θ_i by ~1e-8 rad: measured 2.5e-8 of ρ_s.
             assert!(
-                (s[c] - rho_s[c]).abs() < 1e-6 * rho_s[c],
+                (s[c] - rho_s[c]).abs() < 1e-7 * rho_s[c],
                 "{ti}: {:?} vs {rho_s:?}",
                 s
             );
@@ -148,17 +148,19 @@ fn every_engine_meets_the_values_and_is_reciprocal() {
         for (i, (ti, tr, pr, rho, _)) in PRESET.iter().enumerate() {
             for (c, want) in rho.iter().enumerate() {
                 let (fwd, rev) = (out.brdf[6 * i + c], out.brdf[6 * i + 3 + c]);
-                // FORMULAS.md §1's 1e-5 (these directions are well conditioned: f changes by
-                // far less under a rotation of 6e-8 rad).
+                // Inside FORMULAS.md §1's 1e-5 with room: these directions are well
+                // conditioned, and every engine (f32 inputs and output included) was measured
+                // within 4.2e-7 of the 50-digit values.
                 let rel = (f64::from(fwd) - want).abs() / want;
                 assert!(
-                    rel < 1e-5,
+                    rel < 2e-6,
                     "{}: ({ti}, {tr}, {pr}) {c}: {fwd} vs {want}",
                     backend.name()
                 );
-                // Every factor is symmetric in l and v.
+                // Every factor is symmetric in l and v (measured equal bits here; a few ulp
+                // allowed for the order of a product).
                 assert!(
-                    (fwd - rev).abs() <= 2e-6 * fwd,
+                    (fwd - rev).abs() <= 5e-7 * fwd,
                     "{}: not reciprocal at ({ti}, {tr}, {pr}): {fwd} vs {rev}",
                     backend.name()
                 );

@@ -394,23 +394,18 @@ fn spike<'py>(
 ) -> PyResult<Bound<'py, PyArray2<f32>>> {
     let list = &materials.list;
     let batch = borrowed_batch(py, &tuples, list.len())?;
-    let mut v = Vec::with_capacity(3 * batch.len());
-    for i in 0..batch.len() {
-        let t = batch.tuple(i);
-        let m = &list[t.material];
-        let Some(s) = vkbrdf::reference::htsg_spike(&t, m) else {
-            return Err(raise(
-                py,
-                "UsageError",
-                format!(
-                    "spike=True: row {i} uses material `{}`, a {} material; the mirror spike's weight is defined for htsg materials only (FORMULAS.md §8)",
-                    m.name,
-                    m.model.toml_name()
-                ),
-            ));
-        };
-        v.extend(s.map(|x| x as f32));
-    }
+    let v = vkbrdf::reference::htsg_spike_rows(&batch, list).map_err(|i| {
+        let m = &list[batch.tuple(i).material];
+        raise(
+            py,
+            "UsageError",
+            format!(
+                "spike=True: row {i} uses material `{}`, a {} material; the mirror spike's weight is defined for htsg materials only (FORMULAS.md §8)",
+                m.name,
+                m.model.toml_name()
+            ),
+        )
+    })?;
     rows(py, v, batch.len(), 3)
 }
 

@@ -548,10 +548,10 @@ impl Fields<'_, '_> {
         let why =
             "model `htsg` needs `sigma0` and `tau` (µm) and `ior` (`extinction` defaults to 0)";
         let sigma0 = self
-            .scalar("sigma0", sigma0_range)?
+            .scalar("sigma0", htsg::sigma0_range)?
             .ok_or_else(|| self.err("sigma0", format!("missing; {why}")))?;
         let tau = self
-            .scalar("tau", tau_range)?
+            .scalar("tau", htsg::tau_range)?
             .ok_or_else(|| self.err("tau", format!("missing; {why}")))?;
         if let Some((key, message)) = htsg::legality(sigma0, tau) {
             return Err(self.err(key, message));
@@ -563,7 +563,7 @@ impl Fields<'_, '_> {
             .rgb("extinction", extinction_range)?
             .unwrap_or([0.0; 3]);
         let nm = self
-            .rgb("wavelengths", wavelength_range)?
+            .rgb("wavelengths", htsg::wavelength_range)?
             .unwrap_or(htsg::DEFAULT_WAVELENGTHS_NM);
         Ok(htsg::Htsg {
             sigma0,
@@ -791,28 +791,6 @@ fn extinction_range(x: f64) -> Option<&'static str> {
 fn colour_range(x: f64) -> Option<&'static str> {
     (!(x.is_finite() && (0.0..=1e18).contains(&x)))
         .then_some("must be a finite number ≥ 0, in [0, 1e18]")
-}
-/// HTSG's `sigma0` (µm), [`crate::terms::htsg::SIGMA0_RANGE`]: from a polished surface's
-/// 0.1 nm to 10 µm.
-fn sigma0_range(x: f64) -> Option<&'static str> {
-    let (lo, hi) = crate::terms::htsg::SIGMA0_RANGE;
-    (!(x.is_finite() && (lo..=hi).contains(&x)))
-        .then_some("must be a finite number in [1e-4, 10] (µm)")
-}
-/// HTSG's `tau` (µm), [`crate::terms::htsg::TAU_RANGE`]: with λ ≥ 200 nm, `T = 2πτ/λ` and
-/// the lobe's exponent `v_xy² T²/4` stay within float32's exp range where the lobe is
-/// above the conformance floor.
-fn tau_range(x: f64) -> Option<&'static str> {
-    let (lo, hi) = crate::terms::htsg::TAU_RANGE;
-    (!(x.is_finite() && (lo..=hi).contains(&x)))
-        .then_some("must be a finite number in [1e-3, 100] (µm)")
-}
-/// HTSG's wavelengths (nm), [`crate::terms::htsg::WAVELENGTH_RANGE_NM`]: the near UV to the
-/// mid infrared.
-fn wavelength_range(x: f64) -> Option<&'static str> {
-    let (lo, hi) = crate::terms::htsg::WAVELENGTH_RANGE_NM;
-    (!(x.is_finite() && (lo..=hi).contains(&x)))
-        .then_some("must be a finite number in [200, 5000] (nm)")
 }
 fn unit_interval(x: f64) -> Option<&'static str> {
     (!(x.is_finite() && (0.0..=1.0).contains(&x))).then_some("must be in [0, 1]")

@@ -64,6 +64,21 @@ pub fn htsg_spike(t: &Tuple, m: &Material) -> Option<crate::material::Rgb> {
     Some(crate::terms::htsg::spike(p, angles.cos_i, angles.sin_i))
 }
 
+/// [`htsg_spike`] of every row of `batch` as float32, row-major `(n, 3)`; the first row
+/// whose material is not HTSG's is the error (its index in the batch).
+pub fn htsg_spike_rows(
+    batch: &crate::batch::Batch,
+    materials: &[Material],
+) -> Result<Vec<f32>, usize> {
+    let mut v = Vec::with_capacity(3 * batch.len());
+    for i in 0..batch.len() {
+        let t = batch.tuple(i);
+        let s = htsg_spike(&t, &materials[t.material]).ok_or(i)?;
+        v.extend(s.map(|x| x as f32));
+    }
+    Ok(v)
+}
+
 /// Evaluates one batch tuple (its f32 inputs widened exactly to f64).
 pub fn evaluate_tuple(t: &Tuple, m: &Material) -> Evaluation {
     let w = |a: [f32; 3]| a.map(f64::from);

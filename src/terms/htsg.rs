@@ -63,6 +63,29 @@ pub fn legality(sigma0: f64, tau: f64) -> Option<(&'static str, String)> {
     })
 }
 
+/// HTSG's `sigma0` (µm), [`SIGMA0_RANGE`]: from a polished surface's
+/// 0.1 nm to 10 µm.
+pub fn sigma0_range(x: f64) -> Option<&'static str> {
+    let (lo, hi) = SIGMA0_RANGE;
+    (!(x.is_finite() && (lo..=hi).contains(&x)))
+        .then_some("must be a finite number in [1e-4, 10] (µm)")
+}
+/// HTSG's `tau` (µm), [`TAU_RANGE`]: with λ ≥ 200 nm, `T = 2πτ/λ` and
+/// the lobe's exponent `v_xy² T²/4` stay within float32's exp range where the lobe is
+/// above the conformance floor.
+pub fn tau_range(x: f64) -> Option<&'static str> {
+    let (lo, hi) = TAU_RANGE;
+    (!(x.is_finite() && (lo..=hi).contains(&x)))
+        .then_some("must be a finite number in [1e-3, 100] (µm)")
+}
+/// HTSG's wavelengths (nm), [`WAVELENGTH_RANGE_NM`]: the near UV to the
+/// mid infrared.
+pub fn wavelength_range(x: f64) -> Option<&'static str> {
+    let (lo, hi) = WAVELENGTH_RANGE_NM;
+    (!(x.is_finite() && (lo..=hi).contains(&x)))
+        .then_some("must be a finite number in [200, 5000] (nm)")
+}
+
 /// The geometry one evaluation reads (FORMULAS.md §1 and §8), all from the frame.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Angles {
