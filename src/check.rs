@@ -468,6 +468,7 @@ fn measured_combinations() -> Result<Vec<Combination>> {
                         diffuse: [0.0; 3],
                         specular: [1.0; 3],
                         precision: crate::material::precision::Precision::Exact,
+                        spectral: None,
                     }
                 })
                 .collect();

@@ -46,6 +46,8 @@ pub mod material;
 pub mod precision;
 pub mod reference;
 pub mod sample;
+pub mod spectral;
+pub mod spectral_eval;
 pub mod stats;
 pub mod stream;
 pub mod stress;

@@ -153,6 +153,7 @@ fn measured(
         diffuse: [0.0; 3],
         specular: [1.0; 3],
         precision: vkbrdf::material::precision::Precision::Exact,
+        spectral: None,
     }
 }
 

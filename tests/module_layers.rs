@@ -9,7 +9,7 @@ use std::path::Path;
 /// Lowest first; a module may import its own layer or any below (never above).
 const LAYERS: &[&[&str]] = &[
     &["error", "cancel", "stats", "vector"],
-    &["terms"],
+    &["terms", "spectral"],
     &["atomic", "material"],
     &["batch", "directions"],
     &["backend", "precision", "sample"],
@@ -23,6 +23,7 @@ const LAYERS: &[&[&str]] = &[
         "stream",
         "backend_choice",
         "fit",
+        "spectral_eval",
     ],
 ];
 

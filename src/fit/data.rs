@@ -228,6 +228,7 @@ fn dummy() -> crate::material::Material {
         diffuse: [0.0; 3],
         specular: [1.0; 3],
         precision: crate::material::precision::Precision::Exact,
+        spectral: None,
     }
 }
 

@@ -8,6 +8,7 @@ pub mod merl;
 mod parse;
 pub mod precision;
 pub mod presets;
+pub mod spectral;
 
 pub use crate::terms::{
     legality, Convention, Distribution, DistributionKind, Fresnel, FresnelKind, Geometry, Illegal,
@@ -30,6 +31,9 @@ pub struct Material {
     /// The variant evaluated: `Exact`, or `Fast` once [`super::precision::apply`] has
     /// rewritten the terms (the kernel then also uses the device's own exp/log/atan2).
     pub precision: super::precision::Precision,
+    /// The spectral index behind the RGB `ior`/`extinction` (or Schlick `f0`), when the
+    /// materials file gave `ior` as a spectrum (FORMULAS.md §9); `None` for an RGB material.
+    pub spectral: Option<std::sync::Arc<spectral::SpectralIndex>>,
 }
 
 /// The reflection models of FORMULAS.md §6, each with the parameters its formula uses.

@@ -32,6 +32,7 @@ const KEYS: &[&str] = &[
     "sigma0",
     "tau",
     "wavelengths",
+    "rgb_reduction",
 ];
 
 #[derive(serde::Deserialize)]
@@ -163,6 +164,8 @@ struct Fields<'v, 'c> {
     name: String,
     map: BTreeMap<String, Entry<'v>>,
     used: Vec<&'static str>,
+    /// A spectral `ior`, once read (FORMULAS.md §9).
+    spectral: Option<std::sync::Arc<super::spectral::SpectralIndex>>,
 }
 
 impl Ctx<'_> {
@@ -298,6 +301,7 @@ impl Ctx<'_> {
             name,
             map,
             used: vec![],
+            spectral: None,
         };
         let m = f.build()?;
         f.reject_unused()?;
@@ -492,6 +496,7 @@ impl Fields<'_, '_> {
                 diffuse: [0.0; 3],
                 specular: [1.0; 3],
                 precision: super::precision::Precision::Exact,
+                spectral: None,
             });
         }
         let diffuse = self.rgb("diffuse", colour_range)?.unwrap_or([0.0; 3]);
@@ -504,6 +509,7 @@ impl Fields<'_, '_> {
                 diffuse,
                 specular: [1.0; 3],
                 precision: super::precision::Precision::Exact,
+                spectral: self.spectral.take(),
             });
         }
         let specular = if model == "lambert" {
@@ -537,6 +543,7 @@ impl Fields<'_, '_> {
             diffuse,
             specular,
             precision: super::precision::Precision::Exact,
+            spectral: self.spectral.take(),
         };
         Ok(super::precision::apply(&material, precision))
     }
@@ -556,15 +563,24 @@ impl Fields<'_, '_> {
         if let Some((key, message)) = htsg::legality(sigma0, tau) {
             return Err(self.err(key, message));
         }
-        let ior = self
-            .rgb("ior", ior_range)?
-            .ok_or_else(|| self.err("ior", format!("missing; {why} (n per channel)")))?;
-        let extinction = self
-            .rgb("extinction", extinction_range)?
-            .unwrap_or([0.0; 3]);
         let nm = self
             .rgb("wavelengths", htsg::wavelength_range)?
             .unwrap_or(htsg::DEFAULT_WAVELENGTHS_NM);
+        // A spectral index is read at the material's own wavelengths for its RGB form.
+        let (ior, extinction) = if let Some(index) = self.spectral_ior()? {
+            let at = |l: f64| index.at(l).map_err(|m| self.err("ior", m));
+            let p = [at(nm[0])?, at(nm[1])?, at(nm[2])?];
+            (p.map(|x| x.0.max(1e-6)), p.map(|x| x.1))
+        } else {
+            let ior = self
+                .rgb("ior", ior_range)?
+                .ok_or_else(|| self.err("ior", format!("missing; {why} (n per channel)")))?;
+            (
+                ior,
+                self.rgb("extinction", extinction_range)?
+                    .unwrap_or([0.0; 3]),
+            )
+        };
         Ok(htsg::Htsg {
             sigma0,
             tau,
@@ -681,13 +697,27 @@ impl Fields<'_, '_> {
         let why = "a cook-torrance material states its distribution, geometry and fresnel";
         let name = self.required_string("fresnel", &names, why)?;
         let kind = FresnelKind::from_toml_name(&name).expect("one of the names offered");
+        if kind == FresnelKind::Dielectric && self.has("extinction") {
+            self.used.push("extinction");
+            return Err(self.err(
+                "extinction",
+                "`dielectric` has a real IOR; for a complex IOR use fresnel = \"conductor\"".into(),
+            ));
+        }
+        if kind != FresnelKind::None && !(kind == FresnelKind::Schlick && self.has("f0")) {
+            if let Some(index) = self.spectral_ior()? {
+                let reduction = self
+                    .spectral
+                    .as_ref()
+                    .map(|s| s.reduction)
+                    .unwrap_or_default();
+                return super::spectral::rgb_fresnel(kind, &index, reduction)
+                    .map_err(|m| self.err("ior", m));
+            }
+        }
         Ok(match kind {
             FresnelKind::None => Fresnel::None,
             FresnelKind::Dielectric => {
-                if self.has("extinction") {
-                    self.used.push("extinction");
-                    return Err(self.err("extinction", "`dielectric` has a real IOR; for a complex IOR use fresnel = \"conductor\"".into()));
-                }
                 let ior = self.rgb("ior", ior_range)?.ok_or_else(|| {
                     self.err(
                         "ior",
@@ -725,6 +755,31 @@ impl Fields<'_, '_> {
                 }
             }
         })
+    }
+
+    /// A spectral `ior` (FORMULAS.md §9) with its `extinction` and `rgb_reduction`, kept for
+    /// the material; `None` when `ior` is absent or a number or RGB.
+    fn spectral_ior(&mut self) -> Result<Option<crate::spectral::IndexSpectrum>, MaterialError> {
+        let Some(ior) = self.map.get("ior").map(|e| e.value) else {
+            return Ok(None);
+        };
+        if !super::spectral::is_spectrum(ior) {
+            return Ok(None);
+        }
+        let extinction = self.map.get("extinction").map(|e| e.value);
+        self.used.extend(["ior", "extinction"]);
+        let index = super::spectral::index_from(ior, extinction, self.ctx.base)
+            .map_err(|(key, m)| self.err(key, m))?;
+        let names = crate::spectral::RgbReduction::ALL.map(crate::spectral::RgbReduction::name);
+        let reduction = self
+            .string("rgb_reduction", &names)?
+            .and_then(|n| crate::spectral::RgbReduction::from_name(&n))
+            .unwrap_or_default();
+        self.spectral = Some(std::sync::Arc::new(super::spectral::SpectralIndex {
+            index: index.clone(),
+            reduction,
+        }));
+        Ok(Some(index))
     }
 
     /// Keys the table set (not the preset) that the chosen model never reads are errors:

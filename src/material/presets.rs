@@ -11,6 +11,12 @@
 //!
 //! both as tabulated by refractiveindex.info. Dielectrics: glass 1.5, water 1.33 (the
 //! usual round values; dispersion is ignored).
+//!
+//! Each of these six has a **spectral form**, `NAME-spectral` (`gold-spectral`, …): the same
+//! material with `ior` the shipped measured spectrum (`crate::spectral::datasets`; fused
+//! silica for glass), evaluated at any wavelengths with `vkbrdf eval --wavelengths` and,
+//! in RGB, through the Mitsuba reduction (FORMULAS.md §9). The plain name keeps the
+//! three-wavelength RGB values above.
 
 use super::Material;
 use crate::error::MaterialError;
@@ -25,6 +31,12 @@ pub const NAMES: &[&str] = &[
     "water",
     "shiny-plastic",
     "htsg-aluminium",
+    "gold-spectral",
+    "silver-spectral",
+    "copper-spectral",
+    "aluminium-spectral",
+    "glass-spectral",
+    "water-spectral",
 ];
 
 /// The TOML body (keys without `name`) of a preset, or `None` for an unknown name.
@@ -50,6 +62,16 @@ pub fn body(name: &str) -> Option<String> {
         "water" => DIELECTRIC.trim_end().to_owned() + "\nior = 1.33\n",
         "shiny-plastic" => SHINY_PLASTIC.to_owned(),
         "htsg-aluminium" => HTSG_ALUMINIUM.to_owned(),
+        "gold-spectral" => METAL_GGX_03.trim_end().to_owned() + "\nior = \"au-johnson-christy\"\n",
+        "silver-spectral" => {
+            METAL_GGX_03.trim_end().to_owned() + "\nior = \"ag-johnson-christy\"\n"
+        }
+        "copper-spectral" => {
+            METAL_GGX_03.trim_end().to_owned() + "\nior = \"cu-johnson-christy\"\n"
+        }
+        "aluminium-spectral" => METAL_GGX_03.trim_end().to_owned() + "\nior = \"al-rakic\"\n",
+        "glass-spectral" => DIELECTRIC.trim_end().to_owned() + "\nior = \"sio2-malitson\"\n",
+        "water-spectral" => DIELECTRIC.trim_end().to_owned() + "\nior = \"h2o-hale-querry\"\n",
         _ => return None,
     })
 }

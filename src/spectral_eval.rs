@@ -1,0 +1,180 @@
+//! Evaluation at wavelengths (FORMULAS.md §9). A spectral evaluation of `W` wavelengths is
+//! `⌈W/3⌉` RGB evaluations of the same tuples, each with the materials' forms at three of
+//! the wavelengths (a channel per wavelength: [`crate::material::spectral::SpectralForm`]):
+//! every engine evaluates them with its own RGB code, and the reference judges them like
+//! any RGB evaluation. `--color` then reduces the `W` values of each tuple to CIE XYZ or
+//! linear sRGB by the CIE quadrature, in f64, in the grid's order.
+
+use crate::backend::{Backend, Output, Request};
+use crate::batch::Batch;
+use crate::error::{Error, Result};
+use crate::material::spectral::spectral_form;
+use crate::material::Material;
+use crate::spectral::cie::{self, Illuminant};
+use crate::spectral::Wavelengths;
+
+/// What a colour reduction gives.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Colour {
+    /// CIE 1931 XYZ (Y = 1 for a white reflector).
+    Xyz,
+    /// Linear sRGB, unclamped (gold's red is above 1).
+    Srgb,
+}
+
+impl Colour {
+    /// The name on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Colour::Xyz => "xyz",
+            Colour::Srgb => "srgb",
+        }
+    }
+}
+
+/// A prepared spectral evaluation: the materials at each wavelength triplet.
+#[derive(Debug, Clone)]
+pub struct SpectralJob {
+    wavelengths: Wavelengths,
+    colour: Option<(Colour, Illuminant)>,
+    /// `triplets[t]`: every material at wavelengths `3t, 3t+1, 3t+2` (the last repeated
+    /// when `W` is not a multiple of 3).
+    triplets: Vec<Vec<Material>>,
+}
+
+impl SpectralJob {
+    /// Prepares `materials` at `wavelengths`; with `colour`, the values are reduced (which
+    /// needs the CIE grid 360:830:5). Errors name the material and wavelength.
+    pub fn new(
+        materials: &[Material],
+        wavelengths: Wavelengths,
+        colour: Option<(Colour, Illuminant)>,
+    ) -> Result<SpectralJob> {
+        if colour.is_some() && !wavelengths.is_cie_grid() {
+            return Err(Error::Unsupported(format!(
+                "--color integrates over the CIE 1931 tables' grid, 360:830:5 (95 wavelengths); these {} wavelengths are another grid (give --wavelengths 360:830:5, or leave out --color for the values themselves)",
+                wavelengths.len()
+            )));
+        }
+        let forms = materials
+            .iter()
+            .map(spectral_form)
+            .collect::<std::result::Result<Vec<_>, String>>()
+            .map_err(Error::Unsupported)?;
+        let w = &wavelengths.0;
+        let triplets = (0..w.len().div_ceil(3))
+            .map(|t| {
+                let nm = [0, 1, 2].map(|j| w[(3 * t + j).min(w.len() - 1)]);
+                forms
+                    .iter()
+                    .map(|f| f.at(nm))
+                    .collect::<std::result::Result<Vec<_>, String>>()
+                    .map_err(Error::Unsupported)
+            })
+            .collect::<Result<Vec<_>>>()?;
+        Ok(SpectralJob {
+            wavelengths,
+            colour,
+            triplets,
+        })
+    }
+
+    /// Output columns per tuple: `W`, or 3 with a colour reduction.
+    pub fn columns(&self) -> usize {
+        if self.colour.is_some() {
+            3
+        } else {
+            self.wavelengths.len()
+        }
+    }
+
+    /// The wavelengths.
+    pub fn wavelengths(&self) -> &Wavelengths {
+        &self.wavelengths
+    }
+
+    /// The colour reduction, if any.
+    pub fn colour(&self) -> Option<(Colour, Illuminant)> {
+        self.colour
+    }
+
+    /// The materials at each triplet (what the engines evaluate; for the judge).
+    pub fn triplets(&self) -> &[Vec<Material>] {
+        &self.triplets
+    }
+
+    /// Evaluates `n` tuples: `eval` evaluates them with a material table (one triplet's)
+    /// into an RGB output; `out` receives `n × columns` values. The counts are the first
+    /// triplet's (invalid and below-horizon tuples do not depend on λ), with the largest
+    /// saturated count of any triplet.
+    pub fn evaluate_with(
+        &self,
+        n: usize,
+        mut eval: impl FnMut(&[Material], &mut Output) -> Result<()>,
+        out: &mut Output,
+    ) -> Result<()> {
+        let w = self.wavelengths.len();
+        let cols = self.columns();
+        let mut part = Output::default();
+        let mut acc = vec![0.0f64; if self.colour.is_some() { 3 * n } else { 0 }];
+        let weights = self.colour.map(|(_, illum)| cie::weights(illum));
+        out.brdf.clear();
+        out.brdf.resize(n * cols, 0.0);
+        out.terms = None;
+        for (t, materials) in self.triplets.iter().enumerate() {
+            eval(materials, &mut part)?;
+            if t == 0 {
+                out.counts = part.counts;
+            } else {
+                out.counts.saturated = out.counts.saturated.max(part.counts.saturated);
+            }
+            for j in 0..3 {
+                let l = 3 * t + j;
+                if l >= w || (j > 0 && 3 * t + j >= w) {
+                    break;
+                }
+                match &weights {
+                    None => {
+                        for r in 0..n {
+                            out.brdf[r * cols + l] = part.brdf[r * 3 + j];
+                        }
+                    }
+                    Some(wt) => {
+                        let wl = wt[l];
+                        for r in 0..n {
+                            let v = part.brdf[r * 3 + j] as f64;
+                            for c in 0..3 {
+                                acc[r * 3 + c] += v * wl[c];
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        if let Some((colour, _)) = self.colour {
+            for r in 0..n {
+                let xyz = [acc[3 * r], acc[3 * r + 1], acc[3 * r + 2]];
+                let v = match colour {
+                    Colour::Xyz => xyz,
+                    Colour::Srgb => cie::xyz_to_srgb(xyz),
+                };
+                for c in 0..3 {
+                    out.brdf[r * 3 + c] = v[c] as f32;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Evaluates `batch` (whose material column indexes the job's materials) on `backend`.
+    pub fn evaluate(&self, backend: &mut dyn Backend, batch: &Batch) -> Result<Output> {
+        let mut out = Output::default();
+        self.evaluate_with(
+            batch.len(),
+            |m, o| backend.evaluate_into(batch, m, &Request::default(), o),
+            &mut out,
+        )?;
+        out.counts.tuples = batch.len() as u64;
+        Ok(out)
+    }
+}
