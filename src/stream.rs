@@ -50,6 +50,9 @@ pub struct StreamJob<'a> {
     pub shard: Option<shard::Shard>,
     /// The materials file (fingerprinted into a shard's sidecar).
     pub materials_file: &'a Path,
+    /// Evaluate at wavelengths instead of in RGB (FORMULAS.md §9): the output then has
+    /// the job's columns (`W` values, or 3 for a colour reduction). No terms or spike.
+    pub spectral: Option<&'a crate::spectral_eval::SpectralJob>,
 }
 
 /// What a streamed evaluation did.
@@ -77,7 +80,22 @@ pub struct StreamSummary {
 /// chunks are alive at once, and a sixth of the budget is left to the engine's own working
 /// memory and the buffered writers. At least one row, at most [`MAX_CHUNK_ROWS`].
 pub fn chunk_rows(max_memory: u64, row_bytes: usize, columns: usize, terms: bool) -> usize {
-    let outputs = 4 * (3 + if terms { TERM_COLUMNS } else { 0 });
+    chunk_rows_for(
+        max_memory,
+        row_bytes,
+        columns,
+        3 + if terms { TERM_COLUMNS } else { 0 },
+    )
+}
+
+/// [`chunk_rows`] for `out_columns` float32 outputs a row (a spectral evaluation's `W`).
+pub fn chunk_rows_for(
+    max_memory: u64,
+    row_bytes: usize,
+    columns: usize,
+    out_columns: usize,
+) -> usize {
+    let outputs = 4 * out_columns;
     let per_row = (row_bytes + 4 * columns + 2 * outputs) as u64;
     ((max_memory / 6) / per_row).clamp(1, MAX_CHUNK_ROWS as u64) as usize
 }
@@ -114,6 +132,12 @@ pub fn evaluate(
     if job.spike.is_some() {
         spike_allowed(job)?;
     }
+    if job.spectral.is_some() && (job.spike.is_some() || job.terms.is_some()) {
+        return Err(Error::Unsupported(
+            "a spectral evaluation writes f(λ) only: the terms and the spike are RGB outputs (evaluate them without --wavelengths)".into(),
+        ));
+    }
+    let out_columns = job.spectral.map_or(3, |s| s.columns());
     let total = rows.rows();
     let part = job.shard.map_or(0..total, |s| s.rows(total));
     rows.restrict(part.clone())?;
@@ -121,13 +145,22 @@ pub fn evaluate(
     let request = Request {
         terms: job.terms.is_some(),
     };
-    let chunk = chunk_rows(
-        job.max_memory,
-        rows.row_bytes(),
-        rows.columns(),
-        request.terms,
-    );
-    let mut brdf = NpyOut::start(job.output, n, 3, cancel)?;
+    let chunk = match job.spectral {
+        // The W outputs, and the triplet's RGB the engine writes before they are spread.
+        Some(s) => chunk_rows_for(
+            job.max_memory,
+            rows.row_bytes(),
+            rows.columns(),
+            s.columns() + 3,
+        ),
+        None => chunk_rows(
+            job.max_memory,
+            rows.row_bytes(),
+            rows.columns(),
+            request.terms,
+        ),
+    };
+    let mut brdf = NpyOut::start(job.output, n, out_columns, cancel)?;
     let mut terms = match job.terms {
         Some(path) => Some(NpyOut::start(path, n, TERM_COLUMNS, cancel)?),
         None => None,
@@ -209,13 +242,29 @@ pub fn evaluate(
                 summary.read_s += read_s;
                 let t = std::time::Instant::now();
                 let mut out = recycle_rx.try_recv().unwrap_or_default();
-                let len = match &batch {
-                    Chunk::Rows(b) => {
+                let len = match (&batch, job.spectral) {
+                    (Chunk::Rows(b), None) => {
                         backend.evaluate_into(b, job.materials, &request, &mut out)?;
                         b.len()
                     }
-                    Chunk::Local(b) => {
+                    (Chunk::Local(b), None) => {
                         backend.evaluate_local_into(b, job.materials, &request, &mut out)?;
+                        b.len()
+                    }
+                    (Chunk::Rows(b), Some(s)) => {
+                        s.evaluate_with(
+                            b.len(),
+                            |m, o| backend.evaluate_into(b, m, &request, o),
+                            &mut out,
+                        )?;
+                        b.len()
+                    }
+                    (Chunk::Local(b), Some(s)) => {
+                        s.evaluate_with(
+                            b.len(),
+                            |m, o| backend.evaluate_local_into(b, m, &request, o),
+                            &mut out,
+                        )?;
                         b.len()
                     }
                 };

@@ -139,6 +139,7 @@ pub fn measure(
             shard: None,
             materials_file: &input,
             material: None,
+            spectral: None,
         };
         let t = Instant::now();
         stream::evaluate(&job, engine.backend(), &cancel, |_, _| {})?;

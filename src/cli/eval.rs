@@ -22,7 +22,8 @@ the materials file defines one; not anisotropic). Each tuple means what the 10-c
 Lx Ly Lz Vx Vy Vz 0 0 1 material means, in 24 bytes instead of 40; `cpu` evaluates it as
 it is, the other engines expand it to rows chunk by chunk.
 
-Output: BRDF.npy, float32 (n, 3): RGB f in 1/sr (no cosine); TERMS.npy, float32 (n, 6):
+Output: BRDF.npy, float32 (n, 3): RGB f in 1/sr (no cosine); with --wavelengths, (n, W):
+f(λ) at each wavelength, or with --color (n, 3): XYZ or linear sRGB; TERMS.npy, float32 (n, 6):
 D, G, F_r, F_g, F_b, K; for HTSG materials SPIKE.npy, float32 (n, 3): the mirror spike's
 weight ρ_s per channel (a reflectance: the spike is ρ_s δ(ω − ω_mirror)/cos_i, not in f;
 FORMULAS.md §8). Invalid tuples (zero or non-finite vectors, a bad tangent) and
@@ -48,6 +49,8 @@ Examples:
   vkbrdf generate --materials m.toml --tuples 1000000 --output t.npy
   vkbrdf eval --materials m.toml --input t.npy --output brdf.npy --terms terms.npy
   vkbrdf eval -m htsg.toml -i t.npy -o brdf.npy --spike spike.npy
+  vkbrdf eval -m gold.toml -i t.npy -o spectra.npy --wavelengths 360:830:5
+  vkbrdf eval -m gold.toml -i t.npy -o srgb.npy --color srgb   (gold.toml: preset = \"gold-spectral\")
   seq 1 4 | xargs -P 4 -I K vkbrdf eval -m m.toml -i t.npy -o part-K.npy --shard K/4
   vkbrdf merge -o brdf.npy part-1.npy part-2.npy part-3.npy part-4.npy")]
 pub struct Args {
@@ -71,6 +74,20 @@ pub struct Args {
     /// FORMULAS.md §8; every material of the file must be htsg).
     #[arg(long, value_name = "SPIKE.npy")]
     pub spike: Option<PathBuf>,
+    /// Evaluate at these wavelengths (nm) instead of in RGB: START:END:STEP (both ends
+    /// included, e.g. 360:830:5) or a list (450,550,650). The output is then (n, W):
+    /// f(λ) per tuple (FORMULAS.md §9). Materials need a spectral form: a spectral `ior`
+    /// (`gold-spectral`, …) or no index at all (RGB colours are up-sampled).
+    #[arg(long, value_name = "NM")]
+    pub wavelengths: Option<vkbrdf::spectral::Wavelengths>,
+    /// Reduce the spectral values to a colour, (n, 3): CIE 1931 XYZ or linear sRGB
+    /// (unclamped), by the CIE quadrature on the 5 nm grid (needs --wavelengths 360:830:5,
+    /// the default when --color is given alone).
+    #[arg(long, value_enum, value_name = "SPACE")]
+    pub color: Option<ColourArg>,
+    /// The illuminant weighting --color: d65 (sRGB's white) or e (equal energy).
+    #[arg(long, value_enum, default_value = "d65", requires = "color")]
+    pub illuminant: IlluminantArg,
     /// Fail (exit 1, no output written) if any tuple is invalid.
     #[arg(long)]
     pub strict: bool,
@@ -114,6 +131,53 @@ impl From<PrecisionArg> for Precision {
     }
 }
 
+/// `--color` values.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum ColourArg {
+    /// CIE 1931 XYZ.
+    Xyz,
+    /// Linear sRGB (unclamped).
+    Srgb,
+}
+
+/// `--illuminant` values.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum IlluminantArg {
+    /// CIE D65.
+    D65,
+    /// Equal energy.
+    E,
+}
+
+/// The spectral job of `--wavelengths`/`--color`, if asked for.
+fn spectral_job(
+    args: &Args,
+    materials: &[vkbrdf::material::Material],
+) -> anyhow::Result<Option<vkbrdf::spectral_eval::SpectralJob>> {
+    use vkbrdf::spectral::cie::Illuminant;
+    use vkbrdf::spectral_eval::{Colour, SpectralJob};
+    let colour = args.color.map(|c| {
+        let c = match c {
+            ColourArg::Xyz => Colour::Xyz,
+            ColourArg::Srgb => Colour::Srgb,
+        };
+        let i = match args.illuminant {
+            IlluminantArg::D65 => Illuminant::D65,
+            IlluminantArg::E => Illuminant::E,
+        };
+        (c, i)
+    });
+    let wavelengths = match (&args.wavelengths, colour) {
+        (None, None) => return Ok(None),
+        (Some(w), _) => w.clone(),
+        (None, Some(_)) => vkbrdf::spectral::Wavelengths::cie(),
+    };
+    if args.shard.is_some() {
+        anyhow::bail!("--wavelengths/--color with --shard: merge joins RGB parts only; evaluate spectra unsharded (or split the input file)");
+    }
+    Ok(Some(SpectralJob::new(materials, wavelengths, colour)?))
+}
+
 /// Runs `vkbrdf eval`.
 pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
     let cancel = super::cancel();
@@ -140,8 +204,10 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
     vkbrdf::atomic::check_outputs(&outputs, &inputs)?;
     // Measured (MERL) materials run on every backend: the Vulkan kernel looks their
     // tables up on the device.
+    let spectral = spectral_job(args, &materials)?;
     let mut backend = backend_choice::open(&args.backend)?;
     let job = stream::StreamJob {
+        spectral: spectral.as_ref(),
         input: &args.input,
         material: args.material.as_deref(),
         materials: &materials,

@@ -52,6 +52,67 @@ pub enum Kind {
     Merl(MerlArgs),
     /// A lit-sphere PNG and a polar plot of the lobe in the plane of incidence.
     Preview(PreviewArgs),
+    /// A spectral material's Fresnel reflectance (sRGB, D65) against θ beside its RGB
+    /// reductions (Mitsuba's, Filament's), with the differences and ΔE*ab; table and plot.
+    Spectral(SpectralArgs),
+}
+
+/// Arguments of `vkbrdf table spectral`.
+#[derive(clap::Args, Debug)]
+#[command(after_help = "\
+For θ from 0 to 90°, the Fresnel reflectance F(λ, cos θ) of the material's measured index,
+reduced to linear sRGB under D65 by the CIE 1931 quadrature (FORMULAS.md §9), beside the
+two common RGB forms of the same material: Mitsuba 3's (n and k each reduced to sRGB with
+equal-energy weighting, then the exact Fresnel) and Filament's (F0 reduced under D65, then
+Schlick). Each RGB form's per-channel difference from the spectral colour and its ΔE*ab
+(CIELAB, D65 white) follow. Computed on the host in f64 (no engine: only F depends on λ).
+
+Examples:
+  vkbrdf table spectral --material gold-spectral
+  vkbrdf table spectral --material copper-spectral --output copper.md --plot copper.svg
+  vkbrdf table spectral -m m.toml --material my-metal --step 1")]
+pub struct SpectralArgs {
+    #[command(flatten)]
+    material: MaterialArgs,
+    /// Angle step in degrees.
+    #[arg(long, default_value_t = 5.0, value_name = "DEG")]
+    step: f64,
+    /// Write the table (Markdown) here instead of standard output.
+    #[arg(long, short = 'o', value_name = "TABLE.md")]
+    output: Option<PathBuf>,
+    /// Also draw the plot (SVG).
+    #[arg(long, value_name = "PLOT.svg")]
+    plot: Option<PathBuf>,
+}
+
+/// `vkbrdf table spectral`: no engine, so it runs before a backend is opened.
+fn spectral_table(a: &SpectralArgs) -> anyhow::Result<ExitCode> {
+    let inputs: Vec<&std::path::Path> = a.material.materials.as_deref().into_iter().collect();
+    let outputs: Vec<&std::path::Path> = a
+        .output
+        .iter()
+        .chain(&a.plot)
+        .map(PathBuf::as_path)
+        .collect();
+    vkbrdf::atomic::check_outputs(&outputs, &inputs)?;
+    let material = a.material.load()?;
+    let rows = vkbrdf::table::spectral::reflectance(&material, a.step)?;
+    let text = vkbrdf::table::spectral::markdown(&material, &rows);
+    if let Some(path) = &a.plot {
+        // plotters writes the file itself: draw into a temporary one beside it, then rename.
+        let tmp = path.with_extension("svg.partial");
+        vkbrdf::table::spectral::plot(&tmp, &material, &rows)?;
+        anyhow::Context::with_context(std::fs::rename(&tmp, path), || {
+            format!("writing {}", path.display())
+        })?;
+    }
+    match &a.output {
+        Some(path) => {
+            vkbrdf::atomic::write(path, |w| std::io::Write::write_all(w, text.as_bytes()))?
+        }
+        None => outln!("{text}"),
+    }
+    Ok(ExitCode::SUCCESS)
 }
 
 /// Which material: a name in a materials file, or a preset when no file is given.
@@ -398,6 +459,9 @@ enum Job {
 /// Runs `vkbrdf table <kind>`: builds and checks the job (material, model, size, memory,
 /// output paths) before opening the backend, then evaluates and writes.
 pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
+    if let Kind::Spectral(a) = &args.kind {
+        return spectral_table(a);
+    }
     let t0 = Instant::now();
     let (job, backend_args, outputs) = prepare(&args.kind)?;
     let mut backend = backend_choice::open(backend_args)?;
@@ -442,6 +506,7 @@ fn material_of(job: &Job) -> Option<&Material> {
 /// The checked job, its backend options and the files it will write.
 fn prepare(kind: &Kind) -> anyhow::Result<(Job, &BackendArgs, Vec<PathBuf>)> {
     let (job, backend) = match kind {
+        Kind::Spectral(_) => unreachable!("`run` answers `table spectral` before `prepare`"),
         Kind::Slice(a) => {
             let job = SliceJob {
                 material: a.material.load()?,
@@ -595,7 +660,7 @@ fn prepare(kind: &Kind) -> anyhow::Result<(Job, &BackendArgs, Vec<PathBuf>)> {
         Kind::Slice(a) => (a.material.materials.as_deref(), material_of(&job)),
         Kind::Merl(a) => (a.material.materials.as_deref(), material_of(&job)),
         Kind::Preview(a) => (a.material.materials.as_deref(), material_of(&job)),
-        Kind::Albedo(_) | Kind::Dfg(_) => (None, None),
+        Kind::Albedo(_) | Kind::Dfg(_) | Kind::Spectral(_) => (None, None),
     };
     let mut inputs: Vec<&std::path::Path> = materials_file.into_iter().collect();
     if let Some(vkbrdf::material::Model::Measured(d)) = material.map(|m| &m.model) {

@@ -567,7 +567,7 @@ impl Fields<'_, '_> {
             .rgb("wavelengths", htsg::wavelength_range)?
             .unwrap_or(htsg::DEFAULT_WAVELENGTHS_NM);
         // A spectral index is read at the material's own wavelengths for its RGB form.
-        let (ior, extinction) = if let Some(index) = self.spectral_ior()? {
+        let (ior, extinction) = if let Some(index) = self.spectral_ior(FresnelKind::Conductor)? {
             let at = |l: f64| index.at(l).map_err(|m| self.err("ior", m));
             let p = [at(nm[0])?, at(nm[1])?, at(nm[2])?];
             (p.map(|x| x.0.max(1e-6)), p.map(|x| x.1))
@@ -705,7 +705,7 @@ impl Fields<'_, '_> {
             ));
         }
         if kind != FresnelKind::None && !(kind == FresnelKind::Schlick && self.has("f0")) {
-            if let Some(index) = self.spectral_ior()? {
+            if let Some(index) = self.spectral_ior(kind)? {
                 let reduction = self
                     .spectral
                     .as_ref()
@@ -759,7 +759,10 @@ impl Fields<'_, '_> {
 
     /// A spectral `ior` (FORMULAS.md §9) with its `extinction` and `rgb_reduction`, kept for
     /// the material; `None` when `ior` is absent or a number or RGB.
-    fn spectral_ior(&mut self) -> Result<Option<crate::spectral::IndexSpectrum>, MaterialError> {
+    fn spectral_ior(
+        &mut self,
+        fresnel: FresnelKind,
+    ) -> Result<Option<crate::spectral::IndexSpectrum>, MaterialError> {
         let Some(ior) = self.map.get("ior").map(|e| e.value) else {
             return Ok(None);
         };
@@ -778,6 +781,7 @@ impl Fields<'_, '_> {
         self.spectral = Some(std::sync::Arc::new(super::spectral::SpectralIndex {
             index: index.clone(),
             reduction,
+            fresnel,
         }));
         Ok(Some(index))
     }

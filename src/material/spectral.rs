@@ -17,6 +17,9 @@ pub struct SpectralIndex {
     pub index: IndexSpectrum,
     /// How the material's RGB `ior`/`extinction` (or Schlick `f0`) were derived from it.
     pub reduction: RgbReduction,
+    /// The Fresnel term the file named (HTSG's is the conductor's): what a spectral
+    /// evaluation uses, whatever term the RGB reduction chose.
+    pub fresnel: crate::terms::FresnelKind,
 }
 
 /// Whether a TOML `ior` value is a spectrum (a name, rows or a file), not a number or RGB.
@@ -141,7 +144,7 @@ fn check_values(index: &IndexSpectrum) -> Result<(), (&'static str, String)> {
 /// The RGB Fresnel term a spectral index gives `kind` under `reduction` (FORMULAS.md §9):
 /// Mitsuba's reduced (n, k) with the exact term, or Filament's D65 F0 with Schlick
 /// (clamped to [0, 1]: a Schlick F0 is a reflectance).
-pub(super) fn rgb_fresnel(
+pub fn rgb_fresnel(
     kind: crate::terms::FresnelKind,
     index: &IndexSpectrum,
     reduction: RgbReduction,
@@ -257,21 +260,31 @@ impl SpectralForm {
         out.spectral = None;
         out.model = match &m.model {
             Model::CookTorrance(ct) => Model::CookTorrance(CookTorrance {
-                fresnel: match (ct.fresnel, n, k, f0) {
-                    (Fresnel::None, ..) => Fresnel::None,
-                    (Fresnel::Dielectric { .. }, Some(n), _, _) => Fresnel::Dielectric { ior: n },
-                    (Fresnel::Conductor { .. }, Some(n), Some(k), _) => Fresnel::Conductor {
-                        ior: n,
-                        extinction: k,
+                fresnel: match (&m.spectral, n, k, f0) {
+                    (Some(s), Some(n), Some(k), Some(f0)) => {
+                        use crate::terms::FresnelKind as K;
+                        // `precision = "fast"` made the exact terms Schlick (as in RGB).
+                        let fast = matches!(ct.fresnel, Fresnel::Schlick { .. });
+                        match s.fresnel {
+                            K::None => Fresnel::None,
+                            K::Schlick => Fresnel::Schlick { f0 },
+                            _ if fast => Fresnel::Schlick { f0 },
+                            K::Dielectric => Fresnel::Dielectric { ior: n },
+                            K::Conductor => Fresnel::Conductor {
+                                ior: n,
+                                extinction: k,
+                            },
+                        }
+                    }
+                    _ => match ct.fresnel {
+                        Fresnel::Schlick { .. } => Fresnel::Schlick {
+                            f0: up(self
+                                .f0
+                                .as_ref()
+                                .expect("an RGB Schlick material's f0 was up-sampled")),
+                        },
+                        other => other, // none, or a grey RGB index: the same at every λ
                     },
-                    (Fresnel::Schlick { .. }, _, _, Some(f0)) => Fresnel::Schlick { f0 },
-                    (Fresnel::Schlick { .. }, ..) => Fresnel::Schlick {
-                        f0: up(self
-                            .f0
-                            .as_ref()
-                            .expect("an RGB Schlick material's f0 was up-sampled")),
-                    },
-                    (other, ..) => other, // a grey RGB index: the same at every wavelength
                 },
                 ..ct.clone()
             }),

@@ -25,6 +25,7 @@ pub mod merl;
 pub mod preview;
 pub mod shard;
 pub mod slice;
+pub mod spectral;
 
 use crate::backend::{Backend, Output, Request};
 use crate::batch::{Batch, COLUMNS_PLAIN, COLUMNS_TANGENT};
