@@ -769,7 +769,12 @@ impl Fields<'_, '_> {
         if !super::spectral::is_spectrum(ior) {
             return Ok(None);
         }
-        let extinction = self.map.get("extinction").map(|e| e.value);
+        // A preset's RGB extinction gives way to the table's spectral ior (its data has k).
+        let extinction = self
+            .map
+            .get("extinction")
+            .filter(|e| e.line.is_some())
+            .map(|e| e.value);
         self.used.extend(["ior", "extinction"]);
         let index = super::spectral::index_from(ior, extinction, self.ctx.base)
             .map_err(|(key, m)| self.err(key, m))?;
