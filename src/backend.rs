@@ -151,6 +151,13 @@ pub trait Backend {
         Ok(())
     }
 
+    /// Whether this is the f64 reference, the judge: a spectral evaluation then takes the
+    /// triplet way, the RGB evaluations of the materials at each wavelength, so that it
+    /// judges the engines' factored way independently ([`crate::spectral_eval`]).
+    fn is_reference(&self) -> bool {
+        false
+    }
+
     /// Gives the backend a cancellation token: [`Backend::evaluate`] and the table paths
     /// check it between chunks and return [`crate::Error::Cancelled`] once it is set. The
     /// default ignores it (an engine that never checks still finishes correctly).

@@ -1,9 +1,17 @@
-//! Evaluation at wavelengths (FORMULAS.md §9). A spectral evaluation of `W` wavelengths is
-//! `⌈W/3⌉` RGB evaluations of the same tuples, each with the materials' forms at three of
-//! the wavelengths (a channel per wavelength: [`crate::material::spectral::SpectralForm`]):
-//! every engine evaluates them with its own RGB code, and the reference judges them like
-//! any RGB evaluation. `--color` then reduces the `W` values of each tuple to CIE XYZ or
-//! linear sRGB by the CIE quadrature, in f64, in the grid's order.
+//! Evaluation at wavelengths (FORMULAS.md §9), two ways:
+//! - **triplets**: `⌈W/3⌉` RGB evaluations of the same tuples, each with the materials' forms
+//!   at three of the wavelengths (a channel per wavelength:
+//!   [`crate::material::spectral::SpectralForm`]). Every engine evaluates them with its own
+//!   RGB code; the reference always takes this way (it is the judge), and so do HTSG and
+//!   measured materials on every engine.
+//! - **factored** ([`factored`]): one RGB evaluation of a basis material gives the
+//!   λ-independent factors (D, G and K computed once per tuple), and F is formed per
+//!   wavelength on the host. What the engines take wherever every material allows it.
+//!
+//! `--color` then reduces the `W` values of each tuple to CIE XYZ or linear sRGB by the CIE
+//! quadrature, in f64, in the grid's order.
+
+mod factored;
 
 use crate::backend::{Backend, Output, Request};
 use crate::batch::Batch;
@@ -40,6 +48,7 @@ pub struct SpectralJob {
     /// `triplets[t]`: every material at wavelengths `3t, 3t+1, 3t+2` (the last repeated
     /// when `W` is not a multiple of 3).
     triplets: Vec<Vec<Material>>,
+    factored: Option<factored::Factored>,
 }
 
 impl SpectralJob {
@@ -72,10 +81,12 @@ impl SpectralJob {
                     .map_err(Error::Unsupported)
             })
             .collect::<Result<Vec<_>>>()?;
+        let factored = factored::Factored::new(&triplets, wavelengths.len());
         Ok(SpectralJob {
             wavelengths,
             colour,
             triplets,
+            factored,
         })
     }
 
@@ -103,16 +114,40 @@ impl SpectralJob {
         &self.triplets
     }
 
-    /// Evaluates `n` tuples: `eval` evaluates them with a material table (one triplet's)
-    /// into an RGB output; `out` receives `n × columns` values. The counts are the first
-    /// triplet's (invalid and below-horizon tuples do not depend on λ), with the largest
-    /// saturated count of any triplet.
+    /// Whether an engine that is not the reference takes the factored way for this job.
+    pub fn is_factored(&self) -> bool {
+        self.factored.is_some()
+    }
+
+    /// Evaluates `n` tuples: `eval` evaluates them with a material table into an RGB
+    /// output; `row(r)` gives row r's L, V and material (the factored way reads them);
+    /// `out` receives `n × columns` values. `triplets` forces the triplet way (the
+    /// reference's). The counts are the first evaluation's (invalid and below-horizon tuples
+    /// do not depend on λ), with the largest saturated count of any.
     pub fn evaluate_with(
         &self,
         n: usize,
+        triplets: bool,
+        row: &(dyn Fn(usize) -> ([f32; 3], [f32; 3], usize) + Sync),
         mut eval: impl FnMut(&[Material], &mut Output) -> Result<()>,
         out: &mut Output,
     ) -> Result<()> {
+        if let (Some(f), false) = (&self.factored, triplets) {
+            let mut part = Output::default();
+            eval(&f.basis, &mut part)?;
+            out.counts = part.counts;
+            out.terms = None;
+            out.brdf.clear();
+            out.brdf.resize(n * self.columns(), 0.0);
+            let weights = self.colour.map(|(_, illum)| cie::weights(illum));
+            let colour = self.colour.map(|(c, _)| match c {
+                Colour::Xyz => [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+                Colour::Srgb => cie::srgb_matrices().1,
+            });
+            let colour = weights.as_ref().zip(colour).map(|(w, m)| (&w[..], m));
+            f.combine(&part.brdf, row, colour, &mut out.brdf);
+            return Ok(());
+        }
         let w = self.wavelengths.len();
         let cols = self.columns();
         let mut part = Output::default();
@@ -130,8 +165,8 @@ impl SpectralJob {
             }
             for j in 0..3 {
                 let l = 3 * t + j;
-                if l >= w || (j > 0 && 3 * t + j >= w) {
-                    break;
+                if l >= w {
+                    break; // the last triplet's repeated wavelength
                 }
                 match &weights {
                     None => {
@@ -169,12 +204,37 @@ impl SpectralJob {
     /// Evaluates `batch` (whose material column indexes the job's materials) on `backend`.
     pub fn evaluate(&self, backend: &mut dyn Backend, batch: &Batch) -> Result<Output> {
         let mut out = Output::default();
+        let triplets = backend.is_reference();
         self.evaluate_with(
             batch.len(),
+            triplets,
+            &batch_rows(batch),
             |m, o| backend.evaluate_into(batch, m, &Request::default(), o),
             &mut out,
         )?;
         out.counts.tuples = batch.len() as u64;
         Ok(out)
+    }
+}
+
+/// Row access for [`SpectralJob::evaluate_with`] over a batch of 10- or 13-column rows.
+pub fn batch_rows<'a>(
+    batch: &'a Batch,
+) -> impl Fn(usize) -> ([f32; 3], [f32; 3], usize) + Sync + 'a {
+    let (rows, cols) = (batch.as_slice(), batch.columns());
+    move |r| {
+        let x = &rows[r * cols..];
+        ([x[0], x[1], x[2]], [x[3], x[4], x[5]], x[9] as usize)
+    }
+}
+
+/// Row access over a local-frame batch (6 columns, one material).
+pub fn local_rows<'a>(
+    batch: &'a crate::batch::LocalBatch,
+) -> impl Fn(usize) -> ([f32; 3], [f32; 3], usize) + Sync + 'a {
+    let (rows, material) = (batch.as_slice(), batch.material());
+    move |r| {
+        let x = &rows[r * 6..];
+        ([x[0], x[1], x[2]], [x[3], x[4], x[5]], material)
     }
 }

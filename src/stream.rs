@@ -252,16 +252,22 @@ pub fn evaluate(
                         b.len()
                     }
                     (Chunk::Rows(b), Some(s)) => {
+                        let triplets = backend.is_reference();
                         s.evaluate_with(
                             b.len(),
+                            triplets,
+                            &crate::spectral_eval::batch_rows(b),
                             |m, o| backend.evaluate_into(b, m, &request, o),
                             &mut out,
                         )?;
                         b.len()
                     }
                     (Chunk::Local(b), Some(s)) => {
+                        let triplets = backend.is_reference();
                         s.evaluate_with(
                             b.len(),
+                            triplets,
+                            &crate::spectral_eval::local_rows(b),
                             |m, o| backend.evaluate_local_into(b, m, &request, o),
                             &mut out,
                         )?;

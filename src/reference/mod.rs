@@ -115,6 +115,10 @@ impl Backend for CpuReference {
         "cpu-reference (f64)".to_string()
     }
 
+    fn is_reference(&self) -> bool {
+        true
+    }
+
     fn set_cancel(&mut self, cancel: Cancel) {
         self.cancel = cancel;
     }

@@ -130,18 +130,32 @@ impl LaneConstants {
 /// stays exactly 0.
 #[inline(always)]
 pub fn f_lane(c: f32, s2: f32, p: &LaneConstants, ch: usize) -> f32 {
-    let (n, k) = (p.n[ch], p.k[ch]);
+    f_lane_with(
+        c,
+        s2,
+        [p.n[ch], p.k[ch], p.e2rm1[ch], p.e2r[ch]],
+        [p.c_a[ch], p.c_eb[ch], p.c_iq[ch], p.c_bq[ch]],
+    )
+}
+
+/// [`f_lane`] with one channel's constants given as values: `[n, k, e2rm1, e2r]` and
+/// `[c_a, c_eb, c_iq, c_bq]` (as [`LaneConstants`] names them), for a caller that keeps
+/// them by wavelength (the spectral path's loop over λ).
+#[inline(always)]
+pub fn f_lane_with(c: f32, s2: f32, nk: [f32; 4], q: [f32; 4]) -> f32 {
+    let [n, k, e2rm1, e2r] = nk;
+    let [c_a, c_eb, c_iq, c_bq] = q;
     // Re(η² − sin²θ) = (n² − k² − 1) + c² = (n² − k²) − sin²θ: the form whose two terms
     // are smaller, since their rounding is what remains where they cancel (n and k small
     // near c = 1: the first form's error of 1 ulp of 1 made F 1.4e-5 wrong). η = 1 takes
     // the first (0 + c²), which keeps its F exactly 0.
-    let ar = if p.e2rm1[ch].abs() + c * c <= p.e2r[ch].abs() + s2 {
-        p.e2rm1[ch] + c * c
+    let ar = if e2rm1.abs() + c * c <= e2r.abs() + s2 {
+        e2rm1 + c * c
     } else {
-        p.e2r[ch] - s2
+        e2r - s2
     };
-    let zr = (ar * p.c_a[ch] + p.c_eb[ch]) * p.c_iq[ch];
-    let zi = s2 * p.c_bq[ch];
+    let zr = (ar * c_a + c_eb) * c_iq;
+    let zi = s2 * c_bq;
     // Principal √(zr + i zi), scaled by the larger component (the squares underflow for
     // |z| < 1e-19); the 1e-37 and 1e-30 floors keep z = 0 from 0/0.
     // |z| = big·√(1 + (small/big)²): the larger component scaled by itself is exactly 1,
