@@ -1,5 +1,5 @@
 //! The contract (`docs/FORMULAS.md`, the repository's own and only copy) checked for the
-//! structure code, tests and docs rely on — sections 1–8 in order, each with text, a
+//! structure code, tests and docs rely on — sections 1–9 in order, each with text, a
 //! non-empty table in each of §1–§6 — and against the code: every name the first column of
 //! §2–§5 defines is a term the materials parser knows (`ALL` and `toml_name` of each term
 //! family in `src/terms/`), and every term the parser knows is defined there, so
@@ -170,13 +170,13 @@ fn read(path: &Path) -> String {
     std::fs::read_to_string(path).unwrap_or_else(|e| panic!("reading {}: {e}", path.display()))
 }
 
-/// What the repository copy must hold on its own: sections 1–8 in order, each with text, a
-/// non-empty table in each of §1–§6 and §8, and the names the code dispatches on.
+/// What the repository copy must hold on its own: sections 1–9 in order, each with text, a
+/// non-empty table in each of §1–§6, §8 and §9, and the names the code dispatches on.
 fn check_structure(repo: &BTreeMap<u32, Section>) {
     let numbers: Vec<u32> = repo.keys().copied().collect();
     assert_eq!(
         numbers,
-        (1..=8).collect::<Vec<_>>(),
+        (1..=9).collect::<Vec<_>>(),
         "docs/FORMULAS.md sections"
     );
     for (num, s) in repo {
@@ -224,6 +224,22 @@ fn check_structure(repo: &BTreeMap<u32, Section>) {
             8,
             &[
                 "f", "ρ_dd", "F", "G", "S", "S1", "K(θ)", "σ", "g", "D", "ρ_s",
+            ][..],
+        ),
+        (
+            9,
+            &[
+                "η(λ)",
+                "interpolation",
+                "formula 1",
+                "formula 2",
+                "F(λ, c)",
+                "up-sampling",
+                "XYZ",
+                "sRGB",
+                "ΔE*ab",
+                "mitsuba",
+                "filament",
             ][..],
         ),
     ] {

@@ -194,6 +194,7 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
                 })
                 .collect()
         });
+    let spectral = spectral_rows(&material, &batch, backend.as_mut())?;
     if args.json {
         let items: Vec<serde_json::Value> = qs
             .iter()
@@ -208,6 +209,11 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
                 if let Some(h) = &htsg {
                     item["rho_dd"] = serde_json::json!(h[i].0);
                     item["rho_s"] = serde_json::json!(h[i].1);
+                }
+                if let Some(sp) = &spectral {
+                    item["spectral_srgb"] = serde_json::json!(sp[i][0]);
+                    item["mitsuba"] = serde_json::json!(sp[i][1]);
+                    item["filament"] = serde_json::json!(sp[i][2]);
                 }
                 item
             })
@@ -271,6 +277,22 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
             );
         }
     }
+    if let Some(sp) = &spectral {
+        let own = material.spectral.as_ref().map_or("", |s| s.reduction.name());
+        outln!(
+            "\nSpectral (FORMULAS.md §9): f over 360–830 nm reduced to linear sRGB under D65, beside the two RGB forms of the index (the material's own, above, is {own})"
+        );
+        outln!(
+            "{:<30} {:>11} {:>11} {:>11} | {:>11} {:>11} {:>11} | {:>11} {:>11} {:>11}",
+            "directions (degrees)", "spectral r", "g", "b", "mitsuba r", "g", "b", "filament r", "g", "b"
+        );
+        for (q, v) in qs.iter().zip(sp) {
+            outln!(
+                "{:<30} {:>11.5e} {:>11.5e} {:>11.5e} | {:>11.5e} {:>11.5e} {:>11.5e} | {:>11.5e} {:>11.5e} {:>11.5e}",
+                q.label, v[0][0], v[0][1], v[0][2], v[1][0], v[1][1], v[1][2], v[2][0], v[2][1], v[2][2]
+            );
+        }
+    }
     let c = out.counts;
     if c.below_horizon > 0 || c.invalid > 0 {
         outln!(
@@ -280,4 +302,43 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         );
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// For a spectral material: per query, f reduced to sRGB (D65) from the spectral evaluation,
+/// and f with each RGB form of its index (Mitsuba's, Filament's), on the same engine.
+fn spectral_rows(
+    material: &vkbrdf::material::Material,
+    batch: &Batch,
+    backend: &mut dyn Backend,
+) -> anyhow::Result<Option<Vec<[[f32; 3]; 3]>>> {
+    use vkbrdf::material::{spectral::rgb_fresnel, Model};
+    use vkbrdf::spectral::RgbReduction;
+    let Some(s) = &material.spectral else {
+        return Ok(None);
+    };
+    let Model::CookTorrance(ct) = &material.model else {
+        return Ok(None); // htsg reads its index at its own wavelengths
+    };
+    let colour = Some((vkbrdf::spectral_eval::Colour::Srgb, Default::default()));
+    let job = vkbrdf::spectral_eval::SpectralJob::new(
+        std::slice::from_ref(material),
+        vkbrdf::spectral::Wavelengths::cie(),
+        colour,
+    )?;
+    let spectral = job.evaluate(backend, batch)?;
+    let mut forms = Vec::new();
+    for r in RgbReduction::ALL {
+        let mut m = material.clone();
+        let mut c = ct.clone();
+        c.fresnel = rgb_fresnel(s.fresnel, &s.index, r).map_err(anyhow::Error::msg)?;
+        m.model = Model::CookTorrance(c);
+        m.spectral = None;
+        forms.push(backend.evaluate(batch, std::slice::from_ref(&m), &Request::default())?);
+    }
+    let three = |v: &[f32], i: usize| [v[3 * i], v[3 * i + 1], v[3 * i + 2]];
+    Ok(Some(
+        (0..batch.len())
+            .map(|i| [three(&spectral.brdf, i), three(&forms[0].brdf, i), three(&forms[1].brdf, i)])
+            .collect(),
+    ))
 }
