@@ -49,6 +49,8 @@ pub struct SpectralJob {
     /// when `W` is not a multiple of 3).
     triplets: Vec<Vec<Material>>,
     factored: Option<factored::Factored>,
+    /// Why material `i` has no spectral form, if it has none.
+    unusable: Vec<Option<String>>,
 }
 
 impl SpectralJob {
@@ -65,18 +67,33 @@ impl SpectralJob {
                 wavelengths.len()
             )));
         }
-        let forms = materials
+        // A material without a spectral form is an error only if a row uses it (a table
+        // may hold RGB materials beside spectral ones): it stands in unchanged meanwhile.
+        let mut unusable = vec![None; materials.len()];
+        let forms: Vec<Option<crate::material::spectral::SpectralForm>> = materials
             .iter()
-            .map(spectral_form)
-            .collect::<std::result::Result<Vec<_>, String>>()
-            .map_err(Error::Unsupported)?;
+            .enumerate()
+            .map(|(i, m)| match spectral_form(m) {
+                Ok(f) => Some(f),
+                Err(e) => {
+                    unusable[i] = Some(e);
+                    None
+                }
+            })
+            .collect();
         let w = &wavelengths.0;
         let triplets = (0..w.len().div_ceil(3))
             .map(|t| {
                 let nm = [0, 1, 2].map(|j| w[(3 * t + j).min(w.len() - 1)]);
                 forms
                     .iter()
-                    .map(|f| f.at(nm))
+                    .zip(materials)
+                    .enumerate()
+                    .map(|(i, (f, m))| match f {
+                        Some(f) => f.at(nm),
+                        None if unusable[i].is_some() => Ok(m.clone()),
+                        None => unreachable!("a form or its error"),
+                    })
                     .collect::<std::result::Result<Vec<_>, String>>()
                     .map_err(Error::Unsupported)
             })
@@ -87,6 +104,7 @@ impl SpectralJob {
             colour,
             triplets,
             factored,
+            unusable,
         })
     }
 
@@ -114,6 +132,19 @@ impl SpectralJob {
         &self.triplets
     }
 
+    /// Why the first material without a spectral form that rows `[0, n)` use has none, if
+    /// any row uses one (checked before any evaluation).
+    pub fn unusable_by(
+        &self,
+        n: usize,
+        row: &(dyn Fn(usize) -> ([f32; 3], [f32; 3], usize) + Sync),
+    ) -> Option<String> {
+        if self.unusable.iter().all(Option::is_none) {
+            return None;
+        }
+        (0..n).find_map(|r| self.unusable.get(row(r).2).cloned().flatten())
+    }
+
     /// Whether an engine that is not the reference takes the factored way for this job.
     pub fn is_factored(&self) -> bool {
         self.factored.is_some()
@@ -132,6 +163,9 @@ impl SpectralJob {
         mut eval: impl FnMut(&[Material], &mut Output) -> Result<()>,
         out: &mut Output,
     ) -> Result<()> {
+        if let Some(why) = self.unusable_by(n, row) {
+            return Err(Error::Unsupported(why));
+        }
         if let (Some(f), false) = (&self.factored, triplets) {
             let mut part = Output::default();
             eval(&f.basis, &mut part)?;

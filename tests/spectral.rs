@@ -354,11 +354,15 @@ rgb_reduction = "filament"
     let e = bad("preset = \"gold\"\nior = [[400, 1.5, 1.9], [700, 0.2, 3.9]]");
     assert!(e.contains("360 nm") && e.contains("400–700"), "{e}");
     // An RGB index is not up-sampled; measured data has no spectral form.
+    // (An error when a row uses it: a table may hold RGB materials beside spectral ones.)
     let gold = vec![presets::preset("gold").unwrap().unwrap()];
-    let e = SpectralJob::new(&gold, Wavelengths::cie(), None)
-        .unwrap_err()
-        .to_string();
-    assert!(e.contains("gold-spectral"), "{e}");
+    let job = SpectralJob::new(&gold, Wavelengths::cie(), None).unwrap();
+    let mut cpu = vkbrdf::cpu::CpuEngine::new();
+    let e = job.evaluate(&mut cpu, &tuples(3)).unwrap_err().to_string();
+    assert!(
+        e.contains("material `gold`") && e.contains("gold-spectral"),
+        "{e}"
+    );
     // --color needs the CIE grid.
     let g = vec![presets::preset("gold-spectral").unwrap().unwrap()];
     let e = SpectralJob::new(

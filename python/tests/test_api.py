@@ -185,3 +185,38 @@ def test_htsg_spike_weights():
     assert abs(f[0, 1] - 0.293621038044) < 3e-6
     with pytest.raises(vkbrdf.UsageError, match="htsg materials only"):
         vkbrdf.evaluate(p, l=light, v=view, n=[0, 0, 1], material="gold", spike=True)
+
+
+def test_spectral_gold_matches_numpy_on_the_cie_tables():
+    """FORMULAS.md §9: gold's spectral values reduced to sRGB by vkbrdf equal NumPy's own
+    quadrature of the same values on the shipped CIE tables (an independent reduction)."""
+    import csv
+    import os
+
+    root = os.path.join(os.path.dirname(__file__), "..", "..", "src", "spectral", "data")
+    with open(os.path.join(root, "cie1931-2deg-5nm.csv")) as f:
+        cmf = np.array([[float(x) for x in r[1:]] for r in list(csv.reader(f))[1:]])
+    with open(os.path.join(root, "cie-d65-5nm.csv")) as f:
+        d65 = np.array([float(r[1]) for r in list(csv.reader(f))[1:]])
+    m = vkbrdf.presets()
+    th = np.linspace(0, 1.4, 15)
+    L = np.stack([np.sin(th), np.zeros_like(th), np.cos(th)], axis=-1)
+    V = L * [-1, 1, 1]
+    spectra = vkbrdf.evaluate(m, l=L, v=V, n=[0, 0, 1], material="gold-spectral", wavelengths="360:830:5", backend="cpu")
+    assert spectra.shape == (15, 95)
+    xyz = spectra.astype(np.float64) @ (cmf * d65[:, None]) / (d65 @ cmf[:, 1])
+    x, y = 0.3127 / 0.3290, 1.0
+    prim = np.array([[0.64, 0.33], [0.30, 0.60], [0.15, 0.06]])
+    P = np.stack([prim[:, 0] / prim[:, 1], np.ones(3), (1 - prim.sum(1)) / prim[:, 1]])
+    S = np.linalg.solve(P, [x, y, (1 - 0.3127 - 0.3290) / 0.3290])
+    srgb = xyz @ np.linalg.inv(P * S).T
+    got = vkbrdf.evaluate(m, l=L, v=V, n=[0, 0, 1], material="gold-spectral", color="srgb", backend="cpu")
+    assert got.shape == (15, 3)
+    np.testing.assert_allclose(got, srgb, rtol=2e-6)
+    # Gold's red at normal incidence is above its green and blue, and the F0 ratios are
+    # Johnson & Christy's (F0 sRGB 1.0376, 0.7283, 0.3646).
+    assert got[0, 0] / got[0, 1] == pytest.approx(1.037638 / 0.728341, rel=1e-4)
+    with pytest.raises(vkbrdf.UsageError):
+        vkbrdf.evaluate(m, l=L, v=V, n=[0, 0, 1], material="gold-spectral", color="srgb", terms=True)
+    with pytest.raises(vkbrdf.UsageError, match="gold-spectral"):
+        vkbrdf.evaluate(m, l=L, v=V, n=[0, 0, 1], material="gold", wavelengths=[500, 600])

@@ -182,6 +182,9 @@ def evaluate(
     strict=False,
     return_counts=False,
     spike=False,
+    wavelengths=None,
+    color=None,
+    illuminant="d65",
 ):
     """Evaluates the BRDF; see the stub (``vkbrdf/__init__.pyi``) for the full description."""
     if not isinstance(materials, Materials):
@@ -197,6 +200,21 @@ def evaluate(
         if l is None or v is None or n is None:
             raise UsageError("give tuples, or the directions l=, v= and n=")
         rows, shape = _broadcast_rows(materials, l, v, n, t, material)
+    if wavelengths is not None or color is not None:
+        if terms or spike:
+            raise UsageError(
+                "wavelengths=/color=: a spectral evaluation returns f(λ) only; the terms and "
+                "the spike are RGB outputs (evaluate them without wavelengths)"
+            )
+        if wavelengths is not None and not isinstance(wavelengths, str):
+            wavelengths = ",".join(repr(float(x)) for x in _np.ravel(wavelengths))
+        f, counts = _native.evaluate_spectral(
+            materials, rows, str(backend), wavelengths, color, str(illuminant),
+            str(precision), bool(strict),
+        )
+        if shape is not None:
+            f = f.reshape(shape + (f.shape[1],))
+        return (f, Counts(*counts)) if return_counts else f
     f, term_values, counts, _in_place = _native.evaluate(
         materials, rows, str(backend), bool(terms), str(precision), bool(strict)
     )

@@ -151,7 +151,8 @@ def parse_materials(text: str, source: str = "<string>") -> Materials:
 
 def presets() -> Materials:
     """Every preset material (gold, silver, copper, aluminium, glass, water,
-    shiny-plastic), as one table."""
+    shiny-plastic, htsg-aluminium, and the spectral forms gold-spectral, silver-spectral,
+    copper-spectral, aluminium-spectral, glass-spectral, water-spectral), as one table."""
 
 @overload
 def evaluate(
@@ -164,6 +165,9 @@ def evaluate(
     strict: bool = ...,
     return_counts: bool = ...,
     spike: bool = ...,
+    wavelengths: Union[None, str, _ArrayLike] = ...,
+    color: Optional[str] = ...,
+    illuminant: str = ...,
 ) -> Any:
     """Evaluates the BRDF f (1/sr, RGB, without the cosine) of each tuple.
 
@@ -196,6 +200,16 @@ def evaluate(
         spike: also return the mirror spike's weight rho_s ``(..., 3)`` of HTSG materials
             (FORMULAS.md §8: the spike is rho_s delta(w - w_mirror)/cos_i and is not in f);
             every tuple's material must be ``htsg`` (else ``UsageError``).
+        wavelengths: evaluate at these wavelengths (nm) instead of in RGB (FORMULAS.md §9):
+            ``"360:830:5"`` (START:END:STEP, both ends included), ``"450,550,650"`` or an
+            array; f then has shape ``(..., W)``. Materials need a spectral form (a
+            spectral ``ior`` such as the ``gold-spectral`` preset, or no index: RGB colours
+            are up-sampled by Jakob & Hanika 2019). Not with ``terms`` or ``spike``.
+        color: ``"xyz"`` or ``"srgb"``: reduce the spectral values to CIE 1931 XYZ or
+            linear sRGB (unclamped), shape ``(..., 3)``, by the CIE quadrature on the 5 nm
+            grid 360-830 nm (the default wavelengths with ``color``; another grid is an
+            error).
+        illuminant: ``"d65"`` (default) or ``"e"``, weighting ``color``.
 
     Returns:
         f, then terms when ``terms``, then rho_s when ``spike``, then Counts when
@@ -232,6 +246,9 @@ def evaluate(
     strict: bool = ...,
     return_counts: bool = ...,
     spike: bool = ...,
+    wavelengths: Union[None, str, _ArrayLike] = ...,
+    color: Optional[str] = ...,
+    illuminant: str = ...,
 ) -> Any: ...
 
 def check(

@@ -278,13 +278,25 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         }
     }
     if let Some(sp) = &spectral {
-        let own = material.spectral.as_ref().map_or("", |s| s.reduction.name());
+        let own = material
+            .spectral
+            .as_ref()
+            .map_or("", |s| s.reduction.name());
         outln!(
             "\nSpectral (FORMULAS.md §9): f over 360–830 nm reduced to linear sRGB under D65, beside the two RGB forms of the index (the material's own, above, is {own})"
         );
         outln!(
             "{:<30} {:>11} {:>11} {:>11} | {:>11} {:>11} {:>11} | {:>11} {:>11} {:>11}",
-            "directions (degrees)", "spectral r", "g", "b", "mitsuba r", "g", "b", "filament r", "g", "b"
+            "directions (degrees)",
+            "spectral r",
+            "g",
+            "b",
+            "mitsuba r",
+            "g",
+            "b",
+            "filament r",
+            "g",
+            "b"
         );
         for (q, v) in qs.iter().zip(sp) {
             outln!(
@@ -338,7 +350,13 @@ fn spectral_rows(
     let three = |v: &[f32], i: usize| [v[3 * i], v[3 * i + 1], v[3 * i + 2]];
     Ok(Some(
         (0..batch.len())
-            .map(|i| [three(&spectral.brdf, i), three(&forms[0].brdf, i), three(&forms[1].brdf, i)])
+            .map(|i| {
+                [
+                    three(&spectral.brdf, i),
+                    three(&forms[0].brdf, i),
+                    three(&forms[1].brdf, i),
+                ]
+            })
             .collect(),
     ))
 }
