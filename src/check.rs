@@ -9,7 +9,8 @@
 //! `schlick-smith` only with beckmann/ggx, `smith-fast` with beckmann only, anisotropic
 //! beckmann/ggx in the modern convention only, `schlick-smith` isotropic); and `merl
 //! nearest`, `merl linear`: measured materials over two analytic materials exported to MERL
-//! in memory, read by each lookup. 317 in all. Each combination is
+//! in memory, read by each lookup. 317 in all; the CLI then runs 7 spectral rows
+//! ([`spectral::run`]: the spectral presets at 95 wavelengths, FORMULAS.md §9). Each combination is
 //! one batch over a table of [`MATERIALS_PER_COMBINATION`] materials with seeded random
 //! parameters (one always at the sharpest lobe allowed: roughness 0.01 or exponent 20000).
 //!
@@ -35,6 +36,26 @@ use crate::material::{
     legality, parse_materials, Convention, DistributionKind, FresnelKind, Geometry, Material,
 };
 use crate::reference::{self, Status};
+pub mod spectral;
+
+/// The materials whose spectral rows follow the combinations ([`spectral::run`]): every
+/// spectral preset and the RGB `shiny-plastic` (its colours up-sampled, its dielectric a
+/// grey index).
+pub const SPECTRAL_MATERIALS: &[&str] = &[
+    "gold-spectral",
+    "silver-spectral",
+    "copper-spectral",
+    "aluminium-spectral",
+    "glass-spectral",
+    "water-spectral",
+    "shiny-plastic",
+];
+
+/// The row name of a spectral material in a report.
+pub fn spectral_name(material: &str) -> String {
+    format!("spectral {material} 360:830:5")
+}
+
 use crate::stats::{relative_error, ErrorStats};
 use crate::vector::{cross, dot, normalize_direct};
 use rand::{Rng, SeedableRng};
@@ -838,7 +859,11 @@ pub fn run_with_skips(
     }
     let all = combinations(options.seed)?;
     if let Some(only) = options.only.as_deref() {
-        if !all.iter().any(|c| c.name.contains(only)) {
+        if !all.iter().any(|c| c.name.contains(only))
+            && !SPECTRAL_MATERIALS
+                .iter()
+                .any(|m| spectral_name(m).contains(only))
+        {
             return Err(crate::Error::Unsupported(format!(
                 "only {only:?} matches no combination (names look like `cook-torrance modern ggx-aniso smith conductor`)"
             )));

@@ -4,7 +4,7 @@
 //!   [`crate::material::spectral::SpectralForm`]). Every engine evaluates them with its own
 //!   RGB code; the reference always takes this way (it is the judge), and so do HTSG and
 //!   measured materials on every engine.
-//! - **factored** ([`factored`]): one RGB evaluation of a basis material gives the
+//! - **factored** (`spectral_eval/factored.rs`): one RGB evaluation of a basis material gives the
 //!   λ-independent factors (D, G and K computed once per tuple), and F is formed per
 //!   wavelength on the host. What the engines take wherever every material allows it.
 //!
@@ -227,8 +227,8 @@ impl SpectralJob {
                     Colour::Xyz => xyz,
                     Colour::Srgb => cie::xyz_to_srgb(xyz),
                 };
-                for c in 0..3 {
-                    out.brdf[r * 3 + c] = v[c] as f32;
+                for (o, x) in out.brdf[r * 3..r * 3 + 3].iter_mut().zip(v) {
+                    *o = x as f32;
                 }
             }
         }

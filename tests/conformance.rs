@@ -113,6 +113,13 @@ fn every_combination_matches_the_reference() {
     let reports =
         check::run(&mut gpu, &options, &mut |r| eprintln!("{}", r.row())).expect("check run");
     assert_eq!(reports.len(), combinations::check_combination_count());
+    // And the spectral rows (FORMULAS.md §9), as `vkbrdf check` runs them after these.
+    let mut reports = reports;
+    reports.extend(
+        check::spectral::run(&mut gpu, &options, &mut |r| eprintln!("{}", r.row()))
+            .expect("spectral rows"),
+    );
+    assert_eq!(reports.len(), combinations::check_row_count());
     let failures: Vec<String> = reports
         .iter()
         .filter(|r| !r.pass())

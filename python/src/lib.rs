@@ -383,6 +383,9 @@ fn evaluate<'py>(
     ))
 }
 
+/// A spectral evaluation's values and counts.
+type SpectralValues<'py> = (Bound<'py, PyArray2<f32>>, (u64, u64, u64, Option<u64>));
+
 /// Evaluates a C-contiguous float32 tuple array at wavelengths (FORMULAS.md §9):
 /// `(n, W)` values, or `(n, 3)` XYZ / linear sRGB with `color`.
 #[pyfunction]
@@ -398,7 +401,7 @@ fn evaluate_spectral<'py>(
     illuminant: &str,
     precision: &str,
     strict: bool,
-) -> PyResult<(Bound<'py, PyArray2<f32>>, (u64, u64, u64, Option<u64>))> {
+) -> PyResult<SpectralValues<'py>> {
     use vkbrdf::spectral::cie::Illuminant;
     use vkbrdf::spectral_eval::{Colour, SpectralJob};
     let usage = |m: String| raise(py, "UsageError", m);
@@ -741,7 +744,12 @@ fn check<'py>(
     }
     if let Some(o) = only.as_deref() {
         let names = vkbrdf::check::combinations(seed).map_err(|e| to_py(py, e))?;
-        if !names.iter().any(|c| c.name.contains(o)) {
+        let spectral = vkbrdf::check::SPECTRAL_MATERIALS.iter();
+        if !names.iter().any(|c| c.name.contains(o))
+            && !spectral
+                .clone()
+                .any(|m| vkbrdf::check::spectral_name(m).contains(o))
+        {
             return Err(raise(
                 py,
                 "UsageError",
@@ -751,7 +759,12 @@ fn check<'py>(
     }
     let options = vkbrdf::check::CheckOptions { tuples, seed, only };
     let (name, reports) = run_engine(py, kind, |backend, _| {
-        let reports = vkbrdf::check::run(backend, &options, &mut |_| {})?;
+        let mut reports = vkbrdf::check::run(backend, &options, &mut |_| {})?;
+        reports.extend(vkbrdf::check::spectral::run(
+            backend,
+            &options,
+            &mut |_| {},
+        )?);
         Ok((backend.name(), reports))
     })?;
     let list = PyList::empty(py);

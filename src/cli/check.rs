@@ -121,7 +121,7 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
     let t0 = Instant::now();
     let verbose = args.verbose;
     let mut done = 0usize;
-    let (reports, skipped) = check::run_with_skips(gpu.as_mut(), &check_options, &mut |r| {
+    let mut row = |r: &CombinationReport| {
         done += 1;
         super::set_status(format!(
             "{done} combinations done, the last {}",
@@ -133,7 +133,14 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
                 say(w.to_string());
             }
         }
-    })?;
+    };
+    let (mut reports, skipped) = check::run_with_skips(gpu.as_mut(), &check_options, &mut row)?;
+    // Then the spectral rows (FORMULAS.md §9): the spectral presets at 95 wavelengths.
+    reports.extend(check::spectral::run(
+        gpu.as_mut(),
+        &check_options,
+        &mut row,
+    )?);
     let elapsed = t0.elapsed().as_secs_f64();
     drop(gpu);
     for (name, why) in &skipped {

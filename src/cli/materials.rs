@@ -20,7 +20,9 @@ use vkbrdf::material::{self, Fresnel, Material, Model};
   geometry = "smith-correlated" # none | cook-torrance | smith | smith-correlated | smith-fast
                               # | schlick-smith | neubelt
   fresnel = "conductor"       # none | dielectric | conductor | schlick
-  ior = [1.47, 0.958, 0.618]  # number or RGB
+  ior = [1.47, 0.958, 0.618]  # number or RGB; or a spectrum: "au-johnson-christy",
+                              # [[λ_nm, n, k], ...] rows or { file = "x.yml" } (docs/SPECTRAL.md)
+  # rgb_reduction = "mitsuba" # a spectral ior's RGB form: mitsuba (default) | filament
   extinction = [7.79, 6.69, 5.47] # RGB k (conductor)
   # f0 = [0.9, 0.9, 0.9]      # schlick: F0, or give ior (+ extinction) instead
   # exponent = 50             # phong, blinn-phong, rtr, and distribution "blinn"

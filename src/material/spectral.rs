@@ -289,7 +289,7 @@ impl SpectralForm {
                 ..ct.clone()
             }),
             Model::Htsg(h) => {
-                let mut h = h.clone();
+                let mut h = *h;
                 h.wavelengths = nm.map(|l| l / 1000.0);
                 if let (Some(n), Some(k)) = (n, k) {
                     h.ior = n;

@@ -124,10 +124,13 @@ const SRGB_PRIMARIES: [[f64; 2]; 3] = [[0.64, 0.33], [0.30, 0.60], [0.15, 0.06]]
 /// sRGB's white, D65's chromaticity as the standard writes it.
 const SRGB_WHITE: [f64; 2] = [0.3127, 0.3290];
 
+/// A 3×3 matrix, row-major.
+pub type Matrix3 = [[f64; 3]; 3];
+
 /// The linear-sRGB → XYZ matrix, derived from the primaries and white (so that sRGB
 /// (1, 1, 1) is the white with Y = 1), and its inverse.
-pub fn srgb_matrices() -> &'static ([[f64; 3]; 3], [[f64; 3]; 3]) {
-    static M: OnceLock<([[f64; 3]; 3], [[f64; 3]; 3])> = OnceLock::new();
+pub fn srgb_matrices() -> &'static (Matrix3, Matrix3) {
+    static M: OnceLock<(Matrix3, Matrix3)> = OnceLock::new();
     M.get_or_init(|| {
         let xyz = |[x, y]: [f64; 2]| [x / y, 1.0, (1.0 - x - y) / y];
         let p: [[f64; 3]; 3] = std::array::from_fn(|j| xyz(SRGB_PRIMARIES[j]));

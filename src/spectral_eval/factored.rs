@@ -8,6 +8,10 @@
 //! in f64.
 
 use crate::material::{CookTorrance, Fresnel, Material, Model};
+use crate::spectral::cie::Matrix3;
+
+/// A colour reduction: the quadrature weights by wavelength and the XYZ → output matrix.
+pub(super) type ColourWeights<'a> = (&'a [[f64; 3]], Matrix3);
 use crate::terms::f;
 
 /// F's parameters at each wavelength, by wavelength (structure of arrays).
@@ -147,7 +151,7 @@ impl Factored {
         &self,
         xy: &[f32],
         row: &(dyn Fn(usize) -> ([f32; 3], [f32; 3], usize) + Sync),
-        colour: Option<(&[[f64; 3]], [[f64; 3]; 3])>,
+        colour: Option<ColourWeights<'_>>,
         out: &mut [f32],
     ) {
         let cols = if colour.is_some() {
@@ -184,7 +188,7 @@ impl Factored {
         r: usize,
         xy: &[f32],
         row: &(dyn Fn(usize) -> ([f32; 3], [f32; 3], usize) + Sync),
-        colour: Option<(&[[f64; 3]], [[f64; 3]; 3])>,
+        colour: Option<ColourWeights<'_>>,
         fl: &mut [f32],
         o: &mut [f32],
     ) {
@@ -266,7 +270,7 @@ struct RowsOp<'a> {
     start: usize,
     xy: &'a [f32],
     row: &'a (dyn Fn(usize) -> ([f32; 3], [f32; 3], usize) + Sync),
-    colour: Option<(&'a [[f64; 3]], [[f64; 3]; 3])>,
+    colour: Option<ColourWeights<'a>>,
     out: &'a mut [f32],
 }
 

@@ -193,12 +193,17 @@ pub fn plot(path: &std::path::Path, material: &Material, rows: &[Row]) -> Result
                     .map_err(|e| err(&e))?
             };
             if ch == 0 {
-                series.label(*name).legend(move |(x, y)| {
-                    PathElement::new(
-                        vec![(x, y), (x + 16, y)],
-                        BLACK.stroke_width(if v == 0 { 3 } else { 1 }),
-                    )
-                });
+                series.label(*name).legend(
+                    move |(x, y)| -> DynElement<'static, SVGBackend, (i32, i32)> {
+                        if v == 2 {
+                            Circle::new((x + 8, y), 3, BLACK.filled()).into_dyn()
+                        } else {
+                            let width = if v == 0 { 3 } else { 1 };
+                            PathElement::new(vec![(x, y), (x + 16, y)], BLACK.stroke_width(width))
+                                .into_dyn()
+                        }
+                    },
+                );
             }
         }
     }

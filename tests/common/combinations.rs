@@ -25,3 +25,12 @@ pub fn check_combination_count() -> usize {
     }
     PLAIN_MODELS + shapes * FresnelKind::ALL.len() + MERL_LOOKUPS
 }
+
+/// The spectral rows `check` adds (FORMULAS.md §9): the six spectral presets and the
+/// up-sampled `shiny-plastic`.
+const SPECTRAL_ROWS: usize = 7;
+
+/// The rows of a `vkbrdf check` report: the combinations and the spectral rows.
+pub fn check_row_count() -> usize {
+    check_combination_count() + SPECTRAL_ROWS
+}
