@@ -437,3 +437,45 @@ fn eval_writes_spectra_and_colours() {
         common::stderr(&o)
     );
 }
+
+/// Where D·G·K alone exceeds f32::MAX (cosines of 1e-45, K = 1/(4 cos cos)): the factored
+/// way must not multiply a saturated basis by F (the stress corpus found water at 3 % of
+/// f32::MAX where f itself is beyond it, and so f32::MAX). Every engine, against the
+/// reference's triplets.
+#[test]
+fn a_saturated_basis_does_not_saturate_f() {
+    let water = vec![presets::preset("water-spectral").unwrap().unwrap()];
+    let job = SpectralJob::new(&water, "380,590,800".parse().unwrap(), None).unwrap();
+    let row = [
+        0.230_087_25f32,
+        1e-45,
+        0.97317,
+        0.97317,
+        1e-45,
+        -0.230_087_25,
+        0.0,
+        1.0,
+        0.0,
+        0.0,
+    ];
+    let batch = Batch::new(row.to_vec(), 10, 1, &memory_source()).unwrap();
+    let want = vkbrdf::reference::CpuReference::new()
+        .evaluate(&batch, &job.triplets()[0], &Request::default())
+        .unwrap();
+    assert!(want.brdf[0] > 1e30, "{:?}", want.brdf);
+    let mut engines: Vec<Box<dyn Backend>> = vec![Box::new(vkbrdf::cpu::CpuEngine::new())];
+    if let Some(v) = common::vulkan() {
+        engines.push(Box::new(v));
+    }
+    for e in &mut engines {
+        let got = job.evaluate(e.as_mut(), &batch).unwrap();
+        for j in 0..3 {
+            let (x, r) = (got.brdf[j], want.brdf[j]);
+            assert!(
+                ((x - r) / r).abs() < 1e-5,
+                "{}: λ {j}: {x} vs {r}",
+                e.name()
+            );
+        }
+    }
+}

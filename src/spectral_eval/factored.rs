@@ -14,6 +14,11 @@ use crate::spectral::cie::Matrix3;
 pub(super) type ColourWeights<'a> = (&'a [[f64; 3]], Matrix3);
 use crate::terms::f;
 
+/// The factor of the basis material's third channel (`Y · 2⁻⁶⁴`, exact in f32): it
+/// overflows only beyond 6e57 and keeps full precision above 2⁻⁶² (2e-19), far below the
+/// contract's floor of 1e-6.
+const BASIS_SCALE: f64 = 1.0 / 18_446_744_073_709_551_616.0;
+
 /// F's parameters at each wavelength, by wavelength (structure of arrays).
 #[derive(Debug, Clone)]
 enum Lambda {
@@ -127,7 +132,10 @@ impl Factored {
             .map(|m| {
                 let mut b = m.clone();
                 b.diffuse = [1.0, 0.0, 0.0];
-                b.specular = [0.0, 1.0, 0.0];
+                // Channel 2 holds Y scaled by 2⁻⁶⁴: where D·G·K alone exceeds f32::MAX
+                // (K at grazing) the engine saturates channel 1, though F may bring f
+                // back into range (water at cos 1e-45: 3 % of the true f was returned).
+                b.specular = [0.0, 1.0, BASIS_SCALE];
                 if let Model::CookTorrance(ct) = &m.model {
                     b.model = Model::CookTorrance(CookTorrance {
                         fresnel: Fresnel::None,
@@ -193,6 +201,13 @@ impl Factored {
         o: &mut [f32],
     ) {
         let (x, y) = (xy[3 * r], xy[3 * r + 1]);
+        // Y itself, from the scaled channel where the unscaled one saturated (in f64, as is
+        // the combination below: c_spec·Y·F may exceed f32 before F brings it down).
+        let y64 = if y == f32::MAX {
+            f64::from(xy[3 * r + 2]) / BASIS_SCALE
+        } else {
+            f64::from(y)
+        };
         if x == 0.0 && y == 0.0 {
             o.fill(0.0); // invalid or below the horizon (or black): every λ is 0
             return;
@@ -241,23 +256,26 @@ impl Factored {
         }
         match colour {
             None => {
-                let o = &mut o[..w];
+                let (o, x) = (&mut o[..w], f64::from(x));
                 for j in 0..w {
-                    o[j] = d[j] * x + sp[j] * y * fl[j];
+                    let f = f64::from(d[j]) * x + f64::from(sp[j]) * y64 * f64::from(fl[j]);
+                    // Beyond f32::MAX: f32::MAX (FORMULAS.md §1).
+                    o[j] = f.min(f64::from(f32::MAX)) as f32;
                 }
             }
             Some((weights, to_output)) => {
-                let weights = &weights[..w];
+                let (weights, x) = (&weights[..w], f64::from(x));
                 let mut xyz = [0f64; 3];
                 for j in 0..w {
-                    let f = f64::from(d[j] * x + sp[j] * y * fl[j]);
+                    let f = f64::from(d[j]) * x + f64::from(sp[j]) * y64 * f64::from(fl[j]);
                     let wt = weights[j];
                     xyz[0] += f * wt[0];
                     xyz[1] += f * wt[1];
                     xyz[2] += f * wt[2];
                 }
                 for (c, row) in o.iter_mut().zip(to_output) {
-                    *c = (row[0] * xyz[0] + row[1] * xyz[1] + row[2] * xyz[2]) as f32;
+                    let v = row[0] * xyz[0] + row[1] * xyz[1] + row[2] * xyz[2];
+                    *c = v.clamp(-f64::from(f32::MAX), f64::from(f32::MAX)) as f32;
                 }
             }
         }

@@ -176,10 +176,14 @@ pub fn run_with(
         exact: precision == Precision::Exact,
         ..StressReport::default()
     };
+    let spectral = SpectralPass::new()?;
     let mut start = 0;
     while start < tuples {
         let end = (start + chunk.max(1)).min(tuples);
         let (materials, batch, cases) = corpus::corpus_rows(start..end, seed);
+        if precision == Precision::Exact {
+            spectral.run(backend, &batch, &cases, start, &mut report)?;
+        }
         let variant = crate::precision::apply_all(&materials, precision);
         let out = backend.evaluate(&batch, &variant, &Request { terms: true })?;
         let terms = out.terms.as_deref().expect("terms were requested");
@@ -218,6 +222,94 @@ pub fn run_with(
         progress(start);
     }
     Ok(report)
+}
+
+/// The spectral presets at seven wavelengths (FORMULAS.md §9) on every 16th corpus tuple
+/// (its directions, a preset in turn for its material), through the backend's own spectral
+/// way, judged against the reference's materials at the wavelengths: the rows
+/// `f: spectral` of the report.
+struct SpectralPass {
+    job: crate::spectral_eval::SpectralJob,
+}
+
+/// Which corpus rows the spectral pass takes: one in [`SPECTRAL_EVERY`].
+const SPECTRAL_EVERY: usize = 16;
+
+impl SpectralPass {
+    fn new() -> Result<SpectralPass> {
+        let presets = [
+            "gold-spectral",
+            "silver-spectral",
+            "copper-spectral",
+            "aluminium-spectral",
+            "glass-spectral",
+            "water-spectral",
+        ]
+        .map(|n| crate::material::presets::preset(n).expect("a preset name"));
+        let materials = presets
+            .into_iter()
+            .collect::<std::result::Result<Vec<_>, _>>()?;
+        let wavelengths = "380,450,520,590,660,730,800"
+            .parse()
+            .expect("a wavelength list");
+        Ok(SpectralPass {
+            job: crate::spectral_eval::SpectralJob::new(&materials, wavelengths, None)?,
+        })
+    }
+
+    fn run(
+        &self,
+        backend: &mut dyn Backend,
+        batch: &crate::batch::Batch,
+        cases: &[Case],
+        offset: usize,
+        report: &mut StressReport,
+    ) -> Result<()> {
+        let presets = self.job.triplets()[0].len();
+        let (mut data, mut rows) = (Vec::new(), Vec::new());
+        for i in (SPECTRAL_EVERY / 2..batch.len()).step_by(SPECTRAL_EVERY) {
+            let mut r = [0f32; 13];
+            r.copy_from_slice(&batch.as_slice()[i * 13..i * 13 + 13]);
+            r[9] = ((offset + i) / SPECTRAL_EVERY % presets) as f32;
+            data.extend_from_slice(&r);
+            rows.push(i);
+        }
+        if rows.is_empty() {
+            return Ok(());
+        }
+        let sub = crate::batch::Batch::new(data, 13, presets, &crate::batch::memory_source())?;
+        let out = self.job.evaluate(backend, &sub)?;
+        let mut reference = reference::CpuReference::new();
+        let w = self.job.wavelengths().len();
+        for (t, mats) in self.job.triplets().iter().enumerate() {
+            let r = reference.evaluate(&sub, mats, &Request::default())?;
+            for (k, &i) in rows.iter().enumerate() {
+                let tuple = sub.tuple(k);
+                let m = &mats[tuple.material];
+                if reference::evaluate_tuple(&tuple, m).status != Status::Valid {
+                    continue; // judged, as every row, by the RGB pass
+                }
+                let key = ("f: spectral".to_string(), regime(m, cases[i]));
+                let stats = report.errors.entry(key.clone()).or_default();
+                let before = stats.max;
+                for j in 0..3.min(w - 3 * t) {
+                    let x = out.brdf[k * w + 3 * t + j];
+                    report.non_finite += u64::from(!x.is_finite());
+                    let want = f64::from(r.brdf[3 * k + j]);
+                    stats.add(
+                        relative_error(f64::from(x), want, ERROR_FLOOR),
+                        (offset + i) as u64,
+                    );
+                }
+                if stats.max > before {
+                    let mut row = [0f32; 13];
+                    row.copy_from_slice(&sub.as_slice()[k * 13..k * 13 + 13]);
+                    report.worst_rows.insert(key, row);
+                }
+            }
+        }
+        Ok(())
+    }
 }
 
 #[derive(Default)]
