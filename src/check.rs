@@ -39,17 +39,14 @@ use crate::reference::{self, Status};
 pub mod spectral;
 
 /// The materials whose spectral rows follow the combinations ([`spectral::run`]): every
-/// spectral preset and the RGB `shiny-plastic` (its colours up-sampled, its dielectric a
-/// grey index).
-pub const SPECTRAL_MATERIALS: &[&str] = &[
-    "gold-spectral",
-    "silver-spectral",
-    "copper-spectral",
-    "aluminium-spectral",
-    "glass-spectral",
-    "water-spectral",
-    "shiny-plastic",
-];
+/// spectral preset ([`crate::material::presets::SPECTRAL`]) and the RGB `shiny-plastic`
+/// (its colours up-sampled, its dielectric a grey index).
+pub fn spectral_materials() -> impl Iterator<Item = &'static str> + Clone {
+    crate::material::presets::SPECTRAL
+        .iter()
+        .copied()
+        .chain(["shiny-plastic"])
+}
 
 /// The row name of a spectral material in a report.
 pub fn spectral_name(material: &str) -> String {
@@ -860,9 +857,7 @@ pub fn run_with_skips(
     let all = combinations(options.seed)?;
     if let Some(only) = options.only.as_deref() {
         if !all.iter().any(|c| c.name.contains(only))
-            && !SPECTRAL_MATERIALS
-                .iter()
-                .any(|m| spectral_name(m).contains(only))
+            && !spectral_materials().any(|m| spectral_name(m).contains(only))
         {
             return Err(crate::Error::Unsupported(format!(
                 "only {only:?} matches no combination (names look like `cook-torrance modern ggx-aniso smith conductor`)"

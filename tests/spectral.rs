@@ -387,37 +387,18 @@ fn eval_writes_spectra_and_colours() {
     .unwrap();
     let t = dir.path().join("t.npy");
     assert!(common::generate(&m, 500, &t).status.success());
+    // Each run on cpu, and the shape its .npy header states.
+    let shape_of = |out: &std::path::Path, option: [&str; 2]| {
+        let mut args = vec!["-o", common::path(out), "--backend", "cpu"];
+        args.extend(option);
+        let o = common::eval(&m, &t, &args);
+        assert!(o.status.success(), "{}", common::stderr(&o));
+        String::from_utf8_lossy(&std::fs::read(out).unwrap()[..128]).into_owned()
+    };
     let s = dir.path().join("s.npy");
-    let o = common::eval(
-        &m,
-        &t,
-        &[
-            "-o",
-            common::path(&s),
-            "--wavelengths",
-            "400:700:100",
-            "--backend",
-            "cpu",
-        ],
-    );
-    assert!(o.status.success(), "{}", common::stderr(&o));
-    let head = std::fs::read(&s).unwrap();
-    assert!(String::from_utf8_lossy(&head[..128]).contains("(500, 4)"));
+    assert!(shape_of(&s, ["--wavelengths", "400:700:100"]).contains("(500, 4)"));
     let c = dir.path().join("c.npy");
-    let o = common::eval(
-        &m,
-        &t,
-        &[
-            "-o",
-            common::path(&c),
-            "--color",
-            "srgb",
-            "--backend",
-            "cpu",
-        ],
-    );
-    assert!(o.status.success(), "{}", common::stderr(&o));
-    assert!(String::from_utf8_lossy(&std::fs::read(&c).unwrap()[..128]).contains("(500, 3)"));
+    assert!(shape_of(&c, ["--color", "srgb"]).contains("(500, 3)"));
     let terms = dir.path().join("terms.npy");
     let o = common::eval(
         &m,

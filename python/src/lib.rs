@@ -359,16 +359,7 @@ fn evaluate<'py>(
         backend.evaluate(&batch, &list, &request)
     })?;
     let c: Counts = out.counts;
-    if strict && c.invalid > 0 {
-        return Err(to_py(
-            py,
-            Error::InvalidTuples {
-                invalid: c.invalid,
-                total: c.tuples,
-                first_row: c.first_invalid.unwrap_or(0),
-            },
-        ));
-    }
+    refuse_invalid(py, strict, &c)?;
     let n = batch.len();
     let f = rows(py, out.brdf, n, 3)?;
     let t = match out.terms {
@@ -381,6 +372,21 @@ fn evaluate<'py>(
         (c.invalid, c.below_horizon, c.saturated, c.first_invalid),
         in_place,
     ))
+}
+
+/// `strict=True` with an invalid tuple: the `BatchError` naming the first.
+fn refuse_invalid(py: Python<'_>, strict: bool, c: &Counts) -> PyResult<()> {
+    if strict && c.invalid > 0 {
+        return Err(to_py(
+            py,
+            Error::InvalidTuples {
+                invalid: c.invalid,
+                total: c.tuples,
+                first_row: c.first_invalid.unwrap_or(0),
+            },
+        ));
+    }
+    Ok(())
 }
 
 /// A spectral evaluation's values and counts.
@@ -440,16 +446,7 @@ fn evaluate_spectral<'py>(
     }
     let out = run_engine(py, kind, |backend, _| job.evaluate(backend, &batch))?;
     let c: Counts = out.counts;
-    if strict && c.invalid > 0 {
-        return Err(to_py(
-            py,
-            Error::InvalidTuples {
-                invalid: c.invalid,
-                total: c.tuples,
-                first_row: c.first_invalid.unwrap_or(0),
-            },
-        ));
-    }
+    refuse_invalid(py, strict, &c)?;
     let n = batch.len();
     Ok((
         rows(py, out.brdf, n, job.columns())?,
@@ -744,11 +741,9 @@ fn check<'py>(
     }
     if let Some(o) = only.as_deref() {
         let names = vkbrdf::check::combinations(seed).map_err(|e| to_py(py, e))?;
-        let spectral = vkbrdf::check::SPECTRAL_MATERIALS.iter();
+        let spectral = |m: &str| vkbrdf::check::spectral_name(m).contains(o);
         if !names.iter().any(|c| c.name.contains(o))
-            && !spectral
-                .clone()
-                .any(|m| vkbrdf::check::spectral_name(m).contains(o))
+            && !vkbrdf::check::spectral_materials().any(spectral)
         {
             return Err(raise(
                 py,

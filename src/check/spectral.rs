@@ -4,9 +4,9 @@
 //! §1's rule against the reference's RGB evaluations of the materials at the wavelengths.
 
 use super::{
-    allowed_error, combinations, f32_sensitivity, generate, spectral_name, CheckOptions,
-    Combination, CombinationReport, WorstCase, CONDITIONING_FACTOR, FLOOR,
-    MATERIALS_PER_COMBINATION, RELATIVE_TOLERANCE, SPECTRAL_MATERIALS,
+    allowed_error, combinations, f32_sensitivity, generate, spectral_materials, spectral_name,
+    CheckOptions, Combination, CombinationReport, WorstCase, CONDITIONING_FACTOR, FLOOR,
+    MATERIALS_PER_COMBINATION, RELATIVE_TOLERANCE,
 };
 use crate::backend::{Backend, Request};
 use crate::error::Result;
@@ -15,7 +15,7 @@ use crate::spectral::Wavelengths;
 use crate::spectral_eval::SpectralJob;
 use crate::stats::{relative_error, ErrorStats};
 
-/// The spectral rows of [`SPECTRAL_MATERIALS`] that `options.only` selects, after the
+/// The spectral rows of [`spectral_materials`] that `options.only` selects, after the
 /// combinations of [`super::run`] (seeded after them), `progress` called after each.
 pub fn run(
     backend: &mut dyn Backend,
@@ -24,7 +24,7 @@ pub fn run(
 ) -> Result<Vec<CombinationReport>> {
     let after = combinations(options.seed)?.len() as u64;
     let mut reports = Vec::new();
-    for (i, m) in SPECTRAL_MATERIALS.iter().enumerate() {
+    for (i, m) in spectral_materials().enumerate() {
         if options
             .only
             .as_deref()

@@ -39,6 +39,16 @@ pub const NAMES: &[&str] = &[
     "water-spectral",
 ];
 
+/// The spectral forms of the presets (FORMULAS.md §9), each with a measured `ior`.
+pub const SPECTRAL: &[&str] = &[
+    "gold-spectral",
+    "silver-spectral",
+    "copper-spectral",
+    "aluminium-spectral",
+    "glass-spectral",
+    "water-spectral",
+];
+
 /// The TOML body (keys without `name`) of a preset, or `None` for an unknown name.
 pub fn body(name: &str) -> Option<String> {
     Some(match name {
@@ -139,6 +149,19 @@ pub fn all() -> Vec<Material> {
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn every_spectral_form_is_listed_and_spectral() {
+        for name in super::SPECTRAL {
+            assert!(super::NAMES.contains(name), "{name}");
+            let m = super::preset(name).unwrap().unwrap();
+            assert!(m.spectral.is_some(), "{name}");
+            let rgb = super::preset(name.trim_end_matches("-spectral"))
+                .unwrap()
+                .unwrap();
+            assert!(rgb.spectral.is_none(), "{name}");
+        }
+    }
+
     #[test]
     fn every_preset_validates() {
         for name in super::NAMES {

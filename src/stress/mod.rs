@@ -237,17 +237,9 @@ const SPECTRAL_EVERY: usize = 16;
 
 impl SpectralPass {
     fn new() -> Result<SpectralPass> {
-        let presets = [
-            "gold-spectral",
-            "silver-spectral",
-            "copper-spectral",
-            "aluminium-spectral",
-            "glass-spectral",
-            "water-spectral",
-        ]
-        .map(|n| crate::material::presets::preset(n).expect("a preset name"));
-        let materials = presets
-            .into_iter()
+        let materials = crate::material::presets::SPECTRAL
+            .iter()
+            .map(|n| crate::material::presets::preset(n).expect("a preset name"))
             .collect::<std::result::Result<Vec<_>, _>>()?;
         let wavelengths = "380,450,520,590,660,730,800"
             .parse()
