@@ -10,6 +10,7 @@ pub mod precision;
 pub mod presets;
 pub mod spectral;
 
+pub use crate::terms::f::schlick::f0_from_ior;
 pub use crate::terms::{
     legality, Convention, Distribution, DistributionKind, Fresnel, FresnelKind, Geometry, Illegal,
     Rgb, Roughness, Term,
@@ -33,7 +34,7 @@ pub struct Material {
     pub precision: super::precision::Precision,
     /// The spectral index behind the RGB `ior`/`extinction` (or Schlick `f0`), when the
     /// materials file gave `ior` as a spectrum (FORMULAS.md §9); `None` for an RGB material.
-    pub spectral: Option<std::sync::Arc<spectral::SpectralIndex>>,
+    pub spectral: Option<std::sync::Arc<crate::spectral::SpectralIndex>>,
 }
 
 /// The reflection models of FORMULAS.md §6, each with the parameters its formula uses.
@@ -164,12 +165,4 @@ impl Material {
             _ => true,
         }
     }
-}
-
-/// `F0 = ((n-1)² + k²)/((n+1)² + k²)`: reflectance at normal incidence (FORMULAS.md §4).
-pub fn f0_from_ior(ior: Rgb, extinction: Rgb) -> Rgb {
-    std::array::from_fn(|c| {
-        let (n, k) = (ior[c], extinction[c]);
-        ((n - 1.0).powi(2) + k * k) / ((n + 1.0).powi(2) + k * k)
-    })
 }

@@ -165,7 +165,7 @@ struct Fields<'v, 'c> {
     map: BTreeMap<String, Entry<'v>>,
     used: Vec<&'static str>,
     /// A spectral `ior`, once read (FORMULAS.md §9).
-    spectral: Option<std::sync::Arc<super::spectral::SpectralIndex>>,
+    spectral: Option<std::sync::Arc<crate::spectral::SpectralIndex>>,
 }
 
 impl Ctx<'_> {
@@ -711,7 +711,7 @@ impl Fields<'_, '_> {
                     .as_ref()
                     .map(|s| s.reduction)
                     .unwrap_or_default();
-                return super::spectral::rgb_fresnel(kind, &index, reduction)
+                return crate::spectral::colour::rgb_fresnel(kind, &index, reduction)
                     .map_err(|m| self.err("ior", m));
             }
         }
@@ -766,7 +766,7 @@ impl Fields<'_, '_> {
         let Some(ior) = self.map.get("ior").map(|e| e.value) else {
             return Ok(None);
         };
-        if !super::spectral::is_spectrum(ior) {
+        if !crate::spectral::keys::is_spectrum(ior) {
             return Ok(None);
         }
         // A preset's RGB extinction gives way to the table's spectral ior (its data has k).
@@ -776,14 +776,14 @@ impl Fields<'_, '_> {
             .filter(|e| e.line.is_some())
             .map(|e| e.value);
         self.used.extend(["ior", "extinction"]);
-        let index = super::spectral::index_from(ior, extinction, self.ctx.base)
+        let index = crate::spectral::keys::index_from(ior, extinction, self.ctx.base)
             .map_err(|(key, m)| self.err(key, m))?;
         let names = crate::spectral::RgbReduction::ALL.map(crate::spectral::RgbReduction::name);
         let reduction = self
             .string("rgb_reduction", &names)?
             .and_then(|n| crate::spectral::RgbReduction::from_name(&n))
             .unwrap_or_default();
-        self.spectral = Some(std::sync::Arc::new(super::spectral::SpectralIndex {
+        self.spectral = Some(std::sync::Arc::new(crate::spectral::SpectralIndex {
             index: index.clone(),
             reduction,
             fresnel,

@@ -6,7 +6,8 @@
 //!   then Schlick with that F0.
 
 use super::cie::{self, Illuminant, SAMPLES};
-use super::index::IndexSpectrum;
+use super::index::{Curve, IndexSpectrum};
+use crate::terms::Fresnel;
 
 /// Which reduction gives a spectral material its RGB form.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
@@ -52,4 +53,45 @@ pub fn mitsuba(index: &IndexSpectrum) -> Result<([f64; 3], [f64; 3]), String> {
 /// Filament's RGB `F0` of a spectral index (linear sRGB, unclamped: gold's red is above 1).
 pub fn filament_f0(index: &IndexSpectrum) -> Result<[f64; 3], String> {
     Ok(cie::to_srgb(&on_grid(|nm| index.f0(nm))?, Illuminant::D65))
+}
+
+/// The RGB Fresnel term a spectral index gives `kind` under `reduction` (FORMULAS.md §9):
+/// Mitsuba's reduced (n, k) with the exact term, or Filament's D65 F0 with Schlick
+/// (clamped to [0, 1]: a Schlick F0 is a reflectance).
+pub fn rgb_fresnel(
+    kind: crate::terms::FresnelKind,
+    index: &IndexSpectrum,
+    reduction: RgbReduction,
+) -> Result<Fresnel, String> {
+    use crate::terms::FresnelKind as K;
+    let positive = |v: [f64; 3]| v.map(|x| x.max(1e-6));
+    Ok(match (reduction, kind) {
+        (_, K::None) => Fresnel::None,
+        (RgbReduction::Mitsuba, K::Dielectric) => Fresnel::Dielectric {
+            ior: positive(mitsuba(index)?.0),
+        },
+        (RgbReduction::Mitsuba, K::Conductor) => {
+            let (n, k) = mitsuba(index)?;
+            Fresnel::Conductor {
+                ior: positive(n),
+                extinction: k,
+            }
+        }
+        (RgbReduction::Mitsuba, K::Schlick) => {
+            let (n, k) = mitsuba(index)?;
+            Fresnel::Schlick {
+                f0: crate::terms::f::schlick::f0_from_ior(positive(n), k),
+            }
+        }
+        (RgbReduction::Filament, _) => {
+            // A dielectric reads n only (FORMULAS.md §9).
+            let mut i = index.clone();
+            if kind == K::Dielectric {
+                i.k = Curve::Constant(0.0);
+            }
+            Fresnel::Schlick {
+                f0: filament_f0(&i)?.map(|x| x.clamp(0.0, 1.0)),
+            }
+        }
+    })
 }

@@ -171,3 +171,16 @@ mod tests {
         assert!((c.at(589.3).unwrap() - 1.4584).abs() < 1e-4);
     }
 }
+
+/// A material's spectral index and the reduction that gave its RGB form (what a
+/// `Material` keeps of a spectral `ior`, FORMULAS.md §9).
+#[derive(Debug, Clone, PartialEq)]
+pub struct SpectralIndex {
+    /// `η(λ) = n(λ) + i k(λ)`.
+    pub index: IndexSpectrum,
+    /// How the material's RGB `ior`/`extinction` (or Schlick `f0`) were derived from it.
+    pub reduction: super::RgbReduction,
+    /// The Fresnel term the file named (HTSG's is the conductor's): what a spectral
+    /// evaluation uses, whatever term the RGB reduction chose.
+    pub fresnel: crate::terms::FresnelKind,
+}

@@ -8,10 +8,11 @@ pub mod cie;
 pub mod colour;
 pub mod datasets;
 pub mod index;
+pub mod keys;
 pub mod rii;
 pub mod upsample;
 pub mod wavelengths;
 
 pub use colour::RgbReduction;
-pub use index::{Curve, IndexSpectrum};
+pub use index::{Curve, IndexSpectrum, SpectralIndex};
 pub use wavelengths::Wavelengths;

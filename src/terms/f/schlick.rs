@@ -17,3 +17,12 @@ pub fn f_lane(one_minus_c: f32, f0: f32) -> f32 {
     let x2 = one_minus_c * one_minus_c;
     f0 + (1.0 - f0) * (x2 * x2 * one_minus_c)
 }
+
+/// `F0 = ((n-1)² + k²)/((n+1)² + k²)` per channel: the reflectance at normal incidence of
+/// an index `n + ik` (FORMULAS.md §4), Schlick's F0 when given `ior` and `extinction`.
+pub fn f0_from_ior(ior: [f64; 3], extinction: [f64; 3]) -> [f64; 3] {
+    std::array::from_fn(|c| {
+        let (n, k) = (ior[c], extinction[c]);
+        ((n - 1.0).powi(2) + k * k) / ((n + 1.0).powi(2) + k * k)
+    })
+}
