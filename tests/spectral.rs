@@ -460,3 +460,46 @@ fn a_saturated_basis_does_not_saturate_f() {
         }
     }
 }
+
+/// The local-frame form (6 columns, N = +z, one material) evaluates spectra as its
+/// 10-column rows do, on the factored way (the CPU engine reads it as it is) and on the
+/// reference's triplets.
+#[test]
+fn local_frame_spectra_equal_the_rows() {
+    let dir = tempfile::tempdir().unwrap();
+    let m = dir.path().join("m.toml");
+    std::fs::write(
+        &m,
+        "[[material]]\nname = \"g\"\npreset = \"gold-spectral\"\n",
+    )
+    .unwrap();
+    let batch = tuples(400);
+    let (mut local, mut rows) = (Vec::new(), Vec::new());
+    for r in batch.as_slice().chunks(10) {
+        local.extend_from_slice(&r[..6]);
+        rows.extend_from_slice(r);
+    }
+    let (l, t) = (dir.path().join("l.npy"), dir.path().join("t.npy"));
+    vkbrdf::batch::write_npy_f32(&l, &local, 6).unwrap();
+    vkbrdf::batch::write_npy_f32(&t, &rows, 10).unwrap();
+    for backend in ["cpu", "reference"] {
+        let (a, b) = (dir.path().join("a.npy"), dir.path().join("b.npy"));
+        for (input, out) in [(&l, &a), (&t, &b)] {
+            let args = [
+                "-o",
+                common::path(out),
+                "--wavelengths",
+                "400:700:50",
+                "--backend",
+                backend,
+            ];
+            let o = common::eval(&m, input, &args);
+            assert!(o.status.success(), "{}", common::stderr(&o));
+        }
+        assert_eq!(
+            std::fs::read(&a).unwrap(),
+            std::fs::read(&b).unwrap(),
+            "{backend}"
+        );
+    }
+}
