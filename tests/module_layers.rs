@@ -415,8 +415,6 @@ const FILES_STILL_IN_CIRCLES: &[&str] = &[
     "material/precision.rs",
     "material/presets.rs",
     "precision.rs",
-    "table/exr_out.rs",
-    "table/mod.rs",
     "table/font.rs",
     "table/merl.rs",
     "table/preview.rs",

@@ -3,9 +3,9 @@
 //! attributes `vkbrdf.*` in every layer's header. Written atomically.
 //!
 //! Channel data is row-major with row 0 first (the top of the image): texel `(i, j)` is
-//! `values[j·W + i]`, matching [`super::TEXEL_CENTRES`].
+//! `values[j·W + i]`, matching [`TEXEL_CENTRES`].
 
-use super::Grid;
+use super::grid::{Grid, TEXEL_CENTRES, VERSION};
 use crate::atomic::Staged;
 use crate::cancel::Cancel;
 use crate::error::{Error, Result};
@@ -62,10 +62,10 @@ impl Provenance {
             ("vkbrdf.material", self.material.clone()),
             ("vkbrdf.convention", self.convention.clone()),
             ("vkbrdf.parameterisation", self.parameterisation.clone()),
-            ("vkbrdf.texelCentres", super::TEXEL_CENTRES.to_string()),
+            ("vkbrdf.texelCentres", TEXEL_CENTRES.to_string()),
             ("vkbrdf.samples", self.samples.clone()),
             ("vkbrdf.backend", self.backend.clone()),
-            ("vkbrdf.version", super::VERSION.to_string()),
+            ("vkbrdf.version", VERSION.to_string()),
         ]
     }
 }
@@ -141,7 +141,7 @@ pub fn stage(
             } else {
                 LayerAttributes::default()
             };
-            attributes.software_name = Some(text(&format!("vkbrdf {}", super::VERSION)));
+            attributes.software_name = Some(text(&format!("vkbrdf {}", VERSION)));
             for (key, value) in provenance.attributes() {
                 attributes
                     .other
