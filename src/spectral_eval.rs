@@ -30,16 +30,6 @@ pub enum Colour {
     Srgb,
 }
 
-impl Colour {
-    /// The name on the command line.
-    pub fn name(self) -> &'static str {
-        match self {
-            Colour::Xyz => "xyz",
-            Colour::Srgb => "srgb",
-        }
-    }
-}
-
 /// A prepared spectral evaluation: the materials at each wavelength triplet.
 #[derive(Debug, Clone)]
 pub struct SpectralJob {
@@ -120,11 +110,6 @@ impl SpectralJob {
     /// The wavelengths.
     pub fn wavelengths(&self) -> &Wavelengths {
         &self.wavelengths
-    }
-
-    /// The colour reduction, if any.
-    pub fn colour(&self) -> Option<(Colour, Illuminant)> {
-        self.colour
     }
 
     /// The materials at each triplet (what the engines evaluate; for the judge).

@@ -375,9 +375,8 @@ rgb_reduction = "filament"
     assert!(e.contains("360:830:5"), "{e}");
 }
 
-/// The command line: (n, W) and (n, 3) outputs, and the refusal of terms with spectra.
-#[test]
-fn eval_writes_spectra_and_colours() {
+/// A temporary directory holding `m.toml`: one material `g`, the preset `gold-spectral`.
+fn gold_spectral_file() -> (tempfile::TempDir, std::path::PathBuf) {
     let dir = tempfile::tempdir().unwrap();
     let m = dir.path().join("m.toml");
     std::fs::write(
@@ -385,6 +384,13 @@ fn eval_writes_spectra_and_colours() {
         "[[material]]\nname = \"g\"\npreset = \"gold-spectral\"\n",
     )
     .unwrap();
+    (dir, m)
+}
+
+/// The command line: (n, W) and (n, 3) outputs, and the refusal of terms with spectra.
+#[test]
+fn eval_writes_spectra_and_colours() {
+    let (dir, m) = gold_spectral_file();
     let t = dir.path().join("t.npy");
     assert!(common::generate(&m, 500, &t).status.success());
     // Each run on cpu, and the shape its .npy header states.
@@ -466,13 +472,7 @@ fn a_saturated_basis_does_not_saturate_f() {
 /// reference's triplets.
 #[test]
 fn local_frame_spectra_equal_the_rows() {
-    let dir = tempfile::tempdir().unwrap();
-    let m = dir.path().join("m.toml");
-    std::fs::write(
-        &m,
-        "[[material]]\nname = \"g\"\npreset = \"gold-spectral\"\n",
-    )
-    .unwrap();
+    let (dir, m) = gold_spectral_file();
     let batch = tuples(400);
     let (mut local, mut rows) = (Vec::new(), Vec::new());
     for r in batch.as_slice().chunks(10) {

@@ -8,6 +8,7 @@ pub mod merl;
 mod parse;
 pub mod precision;
 pub mod presets;
+mod ranges;
 pub mod spectral;
 
 pub use crate::terms::f::schlick::f0_from_ior;

@@ -2,12 +2,51 @@
 //! `[λ_nm, n, k]` (or `[λ_nm, n]`) rows, or `{ file = "x.yml" }` in refractiveindex.info's
 //! format, and an `extinction` beside it. The parser (`material::parse`) asks these.
 
-use super::{datasets, rii, Curve, IndexSpectrum};
+use super::{datasets, rii, Curve, IndexSpectrum, RgbReduction, SpectralIndex};
+use crate::terms::FresnelKind;
 use std::path::Path;
 use toml::Value;
 
+/// A material's spectral index from its `ior`, `extinction` and `rgb_reduction` values, for
+/// the Fresnel term `fresnel` the file named; `None` when `ior` is absent or not a
+/// spectrum (a number or RGB). Errors are `(key, message)`.
+pub fn spectral_index(
+    ior: Option<&Value>,
+    extinction: Option<&Value>,
+    reduction: Option<&Value>,
+    fresnel: FresnelKind,
+    base: &Path,
+) -> Result<Option<SpectralIndex>, (&'static str, String)> {
+    let Some(ior) = ior.filter(|v| is_spectrum(v)) else {
+        return Ok(None);
+    };
+    let index = index_from(ior, extinction, base)?;
+    let names = RgbReduction::ALL.map(RgbReduction::name).join(", ");
+    let reduction = match reduction {
+        None => RgbReduction::default(),
+        Some(Value::String(n)) => RgbReduction::from_name(n).ok_or_else(|| {
+            (
+                "rgb_reduction",
+                format!("unknown value `{n}`; expected one of: {names}"),
+            )
+        })?,
+        Some(v) => {
+            let found = v.type_str();
+            return Err((
+                "rgb_reduction",
+                format!("expected a string (one of: {names}), found {found}"),
+            ));
+        }
+    };
+    Ok(Some(SpectralIndex {
+        index,
+        reduction,
+        fresnel,
+    }))
+}
+
 /// Whether a TOML `ior` value is a spectrum (a name, rows or a file), not a number or RGB.
-pub fn is_spectrum(v: &Value) -> bool {
+fn is_spectrum(v: &Value) -> bool {
     match v {
         Value::String(_) | Value::Table(_) => true,
         Value::Array(items) => items.iter().any(|i| matches!(i, Value::Array(_))),
@@ -17,7 +56,7 @@ pub fn is_spectrum(v: &Value) -> bool {
 
 /// The spectrum of `ior` (and of `extinction`, when given: a number or `[λ_nm, k]` rows
 /// replace the ior source's k). Errors are `(key, message)`.
-pub fn index_from(
+fn index_from(
     ior: &Value,
     extinction: Option<&Value>,
     base: &Path,
