@@ -14,12 +14,15 @@
 //!   the evaluation has succeeded — atomicity is a promise for regular files only.
 //! - Writing checks a [`Cancel`] token between blocks.
 
+mod writeback;
+
 use crate::cancel::Cancel;
 use crate::error::{Error, Result};
 use std::fs::File;
 use std::io::{BufWriter, Cursor, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
+use writeback::Writeback;
 
 /// The path that means standard output.
 pub const STDOUT: &str = "-";
@@ -418,6 +421,7 @@ enum WriterInner {
         out: BufWriter<File>,
         target: PathBuf,
         lock: OutputLock,
+        writeback: Option<Writeback>,
     },
     Memory {
         cursor: Cursor<Vec<u8>>,
@@ -434,6 +438,7 @@ pub fn stage_writer(path: &Path, cancel: &Cancel) -> Result<StagedWriter> {
             let file = temp_file_in(parent_dir(&target)).map_err(|e| io_error(path, e))?;
             let out = file.as_file().try_clone().map_err(|e| io_error(path, e))?;
             WriterInner::Temp {
+                writeback: Writeback::start(file.as_file()),
                 file,
                 out: BufWriter::with_capacity(1 << 20, out),
                 target,
@@ -458,7 +463,13 @@ impl Write for StagedWriter {
             return Err(std::io::Error::other("cancelled"));
         }
         match &mut self.inner {
-            WriterInner::Temp { out, .. } => out.write(buf),
+            WriterInner::Temp { out, writeback, .. } => {
+                let n = out.write(buf)?;
+                if let Some(w) = writeback {
+                    w.wrote(n as u64);
+                }
+                Ok(n)
+            }
             WriterInner::Memory { cursor, .. } => cursor.write(buf),
         }
     }
@@ -491,9 +502,13 @@ impl StagedWriter {
                 mut out,
                 target,
                 lock,
+                writeback,
             } => {
                 out.flush().map_err(failed)?;
                 drop(out);
+                if let Some(w) = writeback {
+                    w.finish().map_err(failed)?;
+                }
                 file.as_file().sync_all().map_err(failed)?;
                 set_final_mode(file.as_file(), &target).map_err(failed)?;
                 Held::Temp { file, target, lock }

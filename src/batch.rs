@@ -133,7 +133,7 @@ impl<'a> Batch<'a> {
             .chunks_exact(self.columns)
             .map(|row| row[9])
             .enumerate()
-            .find(|&(_, m)| !(m >= 0.0 && m.fract() == 0.0 && (m as f64) < material_count as f64))
+            .find(|&(_, m)| material_index(m, material_count).is_none())
     }
 
     /// Checks that every row whose material is anisotropic has a tangent: a batch without
@@ -388,13 +388,8 @@ pub fn check_tangent_rows(
     if columns != COLUMNS_PLAIN || !materials.iter().any(Material::is_anisotropic) {
         return Ok(());
     }
-    let needs_tangent = |m: f32| {
-        m >= 0.0
-            && m.fract() == 0.0
-            && materials
-                .get(m as usize)
-                .is_some_and(Material::is_anisotropic)
-    };
+    let needs_tangent =
+        |m: f32| material_index(m, materials.len()).is_some_and(|i| materials[i].is_anisotropic());
     let Some((row, m)) = rows
         .chunks_exact(columns)
         .map(|row| row[9])
@@ -412,6 +407,17 @@ pub fn check_tangent_rows(
             materials[m as usize].name
         ),
     })
+}
+
+/// `m` (a row's material column) as an index below `count`: a non-negative integer, −0
+/// counting as 0. The read stage runs this on every row, so no `trunc` call: `as u32`
+/// saturates (NaN and negatives → 0, ≥ 2^32 → `u32::MAX`), and the round trip gives `m`
+/// back exactly when `m` is an integer in 0..=2^32 — where 2^32 comes back from the
+/// saturated `u32::MAX` (rounded up to 2^32 as an f32), hence its own test.
+#[inline]
+pub(crate) fn material_index(m: f32, count: usize) -> Option<usize> {
+    let i = m as u32;
+    (i as f32 == m && i != u32::MAX && (i as usize) < count).then_some(i as usize)
 }
 
 /// Opens `path` for reading, with its size when it is a regular file (a pipe's is unknown).
@@ -450,12 +456,13 @@ pub fn read_npy_f32_from(
     let head = npy_head(&mut reader, len, source)?;
     let npy = npyz::NpyFile::new(std::io::Cursor::new(head).chain(reader))
         .map_err(|e| err(format!("not a valid .npy file: {e}")))?;
-    if npy.order() != npyz::Order::C {
-        return Err(err(
-            "Fortran-order array; save it in C order (numpy.ascontiguousarray)".into(),
-        ));
-    }
     let shape = npy.shape().to_vec();
+    let fortran = npy.order() == npyz::Order::Fortran;
+    if fortran && shape.len() > 2 {
+        return Err(err(format!(
+            "Fortran-order array of shape {shape:?}: only 1-D and 2-D arrays are read in Fortran order; save it in C order (numpy.ascontiguousarray)"
+        )));
+    }
     let dtype = npy
         .dtype()
         .descr()
@@ -475,6 +482,17 @@ pub fn read_npy_f32_from(
             )))
         }
     };
+    if fortran && shape.len() == 2 {
+        // Column by column in the file: rows are what every reader here expects.
+        let (rows, columns) = (shape[0] as usize, shape[1] as usize);
+        let mut c_order = vec![0f32; data.len()];
+        for (j, column) in data.chunks_exact(rows.max(1)).enumerate().take(columns) {
+            for (i, &x) in column.iter().enumerate() {
+                c_order[i * columns + j] = x;
+            }
+        }
+        return Ok((c_order, shape));
+    }
     Ok((data, shape))
 }
 
@@ -725,5 +743,30 @@ mod tests {
         );
         let cols = Batch::borrowed(&rows[..9], 9, 2, Path::new("tuples")).unwrap_err();
         assert!(cols.to_string().contains("found 9"), "{cols}");
+    }
+
+    /// The material column's rule at its edges: the integers below the count (and −0),
+    /// nothing else — fractions, negatives, NaN, infinities, the count itself, and the
+    /// values where `as u32` saturates.
+    #[test]
+    fn a_material_index_is_a_nonnegative_integer_below_the_count() {
+        for (m, count, want) in [
+            (0.0, 1, Some(0)),
+            (-0.0, 1, Some(0)),
+            (2.0, 3, Some(2)),
+            (3.0, 3, None),
+            (0.5, 3, None),
+            (2.999_999_8, 3, None),
+            (-1.0, 3, None),
+            (-0.25, 3, None),
+            (f32::NAN, 3, None),
+            (f32::INFINITY, 3, None),
+            (f32::NEG_INFINITY, 3, None),
+            (4_294_967_296.0, usize::MAX, None),
+            (1e10, usize::MAX, None),
+            (16_777_216.0, 16_777_217, Some(16_777_216)),
+        ] {
+            assert_eq!(material_index(m, count), want, "m = {m}, count = {count}");
+        }
     }
 }

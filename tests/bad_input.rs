@@ -409,9 +409,26 @@ fn npy_wrong_rank_or_columns() {
     assert!(msg.contains("found 9"), "{msg}");
 }
 
+/// A Fortran-order file (NumPy's `order='F'`, column after column) reads as the same rows;
+/// a rank above 2 in Fortran order is refused, naming the order.
 #[test]
-fn npy_fortran_order() {
-    let msg = npy_error("<f4", true, &[1, 10], &f32_bytes(&row(0.0)), 1);
+fn npy_fortran_order_reads_as_rows() {
+    let dir = tempfile::tempdir().unwrap();
+    let rows: Vec<f32> = [row(0.0), row(1.0), row(1.0)]
+        .concat()
+        .iter()
+        .enumerate()
+        .map(|(i, &x)| if i % 10 == 9 { x } else { x + i as f32 / 64.0 })
+        .collect();
+    let columns: Vec<f32> = (0..10)
+        .flat_map(|j| (0..3).map(move |i| (i, j)))
+        .map(|(i, j)| rows[i * 10 + j])
+        .collect();
+    let path = dir.path().join("f.npy");
+    write_npy(&path, "<f4", true, &[3, 10], &f32_bytes(&columns));
+    let b = Batch::read_npy(&path, 2).unwrap();
+    assert_eq!(b.as_slice(), rows.as_slice());
+    let msg = npy_error("<f4", true, &[1, 1, 10], &f32_bytes(&row(0.0)), 1);
     assert!(msg.contains("Fortran"), "{msg}");
 }
 

@@ -372,7 +372,9 @@ fn merge_refuses_parts_that_do_not_belong_together() {
 
 /// `vkbrdf bench` times each stage of the streamed path on its own and the whole of it:
 /// every engine's row carries a positive rate for read, engine and write and end to end,
-/// names the slowest of the three, and its ratio is end to end over that stage's rate.
+/// each beside a positive ceiling, the stages' CPU time and the cores' bound it gives
+/// (cores ÷ the summed CPU seconds a tuple); it names the lowest of the three stages and
+/// that bound, and its ratio is end to end over that lowest rate.
 #[test]
 fn bench_reports_each_streaming_stage() {
     let dir = tempfile::tempdir().expect("tempdir");
@@ -407,21 +409,140 @@ fn bench_reports_each_streaming_stage() {
             assert!(rate(k).is_finite() && rate(k) > 0.0, "{k} in {r}");
         }
         assert_eq!(r["tuples"], 5000, "{r}");
+        for k in ["read_ceiling", "write_ceiling", "cores_bound"] {
+            assert!(rate(k).is_finite() && rate(k) > 0.0, "{k} in {r}");
+        }
+        let cpu: Vec<f64> = r["cpu_s_per_tuple"]
+            .as_array()
+            .expect("cpu_s_per_tuple")
+            .iter()
+            .map(|x| x.as_f64().expect("a number"))
+            .collect();
+        assert!(cpu.len() == 3 && cpu.iter().all(|&s| s >= 0.0), "{r}");
+        let cores = r["cores"].as_f64().expect("cores");
+        assert!(cores >= 1.0, "{r}");
+        let bound = cores / cpu.iter().sum::<f64>();
+        assert!((rate("cores_bound") - bound).abs() <= 1e-9 * bound, "{r}");
         let slowest = r["slowest"].as_str().expect("slowest");
-        let min = ["read", "engine", "write"]
-            .into_iter()
-            .map(|k| (k, rate(k)))
-            .min_by(|a, b| a.1.total_cmp(&b.1))
-            .expect("three");
+        let min = [
+            ("read", "read"),
+            ("engine", "engine"),
+            ("write", "write"),
+            ("cores", "cores_bound"),
+        ]
+        .into_iter()
+        .map(|(name, k)| (name, rate(k)))
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .expect("four");
         assert_eq!(slowest, min.0, "{r}");
         assert!(
             (rate("ratio") - rate("end_to_end") / min.1).abs() < 1e-9 * rate("ratio"),
             "{r}"
         );
         if r["backend"].as_str().unwrap_or("").starts_with("vulkan") {
-            for k in ["upload", "kernel", "readback"] {
+            for k in [
+                "upload",
+                "kernel",
+                "readback",
+                "upload_ceiling",
+                "readback_ceiling",
+            ] {
                 assert!(rate(k).is_finite() && rate(k) > 0.0, "{k} in {r}");
             }
         }
     }
+}
+
+/// A `.npy` of `rows` (row-major, `columns` wide) in the given dtype and order.
+fn write_npy_as(path: &Path, rows: &[f32], columns: usize, f64s: bool, fortran: bool) {
+    let n = rows.len() / columns;
+    let values: Vec<f32> = if fortran {
+        (0..columns)
+            .flat_map(|j| (0..n).map(move |i| i * columns + j))
+            .map(|k| rows[k])
+            .collect()
+    } else {
+        rows.to_vec()
+    };
+    let mut header = format!(
+        "{{'descr': '{}', 'fortran_order': {}, 'shape': ({n}, {columns}), }}",
+        if f64s { "<f8" } else { "<f4" },
+        if fortran { "True" } else { "False" }
+    );
+    while (10 + header.len() + 1) % 64 != 0 {
+        header.push(' ');
+    }
+    header.push('\n');
+    let mut bytes = b"\x93NUMPY\x01\x00".to_vec();
+    bytes.extend((header.len() as u16).to_le_bytes());
+    bytes.extend(header.as_bytes());
+    for &x in &values {
+        if f64s {
+            bytes.extend((x as f64).to_le_bytes());
+        } else {
+            bytes.extend(x.to_le_bytes());
+        }
+    }
+    std::fs::write(path, bytes).expect("write npy");
+}
+
+/// float64 and Fortran-order batches take the streamed path chunk by chunk (1 MiB chunks,
+/// a shard, tangent columns) and give the bytes the C-order float32 batch gives; a bad
+/// material in a Fortran-order file is named by its batch row.
+#[test]
+fn float64_and_fortran_order_stream_to_the_same_output() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let m = materials(dir.path());
+    let t = dir.path().join("t.npy");
+    assert!(generate(&m, 150_000, &t).status.success());
+    let batch = vkbrdf::batch::Batch::read_npy(&t, 2).expect("read");
+    let rows = batch.as_slice().to_vec();
+    let mut with_tangents = Vec::with_capacity(rows.len() / 10 * 13);
+    for r in rows.chunks_exact(10) {
+        with_tangents.extend_from_slice(r);
+        with_tangents.extend_from_slice(&[1.0, 0.0, 0.0]);
+    }
+    for (name, data, columns) in [("plain", &rows, 10), ("tangents", &with_tangents, 13)] {
+        let run = |input: &Path, out: &str, extra: &[&str]| {
+            let o = dir.path().join(out);
+            let mut args = vec!["-o", path(&o), "--backend", "cpu", "--max-memory", "1MiB"];
+            args.extend_from_slice(extra);
+            let r = eval(&m, input, &args);
+            assert!(r.status.success(), "{name} {out}: {}", stderr(&r));
+            std::fs::read(&o).expect("output")
+        };
+        let c32 = dir.path().join(format!("{name}-c32.npy"));
+        write_npy_as(&c32, data, columns, false, false);
+        let want = run(&c32, "want.npy", &[]);
+        let want_shard = run(&c32, "want-2of3.npy", &["--shard", "2/3"]);
+        for (f64s, fortran) in [(false, true), (true, false), (true, true)] {
+            let input = dir.path().join(format!("{name}-{f64s}-{fortran}.npy"));
+            write_npy_as(&input, data, columns, f64s, fortran);
+            let label = format!("{name}, float64 {f64s}, Fortran {fortran}");
+            assert!(
+                run(&input, "got.npy", &[]) == want,
+                "{label}: output differs"
+            );
+            assert!(
+                run(&input, "got-2of3.npy", &["--shard", "2/3"]) == want_shard,
+                "{label}: shard 2/3 differs"
+            );
+        }
+    }
+    let mut bad = rows.clone();
+    bad[123_456 * 10 + 9] = 2.5;
+    let f = dir.path().join("bad-fortran.npy");
+    write_npy_as(&f, &bad, 10, false, true);
+    let r = eval(
+        &m,
+        &f,
+        &[
+            "-o",
+            path(&dir.path().join("x.npy")),
+            "--max-memory",
+            "1MiB",
+        ],
+    );
+    assert!(!r.status.success());
+    assert!(stderr(&r).contains("row 123456"), "{}", stderr(&r));
 }

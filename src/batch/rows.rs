@@ -10,6 +10,7 @@ use crate::error::{Error, Result};
 use crate::material::Material;
 use std::fs::File;
 use std::io::{BufReader, Read, Seek, SeekFrom};
+use std::os::unix::fs::FileExt;
 use std::path::{Path, PathBuf};
 
 /// The element type of a streamed `.npy` file.
@@ -29,6 +30,9 @@ pub struct NpyRows {
     next_row: u64,
     end_row: u64,
     data_start: u64,
+    /// Column by column in the file (NumPy's `order='F'`): each chunk is gathered from
+    /// one read per column.
+    fortran: bool,
     material_count: usize,
     source: PathBuf,
     bytes: Vec<u8>,
@@ -61,11 +65,7 @@ impl NpyRows {
         let data_start = head.len() as u64;
         let npy = npyz::NpyFile::new(std::io::Cursor::new(head))
             .map_err(|e| err(format!("not a valid .npy file: {e}")))?;
-        if npy.order() != npyz::Order::C {
-            return Err(err(
-                "Fortran-order array; save it in C order (numpy.ascontiguousarray)".into(),
-            ));
-        }
+        let fortran = npy.order() == npyz::Order::Fortran;
         let dtype = match npy.dtype().descr().trim_matches(|c| c == '\'' || c == '"') {
             "<f4" => Dtype::F4,
             "<f8" => Dtype::F8,
@@ -95,6 +95,7 @@ impl NpyRows {
             next_row: 0,
             end_row: shape[0],
             data_start,
+            fortran,
             material_count,
             source: path.to_owned(),
             bytes: Vec::new(),
@@ -170,8 +171,9 @@ impl NpyRows {
         )))
     }
 
-    /// The next at most `max_rows` rows as floats (in `buffer`'s memory), with the index of
-    /// the first. float64 files go through a byte buffer reused between calls.
+    /// The next at most `max_rows` rows as floats (in `buffer`'s memory, row-major), with
+    /// the index of the first. float64 files and Fortran-order files go through a byte
+    /// buffer reused between calls, converted and laid out as rows chunk by chunk.
     fn next_floats(
         &mut self,
         max_rows: usize,
@@ -182,43 +184,57 @@ impl NpyRows {
             return Ok(None);
         }
         let n = left.min(max_rows.max(1) as u64) as usize;
-        let truncated = |e: std::io::Error, row: u64| {
+        let at = self.next_row;
+        let truncated = |e: std::io::Error| {
             Error::Batch {
             path: self.source.clone(),
             message: format!(
-                "the data is shorter than the header's shape says (truncated file?), at row {row}: {e}"
+                "the data is shorter than the header's shape says (truncated file?), at row {at}: {e}"
             ),
         }
         };
-        let data: Vec<f32> = match self.dtype {
+        let columns = self.columns;
+        let width = if self.dtype == Dtype::F8 { 8 } else { 4 };
+        let mut data = buffer;
+        data.resize(n * columns, 0.0);
+        if self.fortran {
+            // Column j's rows [at, at + n) lie together at data_start + (j·rows + at)·width.
+            self.bytes.resize(n * width, 0);
+            for j in 0..columns {
+                let offset = self.data_start + (j as u64 * self.rows + at) * width as u64;
+                self.reader
+                    .get_ref()
+                    .read_exact_at(&mut self.bytes, offset)
+                    .map_err(truncated)?;
+                let rows = data.iter_mut().skip(j).step_by(columns);
+                match self.dtype {
+                    Dtype::F4 => rows
+                        .zip(self.bytes.chunks_exact(4))
+                        .for_each(|(x, b)| *x = f32::from_le_bytes(b.try_into().expect("4 bytes"))),
+                    Dtype::F8 => rows.zip(self.bytes.chunks_exact(8)).for_each(|(x, b)| {
+                        *x = f64::from_le_bytes(b.try_into().expect("8 bytes")) as f32
+                    }),
+                }
+            }
+        } else if self.dtype == Dtype::F4 {
             // float32 rows go straight into the batch's buffer: one copy from the page
             // cache instead of two (the bytes, then the floats).
-            Dtype::F4 => {
-                let mut data = buffer;
-                data.resize(n * self.columns, 0.0);
-                self.reader
-                    .read_exact(bytemuck::cast_slice_mut(&mut data))
-                    .map_err(|e| truncated(e, self.next_row))?;
-                if cfg!(target_endian = "big") {
-                    for x in &mut data {
-                        *x = f32::from_bits(u32::from_le(x.to_bits()));
-                    }
+            self.reader
+                .read_exact(bytemuck::cast_slice_mut(&mut data))
+                .map_err(truncated)?;
+            if cfg!(target_endian = "big") {
+                for x in &mut data {
+                    *x = f32::from_bits(u32::from_le(x.to_bits()));
                 }
-                data
             }
-            Dtype::F8 => {
-                self.bytes.resize(n * self.row_bytes(), 0);
-                self.reader
-                    .read_exact(&mut self.bytes)
-                    .map_err(|e| truncated(e, self.next_row))?;
-                self.bytes
-                    .chunks_exact(8)
-                    .map(|b| f64::from_le_bytes(b.try_into().expect("8 bytes")) as f32)
-                    .collect()
+        } else {
+            self.bytes.resize(n * self.row_bytes(), 0);
+            self.reader.read_exact(&mut self.bytes).map_err(truncated)?;
+            for (x, b) in data.iter_mut().zip(self.bytes.chunks_exact(8)) {
+                *x = f64::from_le_bytes(b.try_into().expect("8 bytes")) as f32;
             }
-        };
-        let first = self.next_row;
+        }
         self.next_row += n as u64;
-        Ok(Some((first, data)))
+        Ok(Some((at, data)))
     }
 }

@@ -20,7 +20,7 @@ use std::path::Path;
 use std::time::Instant;
 
 /// One engine's stage rates on one scenario (tuples per second; `None` where the engine
-/// has no such stage).
+/// has no such stage), each beside its ceiling, and the bound the cores set.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct StageRow {
     /// Engine (`cpu`, `vulkan`, `reference`).
@@ -31,23 +31,48 @@ pub struct StageRow {
     pub tuples: usize,
     /// Rows per chunk (from the memory budget, as `eval` chooses them).
     pub chunk_rows: usize,
-    /// Reading and checking the `.npy` chunk by chunk.
+    /// Reading and checking the `.npy` chunk by chunk, into a reused buffer as `eval` does.
     pub read: f64,
-    /// The engine on chunks in memory (`Backend::evaluate`, outputs included).
+    /// Read's ceiling: the same file copied from the page cache into one reused buffer of
+    /// a chunk's size (`read(2)`, no checks).
+    pub read_ceiling: f64,
+    /// The engine on chunks in memory (`Backend::evaluate_into`, outputs included).
     pub engine: f64,
     /// Vulkan: grouping and copying rows into device-visible memory (host time).
     pub upload: Option<f64>,
+    /// Vulkan: upload's ceiling, the host→device copy rate of a transfer command (its
+    /// bytes: the rows' floats and a `u32` of order).
+    pub upload_ceiling: Option<f64>,
     /// Vulkan: the kernel alone, from device timestamps (tuples resident on the device).
     pub kernel: Option<f64>,
     /// Vulkan: copying results out of device-visible memory (host time).
     pub readback: Option<f64>,
-    /// Writing the outputs, chunk by chunk, to a staged `.npy` renamed at the end.
+    /// Vulkan: readback's ceiling, the device→host copy rate of a transfer command (12
+    /// bytes a tuple).
+    pub readback_ceiling: Option<f64>,
+    /// Vulkan: the host's own copies into and out of mapped memory, bytes per second.
+    pub link: Option<crate::gpu::LinkRates>,
+    /// Writing the outputs, chunk by chunk, to a staged `.npy` renamed at the end (fsync
+    /// included; a fresh path, as a first `eval` writes).
     pub write: f64,
-    /// `vkbrdf eval`'s streamed path, file to file.
+    /// Write's ceiling: the same bytes written to a fresh file with large `write(2)`s and
+    /// fsynced, no staging.
+    pub write_ceiling: f64,
+    /// CPU seconds per tuple of each stage run on its own (read, engine, write): process
+    /// CPU time, every thread of the stage counted.
+    pub cpu_s_per_tuple: [f64; 3],
+    /// The machine's cores (what the stages share).
+    pub cores: usize,
+    /// The bound the cores set when the stages share them: cores ÷ the stages' summed CPU
+    /// seconds per tuple.
+    pub cores_bound: f64,
+    /// `vkbrdf eval`'s streamed path, file to file (a fresh output path, fsync included).
     pub end_to_end: f64,
-    /// The slowest of read, engine and write (the stages that run in parallel).
+    /// The slowest of read, engine and write (the stages that run in parallel), or
+    /// `cores` when the cores' bound is lower still.
     pub slowest: String,
-    /// End to end over the slowest stage's rate.
+    /// End to end over the lower of the slowest stage's rate and the cores' bound (the
+    /// host-path issue's target: ≥ 0.8).
     pub ratio: f64,
 }
 
@@ -66,6 +91,33 @@ impl Engine<'_> {
             Engine::Any(b) => &mut **b,
             Engine::Vulkan(v) => &mut **v,
         }
+    }
+}
+
+/// Process CPU time in seconds (every thread).
+fn cpu_now() -> f64 {
+    let t = rustix::time::clock_gettime(rustix::time::ClockId::ProcessCPUTime);
+    t.tv_sec as f64 + 1e-9 * t.tv_nsec as f64
+}
+
+/// Runs `f`, returning its wall and CPU seconds.
+fn timed<T>(f: impl FnOnce() -> Result<T>) -> Result<(T, f64, f64)> {
+    let (wall, cpu) = (Instant::now(), cpu_now());
+    let v = f()?;
+    Ok((v, wall.elapsed().as_secs_f64(), cpu_now() - cpu))
+}
+
+/// Wall and CPU seconds of each repeat of one stage.
+#[derive(Default)]
+struct Times {
+    wall: Vec<f64>,
+    cpu: Vec<f64>,
+}
+
+impl Times {
+    fn push(&mut self, wall: f64, cpu: f64) {
+        self.wall.push(wall);
+        self.cpu.push(cpu);
     }
 }
 
@@ -91,42 +143,45 @@ pub fn measure(
         .backend()
         .evaluate(&chunks[0], materials, &Request::default())?;
     let mut out = first.clone();
+    read_pass(&input, materials.len(), chunk)?;
 
-    let mut read_s = Vec::new();
-    let mut engine_s = Vec::new();
-    let mut upload_s = Vec::new();
-    let mut readback_s = Vec::new();
-    let mut write_s = Vec::new();
-    let mut e2e_s = Vec::new();
+    let (mut read, mut copy, mut eng, mut write, mut write_copy, mut e2e) = Default::default();
+    let (mut upload_s, mut readback_s) = (Vec::new(), Vec::new());
     let cancel = Cancel::new();
+    // The write stage writes one evaluated chunk's values for every chunk (the rate does
+    // not depend on the values).
+    let blocks: Vec<&[f32]> = chunks.iter().map(|c| &first.brdf[..3 * c.len()]).collect();
     for _ in 0..repeats.max(1) {
-        let t = Instant::now();
-        drop(read_all(&input, materials.len(), chunk)?);
-        read_s.push(t.elapsed().as_secs_f64());
+        let ((), w, c) = timed(|| read_pass(&input, materials.len(), chunk))?;
+        Times::push(&mut read, w, c);
+        let ((), w, c) = timed(|| copy_pass(&input, chunk * 4 * batch.columns()))?;
+        Times::push(&mut copy, w, c);
 
         if let Engine::Vulkan(v) = &mut engine {
             v.reset_host_stages();
         }
         // As the pipeline does it: each chunk into a reused output.
-        let t = Instant::now();
-        for c in &chunks {
-            engine
-                .backend()
-                .evaluate_into(c, materials, &Request::default(), &mut out)?;
-        }
-        engine_s.push(t.elapsed().as_secs_f64());
+        let ((), w, c) = timed(|| {
+            for ch in &chunks {
+                engine
+                    .backend()
+                    .evaluate_into(ch, materials, &Request::default(), &mut out)?;
+            }
+            Ok(())
+        })?;
+        Times::push(&mut eng, w, c);
         if let Engine::Vulkan(v) = &engine {
             let s = v.host_stages();
             upload_s.push(s.upload_s);
             readback_s.push(s.readback_s);
         }
 
-        // The write stage writes one evaluated chunk's values for every chunk (the rate
-        // does not depend on the values).
-        let blocks: Vec<&[f32]> = chunks.iter().map(|c| &first.brdf[..3 * c.len()]).collect();
-        let t = Instant::now();
-        stream::write_chunks(&output, n as u64, 3, &blocks, &cancel)?;
-        write_s.push(t.elapsed().as_secs_f64());
+        remove(&output);
+        let ((), w, c) = timed(|| stream::write_chunks(&output, n as u64, 3, &blocks, &cancel))?;
+        Times::push(&mut write, w, c);
+        remove(&output);
+        let ((), w, c) = timed(|| write_copy_pass(&output, &blocks))?;
+        Times::push(&mut write_copy, w, c);
 
         let job = StreamJob {
             spike: None,
@@ -141,41 +196,65 @@ pub fn measure(
             material: None,
             spectral: None,
         };
-        let t = Instant::now();
-        stream::evaluate(&job, engine.backend(), &cancel, |_, _| {})?;
-        e2e_s.push(t.elapsed().as_secs_f64());
+        remove(&output);
+        let (_, w, c) = timed(|| stream::evaluate(&job, engine.backend(), &cancel, |_, _| {}))?;
+        Times::push(&mut e2e, w, c);
     }
-    let kernel = match &mut engine {
-        Engine::Vulkan(v) => {
-            Some(n as f64 / v.kernel_seconds(batch, materials, &Request::default(), 3)?)
-        }
-        Engine::Any(_) => None,
+    let (kernel, link) = match &mut engine {
+        Engine::Vulkan(v) => (
+            Some(n as f64 / v.kernel_seconds(batch, materials, &Request::default(), 3)?),
+            Some(v.link_rates((4 * (batch.columns() + 1) * chunk) as u64, repeats.max(3))?),
+        ),
+        Engine::Any(_) => (None, None),
     };
     let _ = std::fs::remove_file(&input);
-    let _ = std::fs::remove_file(&output);
+    remove(&output);
     let rate = |s: Vec<f64>| n as f64 / median(s).max(1e-12);
     let opt_rate = |s: Vec<f64>| (!s.is_empty()).then(|| rate(s));
-    let (read, engine_rate, write) = (rate(read_s), rate(engine_s), rate(write_s));
-    let (slowest, slowest_rate) = [("read", read), ("engine", engine_rate), ("write", write)]
-        .into_iter()
-        .min_by(|a, b| a.1.total_cmp(&b.1))
-        .expect("three stages");
-    let end_to_end = rate(e2e_s);
+    let per_tuple = |t: &Times| median(t.cpu.clone()) / n as f64;
+    let cpu_s_per_tuple = [per_tuple(&read), per_tuple(&eng), per_tuple(&write)];
+    let cores = std::thread::available_parallelism().map_or(1, |c| c.get());
+    let cores_bound = cores as f64 / cpu_s_per_tuple.iter().sum::<f64>().max(1e-18);
+    let (read, engine_rate, write) = (rate(read.wall), rate(eng.wall), rate(write.wall));
+    let (slowest, bound) = [
+        ("read", read),
+        ("engine", engine_rate),
+        ("write", write),
+        ("cores", cores_bound),
+    ]
+    .into_iter()
+    .min_by(|a, b| a.1.total_cmp(&b.1))
+    .expect("four bounds");
+    let end_to_end = rate(e2e.wall);
     Ok(StageRow {
         backend: engine.backend().name(),
         scenario: scenario.to_string(),
         tuples: n,
         chunk_rows: chunk,
         read,
+        read_ceiling: rate(copy.wall),
         engine: engine_rate,
         upload: opt_rate(upload_s),
+        upload_ceiling: link.map(|l| l.host_to_device / (4 * (batch.columns() + 1)) as f64),
         kernel,
         readback: opt_rate(readback_s),
+        readback_ceiling: link.map(|l| l.device_to_host / 12.0),
+        link,
         write,
+        write_ceiling: rate(write_copy.wall),
+        cpu_s_per_tuple,
+        cores,
+        cores_bound,
         end_to_end,
         slowest: slowest.to_string(),
-        ratio: end_to_end / slowest_rate,
+        ratio: end_to_end / bound,
     })
+}
+
+/// Removes a previous run's output (untimed): every timed write goes to a fresh path, as
+/// a first `eval` does, so no run pays for freeing the last one's pages.
+fn remove(path: &Path) {
+    let _ = std::fs::remove_file(path);
 }
 
 /// The whole file as chunks of `chunk` rows, read and checked as `eval` reads it.
@@ -188,14 +267,52 @@ fn read_all(path: &Path, material_count: usize, chunk: usize) -> Result<Vec<Batc
     Ok(chunks)
 }
 
-/// Prints the stage table.
+/// The read stage as `eval`'s reader runs it: every chunk read and checked into the one
+/// buffer the last chunk gave back.
+fn read_pass(path: &Path, material_count: usize, chunk: usize) -> Result<()> {
+    let mut rows = NpyRows::open(path, material_count)?;
+    let mut spare = Vec::new();
+    while let Some((_, b)) = rows.next_chunk_reusing(chunk, spare)? {
+        spare = b.into_data();
+    }
+    Ok(())
+}
+
+/// Read's ceiling: the file copied from the page cache into one reused buffer of `bytes`.
+fn copy_pass(path: &Path, bytes: usize) -> Result<()> {
+    use std::io::Read;
+    let io = |source| crate::error::Error::Io {
+        path: path.to_owned(),
+        source,
+    };
+    let mut file = std::fs::File::open(path).map_err(io)?;
+    let mut buffer = vec![0u8; bytes.max(1)];
+    while file.read(&mut buffer).map_err(io)? > 0 {}
+    Ok(())
+}
+
+/// Write's ceiling: `blocks` written to a fresh file with one `write(2)` each, fsynced.
+fn write_copy_pass(path: &Path, blocks: &[&[f32]]) -> Result<()> {
+    use std::io::Write;
+    let io = |source| crate::error::Error::Io {
+        path: path.to_owned(),
+        source,
+    };
+    let mut file = std::fs::File::create(path).map_err(io)?;
+    for b in blocks {
+        file.write_all(bytemuck::cast_slice(b)).map_err(io)?;
+    }
+    file.sync_all().map_err(io)
+}
+
+/// Prints the stage table, then each stage's share of its ceiling and the cores' bound.
 pub fn print(rows: &[StageRow]) {
     if rows.is_empty() {
         return;
     }
     println!("\nstreamed eval, file to file (page cache), by stage, M tuples/s:");
     println!(
-        "  {:<26} {:<10} {:>9} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8}  {:<7} {:>6}",
+        "  {:<26} {:<11} {:>9} {:>7} {:>7} {:>7} {:>7} {:>8} {:>7} {:>7} {:>7}  {:<7} {:>6}",
         "backend",
         "scenario",
         "tuples",
@@ -205,6 +322,7 @@ pub fn print(rows: &[StageRow]) {
         "kernel",
         "readback",
         "write",
+        "cores",
         "e2e",
         "slowest",
         "ratio"
@@ -213,8 +331,8 @@ pub fn print(rows: &[StageRow]) {
     let o = |x: Option<f64>| x.map_or("-".to_string(), m);
     for r in rows {
         println!(
-            "  {:<26} {:<10} {:>9} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8}  {:<7} {:>5.2}×",
-            r.backend,
+            "  {:<26} {:<11} {:>9} {:>7} {:>7} {:>7} {:>7} {:>8} {:>7} {:>7} {:>7}  {:<7} {:>5.2}×",
+            short(&r.backend),
             r.scenario,
             r.tuples,
             m(r.read),
@@ -223,9 +341,74 @@ pub fn print(rows: &[StageRow]) {
             o(r.kernel),
             o(r.readback),
             m(r.write),
+            m(r.cores_bound),
             m(r.end_to_end),
             r.slowest,
             r.ratio
         );
     }
+    println!(
+        "\neach stage against its ceiling (M tuples/s: page-cache copy for read, host→device and device→host transfers for upload and readback, write(2) + fsync for write), and CPU ns a tuple:"
+    );
+    println!(
+        "  {:<26} {:<11} {:>9} {:>7} {:>9} {:>7} {:>9} {:>7} {:>9} {:>7} {:>13}",
+        "backend",
+        "scenario",
+        "read/ceil",
+        "share",
+        "upl/ceil",
+        "share",
+        "rdbk/ceil",
+        "share",
+        "write/ceil",
+        "share",
+        "cpu ns r/e/w"
+    );
+    let pair = |x: f64, c: f64| format!("{}/{}", m(x), m(c));
+    let share = |x: f64, c: f64| format!("{:.2}", x / c.max(1e-12));
+    for r in rows {
+        let opt = |x: Option<f64>, c: Option<f64>| match (x, c) {
+            (Some(x), Some(c)) => (pair(x, c), share(x, c)),
+            _ => ("-".into(), "-".into()),
+        };
+        let (up, ups) = opt(r.upload, r.upload_ceiling);
+        let (rb, rbs) = opt(r.readback, r.readback_ceiling);
+        let ns = r
+            .cpu_s_per_tuple
+            .map(|s| format!("{:.1}", s * 1e9))
+            .join("/");
+        println!(
+            "  {:<26} {:<11} {:>9} {:>7} {:>9} {:>7} {:>9} {:>7} {:>9} {:>7} {:>13}",
+            short(&r.backend),
+            r.scenario,
+            pair(r.read, r.read_ceiling),
+            share(r.read, r.read_ceiling),
+            up,
+            ups,
+            rb,
+            rbs,
+            pair(r.write, r.write_ceiling),
+            share(r.write, r.write_ceiling),
+            ns
+        );
+        if let Some(l) = r.link {
+            println!(
+                "  {:<26} host memcpy into / out of mapped memory: {:.1} / {:.1} GB/s; transfers host→device / device→host: {:.1} / {:.1} GB/s",
+                "",
+                l.host_to_mapped / 1e9,
+                l.mapped_to_host / 1e9,
+                l.host_to_device / 1e9,
+                l.device_to_host / 1e9
+            );
+        }
+    }
+    println!(
+        "  (cores: {} ÷ the summed CPU seconds a tuple of read, engine and write — the bound when the stages share the cores; ratio: e2e over the lower of it and the slowest stage)",
+        rows[0].cores
+    );
+}
+
+/// An engine's name cut to the table's column (the device's full name is in the JSON).
+fn short(name: &str) -> String {
+    name.chars().take(26).collect()
 }

@@ -7,7 +7,9 @@
 
 mod generated;
 mod grouping;
+mod link;
 mod timing;
+pub use link::LinkRates;
 pub use timing::{KernelClock, KernelTiming};
 
 use super::context::{Device, DeviceSelector, ValidationCounter};

@@ -33,7 +33,7 @@ pub use context::{DeviceSelector, ValidationCounter, INSTALL_HINT};
 pub use devices::{list_devices, DeviceInfo, HeapInfo};
 pub use evaluator::{
     validation_from_env, BufferBytes, HostStages, InjectedFault, KernelClock, KernelTiming,
-    VulkanBackend, VulkanOptions, FRAMES_IN_FLIGHT, MAX_CHUNK_TUPLES,
+    LinkRates, VulkanBackend, VulkanOptions, FRAMES_IN_FLIGHT, MAX_CHUNK_TUPLES,
 };
 
 use crate::error::Error;
