@@ -415,11 +415,6 @@ const FILES_STILL_IN_CIRCLES: &[&str] = &[
     "material/precision.rs",
     "material/presets.rs",
     "precision.rs",
-    "table/font.rs",
-    "table/merl.rs",
-    "table/preview.rs",
-    "table/shard.rs",
-    "table/slice.rs",
 ];
 
 #[test]
