@@ -410,11 +410,6 @@ const FILES_STILL_IN_CIRCLES: &[&str] = &[
     "gpu/memory.rs",
     "gpu/mod.rs",
     "gpu/sync.rs",
-    "material/mod.rs",
-    "material/parse.rs",
-    "material/precision.rs",
-    "material/presets.rs",
-    "precision.rs",
 ];
 
 #[test]
