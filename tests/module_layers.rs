@@ -398,8 +398,6 @@ const FILES_STILL_IN_CIRCLES: &[&str] = &[
     "cli/mod.rs",
     "cli/stress.rs",
     "cli/table.rs",
-    "cpu/generated.rs",
-    "cpu/mod.rs",
     "gpu/context.rs",
     "gpu/devices.rs",
     "gpu/evaluator.rs",
