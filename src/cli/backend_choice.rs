@@ -63,7 +63,7 @@ pub fn auto_choice(args: &DeviceArgs) -> (bool, String) {
 /// Opens the requested backend (`auto` when none is named).
 pub fn open(args: &BackendArgs) -> anyhow::Result<Box<dyn Backend>> {
     let mut backend = open_uncancellable(args)?;
-    backend.set_cancel(super::cancel());
+    backend.set_cancel(super::common::cancel());
     Ok(backend)
 }
 

@@ -115,7 +115,7 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         vkbrdf::atomic::check_outputs(&[path.as_path()], &[])?;
     }
     if let Some(dir) = &args.plot {
-        super::output_dir(dir, "--plot")?;
+        super::common::output_dir(dir, "--plot")?;
     }
     let sizes: Vec<usize> = if args.quick {
         vec![1_000, 10_000, 100_000, 1 << 20]
@@ -188,7 +188,7 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
     let mut results = Vec::new();
     for sc in &list {
         for &n in &sizes {
-            super::progress_message(&bar, format!("{} × {n}", sc.name));
+            super::common::progress_message(&bar, format!("{} × {n}", sc.name));
             let batch = scenarios::batch(sc, n, 42);
             let sample = 20_000;
             if let Some(v) = vulkan.as_mut() {
@@ -316,7 +316,7 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         eprintln!("wrote {}", path.display());
     }
     if let Some(dir) = &args.plot {
-        super::output_dir(dir, "--plot")?;
+        super::common::output_dir(dir, "--plot")?;
         plot::throughput(
             &dir.join("throughput.svg"),
             &report
@@ -434,7 +434,7 @@ fn compare_kernels(
     let fast = vkbrdf::precision::apply_all(&sc.materials, Precision::Fast);
     let fast = (fast != sc.materials).then_some(fast);
     if let Some(fast) = &fast {
-        super::progress_message(bar, format!("{} fast", sc.name));
+        super::common::progress_message(bar, format!("{} fast", sc.name));
         let (secs, out) = bench::time_end_to_end(v, &batch, fast, repeats)?;
         let err = bench::max_rel_err(&batch, &sc.materials, &out.brdf, 20_000);
         results.push(row("vulkan", sc.name, "end-to-end", "fast", n, secs, err));
@@ -443,7 +443,7 @@ fn compare_kernels(
     // texels, directions made on the device: end to end (only the material goes in) once.
     let table = match sc.materials.as_slice() {
         [material] => {
-            super::progress_message(bar, format!("{} table kernel", sc.name));
+            super::common::progress_message(bar, format!("{} table kernel", sc.name));
             let side = (n as f64).sqrt().round() as u32;
             let grid = SliceGrid {
                 width: side,
@@ -473,7 +473,7 @@ fn compare_kernels(
         }
         _ => None,
     };
-    super::progress_message(bar, format!("{} kernels side by side", sc.name));
+    super::common::progress_message(bar, format!("{} kernels side by side", sc.name));
     let mut best = [f64::INFINITY; 4]; // specialised, all-features, table, fast
     for _ in 0..rounds {
         let t = v.kernel_seconds(&batch, &sc.materials, &request, repeats)?;
@@ -550,7 +550,7 @@ fn sustained_rows(
     let repeats = repeats.min(5);
     let mut rows = Vec::new();
     for sc in list {
-        super::progress_message(&bar, format!("{} × {total}", sc.name));
+        super::common::progress_message(&bar, format!("{} × {total}", sc.name));
         let batch = scenarios::batch(sc, resident.min(total).min(v.resident_capacity(13)), 42);
         let k = v.kernel_timing(
             &batch,

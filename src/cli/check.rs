@@ -123,7 +123,7 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
     let mut done = 0usize;
     let mut row = |r: &CombinationReport| {
         done += 1;
-        super::set_status(format!(
+        super::common::set_status(format!(
             "{done} combinations done, the last {}",
             r.combination
         ));

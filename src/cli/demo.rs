@@ -37,7 +37,7 @@ pub struct Args {
 
 /// Runs `vkbrdf demo`.
 pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
-    super::output_dir(&args.out_dir, "--out-dir")?;
+    super::common::output_dir(&args.out_dir, "--out-dir")?;
     let materials = presets::all();
     let batch = vkbrdf::sample::sample_batch(args.tuples, materials.len(), 2026, false);
     let mut backend = backend_choice::open(&args.backend)?;
@@ -116,7 +116,7 @@ fn beside_lavapipe(
 ) {
     let timed = || -> anyhow::Result<(String, f64)> {
         let mut v = backend_choice::open_vulkan(device)?;
-        v.set_cancel(super::cancel());
+        v.set_cancel(super::common::cancel());
         let warm = vkbrdf::sample::sample_batch(1024, materials.len(), 1, false);
         v.evaluate(&warm, materials, &Request::default())?;
         let t = Instant::now();
@@ -138,7 +138,7 @@ fn beside_lavapipe(
 fn tables(backend: &mut dyn vkbrdf::backend::Backend, dir: &std::path::Path) -> anyhow::Result<()> {
     use vkbrdf::material::Geometry;
     use vkbrdf::table::{albedo, dfg, preview, slice, Grid, Runner};
-    super::output_dir(dir, "--out-dir")?;
+    super::common::output_dir(dir, "--out-dir")?;
     let ggx = albedo::Microfacet {
         lobe: albedo::Lobe::Ggx,
         geometry: Geometry::SmithCorrelated,

@@ -180,7 +180,7 @@ fn spectral_job(
 
 /// Runs `vkbrdf eval`.
 pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
-    let cancel = super::cancel();
+    let cancel = super::common::cancel();
     let materials = precision::apply_all(
         &vkbrdf::material::load_materials(&args.materials)?,
         args.precision.into(),

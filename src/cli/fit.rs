@@ -179,7 +179,7 @@ fn read_data(args: &Args) -> anyhow::Result<FitData> {
 
 /// Runs `vkbrdf fit`.
 pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
-    let cancel = super::cancel();
+    let cancel = super::common::cancel();
     let loss: Loss = args.loss.parse()?;
     let free: Vec<Param> = args
         .free
@@ -242,7 +242,7 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         ..fit::Options::default()
     };
     // From here a Ctrl-C is the fit's to handle: it writes the best parameters so far.
-    super::own_cancellation(true);
+    super::common::own_cancellation(true);
     let t0 = std::time::Instant::now();
     let mut last = 0.0;
     let mut result = fit::fit(
@@ -262,7 +262,7 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
                 loss.name(),
                 p.best
             );
-            super::set_status(status.clone());
+            super::common::set_status(status.clone());
             if now - last >= 1.0 {
                 last = now;
                 eprintln!("fit [{now:.1} s] {status}");
@@ -276,7 +276,7 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         .unwrap_or_else(|| format!("{}-fit", start.name));
     print_summary(&result);
     write_outputs(args, &result, &data, &start)?;
-    super::own_cancellation(false);
+    super::common::own_cancellation(false);
     if result.interrupted {
         eprintln!("fit: interrupted; wrote the best parameters found so far");
         return Ok(ExitCode::from(130));

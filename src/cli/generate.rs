@@ -47,7 +47,7 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
     }
     let tangents = args.tangents || anisotropic.is_some();
     let batch = vkbrdf::sample::sample_batch(args.tuples, materials.len(), args.seed, tangents);
-    let cancel = super::cancel();
+    let cancel = super::common::cancel();
     let staged =
         vkbrdf::batch::stage_npy_f32(&args.output, batch.as_slice(), batch.columns(), &cancel)?;
     vkbrdf::atomic::commit(vec![staged])?;

@@ -40,7 +40,7 @@ pub struct Args {
 
 /// Runs `vkbrdf merge`.
 pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
-    let cancel = super::cancel();
+    let cancel = super::common::cancel();
     // Table parts or batch parts, never both.
     let mut kinds = Vec::with_capacity(args.parts.len());
     for p in &args.parts {

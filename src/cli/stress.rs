@@ -99,7 +99,7 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
             )
             .expect("valid template"),
         );
-        super::progress_message(&bar, format!("stress {}", backend.name()));
+        super::common::progress_message(&bar, format!("stress {}", backend.name()));
         let report = vkbrdf::stress::run_with(
             backend.as_mut(),
             args.precision.into(),

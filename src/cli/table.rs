@@ -468,7 +468,7 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
     let name = backend.name();
     let mut runner = Runner::new(backend.as_mut())
         .with_progress(true)
-        .with_cancel(super::cancel());
+        .with_cancel(super::common::cancel());
     match &job {
         Job::Slice(j, _, Some(part)) => slice::write_part(&mut runner, j, part)?,
         Job::Slice(j, png, None) => slice::write_with_png(&mut runner, j, png.as_deref())?,

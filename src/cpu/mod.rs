@@ -29,6 +29,7 @@ pub mod lobes;
 mod dispatch;
 mod measured;
 pub mod plan;
+mod slice_tuples;
 pub mod transpose;
 pub(crate) use dispatch::block;
 
@@ -162,7 +163,7 @@ enum Source<'a> {
     Rows(&'a Batch<'a>),
     Local(&'a LocalBatch),
     /// A half/difference slice whose tuples the workers make block by block.
-    Slice(&'a generated::SliceTuples),
+    Slice(&'a slice_tuples::SliceTuples),
 }
 
 impl Source<'_> {

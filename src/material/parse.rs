@@ -1,10 +1,14 @@
 //! TOML materials: `[[material]]` tables, presets plus overrides, and validation with
 //! errors that name the file, line, material and key.
 
-use super::presets;
+use super::model::{CookTorrance, Material, Measured, Model};
+use super::preset_toml;
 use super::ranges::*;
-use super::*;
 use crate::error::MaterialError;
+use crate::terms::f::schlick::f0_from_ior;
+use crate::terms::{
+    Convention, Distribution, DistributionKind, Fresnel, FresnelKind, Geometry, Rgb, Roughness,
+};
 use std::collections::BTreeMap;
 use std::path::Path;
 use toml::{Spanned, Value};
@@ -130,7 +134,7 @@ pub fn parse_materials_in(
     Ok(out)
 }
 
-/// Parses one preset's definition (used by [`presets`]).
+/// Parses one preset's definition (used by [`super::presets`]).
 pub(super) fn parse_preset(name: &str, body: &str) -> Result<Material, MaterialError> {
     let text = format!("[[material]]\nname = \"{name}\"\n{body}");
     let mut v = parse_materials(&text, &format!("preset `{name}`"))?;
@@ -247,14 +251,14 @@ impl Ctx<'_> {
                     ))
                 }
             };
-            let body = presets::body(pname).ok_or_else(|| {
+            let body = preset_toml::body(pname).ok_or_else(|| {
                 self.err(
                     Some(&name),
                     Some("preset"),
                     line,
                     format!(
                         "unknown preset `{pname}`; the presets are: {}",
-                        presets::NAMES.join(", ")
+                        preset_toml::NAMES.join(", ")
                     ),
                 )
             })?;
@@ -689,7 +693,7 @@ impl Fields<'_, '_> {
         anisotropic: bool,
         geometry: Geometry,
     ) -> Result<(), MaterialError> {
-        super::legality(convention, kind, anisotropic, geometry)
+        crate::terms::legality(convention, kind, anisotropic, geometry)
             .map_err(|e| self.err(e.key, e.message))
     }
 

@@ -15,27 +15,10 @@
 //! reference evaluates the rewritten terms in f64. Errors are always measured against the
 //! reference of the **exact** material.
 
-use super::{f0_from_ior, Distribution, Fresnel, Geometry, Material, Model};
-
-/// Which variant of the terms to evaluate.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash)]
-pub enum Precision {
-    /// The formulas of FORMULAS.md as written.
-    #[default]
-    Exact,
-    /// Schlick for exact Fresnel, `smith-fast` for Smith–Beckmann.
-    Fast,
-}
-
-impl Precision {
-    /// The label used in reports.
-    pub fn label(self) -> &'static str {
-        match self {
-            Precision::Exact => "exact",
-            Precision::Fast => "fast",
-        }
-    }
-}
+pub use super::model::Precision;
+use super::model::{Material, Model};
+use crate::terms::f::schlick::f0_from_ior;
+use crate::terms::{Distribution, Fresnel, Geometry};
 
 /// `m` rewritten for `precision` (a clone for `Exact`; measured materials stay exact).
 pub fn apply(m: &Material, precision: Precision) -> Material {

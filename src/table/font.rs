@@ -1,7 +1,7 @@
 //! A 5×7 bitmap font (the HD44780 character generator's shapes, upper case only), enough to
 //! put titles and axis labels on the preview plots without a font library.
 
-use super::preview::Canvas;
+use super::canvas::Canvas;
 
 /// The glyph of `c` as 7 rows of 5 bits (bit 4 leftmost); lower case is drawn as upper
 /// case, and a character without a glyph as `?`.

@@ -14,10 +14,11 @@
 //! deviation, documented at [`BIN_TOLERANCE`]: a point a hair below a bin's lower edge
 //! counts as in that bin, so the bins' own sample points always find their bin.
 
-use super::slice::{from_half_diff, TANGENT};
-use super::{as_f32, needs_tangents, push_row, Runner, NORMAL};
+pub use super::merl_file::{write_values, write_values_cancellable};
+use super::{as_f32, needs_tangents, push_row, Runner, NORMAL, TANGENT};
 use crate::batch::Batch;
-use crate::error::{Error, Result};
+use crate::directions::from_half_diff;
+use crate::error::Result;
 pub use crate::material::merl::{
     bin_angles, bin_index, bin_of, half_diff, read, read_from, MeasuredMerl, BIN_TOLERANCE,
     FILE_BYTES, INVALID, PHI_D_BINS, SAMPLES, SCALES, THETA_D_BINS, THETA_H_BINS,
@@ -118,37 +119,6 @@ pub fn write_part(
     let values = compute_band(runner, material, part.band())?;
     let engine = runner.backend_name();
     super::shard::write_merl_part(path, part, &values, &engine, runner.cancel())
-}
-
-/// Writes stored values (R, G, B blocks) as a MERL binary, atomically.
-pub fn write_values(path: &Path, values: &[f64]) -> Result<()> {
-    write_values_cancellable(path, values, &crate::cancel::Cancel::new())
-}
-
-/// [`write_values`], stopping when `cancel` is set.
-pub fn write_values_cancellable(
-    path: &Path,
-    values: &[f64],
-    cancel: &crate::cancel::Cancel,
-) -> Result<()> {
-    if values.len() != 3 * SAMPLES {
-        return Err(Error::Table(format!(
-            "{}: {} values given, a MERL table holds {}",
-            path.display(),
-            values.len(),
-            3 * SAMPLES
-        )));
-    }
-    crate::atomic::write_cancellable(path, cancel, |w| {
-        use std::io::Write;
-        for dim in [THETA_H_BINS, THETA_D_BINS, PHI_D_BINS] {
-            w.write_all(&(dim as i32).to_le_bytes())?;
-        }
-        for x in values {
-            w.write_all(&x.to_le_bytes())?;
-        }
-        Ok(())
-    })
 }
 
 /// f (n × 3, RGB, 1/sr) of `merl` at every tuple of `batch` (material column and tangents

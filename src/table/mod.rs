@@ -18,11 +18,13 @@
 
 pub mod albedo;
 pub mod axes;
+pub mod canvas;
 pub mod dfg;
 pub mod exr_out;
 pub mod font;
 pub mod grid;
 pub mod merl;
+pub mod merl_file;
 pub mod preview;
 pub mod shard;
 pub mod slice;
@@ -143,6 +145,9 @@ pub fn convention_name(m: &Material) -> &'static str {
 
 /// The normal of every table's frame, `+z`.
 pub const NORMAL: [f64; 3] = [0.0, 0.0, 1.0];
+
+/// The tangent every table passes for anisotropic materials.
+pub const TANGENT: [f64; 3] = [1.0, 0.0, 0.0];
 
 /// Appends one tuple row `l v n material [t]` (f64 rounded to the f32 the backend reads).
 pub fn push_row(

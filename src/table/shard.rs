@@ -255,7 +255,7 @@ pub fn write_merl_part(
     engine: &str,
     cancel: &Cancel,
 ) -> Result<()> {
-    use super::merl::{PHI_D_BINS, THETA_D_BINS};
+    use crate::material::merl::{PHI_D_BINS, THETA_D_BINS};
     let band = spec.band();
     let row_texels = THETA_D_BINS * PHI_D_BINS;
     if values.len() != 3 * band.len() * row_texels {
@@ -494,7 +494,7 @@ fn read_npy_part(path: &Path, shape: [usize; 3]) -> Result<Vec<f32>> {
 
 /// Joins MERL bands (R, G, B blocks each) into one MERL binary.
 fn merge_merl(cars: &[(PathBuf, TableSidecar)], output: &Path, cancel: &Cancel) -> Result<()> {
-    use super::merl::{PHI_D_BINS, SAMPLES, THETA_D_BINS, THETA_H_BINS};
+    use crate::material::merl::{PHI_D_BINS, SAMPLES, THETA_D_BINS, THETA_H_BINS};
     let row = THETA_D_BINS * PHI_D_BINS;
     let mut values = vec![0.0f64; 3 * SAMPLES];
     for (p, c) in cars {
@@ -538,5 +538,5 @@ fn merge_merl(cars: &[(PathBuf, TableSidecar)], output: &Path, cancel: &Cancel) 
             }
         }
     }
-    super::merl::write_values_cancellable(output, &values, cancel)
+    super::merl_file::write_values_cancellable(output, &values, cancel)
 }

@@ -37,8 +37,7 @@ pub fn theta_h(x: f64, spacing: Spacing) -> f64 {
 
 pub use crate::directions::from_half_diff;
 
-/// The tangent every table passes for anisotropic materials.
-pub const TANGENT: [f64; 3] = [1.0, 0.0, 0.0];
+pub use super::TANGENT;
 
 /// f (n × 3, row-major texels) and, when `terms`, the terms (n × 6) of the slice: with
 /// the directions made by the backend where it can ([`Runner::half_diff_slice`]; the
