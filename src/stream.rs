@@ -101,11 +101,13 @@ pub fn chunk_rows_for(
 }
 
 /// The largest chunk, whatever the budget: the stages overlap only from the second chunk
-/// on, and the first and last run alone, so a batch of a few budget-sized chunks (at the
-/// default budget, 860,000 rows each) barely overlapped. 2^18 rows (10 MiB of float32
-/// rows) keep every engine efficient (the Vulkan kernel streams 256 K-tuple chunks
-/// itself, the CPU engine cuts 16 K-row blocks) and a 10^6-tuple batch in four chunks.
-pub const MAX_CHUNK_ROWS: usize = 1 << 18;
+/// on, and the first and last run alone, so a batch of a few budget-sized chunks barely
+/// overlapped; and the chunks alive at once (about five) should stay in the last-level
+/// cache, where the reader's copy leaves a chunk for the engine and the engine its results
+/// for the writer. 2^17 rows (5 MiB of float32 rows) keep every engine efficient (the
+/// Vulkan kernel streams 256 K-tuple chunks itself, the CPU engine cuts 16 K-row blocks);
+/// docs/STREAMING.md has the measurement.
+pub const MAX_CHUNK_ROWS: usize = 1 << 17;
 
 /// Evaluates `job` on `backend`, chunk by chunk; `progress` is told the rows done so far.
 pub fn evaluate(

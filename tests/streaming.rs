@@ -88,8 +88,8 @@ fn a_batch_larger_than_its_budget_streams_to_the_same_output() {
         std::fs::read(&bt).unwrap(),
         "terms differ"
     );
-    // 24 MB in and 21.6 MB out: in chunks of 2^18 rows (1 GiB budget) the run peaks near
-    // 45 MiB; streamed in 1 MiB it stays near the process's own ~10 MiB.
+    // 24 MB in and 21.6 MB out: in chunks of MAX_CHUNK_ROWS (1 GiB budget) the run peaks
+    // near 42 MiB; streamed in 1 MiB it stays near 15 MiB.
     if text.contains("peak memory") {
         let peak = figure(&text, "MiB");
         assert!(peak < 24, "streamed run peaked at {peak} MiB: {text}");

@@ -31,6 +31,7 @@ use vkbrdf::table::albedo::{self, Lobe, Microfacet};
 use vkbrdf::table::{slice, texel_centre, Grid, Runner};
 use vkbrdf::Error;
 
+mod columns;
 mod errors;
 mod fit;
 mod spectral;
@@ -149,7 +150,7 @@ pub(crate) fn parse_backend(py: Python<'_>, name: &str) -> PyResult<Kind> {
         .map_err(|e| raise(py, "UsageError", format!("backend: {e}")))
 }
 
-fn parse_precision(py: Python<'_>, name: &str) -> PyResult<Precision> {
+pub(crate) fn parse_precision(py: Python<'_>, name: &str) -> PyResult<Precision> {
     match name {
         "exact" => Ok(Precision::Exact),
         "fast" => Ok(Precision::Fast),
@@ -304,7 +305,7 @@ pub(crate) fn run_engine<T: Send>(
 
 /// The result arrays of an evaluation, the counts, and whether the tuples were read in
 /// place (no copy).
-type Evaluated<'py> = (
+pub(crate) type Evaluated<'py> = (
     Bound<'py, PyArray2<f32>>,
     Option<Bound<'py, PyArray2<f32>>>,
     (u64, u64, u64, Option<u64>),
@@ -376,7 +377,7 @@ fn evaluate<'py>(
 }
 
 /// `strict=True` with an invalid tuple: the `BatchError` naming the first.
-fn refuse_invalid(py: Python<'_>, strict: bool, c: &Counts) -> PyResult<()> {
+pub(crate) fn refuse_invalid(py: Python<'_>, strict: bool, c: &Counts) -> PyResult<()> {
     if strict && c.invalid > 0 {
         return Err(to_py(
             py,
@@ -417,7 +418,7 @@ fn spike<'py>(
 }
 
 /// `values` as an `(n, columns)` array, without a copy.
-fn rows(
+pub(crate) fn rows(
     py: Python<'_>,
     values: Vec<f32>,
     n: usize,
@@ -744,6 +745,7 @@ fn check<'py>(
 fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Materials>()?;
     m.add_function(wrap_pyfunction!(evaluate, m)?)?;
+    m.add_function(wrap_pyfunction!(columns::evaluate_columns, m)?)?;
     m.add_function(wrap_pyfunction!(spike, m)?)?;
     m.add_function(wrap_pyfunction!(spectral::evaluate_spectral, m)?)?;
     m.add_function(wrap_pyfunction!(load_materials, m)?)?;

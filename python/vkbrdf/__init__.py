@@ -128,7 +128,10 @@ def _material_indices(materials, material):
     return m
 
 
-def _broadcast_rows(materials, l, v, n, t, material):
+def _broadcast_columns(materials, l, v, n, t, material):
+    """The directions and materials as columns: each a C-contiguous float32 ``(k, 3)``
+    (``(k,)`` for the material) with k 1 (one for every row) or the row count; and the
+    broadcast shape."""
     vecs = [_vectors("l", l), _vectors("v", v), _vectors("n", n)]
     if t is not None:
         vecs.append(_vectors("t", t))
@@ -157,14 +160,30 @@ def _broadcast_rows(materials, l, v, n, t, material):
             f"l, v, n{', t' if t is not None else ''}, material: shapes {shapes}, {_np.shape(m)} "
             f"do not broadcast ({e})"
         ) from None
+
+    def column(a, width):
+        # One value for every row stays one; the rest are laid out a row each (a view
+        # where NumPy can, the float32 rounding `vkbrdf eval` gives a float64 file).
+        a = _np.asarray(a)
+        if a.ndim == (1 if width else 0):
+            return _np.ascontiguousarray(a, dtype=_np.float32).reshape((1, width) if width else (1,))
+        full = _np.broadcast_to(a, shape + ((width,) if width else ()))
+        return _np.ascontiguousarray(full.reshape((-1, width) if width else (-1,)), dtype=_np.float32)
+
+    return [column(a, 3) for a in vecs], column(m, 0), shape
+
+
+def _broadcast_rows(materials, l, v, n, t, material):
+    columns, m, shape = _broadcast_columns(materials, l, v, n, t, material)
+    count = int(_np.prod(shape, dtype=_np.int64))
     cols = 13 if t is not None else 10
-    rows = _np.empty(shape + (cols,), dtype=_np.float32)
-    for k, a in enumerate(vecs[:3]):
-        rows[..., 3 * k : 3 * k + 3] = a
-    rows[..., 9] = m
+    rows = _np.empty((count, cols), dtype=_np.float32)
+    for k, a in enumerate(columns[:3]):
+        rows[:, 3 * k : 3 * k + 3] = a
+    rows[:, 9] = m
     if t is not None:
-        rows[..., 10:13] = vecs[3]
-    return rows.reshape(-1, cols), shape
+        rows[:, 10:13] = columns[3]
+    return rows, shape
 
 
 def evaluate(
@@ -199,6 +218,15 @@ def evaluate(
     else:
         if l is None or v is None or n is None:
             raise UsageError("give tuples, or the directions l=, v= and n=")
+        if wavelengths is None and color is None and not spike:
+            # The columns go to the engine as they are: no (n, 10) array is built.
+            columns, m, shape = _broadcast_columns(materials, l, v, n, t, material)
+            count = int(_np.prod(shape, dtype=_np.int64))
+            f, term_values, counts, _in_place = _native.evaluate_columns(
+                materials, count, *columns[:3], columns[3] if t is not None else None, m,
+                str(backend), bool(terms), str(precision), bool(strict),
+            )
+            return _results(f, term_values, None, counts, shape, terms, return_counts)
         rows, shape = _broadcast_rows(materials, l, v, n, t, material)
     if wavelengths is not None or color is not None:
         if terms or spike:
@@ -218,16 +246,24 @@ def evaluate(
     f, term_values, counts, _in_place = _native.evaluate(
         materials, rows, str(backend), bool(terms), str(precision), bool(strict)
     )
+    weights = _native.spike(materials, rows) if spike else None
+    return _results(f, term_values, weights, counts, shape, terms, return_counts)
+
+
+def _results(f, term_values, weights, counts, shape, terms, return_counts):
+    """What `evaluate` returns: f, then the terms, the spike's weights and the counts where
+    asked for, each shaped as the broadcast inputs (``shape``) when they were."""
     if shape is not None:
         f = f.reshape(shape + (3,))
         if term_values is not None:
             term_values = term_values.reshape(shape + (6,))
+        if weights is not None:
+            weights = weights.reshape(shape + (3,))
     result = [f]
     if terms:
         result.append(term_values)
-    if spike:
-        weights = _native.spike(materials, rows)
-        result.append(weights if shape is None else weights.reshape(shape + (3,)))
+    if weights is not None:
+        result.append(weights)
     if return_counts:
         result.append(Counts(*counts))
     return result[0] if len(result) == 1 else tuple(result)
