@@ -5,7 +5,7 @@
 //! tree holds an `Arc<Device>`, so a parent can never be destroyed before its children
 //! (vulkano's scheme; ash leaves `Drop` to its users).
 
-use super::vk_error;
+use super::vk_error::vk_error;
 use crate::error::{Error, Result};
 use ash::vk;
 use std::ffi::{c_void, CStr};

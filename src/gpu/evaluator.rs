@@ -4,23 +4,29 @@
 //! Per chunk: wait for the slot's previous chunk (fence), copy its results out, copy the
 //! next rows in, record one dispatch, submit with the slot's fence. While the device works
 //! on chunk `c`, the host is copying chunk `c + 1` in and chunk `c − 2` out.
+//!
+//! The struct, its slots and what the methods here and in the children share are in
+//! `state`, the settings in `options`: the children use those, never this file.
 
 mod generated;
 mod grouping;
 mod link;
+mod options;
+mod state;
 mod timing;
 pub use link::LinkRates;
+pub use options::{validation_from_env, InjectedFault, VulkanOptions};
+pub use state::{HostStages, VulkanBackend, FRAMES_IN_FLIGHT};
 pub use timing::{KernelClock, KernelTiming};
 
 use super::context::{Device, DeviceSelector, ValidationCounter};
 use super::kernel::{Kernels, WORKGROUP_SIZE};
 use super::layout::{
-    descriptor_type, gpu_materials, measured_tables, GpuCounts, GpuMaterial, PushConstants,
-    BINDING_COUNT, BINDING_TUPLE_TEXELS,
+    gpu_materials, measured_tables, GpuCounts, GpuMaterial, PushConstants, BINDING_COUNT,
 };
 use super::memory::{Buffer, MemoryUse, TexelView};
 use super::sync::{CommandPool, DescriptorPool, Fence};
-use super::vk_error;
+use super::vk_error::vk_error;
 use crate::backend::{Backend, Counts, Output, Request, TERM_COLUMNS};
 use crate::batch::{Batch, COLUMNS_TANGENT};
 use crate::error::{Error, FailedChunk, Result};
@@ -28,11 +34,8 @@ use crate::features::FeatureSet;
 use crate::material::Material;
 use ash::vk;
 use grouping::{bucket_order, gather_rows, read_in_place};
-use std::ops::Range;
+use state::{write_set, Pending, Slot};
 use std::sync::Arc;
-
-/// Chunks in flight: one being filled by the host, one running, one being read back.
-pub const FRAMES_IN_FLIGHT: usize = 3;
 
 /// Upper bound on tuples per chunk (about 22 MiB of buffers per slot at the widest layout):
 /// small enough that a million-tuple batch already streams in several overlapped chunks,
@@ -43,100 +46,6 @@ pub const MAX_CHUNK_TUPLES: usize = 1 << 18;
 /// its place in the evaluation order (a u32), 3 BRDF floats, 6 term floats. Chunks are sized for it, so the slot buffers never exceed
 /// the memory budget whatever mix of batches the backend sees.
 const WORST_CASE_BYTES_PER_TUPLE: u64 = 4 * (COLUMNS_TANGENT + 1 + 3 + TERM_COLUMNS) as u64;
-
-/// Settings of a [`VulkanBackend`].
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct VulkanOptions {
-    /// Upper bound on the device memory the backend's buffers use, in bytes (default
-    /// 256 MiB). Batches larger than this stream through in chunks.
-    pub max_gpu_memory: u64,
-    /// Enable `VK_LAYER_KHRONOS_validation` and count its warnings and errors (default:
-    /// on when the environment variable `VKBRDF_VALIDATION` is `1`).
-    pub validation: bool,
-    /// Extra preprocessor definitions (`NAME`, `VALUE`) for every kernel this backend
-    /// compiles: for measuring kernel variants side by side in one process
-    /// (`examples/kernel_time.rs`). Default: none.
-    pub extra_defines: Vec<(String, String)>,
-    /// Upload batches that mix materials grouped by material (the `BUCKETED` kernels;
-    /// default on). Off only to measure what the grouping gains.
-    pub group_by_material: bool,
-    /// Testing aid: a fault to inject into batch evaluations (see [`InjectedFault`]).
-    /// Default: none, or what the environment variable `VKBRDF_INJECT_VK_FAULT` says
-    /// (read by [`VulkanBackend::new`]).
-    #[doc(hidden)]
-    pub inject_fault: Option<InjectedFault>,
-}
-
-/// Testing aid: the wait for chunk `chunk` (0-based) of every batch evaluation
-/// ([`Backend::evaluate`]) reports `result` after the chunk really completed, as a
-/// lost device or exhausted memory would, so the error path (the message naming the
-/// chunk, the recovery, the teardown, the CLI writing nothing) can be tested on any device.
-/// Set by [`VulkanOptions::inject_fault`] or by the environment variable
-/// `VKBRDF_INJECT_VK_FAULT=KIND@CHUNK`, KIND one of `device-lost`, `out-of-device-memory`,
-/// `out-of-host-memory`, `timeout` (e.g. `device-lost@2`).
-#[doc(hidden)]
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct InjectedFault {
-    /// What the wait returns.
-    pub result: vk::Result,
-    /// 0-based chunk index within a batch.
-    pub chunk: usize,
-}
-
-/// The environment variable [`InjectedFault`] is read from.
-const INJECT_FAULT_VAR: &str = "VKBRDF_INJECT_VK_FAULT";
-
-impl std::str::FromStr for InjectedFault {
-    type Err = String;
-    fn from_str(s: &str) -> std::result::Result<Self, String> {
-        let usage = || {
-            format!("`{s}`: expected KIND@CHUNK, KIND one of device-lost, out-of-device-memory, out-of-host-memory, timeout, CHUNK a 0-based chunk index (e.g. device-lost@2)")
-        };
-        let (kind, chunk) = s.split_once('@').ok_or_else(usage)?;
-        let result = match kind.trim() {
-            "device-lost" => vk::Result::ERROR_DEVICE_LOST,
-            "out-of-device-memory" => vk::Result::ERROR_OUT_OF_DEVICE_MEMORY,
-            "out-of-host-memory" => vk::Result::ERROR_OUT_OF_HOST_MEMORY,
-            "timeout" => vk::Result::TIMEOUT,
-            _ => return Err(usage()),
-        };
-        let chunk = chunk.trim().parse().map_err(|_| usage())?;
-        Ok(InjectedFault { result, chunk })
-    }
-}
-
-impl InjectedFault {
-    /// The fault `VKBRDF_INJECT_VK_FAULT` asks for, if set (an unparsable value is an error).
-    fn from_env() -> Result<Option<InjectedFault>> {
-        match std::env::var(INJECT_FAULT_VAR) {
-            Ok(v) if !v.is_empty() => v
-                .parse()
-                .map(Some)
-                .map_err(|e| Error::Unsupported(format!("{INJECT_FAULT_VAR}={e}"))),
-            _ => Ok(None),
-        }
-    }
-}
-
-impl Default for VulkanOptions {
-    fn default() -> Self {
-        VulkanOptions {
-            max_gpu_memory: 256 << 20,
-            validation: validation_from_env(),
-            extra_defines: Vec::new(),
-            group_by_material: true,
-            inject_fault: None,
-        }
-    }
-}
-
-/// Whether `VKBRDF_VALIDATION` asks for the validation layer (`1`, `true` or `yes`).
-pub fn validation_from_env() -> bool {
-    matches!(
-        std::env::var("VKBRDF_VALIDATION").as_deref(),
-        Ok("1" | "true" | "yes")
-    )
-}
 
 /// Bytes held by the backend's persistent buffers, per purpose (all slots together).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
@@ -156,98 +65,6 @@ impl BufferBytes {
     pub fn total(&self) -> u64 {
         self.input + self.brdf + self.terms + self.materials
     }
-}
-
-/// Host seconds of the streamed evaluation's stages, summed over the calls since the last
-/// [`VulkanBackend::reset_host_stages`]: what `vkbrdf bench` reports as the upload, wait and
-/// readback stages (the kernel's own time comes from device timestamps instead).
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct HostStages {
-    /// Grouping rows by material and copying them into the device-visible input buffers.
-    pub upload_s: f64,
-    /// Waiting on chunk fences: the device's kernel and transfers not hidden behind the
-    /// host's own work.
-    pub wait_s: f64,
-    /// Copying results out of the device-visible output buffers (scattered back to row
-    /// order when grouped).
-    pub readback_s: f64,
-    /// Chunks evaluated.
-    pub chunks: u64,
-}
-
-/// Where a submitted chunk's results go when it is read back.
-#[derive(Debug, Clone)]
-struct Pending {
-    /// Float range of `Output::brdf` (the BRDF buffer's first `len` floats).
-    brdf: Range<usize>,
-    /// Float range of `Output::terms`, when the chunk writes terms.
-    terms: Option<Range<usize>>,
-    /// Batch row of the chunk's first tuple (turns chunk-relative rows into batch rows).
-    first_row: u64,
-    /// The order the chunk's rows were uploaded in (`BUCKETED`): output row i belongs to
-    /// chunk row `order[i]`.
-    order: Option<Vec<u32>>,
-}
-
-/// One frame in flight: its buffers, descriptor set, command buffer and fence.
-struct Slot {
-    /// The RGBA32UI view of `input` (declared first: dropped before the buffer it views).
-    input_view: Option<TexelView>,
-    input: Option<Buffer>,
-    /// The chunk's evaluation order (`BUCKETED` kernels only).
-    order: Option<Buffer>,
-    brdf: Option<Buffer>,
-    terms: Option<Buffer>,
-    counts: Buffer,
-    fence: Fence,
-    cmd: vk::CommandBuffer,
-    set: vk::DescriptorSet,
-    /// The [`Buffer::id`]s the descriptor set points at now, by binding (ids, not handles:
-    /// see [`Buffer::id`]).
-    bound: [u64; BINDING_COUNT as usize],
-    pending: Option<Pending>,
-}
-
-/// The Vulkan compute backend (see the [module docs](super) for its design).
-///
-/// ```no_run
-/// use vkbrdf::backend::{Backend, Request};
-/// use vkbrdf::gpu::{VulkanBackend, VulkanOptions};
-/// # fn main() -> vkbrdf::Result<()> {
-/// let materials = vec![vkbrdf::material::presets::preset("gold").unwrap()?];
-/// let batch = vkbrdf::sample::sample_batch(1000, materials.len(), 1, false);
-/// let mut gpu = VulkanBackend::new(None, VulkanOptions::default())?;
-/// let out = gpu.evaluate(&batch, &materials, &Request { terms: true })?;
-/// assert_eq!(out.brdf.len(), 3000);
-/// # Ok(()) }
-/// ```
-pub struct VulkanBackend {
-    // Field order is drop order: buffers and fences, then the pools, the pipelines, and
-    // last the device (Drop waits idle before any of them goes).
-    slots: Vec<Slot>,
-    materials: Option<Buffer>,
-    /// The MERL tables of the last measured batch ([`BINDING_MERL`](super::layout::BINDING_MERL)),
-    /// uploaded once and kept while the next batch uses the same tables.
-    merl: Option<Buffer>,
-    /// The tables `merl` holds, in order (kept alive, so a pointer match is a table match).
-    merl_tables: Vec<std::sync::Arc<crate::material::merl::MeasuredMerl>>,
-    /// MERL tables uploaded so far ([`VulkanBackend::measured_uploads`]).
-    merl_uploads: u64,
-    dummy: Buffer,
-    /// Owns the slots' descriptor sets (freed with the pool).
-    _descriptors: DescriptorPool,
-    /// Owns the slots' command buffers (freed with the pool).
-    _commands: CommandPool,
-    kernels: Kernels,
-    last_features: Option<FeatureSet>,
-    /// The features [`Backend::share_kernels`] asked every kernel to include.
-    shared_features: FeatureSet,
-    options: VulkanOptions,
-    /// Checked before each chunk is submitted.
-    cancel: crate::cancel::Cancel,
-    /// Host time per stage, for the bench.
-    stages: HostStages,
-    device: Arc<Device>,
 }
 
 impl VulkanBackend {
@@ -947,46 +764,6 @@ fn flush_to_zero_scope<T>(f: impl FnOnce() -> T) -> T {
     f()
 }
 
-/// Points descriptor set `set` at `wanted` (one buffer per binding; the tuple-texel binding
-/// takes `view`, a view of the input buffer). Precondition: no pending work uses the set.
-fn write_set(
-    device: &Device,
-    set: vk::DescriptorSet,
-    wanted: &[&Buffer; BINDING_COUNT as usize],
-    view: &TexelView,
-) {
-    let infos: Vec<[vk::DescriptorBufferInfo; 1]> = wanted
-        .iter()
-        .map(|b| {
-            [vk::DescriptorBufferInfo {
-                buffer: b.raw(),
-                offset: 0,
-                range: vk::WHOLE_SIZE,
-            }]
-        })
-        .collect();
-    let views = [view.raw()];
-    let writes: Vec<vk::WriteDescriptorSet> = infos
-        .iter()
-        .enumerate()
-        .map(|(binding, info)| {
-            let binding = binding as u32;
-            let write = vk::WriteDescriptorSet::default()
-                .dst_set(set)
-                .dst_binding(binding)
-                .descriptor_type(descriptor_type(binding));
-            if binding == BINDING_TUPLE_TEXELS {
-                write.texel_buffer_view(&views)
-            } else {
-                write.buffer_info(info)
-            }
-        })
-        .collect();
-    // SAFETY: the set is not used by pending work (precondition) and every buffer and the
-    // view are live.
-    unsafe { device.raw.update_descriptor_sets(&writes, &[]) };
-}
-
 /// Makes `buffer` at least `bytes` large (replacing a smaller one; the old one is freed
 /// first, so the budget holds one of them at a time).
 fn ensure(
@@ -1059,13 +836,5 @@ impl crate::backend::GeneratedDirections for VulkanBackend {
         let blocks = u64::from(job.samples.div_ceil(generated::SAMPLES_PER_BLOCK));
         (job.points.len() as u64 * blocks <= generated::MAX_GENERATED_TEXELS)
             .then(|| VulkanBackend::importance_sums(self, job, progress))
-    }
-}
-
-impl Drop for VulkanBackend {
-    fn drop(&mut self) {
-        // Then the fields drop in declaration order: buffers and fences, pools, pipelines
-        // and layouts, and the device (when this was the last Arc).
-        self.device.wait_idle();
     }
 }

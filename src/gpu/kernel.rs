@@ -9,7 +9,7 @@
 
 use super::context::{Device, PhysicalInfo};
 use super::layout::{descriptor_type, shader_codes, PushConstants, BINDING_COUNT, SHADER_BINDINGS};
-use super::vk_error;
+use super::vk_error::vk_error;
 use crate::error::{Error, Result};
 use crate::features::FeatureSet;
 use ash::vk;

@@ -10,7 +10,7 @@
 //! lavapipe every type is ordinary RAM.
 
 use super::context::Device;
-use super::vk_error;
+use super::vk_error::vk_error;
 use crate::error::{Error, Result};
 use ash::vk;
 use bytemuck::Pod;

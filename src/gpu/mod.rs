@@ -3,11 +3,12 @@
 //!
 //! # Pieces
 //! - [`context`](DeviceSelector): loads the Vulkan loader (a missing `libvulkan` is an
-//!   [`Error::NoDevice`] that says what to install), creates the instance — with
-//!   `VK_LAYER_KHRONOS_validation` and a `VK_EXT_debug_utils` messenger that counts warnings
-//!   and errors when [`VulkanOptions::validation`] asks for it — picks the physical device
-//!   (discrete GPU > integrated > virtual > CPU, overridden by a [`DeviceSelector`] from
-//!   `--device` or `VKBRDF_DEVICE`) and creates the logical device with one compute queue.
+//!   [`Error::NoDevice`](crate::error::Error::NoDevice) that says what to install), creates
+//!   the instance — with `VK_LAYER_KHRONOS_validation` and a `VK_EXT_debug_utils` messenger
+//!   that counts warnings and errors when [`VulkanOptions::validation`] asks for it — picks
+//!   the physical device (discrete GPU > integrated > virtual > CPU, overridden by a
+//!   [`DeviceSelector`] from `--device` or `VKBRDF_DEVICE`) and creates the logical device
+//!   with one compute queue.
 //! - `memory`: storage buffers, persistently mapped, freed on drop.
 //! - [`kernel`]: the GLSL in `glsl/`, embedded with `include_str!` and compiled by shaderc
 //!   at run time (`#include` resolved against the embedded files, errors naming file and
@@ -15,6 +16,8 @@
 //! - [`VulkanBackend`] (`evaluator`): chunking and streaming, the [`Backend`](crate::backend::Backend).
 //! - [`layout`]: the `#[repr(C)]` GPU structs and the codes the GLSL reads.
 //! - [`devices`]: `vkbrdf devices`.
+//! - `vk_error`: a failed call's `vk::Result` as an
+//!   [`Error::Vulkan`](crate::error::Error::Vulkan), for every file here.
 //!
 //! # Decisions
 //! Memory types, synchronisation, one queue, counts, input, RAII and errors, each with its
@@ -28,6 +31,7 @@ pub mod kernel;
 pub mod layout;
 mod memory;
 mod sync;
+mod vk_error;
 
 pub use context::{DeviceSelector, ValidationCounter, INSTALL_HINT};
 pub use devices::{list_devices, DeviceInfo, HeapInfo};
@@ -35,15 +39,3 @@ pub use evaluator::{
     validation_from_env, BufferBytes, HostStages, InjectedFault, KernelClock, KernelTiming,
     LinkRates, VulkanBackend, VulkanOptions, FRAMES_IN_FLIGHT, MAX_CHUNK_TUPLES,
 };
-
-use crate::error::Error;
-use ash::vk;
-
-/// Maps a failed `vk::Result` of `call` to [`Error::Vulkan`].
-pub(crate) fn vk_error(call: &'static str) -> impl Fn(vk::Result) -> Error {
-    move |result| Error::Vulkan {
-        call,
-        result,
-        chunk: None,
-    }
-}

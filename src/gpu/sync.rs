@@ -3,7 +3,7 @@
 
 use super::context::Device;
 use super::layout::descriptor_type;
-use super::vk_error;
+use super::vk_error::vk_error;
 use crate::error::Result;
 use ash::vk;
 use std::sync::Arc;

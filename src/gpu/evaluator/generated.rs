@@ -4,8 +4,13 @@
 //! about half of the kernel's time, and end to end the host no longer builds and copies
 //! 40 bytes per texel.
 
-use super::*;
+use super::state::{Pending, VulkanBackend, FRAMES_IN_FLIGHT};
+use crate::backend::{Output, Request, TERM_COLUMNS};
 use crate::directions::{ImportanceJob, SliceGrid};
+use crate::error::{Error, Result};
+use crate::features::FeatureSet;
+use crate::gpu::layout::{gpu_materials, GpuCounts, PushConstants};
+use crate::material::Material;
 use crate::precision::Precision;
 use std::time::Instant;
 
@@ -56,7 +61,7 @@ impl VulkanBackend {
     /// The half/difference slice `grid` of `material`, directions made on the device: the
     /// same values as evaluating [`crate::table::slice`]'s tuples (up to the f32 rounding
     /// of the directions, made here from f32 `sin`/`cos`), in the same row-major texel
-    /// order. Streams in chunks like [`Backend::evaluate`].
+    /// order. Streams in chunks like [`Backend::evaluate`](crate::backend::Backend::evaluate).
     pub fn half_diff_slice(
         &mut self,
         material: &Material,

@@ -3,7 +3,7 @@
 //! llvmpipe runs a subgroup's lanes in SIMD, so a subgroup mixing models runs every
 //! model's path; grouped, it runs one (mixed 8-material kernel 2.3× on lavapipe).
 
-use super::Buffer;
+use crate::gpu::memory::Buffer;
 
 /// The evaluation order of a chunk's `rows` (`cols` floats each, material index in column
 /// 9, already validated against `material_count`): row indices grouped by material, in

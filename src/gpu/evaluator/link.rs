@@ -4,7 +4,7 @@
 //! stages do), and a transfer command between a mapped buffer and a device-local one (the
 //! link: PCIe on a discrete GPU, a `memcpy` on a CPU device).
 
-use super::VulkanBackend;
+use super::state::VulkanBackend;
 use crate::error::Result;
 use crate::gpu::memory::{Buffer, MemoryUse};
 use crate::stats::median;

@@ -8,8 +8,20 @@
 //! The same machinery times a copy kernel that reads the bytes a tuple row holds and writes
 //! three floats: the device's ceiling for the bytes the BRDF kernel moves.
 
-use super::*;
+use super::grouping::{bucket_order, gather_rows};
+use super::state::{write_set, VulkanBackend};
+use crate::backend::{Request, TERM_COLUMNS};
+use crate::batch::Batch;
+use crate::error::{Error, Result};
+use crate::features::FeatureSet;
+use crate::gpu::kernel::WORKGROUP_SIZE;
+use crate::gpu::layout::{gpu_materials, GpuCounts, PushConstants, BINDING_COUNT};
+use crate::gpu::memory::{Buffer, MemoryUse, TexelView};
 use crate::gpu::sync::TimestampPool;
+use crate::gpu::vk_error::vk_error;
+use crate::material::Material;
+use ash::vk;
+use std::sync::Arc;
 use std::time::Instant;
 
 /// How a [`KernelTiming`] was clocked.
@@ -38,7 +50,7 @@ pub struct KernelTiming {
     pub clock: KernelClock,
     /// The BRDF of the resident tuples, `resident_tuples × 3`, from the last timed run
     /// (empty for the copy kernel): what the resident path computed, for comparison with
-    /// [`Backend::evaluate`].
+    /// [`Backend::evaluate`](crate::backend::Backend::evaluate).
     pub brdf: Vec<f32>,
 }
 

@@ -1,0 +1,100 @@
+//! The settings of a [`VulkanBackend`](crate::gpu::VulkanBackend): [`VulkanOptions`], the
+//! testing aid [`InjectedFault`] and the environment variables they default from.
+
+use crate::error::{Error, Result};
+use ash::vk;
+
+/// Settings of a [`VulkanBackend`](crate::gpu::VulkanBackend).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct VulkanOptions {
+    /// Upper bound on the device memory the backend's buffers use, in bytes (default
+    /// 256 MiB). Batches larger than this stream through in chunks.
+    pub max_gpu_memory: u64,
+    /// Enable `VK_LAYER_KHRONOS_validation` and count its warnings and errors (default:
+    /// on when the environment variable `VKBRDF_VALIDATION` is `1`).
+    pub validation: bool,
+    /// Extra preprocessor definitions (`NAME`, `VALUE`) for every kernel this backend
+    /// compiles: for measuring kernel variants side by side in one process
+    /// (`examples/kernel_time.rs`). Default: none.
+    pub extra_defines: Vec<(String, String)>,
+    /// Upload batches that mix materials grouped by material (the `BUCKETED` kernels;
+    /// default on). Off only to measure what the grouping gains.
+    pub group_by_material: bool,
+    /// Testing aid: a fault to inject into batch evaluations (see [`InjectedFault`]).
+    /// Default: none, or what the environment variable `VKBRDF_INJECT_VK_FAULT` says
+    /// (read by [`VulkanBackend::new`](crate::gpu::VulkanBackend::new)).
+    #[doc(hidden)]
+    pub inject_fault: Option<InjectedFault>,
+}
+
+/// Testing aid: the wait for chunk `chunk` (0-based) of every batch evaluation
+/// ([`Backend::evaluate`](crate::backend::Backend::evaluate)) reports `result` after the
+/// chunk really completed, as a lost device or exhausted memory would, so the error path
+/// (the message naming the chunk, the recovery, the teardown, the CLI writing nothing) can
+/// be tested on any device.
+/// Set by [`VulkanOptions::inject_fault`] or by the environment variable
+/// `VKBRDF_INJECT_VK_FAULT=KIND@CHUNK`, KIND one of `device-lost`, `out-of-device-memory`,
+/// `out-of-host-memory`, `timeout` (e.g. `device-lost@2`).
+#[doc(hidden)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct InjectedFault {
+    /// What the wait returns.
+    pub result: vk::Result,
+    /// 0-based chunk index within a batch.
+    pub chunk: usize,
+}
+
+/// The environment variable [`InjectedFault`] is read from.
+const INJECT_FAULT_VAR: &str = "VKBRDF_INJECT_VK_FAULT";
+
+impl std::str::FromStr for InjectedFault {
+    type Err = String;
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        let usage = || {
+            format!("`{s}`: expected KIND@CHUNK, KIND one of device-lost, out-of-device-memory, out-of-host-memory, timeout, CHUNK a 0-based chunk index (e.g. device-lost@2)")
+        };
+        let (kind, chunk) = s.split_once('@').ok_or_else(usage)?;
+        let result = match kind.trim() {
+            "device-lost" => vk::Result::ERROR_DEVICE_LOST,
+            "out-of-device-memory" => vk::Result::ERROR_OUT_OF_DEVICE_MEMORY,
+            "out-of-host-memory" => vk::Result::ERROR_OUT_OF_HOST_MEMORY,
+            "timeout" => vk::Result::TIMEOUT,
+            _ => return Err(usage()),
+        };
+        let chunk = chunk.trim().parse().map_err(|_| usage())?;
+        Ok(InjectedFault { result, chunk })
+    }
+}
+
+impl InjectedFault {
+    /// The fault `VKBRDF_INJECT_VK_FAULT` asks for, if set (an unparsable value is an error).
+    pub(super) fn from_env() -> Result<Option<InjectedFault>> {
+        match std::env::var(INJECT_FAULT_VAR) {
+            Ok(v) if !v.is_empty() => v
+                .parse()
+                .map(Some)
+                .map_err(|e| Error::Unsupported(format!("{INJECT_FAULT_VAR}={e}"))),
+            _ => Ok(None),
+        }
+    }
+}
+
+impl Default for VulkanOptions {
+    fn default() -> Self {
+        VulkanOptions {
+            max_gpu_memory: 256 << 20,
+            validation: validation_from_env(),
+            extra_defines: Vec::new(),
+            group_by_material: true,
+            inject_fault: None,
+        }
+    }
+}
+
+/// Whether `VKBRDF_VALIDATION` asks for the validation layer (`1`, `true` or `yes`).
+pub fn validation_from_env() -> bool {
+    matches!(
+        std::env::var("VKBRDF_VALIDATION").as_deref(),
+        Ok("1" | "true" | "yes")
+    )
+}
