@@ -102,13 +102,13 @@ def test_return_forms(mats):
 
 
 def test_broadcast_columns_equal_rows_across_chunks(mats):
-    # The broadcast form goes to the engine as columns, gathered 65,536 rows at a time:
-    # 150,001 rows cross two chunk boundaries. Same bits, counts, first invalid row and
+    # The broadcast form goes to the engine as columns, gathered 262,144 rows at a time:
+    # 600,001 rows cross two chunk boundaries. Same bits, counts, first invalid row and
     # errors as the same rows given as one array, on each engine.
     rng = np.random.default_rng(7)
-    count = 150_001
+    count = 600_001
     L = rng.normal(size=(count, 3))
-    L[100_000] = 0.0  # invalid, in the second chunk
+    L[300_000] = 0.0  # invalid, in the second chunk
     V = np.array([0.3, 0.0, 0.95])
     N = rng.normal(size=(count, 3)) * [0.1, 0.1, 1.0] + [0, 0, 3.0]
     m = rng.integers(0, 4, size=count)
@@ -121,18 +121,18 @@ def test_broadcast_columns_equal_rows_across_chunks(mats):
         g, terms_g, c_g = vkbrdf.evaluate(mats, rows, backend=backend, terms=True,
                                           return_counts=True)
         assert np.array_equal(f, g, equal_nan=True) and np.array_equal(terms, terms_g, equal_nan=True)
-        assert c == c_g and c.invalid == 1 and c.first_invalid == 100_000
+        assert c == c_g and c.invalid == 1 and c.first_invalid == 300_000
     T = np.array([1.0, 0.0, 0.0])
     f_t = vkbrdf.evaluate(mats, l=L, v=V, n=N, t=T, material="brushed", backend="cpu")
     rows13 = np.zeros((count, 13), np.float32)
     rows13[:, 0:3], rows13[:, 3:6], rows13[:, 6:9], rows13[:, 9], rows13[:, 10:13] = L, V, N, 2, T
     assert np.array_equal(f_t, vkbrdf.evaluate(mats, rows13, backend="cpu"), equal_nan=True)
-    with pytest.raises(vkbrdf.BatchError, match="first invalid row: 100000"):
+    with pytest.raises(vkbrdf.BatchError, match="first invalid row: 300000"):
         vkbrdf.evaluate(mats, l=L, v=V, n=N, material=m, backend="cpu", strict=True)
     # An anisotropic material without t= is named at its first row, in a later chunk.
     m2 = np.zeros(count, np.int64)
-    m2[140_000] = 2
-    with pytest.raises(vkbrdf.BatchError, match="row 140000"):
+    m2[540_000] = 2
+    with pytest.raises(vkbrdf.BatchError, match="row 540000"):
         vkbrdf.evaluate(mats, l=L, v=V, n=N, material=m2, backend="cpu")
 
 
