@@ -14,10 +14,12 @@
 //!   the evaluation has succeeded — atomicity is a promise for regular files only.
 //! - Writing checks a [`Cancel`] token between blocks.
 
+mod file_kind;
 mod writeback;
 
 use crate::cancel::Cancel;
 use crate::error::{Error, Result};
+use file_kind::{file_id, is_fifo, is_fifo_or_device, FileId, Identity};
 use std::fs::File;
 use std::io::{BufWriter, Cursor, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
@@ -701,57 +703,6 @@ fn sync_dir(dir: &Path) {
     if let Ok(d) = File::open(dir) {
         let _ = d.sync_all();
     }
-}
-
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-struct FileId(u64, u64);
-
-#[derive(Debug, Clone, PartialEq, Eq)]
-enum Identity {
-    File(FileId),
-    NewFile(PathBuf),
-    Stdout,
-}
-
-#[cfg(unix)]
-fn file_id(path: &Path) -> Option<FileId> {
-    use std::os::unix::fs::MetadataExt;
-    std::fs::metadata(path)
-        .ok()
-        .map(|m| FileId(m.dev(), m.ino()))
-}
-
-#[cfg(not(unix))]
-fn file_id(path: &Path) -> Option<FileId> {
-    // Without inodes, the canonical path stands in for the identity.
-    use std::hash::{Hash, Hasher};
-    let p = path.canonicalize().ok()?;
-    let mut h = std::collections::hash_map::DefaultHasher::new();
-    p.hash(&mut h);
-    Some(FileId(0, h.finish()))
-}
-
-#[cfg(unix)]
-fn is_fifo_or_device(m: &std::fs::Metadata) -> bool {
-    use std::os::unix::fs::FileTypeExt;
-    let t = m.file_type();
-    t.is_fifo() || t.is_char_device() || t.is_block_device()
-}
-
-#[cfg(not(unix))]
-fn is_fifo_or_device(_m: &std::fs::Metadata) -> bool {
-    false
-}
-
-#[cfg(unix)]
-fn is_fifo(path: &Path) -> bool {
-    use std::os::unix::fs::FileTypeExt;
-    std::fs::metadata(path).is_ok_and(|m| m.file_type().is_fifo())
-}
-
-#[cfg(not(unix))]
-fn is_fifo(_path: &Path) -> bool {
-    false
 }
 
 /// A failed write to `path`: [`Error::Cancelled`] when the token was the cause (the writer

@@ -1,6 +1,9 @@
 //! Bad input gets a clear error naming what and where, never a panic: every material error
 //! of the materials format and every `.npy` error.
 
+mod common;
+
+use common::npy::write_npy;
 use std::path::Path;
 use vkbrdf::batch::Batch;
 use vkbrdf::material::parse_materials;
@@ -314,34 +317,6 @@ fn presets_take_overrides_and_drop_keys_the_override_makes_moot() {
 }
 
 // ---- .npy errors -------------------------------------------------------------------------
-
-/// Writes a `.npy` file by hand (format version 1.0), independent of the crate under test.
-fn write_npy(path: &Path, descr: &str, fortran: bool, shape: &[usize], data: &[u8]) {
-    let shape_s = match shape.len() {
-        1 => format!("({},)", shape[0]),
-        _ => format!(
-            "({})",
-            shape
-                .iter()
-                .map(|s| s.to_string())
-                .collect::<Vec<_>>()
-                .join(", ")
-        ),
-    };
-    let mut header = format!(
-        "{{'descr': '{descr}', 'fortran_order': {}, 'shape': {shape_s}, }}",
-        if fortran { "True" } else { "False" }
-    );
-    while (10 + header.len() + 1) % 64 != 0 {
-        header.push(' ');
-    }
-    header.push('\n');
-    let mut bytes = b"\x93NUMPY\x01\x00".to_vec();
-    bytes.extend((header.len() as u16).to_le_bytes());
-    bytes.extend(header.as_bytes());
-    bytes.extend(data);
-    std::fs::write(path, bytes).unwrap();
-}
 
 fn f32_bytes(v: &[f32]) -> Vec<u8> {
     v.iter().flat_map(|x| x.to_le_bytes()).collect()

@@ -464,26 +464,16 @@ fn write_npy_as(path: &Path, rows: &[f32], columns: usize, f64s: bool, fortran: 
     } else {
         rows.to_vec()
     };
-    let mut header = format!(
-        "{{'descr': '{}', 'fortran_order': {}, 'shape': ({n}, {columns}), }}",
-        if f64s { "<f8" } else { "<f4" },
-        if fortran { "True" } else { "False" }
-    );
-    while (10 + header.len() + 1) % 64 != 0 {
-        header.push(' ');
-    }
-    header.push('\n');
-    let mut bytes = b"\x93NUMPY\x01\x00".to_vec();
-    bytes.extend((header.len() as u16).to_le_bytes());
-    bytes.extend(header.as_bytes());
-    for &x in &values {
-        if f64s {
-            bytes.extend((x as f64).to_le_bytes());
-        } else {
-            bytes.extend(x.to_le_bytes());
-        }
-    }
-    std::fs::write(path, bytes).expect("write npy");
+    let bytes: Vec<u8> = if f64s {
+        values
+            .iter()
+            .flat_map(|&x| (x as f64).to_le_bytes())
+            .collect()
+    } else {
+        values.iter().flat_map(|&x| x.to_le_bytes()).collect()
+    };
+    let descr = if f64s { "<f8" } else { "<f4" };
+    common::npy::write_npy(path, descr, fortran, &[n, columns], &bytes);
 }
 
 /// float64 and Fortran-order batches take the streamed path chunk by chunk (1 MiB chunks,

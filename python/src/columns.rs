@@ -7,17 +7,12 @@
 //! array: each chunk is checked and evaluated as rows `start..` of the batch.
 
 use crate::errors::{raise, TUPLES};
-use crate::{
-    parse_backend, parse_precision, refuse_invalid, rows, run_engine, Evaluated, Materials,
-};
+use crate::{engine_and_materials, refuse_invalid, rows, run_engine, Evaluated, Materials};
 use numpy::{PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use std::path::Path;
 use vkbrdf::backend::{Counts, Output, Request, TERM_COLUMNS};
-use vkbrdf::backend_choice::Kind;
 use vkbrdf::batch::{check_tangent_rows, Batch};
-use vkbrdf::material::Model;
-use vkbrdf::precision;
 
 /// Rows gathered and evaluated at a time: 10 MiB of 10-column rows, in the last-level
 /// cache while the engine reads them, and enough work a call that the engine's own
@@ -43,12 +38,7 @@ pub(crate) fn evaluate_columns<'py>(
     precision: &str,
     strict: bool,
 ) -> PyResult<Evaluated<'py>> {
-    let mut kind = parse_backend(py, backend)?;
-    let precision = parse_precision(py, precision)?;
-    let list = precision::apply_all(&materials.list, precision);
-    if kind == Kind::Auto && list.iter().any(|m| matches!(m.model, Model::Measured(_))) {
-        kind = Kind::Reference; // as `evaluate` and `vkbrdf eval` do
-    }
+    let (kind, list) = engine_and_materials(py, materials, backend, precision)?;
     fn slice<'a>(
         py: Python<'_>,
         name: &str,

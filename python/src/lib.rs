@@ -150,7 +150,7 @@ pub(crate) fn parse_backend(py: Python<'_>, name: &str) -> PyResult<Kind> {
         .map_err(|e| raise(py, "UsageError", format!("backend: {e}")))
 }
 
-pub(crate) fn parse_precision(py: Python<'_>, name: &str) -> PyResult<Precision> {
+fn parse_precision(py: Python<'_>, name: &str) -> PyResult<Precision> {
     match name {
         "exact" => Ok(Precision::Exact),
         "fast" => Ok(Precision::Fast),
@@ -330,6 +330,24 @@ fn borrowed_batch<'a>(
     Batch::borrowed(data, columns, materials, Path::new(TUPLES)).map_err(|e| to_py(py, e))
 }
 
+/// The engine `backend` names and the materials in `precision`'s variant, as `vkbrdf eval`
+/// chooses them: measured materials go to the reference unless a backend is named (only it
+/// evaluates them).
+pub(crate) fn engine_and_materials(
+    py: Python<'_>,
+    materials: &Materials,
+    backend: &str,
+    precision: &str,
+) -> PyResult<(Kind, Vec<Material>)> {
+    let mut kind = parse_backend(py, backend)?;
+    let precision = parse_precision(py, precision)?;
+    let list = precision::apply_all(&materials.list, precision);
+    if kind == Kind::Auto && list.iter().any(|m| matches!(m.model, Model::Measured(_))) {
+        kind = Kind::Reference;
+    }
+    Ok((kind, list))
+}
+
 /// Evaluates a C-contiguous float32 `(n, 10)` or `(n, 13)` tuple array in place.
 #[pyfunction]
 #[pyo3(signature = (materials, tuples, backend, terms, precision, strict))]
@@ -342,14 +360,7 @@ fn evaluate<'py>(
     precision: &str,
     strict: bool,
 ) -> PyResult<Evaluated<'py>> {
-    let mut kind = parse_backend(py, backend)?;
-    let precision = parse_precision(py, precision)?;
-    let list = precision::apply_all(&materials.list, precision);
-    // As `vkbrdf eval` does: measured materials go to the reference unless a backend is
-    // named (only it evaluates them).
-    if kind == Kind::Auto && list.iter().any(|m| matches!(m.model, Model::Measured(_))) {
-        kind = Kind::Reference;
-    }
+    let (kind, list) = engine_and_materials(py, materials, backend, precision)?;
     let source = Path::new(TUPLES);
     let batch = borrowed_batch(py, &tuples, list.len())?;
     batch

@@ -76,13 +76,19 @@ impl VulkanBackend {
         })
     }
 
-    /// Copies `bytes` bytes from `from` to `to` with a transfer command and waits for it
-    /// (the host reads `to` afterwards, or the next command does).
-    fn copy(&self, from: &Buffer, to: &Buffer, bytes: u64) -> Result<()> {
+    /// Copies `bytes` bytes from `from` to `to` with a transfer command and waits for it:
+    /// after the host's, earlier transfers' or the kernels' writes to `from`, and before
+    /// the host's or a later transfer's reads of `to`.
+    pub(super) fn copy(&self, from: &Buffer, to: &Buffer, bytes: u64) -> Result<()> {
         self.one_shot(|d, cmd| {
-            // Host writes and earlier transfers → this copy; this copy → host reads.
+            // Host writes, earlier transfers and kernels → this copy; this copy → host reads
+            // and later transfers.
             let before = [vk::MemoryBarrier::default()
-                .src_access_mask(vk::AccessFlags::HOST_WRITE | vk::AccessFlags::TRANSFER_WRITE)
+                .src_access_mask(
+                    vk::AccessFlags::HOST_WRITE
+                        | vk::AccessFlags::TRANSFER_WRITE
+                        | vk::AccessFlags::SHADER_WRITE,
+                )
                 .dst_access_mask(vk::AccessFlags::TRANSFER_READ)];
             let after = [vk::MemoryBarrier::default()
                 .src_access_mask(vk::AccessFlags::TRANSFER_WRITE)
@@ -92,7 +98,9 @@ impl VulkanBackend {
             unsafe {
                 d.cmd_pipeline_barrier(
                     cmd,
-                    vk::PipelineStageFlags::HOST | vk::PipelineStageFlags::TRANSFER,
+                    vk::PipelineStageFlags::HOST
+                        | vk::PipelineStageFlags::TRANSFER
+                        | vk::PipelineStageFlags::COMPUTE_SHADER,
                     vk::PipelineStageFlags::TRANSFER,
                     vk::DependencyFlags::empty(),
                     &before,

@@ -398,45 +398,9 @@ impl VulkanBackend {
     /// `floats` floats from the start of device-local `buffer`, through a staging copy.
     fn read_resident(&mut self, buffer: &Buffer, floats: usize) -> Result<Vec<f32>> {
         let staging = Buffer::new(&self.device, 4 * floats as u64, MemoryUse::Readback)?;
-        self.one_shot(|d, cmd| {
-            // Compute writes (earlier submissions) → this copy; this copy → host reads.
-            let before = [vk::MemoryBarrier::default()
-                .src_access_mask(vk::AccessFlags::SHADER_WRITE)
-                .dst_access_mask(vk::AccessFlags::TRANSFER_READ)];
-            let after = [vk::MemoryBarrier::default()
-                .src_access_mask(vk::AccessFlags::TRANSFER_WRITE)
-                .dst_access_mask(vk::AccessFlags::HOST_READ)];
-            // SAFETY: recording into slot 0's begun command buffer; both buffers are live
-            // and the region lies inside each.
-            unsafe {
-                d.cmd_pipeline_barrier(
-                    cmd,
-                    vk::PipelineStageFlags::COMPUTE_SHADER,
-                    vk::PipelineStageFlags::TRANSFER,
-                    vk::DependencyFlags::empty(),
-                    &before,
-                    &[],
-                    &[],
-                );
-                d.cmd_copy_buffer(
-                    cmd,
-                    buffer.raw(),
-                    staging.raw(),
-                    &[vk::BufferCopy::default().size(4 * floats as u64)],
-                );
-                d.cmd_pipeline_barrier(
-                    cmd,
-                    vk::PipelineStageFlags::TRANSFER,
-                    vk::PipelineStageFlags::HOST,
-                    vk::DependencyFlags::empty(),
-                    &after,
-                    &[],
-                    &[],
-                );
-            }
-        })?;
+        self.copy(buffer, &staging, 4 * floats as u64)?;
         let mut out = vec![0f32; floats];
-        // SAFETY: `one_shot` waited for the copy, whose barrier made it visible to the host.
+        // SAFETY: `copy` waited for the copy, whose barrier made it visible to the host.
         unsafe { staging.read(0, &mut out) };
         Ok(out)
     }
