@@ -3,7 +3,10 @@
 //! to `.npy` with the `npyz` crate; and the local-frame form [`LocalBatch`], `n × 6` rows
 //! `Lx Ly Lz Vx Vy Vz` with N = +z and one material for the whole batch.
 
+mod material_column;
 pub mod rows;
+
+use material_column::{material_in_range, material_index};
 
 use crate::cancel::Cancel;
 use crate::error::{Error, Result};
@@ -425,25 +428,6 @@ pub fn check_tangent_rows(
     })
 }
 
-/// Whether [`material_index`] accepts `m`, in a form the compiler vectorises at the
-/// baseline instruction set (a signed conversion, which SSE2 has for four lanes at once):
-/// `as i32` saturates (NaN → 0, below −2^31 → `i32::MIN`, from 2^31 → `i32::MAX`, which
-/// comes back as 2^31 and so has its own test), and the round trip gives `m` back exactly
-/// when `m` is an integer in range.
-#[inline]
-fn material_in_range(m: f32, count: usize) -> bool {
-    let i = m as i32;
-    (i as f32 == m) & (i >= 0) & (i != i32::MAX) & ((i as i64) < count as i64)
-}
-
-/// `m` (a row's material column) as an index below `count`: a non-negative integer, −0
-/// counting as 0, below 2^31 − 1 (no table comes near). The read stage runs this on every
-/// row, so no `trunc` call: see [`material_in_range`], which it agrees with.
-#[inline]
-pub(crate) fn material_index(m: f32, count: usize) -> Option<usize> {
-    material_in_range(m, count).then_some(m as usize)
-}
-
 /// Opens `path` for reading, with its size when it is a regular file (a pipe's is unknown).
 pub(crate) fn open_sized(path: &Path) -> Result<(BufReader<File>, Option<u64>)> {
     let file = File::open(path).map_err(|source| Error::Io {
@@ -767,37 +751,5 @@ mod tests {
         );
         let cols = Batch::borrowed(&rows[..9], 9, 2, Path::new("tuples")).unwrap_err();
         assert!(cols.to_string().contains("found 9"), "{cols}");
-    }
-
-    /// The material column's rule at its edges: the integers below the count (and −0),
-    /// nothing else — fractions, negatives, NaN, infinities, the count itself, and the
-    /// values where `as u32` saturates.
-    #[test]
-    fn a_material_index_is_a_nonnegative_integer_below_the_count() {
-        for (m, count, want) in [
-            (0.0, 1, Some(0)),
-            (-0.0, 1, Some(0)),
-            (2.0, 3, Some(2)),
-            (3.0, 3, None),
-            (0.5, 3, None),
-            (2.999_999_8, 3, None),
-            (-1.0, 3, None),
-            (-0.25, 3, None),
-            (f32::NAN, 3, None),
-            (f32::INFINITY, 3, None),
-            (f32::NEG_INFINITY, 3, None),
-            (4_294_967_296.0, usize::MAX, None),
-            (1e10, usize::MAX, None),
-            (16_777_216.0, 16_777_217, Some(16_777_216)),
-            (2_147_483_648.0, usize::MAX, None),
-            (-2_147_483_648.0, usize::MAX, None),
-        ] {
-            assert_eq!(material_index(m, count), want, "m = {m}, count = {count}");
-            assert_eq!(
-                material_in_range(m, count),
-                want.is_some(),
-                "m = {m}, count = {count}"
-            );
-        }
     }
 }

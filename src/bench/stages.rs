@@ -145,7 +145,8 @@ pub fn measure(
     let mut out = first.clone();
     read_pass(&input, materials.len(), chunk)?;
 
-    let (mut read, mut copy, mut eng, mut write, mut write_copy, mut e2e) = Default::default();
+    let [mut read, mut copy, mut eng, mut write, mut write_copy, mut e2e] =
+        std::array::from_fn::<Times, 6, _>(|_| Times::default());
     let (mut upload_s, mut readback_s) = (Vec::new(), Vec::new());
     let cancel = Cancel::new();
     // The write stage writes one evaluated chunk's values for every chunk (the rate does
@@ -153,9 +154,9 @@ pub fn measure(
     let blocks: Vec<&[f32]> = chunks.iter().map(|c| &first.brdf[..3 * c.len()]).collect();
     for _ in 0..repeats.max(1) {
         let ((), w, c) = timed(|| read_pass(&input, materials.len(), chunk))?;
-        Times::push(&mut read, w, c);
+        read.push(w, c);
         let ((), w, c) = timed(|| copy_pass(&input, chunk * 4 * batch.columns()))?;
-        Times::push(&mut copy, w, c);
+        copy.push(w, c);
 
         if let Engine::Vulkan(v) = &mut engine {
             v.reset_host_stages();
@@ -169,7 +170,7 @@ pub fn measure(
             }
             Ok(())
         })?;
-        Times::push(&mut eng, w, c);
+        eng.push(w, c);
         if let Engine::Vulkan(v) = &engine {
             let s = v.host_stages();
             upload_s.push(s.upload_s);
@@ -178,10 +179,10 @@ pub fn measure(
 
         remove(&output);
         let ((), w, c) = timed(|| stream::write_chunks(&output, n as u64, 3, &blocks, &cancel))?;
-        Times::push(&mut write, w, c);
+        write.push(w, c);
         remove(&output);
         let ((), w, c) = timed(|| write_copy_pass(&output, &blocks))?;
-        Times::push(&mut write_copy, w, c);
+        write_copy.push(w, c);
 
         let job = StreamJob {
             spike: None,
@@ -198,7 +199,7 @@ pub fn measure(
         };
         remove(&output);
         let (_, w, c) = timed(|| stream::evaluate(&job, engine.backend(), &cancel, |_, _| {}))?;
-        Times::push(&mut e2e, w, c);
+        e2e.push(w, c);
     }
     let (kernel, link) = match &mut engine {
         Engine::Vulkan(v) => (

@@ -20,6 +20,7 @@ pub use state::{HostStages, VulkanBackend, FRAMES_IN_FLIGHT};
 pub use timing::{KernelClock, KernelTiming};
 
 use super::context::{Device, DeviceSelector, ValidationCounter};
+use super::emulate_ftz::flush_to_zero_scope;
 use super::kernel::{Kernels, WORKGROUP_SIZE};
 use super::layout::{
     gpu_materials, measured_tables, GpuCounts, GpuMaterial, PushConstants, BINDING_COUNT,
@@ -731,39 +732,6 @@ impl VulkanBackend {
     }
 }
 
-/// Runs `f` — the device's creation, during which a CPU driver (lavapipe) starts the
-/// threads that run the kernel — with the x86-64 flush-to-zero and denormals-are-zero
-/// modes set when `VKBRDF_EMULATE_FTZ=1`: new threads inherit the floating-point
-/// environment, so the kernel then runs on lavapipe with f32 subnormals flushed, as GPUs
-/// run it. A testing aid (the stress corpus's subnormal rows behaved differently on an H200
-/// than on lavapipe); the calling thread's mode is restored before `f`'s result returns.
-fn flush_to_zero_scope<T>(f: impl FnOnce() -> T) -> T {
-    #[cfg(target_arch = "x86_64")]
-    if std::env::var("VKBRDF_EMULATE_FTZ").as_deref() == Ok("1") {
-        #[allow(deprecated)]
-        use std::arch::x86_64::{_mm_getcsr, _mm_setcsr};
-        const FTZ_DAZ: u32 = 0x8040; // MXCSR bits 15 (flush to zero) and 6 (denormals are zero)
-                                     // SAFETY: reading MXCSR has no effect.
-        #[allow(deprecated)]
-        let old = unsafe { _mm_getcsr() };
-        // SAFETY: writing MXCSR changes only this thread's SSE rounding and denormal modes;
-        // the value read above is restored below, before any host code of vkbrdf computes
-        // with subnormals on this thread.
-        #[allow(deprecated)]
-        unsafe {
-            _mm_setcsr(old | FTZ_DAZ)
-        };
-        let out = f();
-        // SAFETY: as above; restores the value read before.
-        #[allow(deprecated)]
-        unsafe {
-            _mm_setcsr(old)
-        };
-        return out;
-    }
-    f()
-}
-
 /// Makes `buffer` at least `bytes` large (replacing a smaller one; the old one is freed
 /// first, so the budget holds one of them at a time).
 fn ensure(
@@ -811,30 +779,5 @@ impl Backend for VulkanBackend {
 
     fn generated_directions(&mut self) -> Option<&mut dyn crate::backend::GeneratedDirections> {
         Some(self)
-    }
-}
-
-/// The kernel makes slice and importance-sample directions on the device.
-impl crate::backend::GeneratedDirections for VulkanBackend {
-    fn half_diff_slice(
-        &mut self,
-        material: &Material,
-        grid: crate::directions::SliceGrid,
-        request: &Request,
-    ) -> Option<Result<Output>> {
-        // Larger grids go through tuples (the caller builds them).
-        (grid.texels() <= generated::MAX_GENERATED_TEXELS)
-            .then(|| VulkanBackend::half_diff_slice(self, material, grid, request))
-    }
-
-    fn importance_sums(
-        &mut self,
-        job: &crate::directions::ImportanceJob,
-        progress: &mut dyn FnMut(u64),
-    ) -> Option<Result<Vec<[f64; 2]>>> {
-        // Beyond the kernel's 2^24 blocks the caller sends the samples as tuples.
-        let blocks = u64::from(job.samples.div_ceil(generated::SAMPLES_PER_BLOCK));
-        (job.points.len() as u64 * blocks <= generated::MAX_GENERATED_TEXELS)
-            .then(|| VulkanBackend::importance_sums(self, job, progress))
     }
 }

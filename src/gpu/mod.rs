@@ -26,6 +26,7 @@
 
 mod context;
 pub mod devices;
+mod emulate_ftz;
 mod evaluator;
 pub mod kernel;
 pub mod layout;

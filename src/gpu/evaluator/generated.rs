@@ -286,3 +286,28 @@ impl VulkanBackend {
             .collect())
     }
 }
+
+/// The kernel makes slice and importance-sample directions on the device.
+impl crate::backend::GeneratedDirections for VulkanBackend {
+    fn half_diff_slice(
+        &mut self,
+        material: &Material,
+        grid: crate::directions::SliceGrid,
+        request: &Request,
+    ) -> Option<Result<Output>> {
+        // Larger grids go through tuples (the caller builds them).
+        (grid.texels() <= MAX_GENERATED_TEXELS)
+            .then(|| VulkanBackend::half_diff_slice(self, material, grid, request))
+    }
+
+    fn importance_sums(
+        &mut self,
+        job: &crate::directions::ImportanceJob,
+        progress: &mut dyn FnMut(u64),
+    ) -> Option<Result<Vec<[f64; 2]>>> {
+        // Beyond the kernel's 2^24 blocks the caller sends the samples as tuples.
+        let blocks = u64::from(job.samples.div_ceil(SAMPLES_PER_BLOCK));
+        (job.points.len() as u64 * blocks <= MAX_GENERATED_TEXELS)
+            .then(|| VulkanBackend::importance_sums(self, job, progress))
+    }
+}
