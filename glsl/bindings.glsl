@@ -6,6 +6,8 @@
 #ifndef VKBRDF_BINDINGS_GLSL
 #define VKBRDF_BINDINGS_GLSL
 
+#include "layout.glsl"
+
 // Rows `Lx Ly Lz Vx Vy Vz Nx Ny Nz material [Tx Ty Tz]` (src/batch.rs), row-major f32,
 // read as RGBA32F texels of a uniform texel buffer over the same bytes (the storage-buffer
 // binding BINDING_TUPLES is not read by the kernel). On lavapipe a texelFetch of 4 floats

@@ -5,6 +5,9 @@
 #ifndef VKBRDF_COUNTS_GLSL
 #define VKBRDF_COUNTS_GLSL
 
+#include "bindings.glsl"
+#include "frame_fields.glsl"
+
 // The chunk row that uploaded row `row` came from (see Order).
 uint original_row(uint row) {
 #if defined(BUCKETED)

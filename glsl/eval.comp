@@ -1,16 +1,17 @@
 #version 450
 // eval.comp — the BRDF kernel's entry: one invocation per tuple of one chunk (or, for the
-// tables' integrals, per block of samples). Each idea lives in its own file, included here
-// in the order it is needed:
+// tables' integrals, per block of samples). Each idea lives in its own file, and each file
+// includes what it uses (tests/glsl_includes.rs); the ones this entry calls:
 //   bindings.glsl     the buffers and push constants
 //   input.glsl        a row read from its texels (the f32 bits), input_vector, exact64
 //   generators.glsl   rows and half vectors made on the device (slice, importance sampling)
-//   frame.glsl        the frame of FORMULAS.md §1 and its classification (frame64.glsl or
-//                     frame32.glsl for the scalars)
+//   frame.glsl        the frame of FORMULAS.md §1 (its fields in frame_fields.glsl) and its
+//                     classification (frame64.glsl or frame32.glsl for the scalars)
 //   measured.glsl     MERL lookups
 //   integrators.glsl  the albedo/DFG sums
 //   counts.glsl       invalid, below-horizon and saturated counts
-// and models.glsl / terms.glsl (§2-§6) with material.glsl's accessors of GpuMaterial.
+// and evaluate.glsl (the model dispatch over models.glsl / terms.glsl, §2-§6, and
+// htsg.glsl) with material.glsl's accessors of GpuMaterial.
 //
 // Compiled once per FeatureSet (src/gpu/kernel.rs): the HAS_* / WRITE_TERMS macros decide
 // which models, terms and outputs exist at all. Also injected from Rust (said once there):
@@ -26,7 +27,7 @@
 #endif
 
 #include "layout.glsl"
-#include "models.glsl"
+#include "evaluate.glsl"
 
 layout(local_size_x_id = 0) in;
 
@@ -38,33 +39,6 @@ layout(local_size_x_id = 0) in;
 #if defined(HAS_MEASURED)
 #include "measured.glsl"
 #endif
-
-Eval evaluate(Frame f, GpuMaterial m) {
-    switch (material_model(m)) {
-#if defined(HAS_LAMBERT)
-    case MODEL_LAMBERT: return model_lambert(m);
-#endif
-#if defined(HAS_PHONG)
-    case MODEL_PHONG: return model_phong(f, m);
-#endif
-#if defined(HAS_BLINN_PHONG)
-    case MODEL_BLINN_PHONG: return model_blinn_phong(f, m);
-#endif
-#if defined(HAS_RTR)
-    case MODEL_RTR: return model_rtr(f, m);
-#endif
-#if defined(HAS_WARD)
-    case MODEL_WARD: return model_ward(f, m);
-#endif
-#if defined(HAS_COOK_TORRANCE)
-    case MODEL_COOK_TORRANCE: return model_cook_torrance(f, m);
-#endif
-#if defined(HAS_HTSG)
-    case MODEL_HTSG: return model_htsg(f, m);
-#endif
-    default: return eval_zero();
-    }
-}
 
 #include "integrators.glsl"
 #include "counts.glsl"

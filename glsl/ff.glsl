@@ -17,6 +17,14 @@
 
 #include "math.glsl"
 
+// A value past float32's precision or range: f64 where the device has it, else a
+// float-float pair (hi, lo) or m 2^e form.
+#if defined(HAS_FLOAT64)
+#define double_or_float double
+#else
+#define double_or_float vec2
+#endif
+
 // a + b exactly, as (rounded sum, its error): Knuth's branch-free two-sum.
 vec2 two_sum(float a, float b) {
     precise float s = a + b;
@@ -328,5 +336,17 @@ float xf_float(vec2 a) {
     }
     return ldexp(a.x, int(a.y));
 }
+
+// e^x as m 2^e for x = x.hi + x.lo beyond float32's exp range: x = k ln 2 + r, |r| <=
+// ln 2 / 2. A pair, because x is ~100 at subnormal cosines and a float x would carry an
+// absolute error of 4e-6, the result as much relatively.
+vec2 xf_exp(vec2 x) {
+    float k = floor(x.x * LOG2E + 0.5);
+    float r = (x.x - k * LN2_HI) + (x.y - k * LN2_LO);
+    return xf_norm(exp_acc(r), k);
+}
+
+// ln 0 as a pair's high word: far below any exponent xf_exp is given, so e^it is 0.
+const float XF_LN_ZERO = -1e30;
 
 #endif

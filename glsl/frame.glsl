@@ -5,10 +5,10 @@
 #ifndef VKBRDF_FRAME_GLSL
 #define VKBRDF_FRAME_GLSL
 
-const uint STATUS_VALID = 0u;
-const uint STATUS_INVALID = 1u;
-const uint STATUS_BELOW_HORIZON = 2u;
-
+#include "math.glsl"
+#include "frame_fields.glsl"
+#include "material.glsl"
+#include "input.glsl"
 #include "frame64.glsl"
 #include "frame32.glsl"
 

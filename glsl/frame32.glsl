@@ -6,6 +6,11 @@
 #ifndef VKBRDF_FRAME32_GLSL
 #define VKBRDF_FRAME32_GLSL
 
+#include "ff.glsl"
+#include "frame_fields.glsl"
+#include "material.glsl"
+#include "input.glsl"
+
 #if !defined(HAS_FLOAT64)
 // a 2^k with max |a_i| in [1, 2) (a finite and non-zero: checked before). A power of two:
 // exact, so the frame's pairs see the inputs themselves; without it the squares of

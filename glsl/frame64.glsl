@@ -6,6 +6,11 @@
 #ifndef VKBRDF_FRAME64_GLSL
 #define VKBRDF_FRAME64_GLSL
 
+#include "math.glsl"
+#include "frame_fields.glsl"
+#include "material.glsl"
+#include "input.glsl"
+
 #if defined(HAS_FLOAT64)
 
 // An f64 value of the frame rounded to f32 as a GPU rounds it: below FLT_MIN, 0. GPUs

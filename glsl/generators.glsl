@@ -6,6 +6,10 @@
 #ifndef VKBRDF_GENERATORS_GLSL
 #define VKBRDF_GENERATORS_GLSL
 
+#include "math.glsl"
+#include "bindings.glsl"
+#include "input.glsl"
+
 #if defined(GENERATE_HALF_DIFF) || defined(GENERATE_IMPORTANCE)
 
 // Texel `g` of the half/difference slice (src/table/slice.rs, Rusinkiewicz 1998), made on

@@ -19,6 +19,12 @@
 #ifndef VKBRDF_HTSG_GLSL
 #define VKBRDF_HTSG_GLSL
 
+#include "math.glsl"
+#include "ff.glsl"
+#include "frame_fields.glsl"
+#include "material.glsl"
+#include "models.glsl"
+
 #if defined(HAS_HTSG)
 
 const float SQRT_PI = 1.77245385090551602730;
@@ -134,7 +140,7 @@ Eval model_htsg(Frame f, GpuMaterial m) {
     Eval e;
     e.k = q_i * q_o * INV_PI;
     e.g = htsg_g(f, s2, ns);
-    e.f = conductor_f_frame(f, m);
+    e.f = frame_conductor_f(f, m);
     for (int ch = 0; ch < 3; ch++) {
         float t = m.specular[ch];
         float norm = 0.0625 * t * t;

@@ -7,6 +7,8 @@
 #ifndef VKBRDF_INPUT_GLSL
 #define VKBRDF_INPUT_GLSL
 
+#include "bindings.glsl"
+
 #if defined(HAS_TANGENTS)
 const uint COLUMNS = 13u;
 #else

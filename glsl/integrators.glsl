@@ -5,6 +5,13 @@
 #ifndef VKBRDF_INTEGRATORS_GLSL
 #define VKBRDF_INTEGRATORS_GLSL
 
+#include "math.glsl"
+#include "bindings.glsl"
+#include "input.glsl"
+#include "generators.glsl"
+#include "frame.glsl"
+#include "evaluate.glsl"
+
 #if defined(GENERATE_IMPORTANCE)
 // The albedo and split-sum DFG tables (src/table/albedo.rs, which states the method and
 // its accuracy): invocation g integrates SAMPLES_PER_BLOCK samples of one (mu, alpha)

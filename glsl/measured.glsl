@@ -6,6 +6,11 @@
 #ifndef VKBRDF_MEASURED_GLSL
 #define VKBRDF_MEASURED_GLSL
 
+#include "material.glsl"
+#include "input.glsl"
+#include "frame64.glsl"
+#include "models.glsl"
+
 layout(std430, set = 0, binding = BINDING_MERL) readonly buffer Merl {
     float merl[];
 };

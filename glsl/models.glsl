@@ -6,6 +6,7 @@
 #ifndef VKBRDF_MODELS_GLSL
 #define VKBRDF_MODELS_GLSL
 
+#include "frame_fields.glsl"
 #include "material.glsl"
 #include "terms.glsl"
 
@@ -41,15 +42,6 @@ Eval eval_lobe(GpuMaterial m, float lobe) {
 }
 
 #if defined(HAS_FLOAT64)
-// FORMULAS.md §1, "Overflow": below this cosine the float32 path no longer holds the
-// products the models form (K = 1/(4 cos_i cos_o) leaves float32 below ~1e-19, m^2 tan^2
-// at roughness 1e4 below 1e-15, cos^2 becomes subnormal below 1e-19 and a cosine under
-// 7e-46 rounds to 0), so the cosine-dependent factors are formed in f64 from the frame's
-// f64 cosines instead. Above it every such factor is finite in float32 (K <= 2.5e29,
-// m^2 tan^2 <= 1e38 with the parser's roughness <= 1e4). Taken by a vanishing fraction of
-// tuples, so the branch costs nothing measurable.
-const double TINY_COS = 1e-15;
-
 // A non-microfacet model whose lobe was formed in f64: c_diff/pi + c_spec * lobe in f64,
 // each output rounded once (+inf beyond FLT_MAX, saturated by the caller).
 Eval eval_lobe_f64(GpuMaterial m, double lobe) {
@@ -65,20 +57,6 @@ Eval eval_lobe_f64(GpuMaterial m, double lobe) {
 #endif
 
 #if !defined(HAS_FLOAT64)
-// The f32 frame's TINY_COS (the same rule as above): below it the cosine-dependent factors
-// are formed as m 2^e (ff.glsl, xf) from the frame's cos_*_xf, f64's range at float32's
-// precision.
-const float TINY_COS = 1e-15;
-
-// e^x as m 2^e for x = x.hi + x.lo beyond float32's exp range: x = k ln 2 + r, |r| <=
-// ln 2 / 2. A pair, because x is ~100 at subnormal cosines and a float x would carry an
-// absolute error of 4e-6, the result as much relatively.
-vec2 xf_exp(vec2 x) {
-    float k = floor(x.x * LOG2E + 0.5);
-    float r = (x.x - k * LN2_HI) + (x.y - k * LN2_LO);
-    return xf_norm(exp_acc(r), k);
-}
-
 // eval_lobe_f64 without f64: c_diff/pi + c_spec * lobe with lobe = m 2^e, each output
 // rounded once (+inf beyond FLT_MAX, saturated by the caller).
 Eval eval_lobe_xf(GpuMaterial m, vec2 lobe) {
@@ -128,7 +106,7 @@ float slope2_h(Frame f, GpuMaterial m) {
 // (FORMULAS.md §3): the argument of Smith's Lambda and of the smith-fast fit. w.t, w.b and
 // |n x w|^2 come from make_frame (in f64 where the device has it: with roughness ratios
 // up to 1e4 the f32 tangent frame's error put G 3e-4 off at grazing, stress corpus).
-float smith_q2(GpuMaterial m, vec2 w_tb, float sin2_w, float cos_w) {
+float m2_tan2(GpuMaterial m, vec2 w_tb, float sin2_w, float cos_w) {
     float num;
 #if defined(HAS_ANISOTROPIC)
     if (is_anisotropic(m)) {
@@ -146,7 +124,7 @@ float smith_q2(GpuMaterial m, vec2 w_tb, float sin2_w, float cos_w) {
 #if defined(HAS_G_SMITH) || defined(HAS_G_SMITH_CORRELATED)
 // Smith's Lambda for the material's distribution (Beckmann or GGX; the material validation
 // rejects smith* with gaussian or blinn).
-float smith_lambda(GpuMaterial m, float q2) {
+float distribution_lambda(GpuMaterial m, float q2) {
 #if defined(HAS_LAMBDA_BECKMANN)
     if (material_distribution(m) == DIST_BECKMANN) {
         return beckmann_lambda(q2);
@@ -261,40 +239,38 @@ Eval model_ward(Frame f, GpuMaterial m) {
 // Smith's Lambda in f64 for direction w with n.w = cos_w (f64): float32's for cos_w >=
 // TINY_COS; below it from q2 = m^2 tan^2 in f64 (in float32 it is +inf, Lambda +inf and G 0,
 // where the exact G is as small as 1e-45 and G K is finite).
-double smith_lambda_f64(GpuMaterial m, vec2 w_tb, float sin2_w, double cos_w) {
+double distribution_lambda_f64(GpuMaterial m, vec2 w_tb, float sin2_w, double cos_w) {
     if (cos_w >= TINY_COS) {
 #if defined(HAS_G_SMITH) || defined(HAS_G_SMITH_CORRELATED)
-        return double(smith_lambda(m, smith_q2(m, w_tb, sin2_w, float(cos_w))));
+        return double(distribution_lambda(m, m2_tan2(m, w_tb, sin2_w, float(cos_w))));
 #else
         return 0.0;
 #endif
     }
 #if defined(HAS_G_SMITH) || defined(HAS_G_SMITH_CORRELATED) || defined(HAS_G_SMITH_FAST)
-    double q2 = double(smith_q2(m, w_tb, sin2_w, 1.0)) / (cos_w * cos_w);
+    double q2 = double(m2_tan2(m, w_tb, sin2_w, 1.0)) / (cos_w * cos_w);
 #else
     double q2 = 0.0;
 #endif
 #if defined(HAS_LAMBDA_BECKMANN)
     if (material_distribution(m) == DIST_BECKMANN) {
-        // a = 1/(m tan) < TINY_COS/(1e-7 sin) ~ 1e-8 (roughness >= 1e-7): exp(-a^2) = 1
-        // and erfc(a) = 1 - 2a/sqrt(pi) to O(a^2) < 1e-16 relative, so Lambda =
-        // (exp(-a^2)/(a sqrt(pi)) - erfc(a))/2 = 1/(2 a sqrt(pi)) - 1/2 + a/sqrt(pi).
-        double a = 1.0 / sqrt(q2);
-        return 0.5 / (a * double(1.0 / INV_SQRT_PI)) - 0.5 + a * double(INV_SQRT_PI);
+        return beckmann_lambda_f64(q2);
     }
 #endif
-    // GGX: (sqrt(1 + q2) - 1)/2; q2 >= 1e14 here, so the subtraction does not cancel.
-    return 0.5 * (sqrt(1.0 + q2) - 1.0);
+#if defined(HAS_LAMBDA_GGX)
+    return ggx_lambda_f64(q2);
+#else
+    return 0.0;
+#endif
 }
 
 // G1 of Walter et al. 2007's rational fit (smith_fast_g1) in f64 for one direction.
-double smith_fast_g1_f64(GpuMaterial m, vec2 w_tb, float sin2_w, double cos_w) {
+double fast_g1_f64(GpuMaterial m, vec2 w_tb, float sin2_w, double cos_w) {
 #if defined(HAS_G_SMITH_FAST)
     if (cos_w >= TINY_COS) {
-        return double(smith_fast_g1(smith_q2(m, w_tb, sin2_w, float(cos_w))));
+        return double(smith_fast_g1(m2_tan2(m, w_tb, sin2_w, float(cos_w))));
     }
-    double a = cos_w / sqrt(double(smith_q2(m, w_tb, sin2_w, 1.0))); // < 1.6 here
-    return (3.535 * a + 2.181 * a * a) / (1.0 + 2.276 * a + 2.577 * a * a);
+    return smith_fast_g1_f64(cos_w / sqrt(double(m2_tan2(m, w_tb, sin2_w, 1.0)))); // a < 1.6
 #else
     return 1.0;
 #endif
@@ -309,118 +285,119 @@ double d_f64(Frame f, GpuMaterial m) {
     double ln_cos = f.cos_h >= FLT_MIN ? double(log_cos(f.cos_h, f.sin2_h)) : log_f64(f.cos_h_exact);
     switch (material_distribution(m)) {
 #if defined(HAS_D_GAUSSIAN)
-    case DIST_GAUSSIAN: {
-        double delta = double(atan2_positive(sqrt(f.sin2_h), f.cos_h));
-        return exp_f64(-delta * delta * double(material_inv_roughness2(m).x));
-    }
+    case DIST_GAUSSIAN: return gaussian_d_f64(f.cos_h, f.sin2_h, material_inv_roughness2(m).x);
 #endif
 #if defined(HAS_D_BECKMANN)
-    case DIST_BECKMANN: {
-        double c2 = f.cos_h_exact * f.cos_h_exact;
-        return exp_f64(log_f64(double(material_norm(m))) - double(slope2_h(f, m)) / c2 - 4.0 * ln_cos);
-    }
+    case DIST_BECKMANN: return beckmann_d_f64(slope2_h(f, m), f.cos_h_exact, ln_cos, material_norm(m));
 #endif
 #if defined(HAS_D_BLINN)
-    case DIST_BLINN:
-        return exp_f64(log_f64(double(material_norm(m))) + double(material_exponent(m)) * ln_cos);
+    case DIST_BLINN: return blinn_d_f64(ln_cos, material_exponent(m), material_norm(m));
 #endif
 #if defined(HAS_D_CHARLIE)
-    case DIST_CHARLIE: {
-        // ln sin_h as charlie_d takes it; sin_h = 0 is D = 0.
-        if (f.sin2_h == 0.0) {
-            return 0.0;
-        }
-        double ln_sin = double(log_cos(sqrt(f.sin2_h), f.cos_h * f.cos_h));
-        return exp_f64(log_f64(double(material_norm(m))) + double(material_exponent(m)) * ln_sin);
-    }
+    case DIST_CHARLIE: return charlie_d_f64(f.cos_h, f.sin2_h, material_exponent(m), material_norm(m));
 #endif
-    default: // GGX: D >= 1/(pi m^2 (1/m^2)^2) > 1e-15 for roughness in [1e-7, 1e4]
+    default: // GGX: its D is a normal float32 at any cosine (terms.glsl)
         return 0.0;
     }
 }
 
 // G and K in f64 for a tuple with min(cos_i, cos_o) < TINY_COS, where float32 overflows K
 // and underflows G although their product stays finite (FORMULAS.md §1, "Overflow").
-void cook_torrance_gk_f64(Frame f, GpuMaterial m, uint convention, out double g, out double k) {
+void microfacet_gk_f64(Frame f, GpuMaterial m, uint convention, out double g, out double k) {
     double ci = f.cos_i_exact, co = f.cos_o_exact;
     g = 1.0;
     switch (material_geometry(m)) {
-    case GEOM_COOK_TORRANCE: {
-        double t = 2.0 * f.cos_h_exact / f.c_exact; // the f32 cos_h may be flushed to 0
-        g = min(1.0, min(t * co, t * ci));
-        break;
-    }
+#if defined(HAS_G_COOK_TORRANCE)
+    case GEOM_COOK_TORRANCE: g = cook_torrance_g_f64(ci, co, f.cos_h_exact, f.c_exact); break;
+#endif
+#if defined(HAS_G_SMITH)
     case GEOM_SMITH:
-        g = 1.0 / ((1.0 + smith_lambda_f64(m, f.v_tb, f.sin2_o, co))
-                   * (1.0 + smith_lambda_f64(m, f.l_tb, f.sin2_i, ci)));
+        g = smith_g_f64(distribution_lambda_f64(m, f.v_tb, f.sin2_o, co),
+                        distribution_lambda_f64(m, f.l_tb, f.sin2_i, ci));
         break;
+#endif
+#if defined(HAS_G_SMITH_CORRELATED)
     case GEOM_SMITH_CORRELATED:
-        g = 1.0 / (1.0 + smith_lambda_f64(m, f.v_tb, f.sin2_o, co)
-                   + smith_lambda_f64(m, f.l_tb, f.sin2_i, ci));
+        g = smith_correlated_g_f64(distribution_lambda_f64(m, f.v_tb, f.sin2_o, co),
+                                   distribution_lambda_f64(m, f.l_tb, f.sin2_i, ci));
         break;
+#endif
+#if defined(HAS_G_SMITH_FAST)
     case GEOM_SMITH_FAST:
-        g = smith_fast_g1_f64(m, f.v_tb, f.sin2_o, co) * smith_fast_g1_f64(m, f.l_tb, f.sin2_i, ci);
+        g = fast_g1_f64(m, f.v_tb, f.sin2_o, co) * fast_g1_f64(m, f.l_tb, f.sin2_i, ci);
         break;
-    case GEOM_SCHLICK_SMITH: { // schlick_smith_g1 per direction, in f64
+#endif
+#if defined(HAS_G_SCHLICK_SMITH)
+    case GEOM_SCHLICK_SMITH: { // 1 - cos as the float32 path forms it (model_cook_torrance)
         double k = double(material_schlick_k(m));
         double omc_o = double(f.sin2_o) / (1.0 + co), omc_i = double(f.sin2_i) / (1.0 + ci);
-        g = co / (co + k * omc_o) * (ci / (ci + k * omc_i));
+        g = schlick_smith_g1_f64(co, omc_o, k) * schlick_smith_g1_f64(ci, omc_i, k);
         break;
     }
-    case GEOM_NEUBELT: // neubelt_g in f64
-        g = ci * co / (ci + co * (1.0 - ci));
-        break;
+#endif
+#if defined(HAS_G_NEUBELT)
+    case GEOM_NEUBELT: g = neubelt_g_f64(ci, co); break;
+#endif
     default: break;
     }
     k = 1.0;
     switch (convention) {
-    case CONV_SEED: k = 1.0 / co; break;
-    case CONV_CT1982: k = double(INV_PI) / (ci * co); break;
-    case CONV_MODERN: k = 0.25 / (ci * co); break;
+#if defined(HAS_CONV_SEED)
+    case CONV_SEED: k = seed_k_f64(ci, co); break;
+#endif
+#if defined(HAS_CONV_CT1982)
+    case CONV_CT1982: k = cook_torrance_1982_k_f64(ci, co); break;
+#endif
+#if defined(HAS_CONV_MODERN)
+    case CONV_MODERN: k = modern_k_f64(ci, co); break;
+#endif
     default: break;
     }
 }
 #endif
 
 #if defined(HAS_COOK_TORRANCE) && !defined(HAS_FLOAT64)
-// The TINY_COS helpers of the f64 branch above, in m 2^e form (the f32 frame), each the
-// same formula: 1 + Lambda (Smith) for direction w with n.w = cos_w < TINY_COS, where
-// q2 = m^2 tan^2 leaves float32 (Lambda ~ sqrt(q2)/(2 sqrt(pi)) Beckmann, sqrt(q2)/2 GGX;
-// the dropped terms are below 1e-8 relative, as sqrt(q2) > 1e8 here).
-vec2 smith_one_plus_lambda_xf(GpuMaterial m, vec2 w_tb, float sin2_w, vec2 cos_w) {
+// The TINY_COS helpers of the f64 branch above, in m 2^e form (the f32 frame): 1 + Lambda
+// (Smith) for direction w with n.w = cos_w < TINY_COS, where q2 = m^2 tan^2 leaves
+// float32 (the distribution's *_one_plus_lambda_xf, from sqrt(q2) > 1e8).
+vec2 one_plus_lambda_tiny_xf(GpuMaterial m, vec2 w_tb, float sin2_w, vec2 cos_w) {
 #if defined(HAS_G_SMITH) || defined(HAS_G_SMITH_CORRELATED) || defined(HAS_G_SMITH_FAST)
-    vec2 sq = xf_div(xf(sqrt(smith_q2(m, w_tb, sin2_w, 1.0))), cos_w); // sqrt(q2)
+    vec2 sq = xf_div(xf(sqrt(m2_tan2(m, w_tb, sin2_w, 1.0))), cos_w); // sqrt(q2)
 #else
     vec2 sq = vec2(0.0);
 #endif
 #if defined(HAS_LAMBDA_BECKMANN)
     if (material_distribution(m) == DIST_BECKMANN) {
-        return xf_add(xf_mul(sq, xf(0.5 * INV_SQRT_PI)), xf(0.5));
+        return beckmann_one_plus_lambda_xf(sq);
     }
 #endif
-    return xf_add(xf_mul(sq, xf(0.5)), xf(0.5));
+#if defined(HAS_LAMBDA_GGX)
+    return ggx_one_plus_lambda_xf(sq);
+#else
+    return xf(1.0);
+#endif
 }
 
 // 1 + Lambda for either cosine: float32's above TINY_COS.
-vec2 smith_one_plus_lambda(GpuMaterial m, vec2 w_tb, float sin2_w, float cos_w, vec2 cos_w_xf) {
+vec2 one_plus_lambda_xf(GpuMaterial m, vec2 w_tb, float sin2_w, float cos_w, vec2 cos_w_xf) {
     if (cos_w >= TINY_COS) {
 #if defined(HAS_G_SMITH) || defined(HAS_G_SMITH_CORRELATED)
-        return xf(1.0 + smith_lambda(m, smith_q2(m, w_tb, sin2_w, cos_w)));
+        return xf(1.0 + distribution_lambda(m, m2_tan2(m, w_tb, sin2_w, cos_w)));
 #else
         return xf(1.0);
 #endif
     }
-    return smith_one_plus_lambda_xf(m, w_tb, sin2_w, cos_w_xf);
+    return one_plus_lambda_tiny_xf(m, w_tb, sin2_w, cos_w_xf);
 }
 
 // Walter et al.'s G1 fit for either cosine: below TINY_COS a = cos_w/sqrt(m^2 sin^2) <
-// 1e-8 and G1 = 3.535 a to 1e-8 relative.
-vec2 smith_fast_g1_xf(GpuMaterial m, vec2 w_tb, float sin2_w, float cos_w, vec2 cos_w_xf) {
+// 1e-8 (smith_fast_g1_xf).
+vec2 fast_g1_xf(GpuMaterial m, vec2 w_tb, float sin2_w, float cos_w, vec2 cos_w_xf) {
 #if defined(HAS_G_SMITH_FAST)
     if (cos_w >= TINY_COS) {
-        return xf(smith_fast_g1(smith_q2(m, w_tb, sin2_w, cos_w)));
+        return xf(smith_fast_g1(m2_tan2(m, w_tb, sin2_w, cos_w)));
     }
-    return xf_mul(xf(3.535), xf_div(cos_w_xf, xf(sqrt(smith_q2(m, w_tb, sin2_w, 1.0)))));
+    return smith_fast_g1_xf(xf_div(cos_w_xf, xf(sqrt(m2_tan2(m, w_tb, sin2_w, 1.0)))));
 #else
     return xf(1.0);
 #endif
@@ -431,36 +408,21 @@ vec2 smith_fast_g1_xf(GpuMaterial m, vec2 w_tb, float sin2_w, float cos_w, vec2 
 vec2 d_xf(Frame f, GpuMaterial m) {
     vec2 ln_cos = f.cos_h >= FLT_MIN ? vec2(log_cos(f.cos_h, f.sin2_h), 0.0)
                                      : xf_log_pair(f.cos_h_xf);
-    vec2 ln_d = vec2(-1e30, 0.0);
+    vec2 ln_d = vec2(XF_LN_ZERO, 0.0);
     switch (material_distribution(m)) {
 #if defined(HAS_D_GAUSSIAN)
-    case DIST_GAUSSIAN: {
-        float delta = atan2_positive(sqrt(f.sin2_h), f.cos_h);
-        ln_d = vec2(-delta * delta * material_inv_roughness2(m).x, 0.0);
-        break;
-    }
+    case DIST_GAUSSIAN: ln_d = gaussian_ln_d_xf(f.cos_h, f.sin2_h, material_inv_roughness2(m).x); break;
 #endif
 #if defined(HAS_D_BECKMANN)
-    case DIST_BECKMANN: {
-        float x = xf_float(xf_div(xf(slope2_h(f, m)), xf_mul(f.cos_h_xf, f.cos_h_xf)));
-        ln_d = ff_add(vec2(log_acc(material_norm(m)) - min(x, 1e30), 0.0), ff_mul_f(ln_cos, -4.0));
-        break;
-    }
+    case DIST_BECKMANN: ln_d = beckmann_ln_d_xf(slope2_h(f, m), f.cos_h_xf, ln_cos, material_norm(m)); break;
 #endif
 #if defined(HAS_D_BLINN)
-    case DIST_BLINN:
-        ln_d = ff_add(vec2(log_acc(material_norm(m)), 0.0), ff_mul_f(ln_cos, material_exponent(m)));
-        break;
+    case DIST_BLINN: ln_d = blinn_ln_d_xf(ln_cos, material_exponent(m), material_norm(m)); break;
 #endif
 #if defined(HAS_D_CHARLIE)
-    case DIST_CHARLIE:
-        if (f.sin2_h > 0.0) { // sin_h = 0 is D = 0 (ln_d stays -1e30)
-            vec2 ln_sin = vec2(log_cos(sqrt(f.sin2_h), f.cos_h * f.cos_h), 0.0);
-            ln_d = ff_add(vec2(log_acc(material_norm(m)), 0.0), ff_mul_f(ln_sin, material_exponent(m)));
-        }
-        break;
+    case DIST_CHARLIE: ln_d = charlie_ln_d_xf(f.cos_h, f.sin2_h, material_exponent(m), material_norm(m)); break;
 #endif
-    default: // GGX: D > 1e-15 for roughness in [1e-7, 1e4] (see d_f64)
+    default: // GGX: its D is a normal float32 at any cosine (terms.glsl)
         break;
     }
     // Beyond e^-200 the product with any K (<= 1e90) is 0 in float32; xf_exp's range
@@ -468,48 +430,57 @@ vec2 d_xf(Frame f, GpuMaterial m) {
     return ln_d.x < -200.0 ? vec2(0.0) : xf_exp(ln_d);
 }
 
-// cook_torrance_gk_f64 in m 2^e form.
-void cook_torrance_gk_xf(Frame f, GpuMaterial m, uint convention, out vec2 g, out vec2 k) {
+// microfacet_gk_f64 in m 2^e form.
+void microfacet_gk_xf(Frame f, GpuMaterial m, uint convention, out vec2 g, out vec2 k) {
     vec2 ci = f.cos_i_xf, co = f.cos_o_xf;
     g = xf(1.0);
     switch (material_geometry(m)) {
-    case GEOM_COOK_TORRANCE: {
-        // cos_h from its m 2^e form: the float one is subnormal (few bits) or flushed here.
-        vec2 t = xf_div(xf_mul(xf(2.0), f.cos_h_xf), f.c_xf);
-        g = xf_min(xf(1.0), xf_min(xf_mul(t, co), xf_mul(t, ci)));
-        break;
-    }
+#if defined(HAS_G_COOK_TORRANCE)
+    // cos_h from its m 2^e form: the float one is subnormal (few bits) or flushed here.
+    case GEOM_COOK_TORRANCE: g = cook_torrance_g_xf(ci, co, f.cos_h_xf, f.c_xf); break;
+#endif
+#if defined(HAS_G_SMITH)
     case GEOM_SMITH:
-        g = xf_div(xf(1.0), xf_mul(smith_one_plus_lambda(m, f.v_tb, f.sin2_o, f.cos_o, co),
-                                   smith_one_plus_lambda(m, f.l_tb, f.sin2_i, f.cos_i, ci)));
+        g = smith_g_xf(one_plus_lambda_xf(m, f.v_tb, f.sin2_o, f.cos_o, co),
+                       one_plus_lambda_xf(m, f.l_tb, f.sin2_i, f.cos_i, ci));
         break;
+#endif
+#if defined(HAS_G_SMITH_CORRELATED)
     case GEOM_SMITH_CORRELATED:
-        // 1 + Lambda_o + Lambda_i = (1 + Lambda_o) + (1 + Lambda_i) - 1, where the larger
-        // is above 1e8 (one cosine is below TINY_COS), so the -1 is below its precision
-        // unless both are O(1), which they are not here.
-        g = xf_div(xf(1.0), xf_add(smith_one_plus_lambda(m, f.v_tb, f.sin2_o, f.cos_o, co),
-                                   smith_one_plus_lambda(m, f.l_tb, f.sin2_i, f.cos_i, ci)));
+        g = smith_correlated_g_xf(one_plus_lambda_xf(m, f.v_tb, f.sin2_o, f.cos_o, co),
+                                  one_plus_lambda_xf(m, f.l_tb, f.sin2_i, f.cos_i, ci));
         break;
+#endif
+#if defined(HAS_G_SMITH_FAST)
     case GEOM_SMITH_FAST:
-        g = xf_mul(smith_fast_g1_xf(m, f.v_tb, f.sin2_o, f.cos_o, co),
-                   smith_fast_g1_xf(m, f.l_tb, f.sin2_i, f.cos_i, ci));
+        g = xf_mul(fast_g1_xf(m, f.v_tb, f.sin2_o, f.cos_o, co),
+                   fast_g1_xf(m, f.l_tb, f.sin2_i, f.cos_i, ci));
         break;
-    case GEOM_SCHLICK_SMITH: { // schlick_smith_g1 per direction, in m 2^e form
+#endif
+#if defined(HAS_G_SCHLICK_SMITH)
+    case GEOM_SCHLICK_SMITH: { // 1 - cos as the float32 path forms it (model_cook_torrance)
         float k = material_schlick_k(m);
-        g = xf_mul(xf_div(co, xf_add(co, xf(k * (f.sin2_o / (1.0 + f.cos_o))))),
-                   xf_div(ci, xf_add(ci, xf(k * (f.sin2_i / (1.0 + f.cos_i))))));
+        g = xf_mul(schlick_smith_g1_xf(co, f.sin2_o / (1.0 + f.cos_o), k),
+                   schlick_smith_g1_xf(ci, f.sin2_i / (1.0 + f.cos_i), k));
         break;
     }
-    case GEOM_NEUBELT: // neubelt_g in m 2^e form
-        g = xf_div(xf_mul(ci, co), xf_add(ci, xf_mul(co, xf(1.0 - f.cos_i))));
-        break;
+#endif
+#if defined(HAS_G_NEUBELT)
+    case GEOM_NEUBELT: g = neubelt_g_xf(ci, co, 1.0 - f.cos_i); break;
+#endif
     default: break;
     }
     k = xf(1.0);
     switch (convention) {
-    case CONV_SEED: k = xf_div(xf(1.0), co); break;
-    case CONV_CT1982: k = xf_div(xf(INV_PI), xf_mul(ci, co)); break;
-    case CONV_MODERN: k = xf_div(xf(0.25), xf_mul(ci, co)); break;
+#if defined(HAS_CONV_SEED)
+    case CONV_SEED: k = seed_k_xf(ci, co); break;
+#endif
+#if defined(HAS_CONV_CT1982)
+    case CONV_CT1982: k = cook_torrance_1982_k_xf(ci, co); break;
+#endif
+#if defined(HAS_CONV_MODERN)
+    case CONV_MODERN: k = modern_k_xf(ci, co); break;
+#endif
     default: break;
     }
 }
@@ -518,14 +489,14 @@ void cook_torrance_gk_xf(Frame f, GpuMaterial m, uint convention, out vec2 g, ou
 #if defined(HAS_F_CONDUCTOR)
 // The conductor's F at the frame's c, in the form each range of c needs: below c = 1e-12
 // from the frame's f64 (or m 2^e) c, where c^2 leaves float32's range.
-vec3 conductor_f_frame(Frame f, GpuMaterial m) {
+vec3 frame_conductor_f(Frame f, GpuMaterial m) {
 #if defined(HAS_FLOAT64)
     if (f.c_exact < 1e-12) {
         return conductor_f_f64(f.c_exact, m.fresnel0.rgb, m.fresnel1.rgb, material_fresnel_lo(m));
     }
 #else
     if (xf_less(f.c_xf, xf(1e-12))) {
-        return conductor_f_tiny(f.c_xf, m.fresnel0.rgb, m.fresnel1.rgb, material_fresnel_lo(m));
+        return conductor_f_xf(f.c_xf, m.fresnel0.rgb, m.fresnel1.rgb, material_fresnel_lo(m));
     }
 #endif
     return conductor_f(f.c, m.fresnel0.rgb, m.fresnel1.rgb, material_fresnel_lo(m));
@@ -567,19 +538,19 @@ Eval model_cook_torrance(Frame f, GpuMaterial m) {
 #endif
 #if defined(HAS_G_SMITH)
     case GEOM_SMITH:
-        e.g = smith_g(smith_lambda(m, smith_q2(m, f.v_tb, f.sin2_o, f.cos_o)),
-                      smith_lambda(m, smith_q2(m, f.l_tb, f.sin2_i, f.cos_i)));
+        e.g = smith_g(distribution_lambda(m, m2_tan2(m, f.v_tb, f.sin2_o, f.cos_o)),
+                      distribution_lambda(m, m2_tan2(m, f.l_tb, f.sin2_i, f.cos_i)));
         break;
 #endif
 #if defined(HAS_G_SMITH_CORRELATED)
     case GEOM_SMITH_CORRELATED:
-        e.g = smith_correlated_g(smith_lambda(m, smith_q2(m, f.v_tb, f.sin2_o, f.cos_o)),
-                                smith_lambda(m, smith_q2(m, f.l_tb, f.sin2_i, f.cos_i)));
+        e.g = smith_correlated_g(distribution_lambda(m, m2_tan2(m, f.v_tb, f.sin2_o, f.cos_o)),
+                                distribution_lambda(m, m2_tan2(m, f.l_tb, f.sin2_i, f.cos_i)));
         break;
 #endif
 #if defined(HAS_G_SMITH_FAST)
     case GEOM_SMITH_FAST:
-        e.g = smith_fast_g1(smith_q2(m, f.v_tb, f.sin2_o, f.cos_o)) * smith_fast_g1(smith_q2(m, f.l_tb, f.sin2_i, f.cos_i));
+        e.g = smith_fast_g1(m2_tan2(m, f.v_tb, f.sin2_o, f.cos_o)) * smith_fast_g1(m2_tan2(m, f.l_tb, f.sin2_i, f.cos_i));
         break;
 #endif
 #if defined(HAS_G_SCHLICK_SMITH)
@@ -604,7 +575,7 @@ Eval model_cook_torrance(Frame f, GpuMaterial m) {
     case FRESNEL_DIELECTRIC: e.f = dielectric_f(f.c, m.fresnel0.rgb, material_fresnel_lo(m), f.c_exact); break;
 #endif
 #if defined(HAS_F_CONDUCTOR)
-    case FRESNEL_CONDUCTOR: e.f = conductor_f_frame(f, m); break;
+    case FRESNEL_CONDUCTOR: e.f = frame_conductor_f(f, m); break;
 #endif
 #if defined(HAS_F_SCHLICK)
     case FRESNEL_SCHLICK: e.f = schlick_f(f.c, m.fresnel0.rgb); break;
@@ -641,7 +612,7 @@ Eval model_cook_torrance(Frame f, GpuMaterial m) {
     if (tiny || any_non_finite(e.brdf)) {
         double d64 = double(e.d), g64 = double(e.g), k64 = double(e.k);
         if (tiny) {
-            cook_torrance_gk_f64(f, m, convention, g64, k64);
+            microfacet_gk_f64(f, m, convention, g64, k64);
             e.g = float(g64);
             e.k = float_or_inf(k64);
             if (e.d < FLT_MIN && material_distribution(m) != DIST_GGX) {
@@ -658,7 +629,7 @@ Eval model_cook_torrance(Frame f, GpuMaterial m) {
     if (tiny || any_non_finite(e.brdf)) {
         vec2 gx = xf(e.g), kx = xf(e.k);
         if (tiny) {
-            cook_torrance_gk_xf(f, m, convention, gx, kx);
+            microfacet_gk_xf(f, m, convention, gx, kx);
             e.g = xf_float(gx);
             e.k = xf_float(kx);
         }
@@ -673,6 +644,5 @@ Eval model_cook_torrance(Frame f, GpuMaterial m) {
 }
 #endif
 
-#include "htsg.glsl"
 
 #endif

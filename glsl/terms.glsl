@@ -4,8 +4,13 @@
 // and its CITATION; its functions are named `<name>_...` as the Rust file's forms are
 // (tests/term_homes.rs holds the two together). Every function is compiled only when its
 // feature is in the batch's FeatureSet (the HAS_* macros), so a GGX + Schlick kernel has no
-// erf, no complex Fresnel. The f64 and float-float forms the frame's slow paths take are
-// still in models.glsl (`d_f64`, `d_xf`, ...), by family.
+// erf, no complex Fresnel.
+//
+// A block holds all of its term's forms: the float32 one every tuple takes, then the two
+// that the models' tiny-cosine path takes (FORMULAS.md §1, "Overflow": a cosine below
+// TINY_COS, where float32's range no longer holds the factors): `<name>_..._f64` on a device
+// with float64, `<name>_..._xf` (m 2^e pairs, ff.glsl) on one without. The two are the same
+// formula; models.glsl picks the form, these blocks hold the arithmetic.
 
 #ifndef VKBRDF_TERMS_GLSL
 #define VKBRDF_TERMS_GLSL
@@ -18,37 +23,6 @@
 #define HAS_F_CONDUCTOR
 #endif
 
-// The derived quantities of FORMULAS.md §1 for one valid, above-horizon tuple.
-// The *_exact fields: f64 where the device has it, else a float-float pair (hi, lo).
-#if defined(HAS_FLOAT64)
-#define double_or_float double
-#else
-#define double_or_float vec2
-#endif
-
-struct Frame {
-    vec3 n, l, v, h;   // unit vectors
-    float cos_i;       // n.l > 0
-    float cos_o;       // n.v > 0
-    float cos_h;       // n.h > 0 (cos delta)
-    float c;           // v.h > 0, the Fresnel angle cosine
-    float sin2_h;      // |n x h|^2, not 1 - cos_h^2 (which cancels near the peak)
-    vec3 t, b;         // tangent frame, anisotropic materials only (zero otherwise)
-    float hx, hy;      // h.t, h.b: h in the tangent frame (anisotropic materials only)
-    float rv, sin2_rv; // r.v and |r x v|^2, r = 2 cos_i n - l (Phong only)
-    float sin2_i, sin2_o; // |n x l|^2, |n x v|^2 (Smith's tan^2 numerators)
-    double_or_float c_exact; // c before rounding to f32 (f64, or a float-float pair)
-#if defined(HAS_FLOAT64)
-    double cos_i_exact, cos_o_exact; // cos_i, cos_o before rounding (FORMULAS.md §1,
-                       // "Overflow": below TINY_COS the models evaluate from these, in f64)
-    double cos_h_exact; // cos_h before rounding (below float32's smallest normal
-                       // number the f32 value flushes to 0)
-#else
-    // The same four in f64's range without f64: m 2^e (ff.glsl, xf), float32 precision.
-    vec2 cos_i_xf, cos_o_xf, cos_h_xf, c_xf;
-#endif
-    vec2 l_tb, v_tb;   // (l.t, l.b), (v.t, v.b) (anisotropic materials only)
-};
 
 // ===================================================================== D (FORMULAS.md §2)
 // Arguments: slope2 = (hx/mx)^2 + (hy/my)^2 (= sin2_h / m^2 when isotropic), so that
@@ -63,6 +37,19 @@ float gaussian_d(float cos_h, float sin2_h, float inv_m2) {
     float delta = atan2_positive(sqrt(sin2_h), cos_h);
     return exp_acc(-delta * delta * inv_m2);
 }
+#if defined(HAS_FLOAT64)
+// gaussian_d in f64's range: the angle from float32, the exponential in f64.
+double gaussian_d_f64(float cos_h, float sin2_h, float inv_m2) {
+    double delta = double(atan2_positive(sqrt(sin2_h), cos_h));
+    return exp_f64(-delta * delta * double(inv_m2));
+}
+#else
+// ln gaussian_d as a pair.
+vec2 gaussian_ln_d_xf(float cos_h, float sin2_h, float inv_m2) {
+    float delta = atan2_positive(sqrt(sin2_h), cos_h);
+    return vec2(-delta * delta * inv_m2, 0.0);
+}
+#endif
 #endif
 
 // term d/beckmann: Beckmann 1963; Cook & Torrance 1982
@@ -78,6 +65,21 @@ float beckmann_d(float slope2, float cos_h, float sin2_h, float norm) {
     float x = slope2 / (cos_h * cos_h);
     return norm * exp_acc(-x - 4.0 * log_cos(cos_h, sin2_h));
 }
+#if defined(HAS_FLOAT64)
+// beckmann_d in f64's range, given cos_h in f64 and ln cos_h: the same log domain, where
+// cos_h^4 alone would leave f64's range at cosines of 1e-80.
+double beckmann_d_f64(float slope2, double cos_h, double ln_cos_delta, float norm) {
+    double c2 = cos_h * cos_h;
+    return exp_f64(log_f64(double(norm)) - double(slope2) / c2 - 4.0 * ln_cos_delta);
+}
+#else
+// ln beckmann_d as a pair, given cos_h and ln cos_h as pairs. The exponent is capped at
+// 1e30 (a D of e^-1e30 is 0 to any K).
+vec2 beckmann_ln_d_xf(float slope2, vec2 cos_h, vec2 ln_cos_delta, float norm) {
+    float x = xf_float(xf_div(xf(slope2), xf_mul(cos_h, cos_h)));
+    return ff_add(vec2(log_acc(norm) - min(x, 1e30), 0.0), ff_mul_f(ln_cos_delta, -4.0));
+}
+#endif
 #endif
 
 #if defined(HAS_LAMBDA_BECKMANN)
@@ -94,6 +96,21 @@ float beckmann_lambda(float q2) {
     // absolute terms, which is all G = 1/(1 + Lambda) needs.
     return 0.5 * (exp_acc(-a * a) * INV_SQRT_PI / a - erfc_nr(a));
 }
+#if defined(HAS_FLOAT64)
+// beckmann_lambda in f64 for q2 >= 1e14 (a cosine below TINY_COS): a = 1/(m tan) <
+// TINY_COS/(1e-7 sin) ~ 1e-8 (roughness >= 1e-7), so exp(-a^2) = 1 and erfc(a) = 1 -
+// 2a/sqrt(pi) to O(a^2) < 1e-16 relative, and Lambda = 1/(2 a sqrt(pi)) - 1/2 + a/sqrt(pi).
+double beckmann_lambda_f64(double q2) {
+    double a = 1.0 / sqrt(q2);
+    return 0.5 / (a * double(1.0 / INV_SQRT_PI)) - 0.5 + a * double(INV_SQRT_PI);
+}
+#else
+// 1 + beckmann_lambda as a pair, given sqrt(q2) > 1e8 as a pair (a cosine below TINY_COS):
+// sqrt(q2)/(2 sqrt(pi)) + 1/2, the dropped terms below 1e-8 relative.
+vec2 beckmann_one_plus_lambda_xf(vec2 sqrt_q2) {
+    return xf_add(xf_mul(sqrt_q2, xf(0.5 * INV_SQRT_PI)), xf(0.5));
+}
+#endif
 #endif
 
 // term d/ggx: Trowbridge & Reitz 1975; Walter et al. 2007
@@ -106,6 +123,8 @@ float ggx_d(float slope2, float cos_h, float norm) {
     float d = slope2 + cos_h * cos_h;
     return norm / (d * d);
 }
+// No f64 or pair form: D >= 1/(pi m^2 (1/m^2)^2) > 1e-15 for roughness in [1e-7, 1e4], a
+// normal float32 at any cosine.
 #endif
 
 #if defined(HAS_LAMBDA_GGX)
@@ -116,6 +135,19 @@ float ggx_lambda(float q2) {
     float r = sqrt(1.0 + q2);
     return q2 <= 1.0 ? q2 / (2.0 * (1.0 + r)) : 0.5 * (r - 1.0);
 }
+#if defined(HAS_FLOAT64)
+// ggx_lambda in f64 for q2 >= 1e14 (a cosine below TINY_COS), where the subtraction does not
+// cancel.
+double ggx_lambda_f64(double q2) {
+    return 0.5 * (sqrt(1.0 + q2) - 1.0);
+}
+#else
+// 1 + ggx_lambda as a pair, given sqrt(q2) > 1e8 as a pair: sqrt(q2)/2 + 1/2, the dropped
+// terms below 1e-8 relative.
+vec2 ggx_one_plus_lambda_xf(vec2 sqrt_q2) {
+    return xf_add(xf_mul(sqrt_q2, xf(0.5)), xf(0.5));
+}
+#endif
 #endif
 
 // term d/blinn: Blinn 1977
@@ -125,6 +157,17 @@ float ggx_lambda(float q2) {
 float blinn_d(float cos_h, float sin2_h, float e, float norm) {
     return norm * exp_acc(e * log_cos(cos_h, sin2_h));
 }
+#if defined(HAS_FLOAT64)
+// blinn_d in f64's range, given ln cos_h in f64.
+double blinn_d_f64(double ln_cos_delta, float e, float norm) {
+    return exp_f64(log_f64(double(norm)) + double(e) * ln_cos_delta);
+}
+#else
+// ln blinn_d as a pair, given ln cos_h as a pair.
+vec2 blinn_ln_d_xf(vec2 ln_cos_delta, float e, float norm) {
+    return ff_add(vec2(log_acc(norm), 0.0), ff_mul_f(ln_cos_delta, e));
+}
+#endif
 #endif
 
 // term d/charlie: Estevez & Kulla 2017
@@ -140,6 +183,25 @@ float charlie_d(float cos_h, float sin2_h, float inv_m, float norm) {
     }
     return norm * exp_acc(inv_m * log_cos(sqrt(sin2_h), cos_h * cos_h));
 }
+#if defined(HAS_FLOAT64)
+// charlie_d in f64's range (ln sin_h as charlie_d takes it).
+double charlie_d_f64(float cos_h, float sin2_h, float inv_m, float norm) {
+    if (sin2_h == 0.0) {
+        return 0.0;
+    }
+    double ln_sin = double(log_cos(sqrt(sin2_h), cos_h * cos_h));
+    return exp_f64(log_f64(double(norm)) + double(inv_m) * ln_sin);
+}
+#else
+// ln charlie_d as a pair; ln 0 (sin_h = 0) is XF_LN_ZERO.
+vec2 charlie_ln_d_xf(float cos_h, float sin2_h, float inv_m, float norm) {
+    if (!(sin2_h > 0.0)) {
+        return vec2(XF_LN_ZERO, 0.0);
+    }
+    vec2 ln_sin = vec2(log_cos(sqrt(sin2_h), cos_h * cos_h), 0.0);
+    return ff_add(vec2(log_acc(norm), 0.0), ff_mul_f(ln_sin, inv_m));
+}
+#endif
 #endif
 
 // ===================================================================== G (FORMULAS.md §3)
@@ -155,6 +217,20 @@ float cook_torrance_g(float cos_i, float cos_o, float cos_h, float c) {
     float k = 2.0 * cos_h / c;
     return min(1.0, min(k * cos_o, k * cos_i));
 }
+#if defined(HAS_FLOAT64)
+// cook_torrance_g in f64, from the frame's f64 cosines (the float32 cos_h may be flushed
+// to 0 there).
+double cook_torrance_g_f64(double cos_i, double cos_o, double cos_h, double c) {
+    double t = 2.0 * cos_h / c;
+    return min(1.0, min(t * cos_o, t * cos_i));
+}
+#else
+// cook_torrance_g with m 2^e pairs.
+vec2 cook_torrance_g_xf(vec2 cos_i, vec2 cos_o, vec2 cos_h, vec2 c) {
+    vec2 t = xf_div(xf_mul(xf(2.0), cos_h), c);
+    return xf_min(xf(1.0), xf_min(xf_mul(t, cos_o), xf_mul(t, cos_i)));
+}
+#endif
 #endif
 
 // term g/smith: Smith 1967; Walter et al. 2007
@@ -163,6 +239,17 @@ float cook_torrance_g(float cos_i, float cos_o, float cos_h, float c) {
 float smith_g(float lambda_o, float lambda_i) {
     return 1.0 / ((1.0 + lambda_o) * (1.0 + lambda_i));
 }
+#if defined(HAS_FLOAT64)
+// smith_g in f64.
+double smith_g_f64(double lambda_o, double lambda_i) {
+    return 1.0 / ((1.0 + lambda_o) * (1.0 + lambda_i));
+}
+#else
+// smith_g from 1 + Lambda per direction as pairs.
+vec2 smith_g_xf(vec2 one_plus_lambda_o, vec2 one_plus_lambda_i) {
+    return xf_div(xf(1.0), xf_mul(one_plus_lambda_o, one_plus_lambda_i));
+}
+#endif
 #endif
 
 // term g/smith_correlated: Heitz 2014
@@ -172,6 +259,19 @@ float smith_g(float lambda_o, float lambda_i) {
 float smith_correlated_g(float lambda_o, float lambda_i) {
     return 1.0 / (1.0 + lambda_o + lambda_i);
 }
+#if defined(HAS_FLOAT64)
+// smith_correlated_g in f64.
+double smith_correlated_g_f64(double lambda_o, double lambda_i) {
+    return 1.0 / (1.0 + lambda_o + lambda_i);
+}
+#else
+// smith_correlated_g from 1 + Lambda per direction as pairs, on the tiny-cosine path only:
+// 1 + Lambda_o + Lambda_i = (1 + Lambda_o) + (1 + Lambda_i) - 1, and there the larger is
+// above 1e8 (one cosine is below TINY_COS), so the -1 is below its precision.
+vec2 smith_correlated_g_xf(vec2 one_plus_lambda_o, vec2 one_plus_lambda_i) {
+    return xf_div(xf(1.0), xf_add(one_plus_lambda_o, one_plus_lambda_i));
+}
+#endif
 #endif
 
 // term g/smith_fast: Walter et al. 2007
@@ -185,6 +285,17 @@ float smith_fast_g1(float q2) {
     float a = inversesqrt(q2);
     return a < 1.6 ? (3.535 * a + 2.181 * a * a) / (1.0 + 2.276 * a + 2.577 * a * a) : 1.0;
 }
+#if defined(HAS_FLOAT64)
+// smith_fast_g1 in f64 for a = 1/sqrt(q2) < 1.6, given a.
+double smith_fast_g1_f64(double a) {
+    return (3.535 * a + 2.181 * a * a) / (1.0 + 2.276 * a + 2.577 * a * a);
+}
+#else
+// smith_fast_g1 for a < 1e-8 as a pair (a cosine below TINY_COS): 3.535 a to 1e-8 relative.
+vec2 smith_fast_g1_xf(vec2 a) {
+    return xf_mul(xf(3.535), a);
+}
+#endif
 #endif
 
 // term g/schlick_smith: Schlick 1994; Karis 2013
@@ -196,6 +307,17 @@ float smith_fast_g1(float q2) {
 float schlick_smith_g1(float cos_w, float one_minus_cos_w, float k) {
     return cos_w / (cos_w + k * one_minus_cos_w);
 }
+#if defined(HAS_FLOAT64)
+// schlick_smith_g1 in f64.
+double schlick_smith_g1_f64(double cos_w, double one_minus_cos_w, double k) {
+    return cos_w / (cos_w + k * one_minus_cos_w);
+}
+#else
+// schlick_smith_g1 for cos_w as a pair (1 - cos_w is ~1 there).
+vec2 schlick_smith_g1_xf(vec2 cos_w, float one_minus_cos_w, float k) {
+    return xf_div(cos_w, xf_add(cos_w, xf(k * one_minus_cos_w)));
+}
+#endif
 #endif
 
 // term g/neubelt: Neubelt & Pettineo 2013
@@ -206,6 +328,18 @@ float schlick_smith_g1(float cos_w, float one_minus_cos_w, float k) {
 float neubelt_g(float cos_i, float cos_o) {
     return cos_i * cos_o / (cos_i + cos_o * (1.0 - cos_i));
 }
+#if defined(HAS_FLOAT64)
+// neubelt_g in f64.
+double neubelt_g_f64(double cos_i, double cos_o) {
+    return cos_i * cos_o / (cos_i + cos_o * (1.0 - cos_i));
+}
+#else
+// neubelt_g with the cosines as pairs; one_minus_cos_i from float32 (an absolute error of
+// 6e-8 in a term next to cos_i <= 1).
+vec2 neubelt_g_xf(vec2 cos_i, vec2 cos_o, float one_minus_cos_i) {
+    return xf_div(xf_mul(cos_i, cos_o), xf_add(cos_i, xf_mul(cos_o, xf(one_minus_cos_i))));
+}
+#endif
 #endif
 
 // ===================================================================== F (FORMULAS.md §4)
@@ -350,7 +484,7 @@ vec3 abs2_ratio(vec3 pr, vec3 pi_, vec3 qr, vec3 qi) {
 // formula is taken in units of c: u = cos_t/c, u^2 = (e2rm1/c^2 + 1 + i e2i/c^2)/eta^2,
 // r_par = |eta - u|^2/|eta + u|^2, r_perp = |1 - eta u|^2/|1 + eta u|^2 (c cancels).
 // Elsewhere cos_t is far above c and the float32 formula holds, with its quotients scaled.
-vec3 conductor_f_tiny(vec2 c_xf, vec3 n, vec3 k, vec3 e2rm1) {
+vec3 conductor_f_xf(vec2 c_xf, vec3 n, vec3 k, vec3 e2rm1) {
     float c = xf_float(c_xf);
     vec2 c2 = xf_mul(c_xf, c_xf);
     vec3 e2r = n * n - k * k, e2i = 2.0 * n * k, q = n * n + k * k;
@@ -448,6 +582,15 @@ vec3 schlick_f(float c, vec3 f0) {
 float seed_k(float cos_i, float cos_o) {
     return 1.0 / cos_o;
 }
+#if defined(HAS_FLOAT64)
+double seed_k_f64(double cos_i, double cos_o) {
+    return 1.0 / cos_o;
+}
+#else
+vec2 seed_k_xf(vec2 cos_i, vec2 cos_o) {
+    return xf_div(xf(1.0), cos_o);
+}
+#endif
 #endif
 
 // term k/cook_torrance_1982: Cook & Torrance 1982
@@ -456,6 +599,16 @@ float seed_k(float cos_i, float cos_o) {
 float cook_torrance_1982_k(float cos_i, float cos_o) {
     return INV_PI / cos_i / cos_o;
 }
+#if defined(HAS_FLOAT64)
+// In f64 the product of the cosines cannot underflow (each >= 1e-45).
+double cook_torrance_1982_k_f64(double cos_i, double cos_o) {
+    return double(INV_PI) / (cos_i * cos_o);
+}
+#else
+vec2 cook_torrance_1982_k_xf(vec2 cos_i, vec2 cos_o) {
+    return xf_div(xf(INV_PI), xf_mul(cos_i, cos_o));
+}
+#endif
 #endif
 
 // term k/modern: Walter et al. 2007
@@ -466,6 +619,16 @@ float cook_torrance_1982_k(float cos_i, float cos_o) {
 float modern_k(float cos_i, float cos_o) {
     return 0.25 / cos_i / cos_o;
 }
+#if defined(HAS_FLOAT64)
+// In f64 the product of the cosines cannot underflow (each >= 1e-45).
+double modern_k_f64(double cos_i, double cos_o) {
+    return 0.25 / (cos_i * cos_o);
+}
+#else
+vec2 modern_k_xf(vec2 cos_i, vec2 cos_o) {
+    return xf_div(xf(0.25), xf_mul(cos_i, cos_o));
+}
+#endif
 #endif
 
 #endif

@@ -156,6 +156,68 @@ fn every_term_has_one_rust_file_and_one_glsl_block_with_the_same_name_and_citati
     }
 }
 
+/// The term names of every family list.
+fn term_names() -> Vec<String> {
+    FAMILIES
+        .iter()
+        .flat_map(|f| family_list(f))
+        .filter(|n| n != "none")
+        .collect()
+}
+
+/// The `(file, function)` pairs of GLSL files other than terms.glsl whose function is
+/// named after a term (`<name>_...`): a term's form outside its block.
+fn term_forms_outside_terms_glsl() -> Vec<(String, String)> {
+    let names = term_names();
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("glsl");
+    let mut found = Vec::new();
+    for entry in std::fs::read_dir(dir).unwrap() {
+        let path = entry.unwrap().path();
+        let file = path.file_name().unwrap().to_string_lossy().to_string();
+        if file == "terms.glsl" {
+            continue;
+        }
+        for f in functions(&std::fs::read_to_string(&path).unwrap()) {
+            if names.iter().any(|n| f.starts_with(&format!("{n}_"))) {
+                found.push((file.clone(), f));
+            }
+        }
+    }
+    found
+}
+
+/// Item 3 of "one home per term": a term's float64 and m 2^e forms (the two frames'
+/// tiny-cosine paths) sit in its block beside the float32 form, not in models.glsl; and a
+/// block that has one of the two has the other, so the frames stay in step.
+#[test]
+fn a_terms_f64_and_xf_forms_sit_in_its_block() {
+    let outside = term_forms_outside_terms_glsl();
+    assert!(
+        outside.is_empty(),
+        "functions named after a term outside glsl/terms.glsl: {outside:?}"
+    );
+    let mut with_both = 0;
+    for (id, _, text) in glsl_blocks() {
+        let fns = functions(&text);
+        let f64s: Vec<String> = fns
+            .iter()
+            .filter_map(|f| f.strip_suffix("_f64").map(str::to_string))
+            .collect();
+        let xfs: Vec<String> = fns
+            .iter()
+            .filter_map(|f| f.strip_suffix("_xf").map(str::to_string))
+            .collect();
+        assert_eq!(
+            f64s.is_empty(),
+            xfs.is_empty(),
+            "block {id}: float64 forms {f64s:?} but m 2^e forms {xfs:?}"
+        );
+        with_both += usize::from(!f64s.is_empty());
+    }
+    // Every D (GGX's are its Lambda's), every G but none, the conductor's F, every K.
+    assert!(with_both >= 15, "{with_both} blocks have both forms");
+}
+
 /// The test can fail: a block out of place or re-cited is seen.
 #[test]
 fn the_comparison_sees_names_and_citations() {
@@ -169,4 +231,10 @@ fn the_comparison_sees_names_and_citations() {
     assert_eq!(family_list("g").first().map(String::as_str), Some("none"));
     assert!(functions("float ggx_d(float a) {\n    return a;\n}\n").contains(&"ggx_d".to_string()));
     assert!(glsl_blocks().iter().any(|b| b.0 == "d/ggx"));
+    assert!(term_names().contains(&"smith_fast".to_string()));
+    // models.glsl's dispatchers are found by the same reader (and are not term forms).
+    let models =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("glsl/models.glsl"))
+            .unwrap();
+    assert!(functions(&models).contains(&"microfacet_gk_f64".to_string()));
 }

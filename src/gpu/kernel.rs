@@ -29,6 +29,7 @@ pub const SOURCES: &[(&str, &str)] = &[
     ("terms.glsl", include_str!("../../glsl/terms.glsl")),
     ("models.glsl", include_str!("../../glsl/models.glsl")),
     ("htsg.glsl", include_str!("../../glsl/htsg.glsl")),
+    ("evaluate.glsl", include_str!("../../glsl/evaluate.glsl")),
     ("measured.glsl", include_str!("../../glsl/measured.glsl")),
     ("material.glsl", include_str!("../../glsl/material.glsl")),
     ("bindings.glsl", include_str!("../../glsl/bindings.glsl")),
@@ -38,6 +39,10 @@ pub const SOURCES: &[(&str, &str)] = &[
         include_str!("../../glsl/generators.glsl"),
     ),
     ("frame.glsl", include_str!("../../glsl/frame.glsl")),
+    (
+        "frame_fields.glsl",
+        include_str!("../../glsl/frame_fields.glsl"),
+    ),
     ("frame64.glsl", include_str!("../../glsl/frame64.glsl")),
     ("frame32.glsl", include_str!("../../glsl/frame32.glsl")),
     (

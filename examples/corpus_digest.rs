@@ -1,0 +1,60 @@
+//! Digests of the Vulkan kernel's outputs on the stress corpus, one material at a time (so
+//! each material's own kernel variant runs): `cargo run --release --example corpus_digest
+//! -- [TUPLES]` (default 200,000). Prints, per material, an FNV-1a hash of the BRDF and term
+//! bits and the counts. Two builds that print the same lines computed the same bits: the
+//! check behind a "same bits" claim for a GLSL change (run it once plain, once with
+//! VKBRDF_DISABLE_FLOAT64=1 for the f32 frame, on each commit).
+use vkbrdf::backend::{Backend, Request};
+use vkbrdf::batch::Batch;
+use vkbrdf::gpu::{VulkanBackend, VulkanOptions};
+
+fn fnv(hash: &mut u64, values: &[f32]) {
+    for v in values {
+        for b in v.to_bits().to_le_bytes() {
+            *hash = (*hash ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3);
+        }
+    }
+}
+
+fn main() -> vkbrdf::Result<()> {
+    let n: usize = match std::env::args().nth(1) {
+        None => 200_000,
+        Some(a) => a.parse().unwrap_or_else(|_| {
+            eprintln!("not a tuple count: {a}");
+            std::process::exit(2);
+        }),
+    };
+    let (materials, batch, _) = vkbrdf::stress::corpus::corpus(n, 7);
+    let columns = batch.columns();
+    let mut gpu = VulkanBackend::new(None, VulkanOptions::default())?;
+    let request = Request { terms: true };
+    let mut total = 0xcbf2_9ce4_8422_2325u64;
+    for (index, material) in materials.iter().enumerate() {
+        // This material's rows, its index rewritten to 0 (a batch of one material).
+        let mut rows: Vec<f32> = Vec::new();
+        for row in batch.as_slice().chunks_exact(columns) {
+            if row[9] as usize == index {
+                rows.extend_from_slice(row);
+                let last = rows.len() - columns + 9;
+                rows[last] = 0.0;
+            }
+        }
+        if rows.is_empty() {
+            continue;
+        }
+        let count = rows.len() / columns;
+        let one = Batch::new(rows, columns, 1, std::path::Path::new("corpus"))?;
+        let out = gpu.evaluate(&one, std::slice::from_ref(material), &request)?;
+        let mut hash = 0xcbf2_9ce4_8422_2325u64;
+        fnv(&mut hash, &out.brdf);
+        fnv(&mut hash, out.terms.as_deref().unwrap_or(&[]));
+        fnv(&mut total, &out.brdf);
+        let c = out.counts;
+        println!(
+            "material {index:3} rows {count:6} digest {hash:016x} invalid {} below {} saturated {}",
+            c.invalid, c.below_horizon, c.saturated
+        );
+    }
+    println!("all {total:016x}");
+    Ok(())
+}
