@@ -73,5 +73,14 @@ pub fn run(_args: &Args) -> anyhow::Result<ExitCode> {
         format!("the native CPU engine ({})", vkbrdf::cpu::instruction_set())
     };
     outln!("--backend auto (the default) runs {engine}: {why}.");
+    match vkbrdf::gpu::kernel_cache_dir() {
+        Some(dir) => outln!(
+            "Compiled kernels are kept in {} (VKBRDF_CACHE_DIR=DIR moves it, =off turns it off).",
+            dir.display()
+        ),
+        None => {
+            outln!("Compiled kernels are not kept across runs (VKBRDF_CACHE_DIR=DIR keeps them).")
+        }
+    }
     Ok(ExitCode::SUCCESS)
 }

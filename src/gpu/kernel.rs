@@ -8,7 +8,9 @@
 //! constant 0: each is said once, in Rust.
 
 use super::context::{Device, PhysicalInfo};
+use super::disk_cache::{key_of, DiskCache};
 use super::layout::{descriptor_type, shader_codes, PushConstants, BINDING_COUNT, SHADER_BINDINGS};
+use super::pipeline_cache::PipelineCache;
 use super::vk_error::vk_error;
 use crate::error::{Error, Result};
 use crate::features::FeatureSet;
@@ -51,6 +53,23 @@ pub const SOURCES: &[(&str, &str)] = &[
     ),
     ("counts.glsl", include_str!("../../glsl/counts.glsl")),
 ];
+
+/// The disk cache's name for the SPIR-V of the kernel compiled with `defines` for `env`:
+/// every embedded source, the definitions and the target, and this build's version.
+fn spirv_key(defines: &[(String, String)], env: shaderc::EnvVersion) -> String {
+    let mut parts: Vec<&[u8]> = vec![env!("CARGO_PKG_VERSION").as_bytes()];
+    for (name, text) in SOURCES {
+        parts.push(name.as_bytes());
+        parts.push(text.as_bytes());
+    }
+    for (name, value) in defines {
+        parts.push(name.as_bytes());
+        parts.push(value.as_bytes());
+    }
+    let env = (env as u32).to_le_bytes();
+    parts.push(&env);
+    key_of(&parts)
+}
 
 /// The kernel's entry file in [`SOURCES`].
 pub const KERNEL_FILE: &str = "eval.comp";
@@ -212,13 +231,19 @@ impl Drop for Pipeline {
     }
 }
 
-/// The descriptor-set and pipeline layouts every kernel shares, and the pipeline cache.
+/// The descriptor-set and pipeline layouts every kernel shares, the pipelines made so far,
+/// and what is kept across runs: the SPIR-V and the driver's pipeline cache
+/// ([`super::disk_cache`]).
 pub(crate) struct Kernels {
     cache: HashMap<FeatureSet, Pipeline>,
     probes: HashMap<String, Pipeline>,
     layout: vk::PipelineLayout,
     set_layout: vk::DescriptorSetLayout,
     extra_defines: Vec<(String, String)>,
+    disk: DiskCache,
+    /// Declared after the pipelines' owners, so that it is written back after they are
+    /// gone (`Drop` below clears them first in any case).
+    pipeline_cache: PipelineCache,
     device: Arc<Device>,
 }
 
@@ -241,12 +266,23 @@ impl Kernels {
         // `bindings`, a local that outlives the call.
         let set_layout = unsafe { device.raw.create_descriptor_set_layout(&info, None) }
             .map_err(vk_error("vkCreateDescriptorSetLayout"))?;
+        let disk = DiskCache::from_env();
+        let pipeline_cache = match PipelineCache::new(device, disk.clone()) {
+            Ok(c) => c,
+            Err(e) => {
+                // SAFETY: created above on this device, used by nothing yet.
+                unsafe { device.raw.destroy_descriptor_set_layout(set_layout, None) };
+                return Err(e);
+            }
+        };
         let mut kernels = Kernels {
             cache: HashMap::new(),
             probes: HashMap::new(),
             layout: vk::PipelineLayout::null(),
             set_layout,
             extra_defines,
+            disk,
+            pipeline_cache,
             device: Arc::clone(device),
         };
         let ranges = [vk::PushConstantRange::default()
@@ -284,13 +320,31 @@ impl Kernels {
                 defines.push(("HAS_FLOAT64".to_string(), "1".to_string()));
             }
             defines.extend(self.extra_defines.iter().cloned());
-            let spirv =
-                compile(SOURCES, KERNEL_FILE, &defines, target(p)).map_err(|e| match e {
-                    Error::Shader(m) => {
-                        Error::Shader(format!("{m}\n(kernel for features {features})"))
-                    }
-                    e => e,
-                })?;
+            let key = spirv_key(&defines, target(p));
+            let cached = self.disk.load("spirv", &key).and_then(|bytes| {
+                (bytes.len() % 4 == 0 && !bytes.is_empty()).then(|| {
+                    bytes
+                        .chunks_exact(4)
+                        .map(|w| u32::from_le_bytes(w.try_into().unwrap()))
+                        .collect::<Vec<u32>>()
+                })
+            });
+            let spirv = match cached {
+                Some(words) => words,
+                None => {
+                    let words = compile(SOURCES, KERNEL_FILE, &defines, target(p)).map_err(
+                        |e| match e {
+                            Error::Shader(m) => {
+                                Error::Shader(format!("{m}\n(kernel for features {features})"))
+                            }
+                            e => e,
+                        },
+                    )?;
+                    let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
+                    self.disk.store("spirv", &key, &bytes);
+                    words
+                }
+            };
             let pipeline = self.create(spirv)?;
             self.cache.insert(features, pipeline);
         }
@@ -321,7 +375,8 @@ impl Kernels {
         Ok(&self.probes[source])
     }
 
-    fn create(&self, spirv: Vec<u32>) -> Result<Pipeline> {
+    fn create(&mut self, spirv: Vec<u32>) -> Result<Pipeline> {
+        let pipeline_cache = self.pipeline_cache.for_creation();
         let d = &self.device.raw;
         let info = vk::ShaderModuleCreateInfo::default().code(&spirv);
         // SAFETY: `spirv` is a complete module from shaderc; the device is live.
@@ -345,8 +400,7 @@ impl Kernels {
             .stage(stage)
             .layout(self.layout)];
         // SAFETY: the module, layout and specialization data are live for the call.
-        let created =
-            unsafe { d.create_compute_pipelines(vk::PipelineCache::null(), &infos, None) };
+        let created = unsafe { d.create_compute_pipelines(pipeline_cache, &infos, None) };
         // SAFETY: the module is no longer needed once the pipeline exists (or failed).
         unsafe { d.destroy_shader_module(module, None) };
         let raw = created.map_err(|(_, r)| vk_error("vkCreateComputePipelines")(r))?[0];

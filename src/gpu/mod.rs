@@ -26,16 +26,26 @@
 
 mod context;
 pub mod devices;
+mod disk_cache;
 mod emulate_ftz;
 mod evaluator;
 pub mod kernel;
 pub mod layout;
 mod memory;
+mod pipeline_cache;
 mod sync;
 mod vk_error;
 
 pub use context::{DeviceSelector, ValidationCounter, INSTALL_HINT};
 pub use devices::{list_devices, DeviceInfo, HeapInfo};
+
+/// The directory where compiled kernels are kept across runs (`VKBRDF_CACHE_DIR`, else the
+/// user's cache directory), or `None` when the cache is off or no home is known.
+pub fn kernel_cache_dir() -> Option<std::path::PathBuf> {
+    disk_cache::DiskCache::from_env()
+        .dir()
+        .map(std::path::Path::to_path_buf)
+}
 pub use evaluator::{
     validation_from_env, BufferBytes, HostStages, InjectedFault, KernelClock, KernelTiming,
     LinkRates, VulkanBackend, VulkanOptions, FRAMES_IN_FLIGHT, MAX_CHUNK_TUPLES,

@@ -1,0 +1,205 @@
+//! What the kernel compiles, kept across runs in the user's cache directory: the SPIR-V
+//! shaderc made for each kernel (`spirv/`) and the driver's pipeline cache for each device
+//! and driver (`pipelines/`, see [`super::pipeline_cache`]).
+//!
+//! The directory is `VKBRDF_CACHE_DIR` when set (`off` or empty: no cache), else
+//! `$XDG_CACHE_HOME/vkbrdf`, else `$HOME/.cache/vkbrdf`. Each entry is one file written
+//! whole under a temporary name and renamed into place, so processes sharing the directory
+//! read either an old entry or a new one, never part of one; each carries its length and a
+//! checksum, and an entry that does not match them is ignored as if absent. A directory that
+//! cannot be created or written (a read-only home, a full disk) is no cache: the run
+//! compiles as it would without one. Deleting the directory is always safe.
+
+use std::ffi::OsString;
+use std::io::Write;
+use std::path::PathBuf;
+
+/// The first bytes of every entry.
+const MAGIC: &[u8; 8] = b"VKBRDFC1";
+/// Magic, payload length (u64 LE) and the payload's FNV-1a hash (u64 LE).
+const HEADER: usize = 24;
+/// Entries larger than this are ignored (and replaced by the next store): a pipeline
+/// cache merged run after run is bounded by it.
+pub(crate) const MAX_ENTRY: usize = 128 << 20;
+
+/// The cache directory, or none.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub(crate) struct DiskCache {
+    dir: Option<PathBuf>,
+}
+
+impl DiskCache {
+    /// The directory the environment names (see the module documentation).
+    pub fn from_env() -> DiskCache {
+        DiskCache::from_vars(
+            std::env::var_os("VKBRDF_CACHE_DIR"),
+            std::env::var_os("XDG_CACHE_HOME"),
+            std::env::var_os("HOME"),
+        )
+    }
+
+    /// [`DiskCache::from_env`] given the three variables.
+    fn from_vars(
+        explicit: Option<OsString>,
+        xdg: Option<OsString>,
+        home: Option<OsString>,
+    ) -> DiskCache {
+        let non_empty = |v: Option<OsString>| v.filter(|v| !v.is_empty());
+        let dir = match explicit {
+            Some(v) if v.is_empty() || v == "off" => None,
+            Some(v) => Some(PathBuf::from(v)),
+            None => non_empty(xdg)
+                .map(PathBuf::from)
+                .or_else(|| non_empty(home).map(|h| PathBuf::from(h).join(".cache")))
+                .map(|d| d.join("vkbrdf")),
+        };
+        DiskCache { dir }
+    }
+
+    /// The directory, if there is a cache.
+    pub fn dir(&self) -> Option<&std::path::Path> {
+        self.dir.as_deref()
+    }
+
+    /// The entry `kind/key`, if present and whole.
+    pub fn load(&self, kind: &str, key: &str) -> Option<Vec<u8>> {
+        let path = self.dir.as_ref()?.join(kind).join(format!("{key}.bin"));
+        let bytes = std::fs::read(path).ok()?;
+        unwrap_entry(&bytes).map(<[u8]>::to_vec)
+    }
+
+    /// Stores `payload` as `kind/key`, replacing any entry; failures are ignored (see the
+    /// module documentation).
+    pub fn store(&self, kind: &str, key: &str, payload: &[u8]) {
+        let Some(dir) = &self.dir else {
+            return;
+        };
+        let dir = dir.join(kind);
+        let write = || -> std::io::Result<()> {
+            std::fs::create_dir_all(&dir)?;
+            let mut file = tempfile::NamedTempFile::new_in(&dir)?;
+            file.write_all(&entry(payload))?;
+            file.persist(dir.join(format!("{key}.bin")))?;
+            Ok(())
+        };
+        let _ = write();
+    }
+}
+
+/// FNV-1a (64 bits) of `parts` in order, from `basis`.
+fn fnv1a(basis: u64, parts: &[&[u8]]) -> u64 {
+    let mut h = basis;
+    for part in parts {
+        // The length first, so that ("ab", "c") and ("a", "bc") differ.
+        for b in (part.len() as u64).to_le_bytes().iter().chain(part.iter()) {
+            h = (h ^ u64::from(*b)).wrapping_mul(0x0100_0000_01b3);
+        }
+    }
+    h
+}
+
+/// An entry's name for the value made from `parts`: two FNV-1a hashes of them from
+/// different bases, 32 hex digits (a stale entry would need both to collide).
+pub(crate) fn key_of(parts: &[&[u8]]) -> String {
+    let a = fnv1a(0xcbf2_9ce4_8422_2325, parts);
+    let b = fnv1a(0x6c62_272e_07bb_0142, parts);
+    format!("{a:016x}{b:016x}")
+}
+
+/// `payload` with its header.
+fn entry(payload: &[u8]) -> Vec<u8> {
+    let mut out = Vec::with_capacity(HEADER + payload.len());
+    out.extend_from_slice(MAGIC);
+    out.extend_from_slice(&(payload.len() as u64).to_le_bytes());
+    out.extend_from_slice(&fnv1a(0xcbf2_9ce4_8422_2325, &[payload]).to_le_bytes());
+    out.extend_from_slice(payload);
+    out
+}
+
+/// The payload of a whole entry; `None` for anything else (another format, cut short,
+/// changed, too large).
+fn unwrap_entry(bytes: &[u8]) -> Option<&[u8]> {
+    if bytes.len() < HEADER || &bytes[..8] != MAGIC || bytes.len() > HEADER + MAX_ENTRY {
+        return None;
+    }
+    let len = u64::from_le_bytes(bytes[8..16].try_into().ok()?);
+    let sum = u64::from_le_bytes(bytes[16..24].try_into().ok()?);
+    let payload = &bytes[HEADER..];
+    (payload.len() as u64 == len && fnv1a(0xcbf2_9ce4_8422_2325, &[payload]) == sum)
+        .then_some(payload)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_directory_follows_the_environment() {
+        let os = |s: &str| Some(OsString::from(s));
+        let dir = |c: DiskCache| c.dir.map(|d| d.to_string_lossy().into_owned());
+        assert_eq!(
+            dir(DiskCache::from_vars(os("/c"), os("/x"), os("/h"))).as_deref(),
+            Some("/c")
+        );
+        assert_eq!(
+            dir(DiskCache::from_vars(os("off"), os("/x"), os("/h"))),
+            None
+        );
+        assert_eq!(dir(DiskCache::from_vars(os(""), os("/x"), os("/h"))), None);
+        assert_eq!(
+            dir(DiskCache::from_vars(None, os("/x"), os("/h"))).as_deref(),
+            Some("/x/vkbrdf")
+        );
+        assert_eq!(
+            dir(DiskCache::from_vars(None, os(""), os("/h"))).as_deref(),
+            Some("/h/.cache/vkbrdf")
+        );
+        assert_eq!(dir(DiskCache::from_vars(None, None, None)), None);
+    }
+
+    #[test]
+    fn an_entry_is_read_back_only_whole_and_unchanged() {
+        let e = entry(b"kernel words");
+        assert_eq!(unwrap_entry(&e), Some(&b"kernel words"[..]));
+        assert_eq!(unwrap_entry(&e[..e.len() - 1]), None, "cut short");
+        let mut changed = e.clone();
+        *changed.last_mut().unwrap() ^= 1;
+        assert_eq!(unwrap_entry(&changed), None, "a flipped bit");
+        let mut longer = e.clone();
+        longer.push(0);
+        assert_eq!(unwrap_entry(&longer), None, "bytes appended");
+        assert_eq!(unwrap_entry(b"VKBRDFC0 and more bytes than a header"), None);
+        assert_eq!(unwrap_entry(&entry(b"")), Some(&b""[..]));
+    }
+
+    #[test]
+    fn keys_differ_by_content_and_by_split() {
+        assert_eq!(key_of(&[b"a", b"b"]), key_of(&[b"a", b"b"]));
+        assert_ne!(key_of(&[b"ab", b"c"]), key_of(&[b"a", b"bc"]));
+        assert_ne!(key_of(&[b"a"]), key_of(&[b"b"]));
+        assert_eq!(key_of(&[b"a"]).len(), 32);
+    }
+
+    #[test]
+    fn store_and_load_round_trip_and_an_unwritable_directory_is_no_cache() {
+        let tmp = tempfile::tempdir().unwrap();
+        let cache = DiskCache {
+            dir: Some(tmp.path().join("c")),
+        };
+        assert_eq!(cache.load("spirv", "k"), None);
+        cache.store("spirv", "k", b"words");
+        assert_eq!(cache.load("spirv", "k").as_deref(), Some(&b"words"[..]));
+        cache.store("spirv", "k", b"other words");
+        assert_eq!(
+            cache.load("spirv", "k").as_deref(),
+            Some(&b"other words"[..])
+        );
+        // A directory below a regular file cannot exist: storing is silently nothing.
+        std::fs::write(tmp.path().join("file"), b"x").unwrap();
+        let blocked = DiskCache {
+            dir: Some(tmp.path().join("file").join("c")),
+        };
+        blocked.store("spirv", "k", b"words");
+        assert_eq!(blocked.load("spirv", "k"), None);
+    }
+}
