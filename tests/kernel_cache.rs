@@ -65,6 +65,23 @@ fn whole(bytes: &[u8]) -> bool {
         && u64::from_le_bytes(bytes[8..16].try_into().unwrap()) as usize == bytes.len() - 24
 }
 
+/// Another run with the cache `c` writes the bytes of `first`, leaving the SPIR-V entries
+/// `spirv`.
+fn same_again(c: &str, m: &Path, t: &Path, first: &Path, spirv: &[(String, Vec<u8>)], why: &str) {
+    let again = first.with_file_name("again.npy");
+    let o = eval(c, m, t, &again);
+    assert!(o.status.success(), "{}", common::stderr(&o));
+    assert_eq!(
+        std::fs::read(first).unwrap(),
+        std::fs::read(&again).unwrap()
+    );
+    assert_eq!(
+        entries(Path::new(c), "spirv"),
+        spirv,
+        "{why}"
+    );
+}
+
 #[test]
 fn a_second_run_computes_the_same_from_the_cache_and_a_damaged_entry_is_rewritten() {
     if common::vulkan().is_none() {
@@ -86,18 +103,7 @@ fn a_second_run_computes_the_same_from_the_cache_and_a_damaged_entry_is_rewritte
         .chain(&pipelines)
         .all(|(n, b)| n.ends_with(".bin") && whole(b)));
 
-    let second = tmp.path().join("second.npy");
-    let o = eval(c, &m, &t, &second);
-    assert!(o.status.success(), "{}", common::stderr(&o));
-    assert_eq!(
-        std::fs::read(&first).unwrap(),
-        std::fs::read(&second).unwrap()
-    );
-    assert_eq!(
-        entries(&cache, "spirv"),
-        spirv,
-        "the SPIR-V was stored once"
-    );
+    same_again(c, &m, &t, &first, &spirv, "the SPIR-V was stored once");
 
     // Damaged entries: one cut short, one not an entry at all.
     let (name, bytes) = &spirv[0];
@@ -107,17 +113,13 @@ fn a_second_run_computes_the_same_from_the_cache_and_a_damaged_entry_is_rewritte
         b"not a cache",
     )
     .unwrap();
-    let third = tmp.path().join("third.npy");
-    let o = eval(c, &m, &t, &third);
-    assert!(o.status.success(), "{}", common::stderr(&o));
-    assert_eq!(
-        std::fs::read(&first).unwrap(),
-        std::fs::read(&third).unwrap()
-    );
-    assert_eq!(
-        entries(&cache, "spirv"),
-        spirv,
-        "the damaged SPIR-V was rewritten"
+    same_again(
+        c,
+        &m,
+        &t,
+        &first,
+        &spirv,
+        "the damaged SPIR-V was rewritten",
     );
     assert!(entries(&cache, "pipelines").iter().all(|(_, b)| whole(b)));
 }
