@@ -75,11 +75,7 @@ fn same_again(c: &str, m: &Path, t: &Path, first: &Path, spirv: &[(String, Vec<u
         std::fs::read(first).unwrap(),
         std::fs::read(&again).unwrap()
     );
-    assert_eq!(
-        entries(Path::new(c), "spirv"),
-        spirv,
-        "{why}"
-    );
+    assert_eq!(entries(Path::new(c), "spirv"), spirv, "{why}");
 }
 
 #[test]

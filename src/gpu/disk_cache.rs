@@ -21,6 +21,9 @@ const HEADER: usize = 24;
 /// Entries larger than this are ignored (and replaced by the next store): a pipeline
 /// cache merged run after run is bounded by it.
 pub(crate) const MAX_ENTRY: usize = 128 << 20;
+/// Entries a folder keeps: past this many, a store removes the oldest half (a new build or
+/// a new batch's kernel adds entries, and nothing else ever removes them).
+const MAX_ENTRIES: usize = 2048;
 
 /// The cache directory, or none.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -82,7 +85,33 @@ impl DiskCache {
             file.persist(dir.join(format!("{key}.bin")))?;
             Ok(())
         };
-        let _ = write();
+        if write().is_ok() {
+            prune(&dir, MAX_ENTRIES);
+        }
+    }
+}
+
+/// Removes the least recently written entries of `dir` while it holds more than `max`,
+/// down to half of `max`. Best effort: an entry another process removed or replaced
+/// meanwhile is skipped.
+fn prune(dir: &std::path::Path, max: usize) {
+    let Ok(read) = std::fs::read_dir(dir) else {
+        return;
+    };
+    let mut entries: Vec<(std::time::SystemTime, PathBuf)> = read
+        .filter_map(|e| {
+            let e = e.ok()?;
+            let modified = e.metadata().ok()?.modified().ok()?;
+            Some((modified, e.path()))
+        })
+        .filter(|(_, p)| p.extension().is_some_and(|x| x == "bin"))
+        .collect();
+    if entries.len() <= max {
+        return;
+    }
+    entries.sort();
+    for (_, path) in &entries[..entries.len() - max / 2] {
+        let _ = std::fs::remove_file(path);
     }
 }
 
@@ -178,6 +207,33 @@ mod tests {
         assert_ne!(key_of(&[b"ab", b"c"]), key_of(&[b"a", b"bc"]));
         assert_ne!(key_of(&[b"a"]), key_of(&[b"b"]));
         assert_eq!(key_of(&[b"a"]).len(), 32);
+    }
+
+    #[test]
+    fn a_full_folder_keeps_its_newest_half() {
+        let tmp = tempfile::tempdir().unwrap();
+        let old = std::time::SystemTime::UNIX_EPOCH + std::time::Duration::from_secs(1_000_000);
+        for i in 0..9u64 {
+            let path = tmp.path().join(format!("{i}.bin"));
+            std::fs::write(&path, b"x").unwrap();
+            let file = std::fs::File::options().write(true).open(&path).unwrap();
+            file.set_modified(old + std::time::Duration::from_secs(i))
+                .unwrap();
+        }
+        std::fs::write(tmp.path().join("other.txt"), b"not an entry").unwrap();
+        prune(tmp.path(), 10);
+        assert_eq!(
+            std::fs::read_dir(tmp.path()).unwrap().count(),
+            10,
+            "at the limit: kept"
+        );
+        prune(tmp.path(), 8);
+        let mut left: Vec<String> = std::fs::read_dir(tmp.path())
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        left.sort();
+        assert_eq!(left, ["5.bin", "6.bin", "7.bin", "8.bin", "other.txt"]);
     }
 
     #[test]
