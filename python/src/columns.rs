@@ -101,10 +101,15 @@ pub(crate) fn evaluate_columns<'py>(
             )?;
             check_tangent_rows(batch.as_slice(), width, start as u64, &list, source)?;
             backend.evaluate_into(&batch, &list, &request, &mut out)?;
-            brdf[3 * start..3 * end].copy_from_slice(&out.brdf[..3 * (end - start)]);
+            copy_split(
+                &mut brdf[3 * start..3 * end],
+                &out.brdf[..3 * (end - start)],
+            );
             if let Some(t) = out.terms.as_ref().filter(|_| terms) {
-                term_values[TERM_COLUMNS * start..TERM_COLUMNS * end]
-                    .copy_from_slice(&t[..TERM_COLUMNS * (end - start)]);
+                copy_split(
+                    &mut term_values[TERM_COLUMNS * start..TERM_COLUMNS * end],
+                    &t[..TERM_COLUMNS * (end - start)],
+                );
             }
             let mut c = out.counts;
             c.first_invalid = c.first_invalid.map(|r| r + start as u64);
@@ -129,10 +134,24 @@ pub(crate) fn evaluate_columns<'py>(
     ))
 }
 
+/// `dst.copy_from_slice(src)` split over the cores: the result's pages are new, and
+/// their first writes (page faults) are most of the copy's time.
+fn copy_split(dst: &mut [f32], src: &[f32]) {
+    let parts = std::thread::available_parallelism()
+        .map_or(1, |n| n.get())
+        .min(dst.len() / (16 << 10))
+        .max(1);
+    let per_part = dst.len().div_ceil(parts);
+    std::thread::scope(|s| {
+        for (d, c) in dst.chunks_mut(per_part).zip(src.chunks(per_part)) {
+            s.spawn(move || d.copy_from_slice(c));
+        }
+    });
+}
+
 /// Rows `range` of the batch the columns make, into `buffer` (`width` floats a row: L, V,
-/// N, the material, then T). A column of one vector (one value) serves every row. Column
-/// by column (a pass each): faster here than one pass writing whole rows, whose indexing
-/// the compiler does not vectorise.
+/// N, the material, then T), split over the cores: the gather is the form's one pass the
+/// row form does not have, and the engine's threads wait for it.
 fn gather(
     columns: &[&[f32]],
     m: &[f32],
@@ -142,9 +161,34 @@ fn gather(
 ) {
     buffer.clear();
     buffer.resize(range.len() * width, 0.0);
+    // Below a few thousand rows a thread costs more than it saves.
+    let parts = std::thread::available_parallelism()
+        .map_or(1, |n| n.get())
+        .min(range.len() / 4096)
+        .max(1);
+    let rows_per_part = range.len().div_ceil(parts);
+    std::thread::scope(|s| {
+        for (i, piece) in buffer.chunks_mut(rows_per_part * width).enumerate() {
+            let start = range.start + i * rows_per_part;
+            let rows = start..start + piece.len() / width;
+            s.spawn(move || gather_rows(columns, m, rows, width, piece));
+        }
+    });
+}
+
+/// [`gather`]'s work for rows `range` into `out` (their `width`-float rows). Column by
+/// column (a pass each): faster here than one pass writing whole rows, whose indexing the
+/// compiler does not vectorise.
+fn gather_rows(
+    columns: &[&[f32]],
+    m: &[f32],
+    range: std::ops::Range<usize>,
+    width: usize,
+    out: &mut [f32],
+) {
     for (k, column) in columns.iter().enumerate() {
         let at = if k < 3 { 3 * k } else { 10 };
-        let rows = buffer.chunks_exact_mut(width);
+        let rows = out.chunks_exact_mut(width);
         if column.len() == 3 {
             rows.for_each(|r| r[at..at + 3].copy_from_slice(column));
         } else {
@@ -153,7 +197,7 @@ fn gather(
                 .for_each(|(r, x)| r[at..at + 3].copy_from_slice(x));
         }
     }
-    let rows = buffer.chunks_exact_mut(width);
+    let rows = out.chunks_exact_mut(width);
     if m.len() == 1 {
         rows.for_each(|r| r[9] = m[0]);
     } else {
