@@ -99,7 +99,23 @@ fn a_second_run_computes_the_same_from_the_cache_and_a_damaged_entry_is_rewritte
         .chain(&pipelines)
         .all(|(n, b)| n.ends_with(".bin") && whole(b)));
 
+    // Read, not compiled again: a kernel compiled is always stored, by renaming a new file
+    // into place, so an unchanged inode means the entry served the run.
+    let inodes = || {
+        let mut v: Vec<u64> = std::fs::read_dir(cache.join("spirv"))
+            .unwrap()
+            .map(|e| std::os::unix::fs::MetadataExt::ino(&e.unwrap().metadata().unwrap()))
+            .collect();
+        v.sort();
+        v
+    };
+    let before = inodes();
     same_again(c, &m, &t, &first, &spirv, "the SPIR-V was stored once");
+    assert_eq!(
+        inodes(),
+        before,
+        "the second run compiled its kernels again"
+    );
 
     // Damaged entries: one cut short, one not an entry at all.
     let (name, bytes) = &spirv[0];

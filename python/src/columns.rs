@@ -134,14 +134,23 @@ pub(crate) fn evaluate_columns<'py>(
     ))
 }
 
+/// The size of each part when `len` items are split one part a core, each at least
+/// `min_part` items (below that a thread costs more than it saves): `len` itself when one
+/// part. The core count is read once (on Linux it reads the cgroup's files).
+fn part_size(len: usize, min_part: usize) -> usize {
+    static CORES: std::sync::OnceLock<usize> = std::sync::OnceLock::new();
+    let cores = *CORES.get_or_init(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    len.div_ceil(cores.min(len / min_part).max(1)).max(1)
+}
+
 /// `dst.copy_from_slice(src)` split over the cores: the result's pages are new, and
 /// their first writes (page faults) are most of the copy's time.
 fn copy_split(dst: &mut [f32], src: &[f32]) {
-    let parts = std::thread::available_parallelism()
-        .map_or(1, |n| n.get())
-        .min(dst.len() / (16 << 10))
-        .max(1);
-    let per_part = dst.len().div_ceil(parts);
+    let per_part = part_size(dst.len(), 16 << 10);
+    if per_part >= dst.len() {
+        dst.copy_from_slice(src);
+        return;
+    }
     std::thread::scope(|s| {
         for (d, c) in dst.chunks_mut(per_part).zip(src.chunks(per_part)) {
             s.spawn(move || d.copy_from_slice(c));
@@ -161,12 +170,11 @@ fn gather(
 ) {
     buffer.clear();
     buffer.resize(range.len() * width, 0.0);
-    // Below a few thousand rows a thread costs more than it saves.
-    let parts = std::thread::available_parallelism()
-        .map_or(1, |n| n.get())
-        .min(range.len() / 4096)
-        .max(1);
-    let rows_per_part = range.len().div_ceil(parts);
+    let rows_per_part = part_size(range.len(), 4096);
+    if rows_per_part >= range.len() {
+        gather_rows(columns, m, range, width, buffer);
+        return;
+    }
     std::thread::scope(|s| {
         for (i, piece) in buffer.chunks_mut(rows_per_part * width).enumerate() {
             let start = range.start + i * rows_per_part;

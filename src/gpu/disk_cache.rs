@@ -11,16 +11,18 @@
 //! compiles as it would without one. Deleting the directory is always safe.
 
 use std::ffi::OsString;
-use std::io::Write;
+use std::io::{Read, Write};
 use std::path::PathBuf;
 
 /// The first bytes of every entry.
 const MAGIC: &[u8; 8] = b"VKBRDFC1";
-/// Magic, payload length (u64 LE) and the payload's FNV-1a hash (u64 LE).
+/// Magic, payload length (u64 LE) and the payload's CRC-32 (`crc32fast`, u64 LE).
 const HEADER: usize = 24;
 /// Entries larger than this are ignored (and replaced by the next store): a pipeline
 /// cache merged run after run is bounded by it.
-pub(crate) const MAX_ENTRY: usize = 128 << 20;
+const MAX_ENTRY: usize = 128 << 20;
+/// FNV-1a's offset basis; the entries' names also hash from a second basis.
+const FNV_BASIS: u64 = 0xcbf2_9ce4_8422_2325;
 /// Entries a folder keeps: past this many, a store removes the oldest half (a new build or
 /// a new batch's kernel adds entries, and nothing else ever removes them).
 const MAX_ENTRIES: usize = 2048;
@@ -67,8 +69,35 @@ impl DiskCache {
     /// The entry `kind/key`, if present and whole.
     pub fn load(&self, kind: &str, key: &str) -> Option<Vec<u8>> {
         let path = self.dir.as_ref()?.join(kind).join(format!("{key}.bin"));
-        let bytes = std::fs::read(path).ok()?;
-        unwrap_entry(&bytes).map(<[u8]>::to_vec)
+        let file = std::fs::File::open(path).ok()?;
+        // Not read at all when larger than any entry kept.
+        if file.metadata().ok()?.len() > (HEADER + MAX_ENTRY) as u64 {
+            return None;
+        }
+        let mut bytes = Vec::new();
+        file.take((HEADER + MAX_ENTRY) as u64)
+            .read_to_end(&mut bytes)
+            .ok()?;
+        let len = payload_len(&bytes)?;
+        bytes.drain(..HEADER);
+        (bytes.len() == len).then_some(bytes)
+    }
+
+    /// [`DiskCache::load`] of an entry [`DiskCache::store_words`] wrote.
+    pub fn load_words(&self, kind: &str, key: &str) -> Option<Vec<u32>> {
+        let bytes = self.load(kind, key)?;
+        (!bytes.is_empty() && bytes.len() % 4 == 0).then(|| {
+            bytes
+                .chunks_exact(4)
+                .map(|w| u32::from_le_bytes(w.try_into().unwrap()))
+                .collect()
+        })
+    }
+
+    /// [`DiskCache::store`] of 32-bit words (SPIR-V), little-endian.
+    pub fn store_words(&self, kind: &str, key: &str, words: &[u32]) {
+        let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
+        self.store(kind, key, &bytes);
     }
 
     /// Stores `payload` as `kind/key`, replacing any entry; failures are ignored (see the
@@ -81,7 +110,8 @@ impl DiskCache {
         let write = || -> std::io::Result<()> {
             std::fs::create_dir_all(&dir)?;
             let mut file = tempfile::NamedTempFile::new_in(&dir)?;
-            file.write_all(&entry(payload))?;
+            file.write_all(&header(payload))?;
+            file.write_all(payload)?;
             file.persist(dir.join(format!("{key}.bin")))?;
             Ok(())
         };
@@ -130,32 +160,28 @@ fn fnv1a(basis: u64, parts: &[&[u8]]) -> u64 {
 /// An entry's name for the value made from `parts`: two FNV-1a hashes of them from
 /// different bases, 32 hex digits (a stale entry would need both to collide).
 pub(crate) fn key_of(parts: &[&[u8]]) -> String {
-    let a = fnv1a(0xcbf2_9ce4_8422_2325, parts);
+    let a = fnv1a(FNV_BASIS, parts);
     let b = fnv1a(0x6c62_272e_07bb_0142, parts);
     format!("{a:016x}{b:016x}")
 }
 
-/// `payload` with its header.
-fn entry(payload: &[u8]) -> Vec<u8> {
-    let mut out = Vec::with_capacity(HEADER + payload.len());
-    out.extend_from_slice(MAGIC);
-    out.extend_from_slice(&(payload.len() as u64).to_le_bytes());
-    out.extend_from_slice(&fnv1a(0xcbf2_9ce4_8422_2325, &[payload]).to_le_bytes());
-    out.extend_from_slice(payload);
-    out
+/// The header of an entry holding `payload`.
+fn header(payload: &[u8]) -> [u8; HEADER] {
+    let mut h = [0u8; HEADER];
+    h[..8].copy_from_slice(MAGIC);
+    h[8..16].copy_from_slice(&(payload.len() as u64).to_le_bytes());
+    h[16..].copy_from_slice(&u64::from(crc32fast::hash(payload)).to_le_bytes());
+    h
 }
 
-/// The payload of a whole entry; `None` for anything else (another format, cut short,
-/// changed, too large).
-fn unwrap_entry(bytes: &[u8]) -> Option<&[u8]> {
-    if bytes.len() < HEADER || &bytes[..8] != MAGIC || bytes.len() > HEADER + MAX_ENTRY {
+/// The payload length of a whole entry (header and payload); `None` for anything else
+/// (another format, cut short, changed, too large).
+fn payload_len(bytes: &[u8]) -> Option<usize> {
+    if bytes.len() < HEADER || bytes.len() > HEADER + MAX_ENTRY {
         return None;
     }
-    let len = u64::from_le_bytes(bytes[8..16].try_into().ok()?);
-    let sum = u64::from_le_bytes(bytes[16..24].try_into().ok()?);
     let payload = &bytes[HEADER..];
-    (payload.len() as u64 == len && fnv1a(0xcbf2_9ce4_8422_2325, &[payload]) == sum)
-        .then_some(payload)
+    (header(payload)[..] == bytes[..HEADER]).then_some(payload.len())
 }
 
 #[cfg(test)]
@@ -184,6 +210,16 @@ mod tests {
             Some("/h/.cache/vkbrdf")
         );
         assert_eq!(dir(DiskCache::from_vars(None, None, None)), None);
+    }
+
+    /// An entry's bytes.
+    fn entry(payload: &[u8]) -> Vec<u8> {
+        [&header(payload)[..], payload].concat()
+    }
+
+    /// The payload of a whole entry.
+    fn unwrap_entry(bytes: &[u8]) -> Option<&[u8]> {
+        payload_len(bytes).map(|_| &bytes[HEADER..])
     }
 
     #[test]

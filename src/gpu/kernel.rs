@@ -252,6 +252,9 @@ impl Kernels {
     /// texel buffer, see [`descriptor_type`]) and the push constants. `extra_defines` are
     /// added to every kernel's definitions (variant experiments).
     pub fn new(device: &Arc<Device>, extra_defines: Vec<(String, String)>) -> Result<Kernels> {
+        // First: it cleans up after itself (RAII) if what follows fails.
+        let disk = DiskCache::from_env();
+        let pipeline_cache = PipelineCache::new(device, disk.clone())?;
         let bindings: Vec<vk::DescriptorSetLayoutBinding> = (0..BINDING_COUNT)
             .map(|b| {
                 vk::DescriptorSetLayoutBinding::default()
@@ -266,15 +269,6 @@ impl Kernels {
         // `bindings`, a local that outlives the call.
         let set_layout = unsafe { device.raw.create_descriptor_set_layout(&info, None) }
             .map_err(vk_error("vkCreateDescriptorSetLayout"))?;
-        let disk = DiskCache::from_env();
-        let pipeline_cache = match PipelineCache::new(device, disk.clone()) {
-            Ok(c) => c,
-            Err(e) => {
-                // SAFETY: created above on this device, used by nothing yet.
-                unsafe { device.raw.destroy_descriptor_set_layout(set_layout, None) };
-                return Err(e);
-            }
-        };
         let mut kernels = Kernels {
             cache: HashMap::new(),
             probes: HashMap::new(),
@@ -321,15 +315,7 @@ impl Kernels {
             }
             defines.extend(self.extra_defines.iter().cloned());
             let key = spirv_key(&defines, target(p));
-            let cached = self.disk.load("spirv", &key).and_then(|bytes| {
-                (bytes.len() % 4 == 0 && !bytes.is_empty()).then(|| {
-                    bytes
-                        .chunks_exact(4)
-                        .map(|w| u32::from_le_bytes(w.try_into().unwrap()))
-                        .collect::<Vec<u32>>()
-                })
-            });
-            let spirv = match cached {
+            let spirv = match self.disk.load_words("spirv", &key) {
                 Some(words) => words,
                 None => {
                     let words = compile(SOURCES, KERNEL_FILE, &defines, target(p)).map_err(
@@ -340,8 +326,7 @@ impl Kernels {
                             e => e,
                         },
                     )?;
-                    let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
-                    self.disk.store("spirv", &key, &bytes);
+                    self.disk.store_words("spirv", &key, &words);
                     words
                 }
             };

@@ -38,6 +38,10 @@ mod vk_error;
 
 pub use context::{DeviceSelector, ValidationCounter, INSTALL_HINT};
 pub use devices::{list_devices, DeviceInfo, HeapInfo};
+pub use evaluator::{
+    validation_from_env, BufferBytes, HostStages, InjectedFault, KernelClock, KernelTiming,
+    LinkRates, VulkanBackend, VulkanOptions, FRAMES_IN_FLIGHT, MAX_CHUNK_TUPLES,
+};
 
 /// The directory where compiled kernels are kept across runs (`VKBRDF_CACHE_DIR`, else the
 /// user's cache directory), or `None` when the cache is off or no home is known.
@@ -46,7 +50,3 @@ pub fn kernel_cache_dir() -> Option<std::path::PathBuf> {
         .dir()
         .map(std::path::Path::to_path_buf)
 }
-pub use evaluator::{
-    validation_from_env, BufferBytes, HostStages, InjectedFault, KernelClock, KernelTiming,
-    LinkRates, VulkanBackend, VulkanOptions, FRAMES_IN_FLIGHT, MAX_CHUNK_TUPLES,
-};

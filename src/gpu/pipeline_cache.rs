@@ -32,10 +32,7 @@ impl PipelineCache {
     /// usable one, else empty.
     pub fn new(device: &Arc<Device>, disk: DiskCache) -> Result<PipelineCache> {
         let key = device_key(&device.physical);
-        let initial = disk
-            .load(KIND, &key)
-            .filter(|data| header_matches(data, &device.physical))
-            .unwrap_or_default();
+        let initial = load(&disk, &key, &device.physical).unwrap_or_default();
         let raw = match create(device, &initial) {
             Ok(raw) => raw,
             // A driver that refuses its own earlier data: start empty.
@@ -61,11 +58,7 @@ impl PipelineCache {
     /// result. Failures leave the disk as it was.
     fn save(&self) {
         let d = &self.device.raw;
-        if let Some(theirs) = self
-            .disk
-            .load(KIND, &self.key)
-            .filter(|data| header_matches(data, &self.device.physical))
-        {
+        if let Some(theirs) = load(&self.disk, &self.key, &self.device.physical) {
             if let Ok(other) = create(&self.device, &theirs) {
                 // SAFETY: both caches are live on this device and not in use by another
                 // thread (`&self` is the only handle to `raw`; `other` is local).
@@ -90,6 +83,11 @@ impl Drop for PipelineCache {
         // (`Kernels`) creates no pipeline with it any more.
         unsafe { self.device.raw.destroy_pipeline_cache(self.raw, None) };
     }
+}
+
+/// The disk's entry `key` if it is this device's and driver's data.
+fn load(disk: &DiskCache, key: &str, p: &PhysicalInfo) -> Option<Vec<u8>> {
+    disk.load(KIND, key).filter(|data| header_matches(data, p))
 }
 
 /// A pipeline cache on `device` holding `initial` (empty: an empty cache).
