@@ -1,11 +1,13 @@
-//! Digests of the Vulkan kernel's outputs on the stress corpus, one material at a time (so
-//! each material's own kernel variant runs): `cargo run --release --example corpus_digest
-//! -- [TUPLES]` (default 200,000). Prints, per material, an FNV-1a hash of the BRDF and term
-//! bits and the counts. Two builds that print the same lines computed the same bits: the
-//! check behind a "same bits" claim for a GLSL change (run it once plain, once with
-//! VKBRDF_DISABLE_FLOAT64=1 for the f32 frame, on each commit).
+//! Digests of an engine's outputs on the stress corpus, one material at a time (so each
+//! material's own kernel variant or lanes run): `cargo run --release --example corpus_digest
+//! -- [TUPLES] [vulkan|cpu]` (default 200,000 on `vulkan`). Prints, per material, an FNV-1a
+//! hash of the BRDF and term bits and the counts, then the whole mixed batch's. Two builds
+//! that print the same lines computed the same bits: the check behind a "same bits" claim
+//! for a GLSL change (run it once plain, once with VKBRDF_DISABLE_FLOAT64=1 for the f32
+//! frame, on each commit) or a CPU engine change (once per `VKBRDF_CPU_ISA`).
 use vkbrdf::backend::{Backend, Request};
 use vkbrdf::batch::Batch;
+use vkbrdf::cpu::CpuEngine;
 use vkbrdf::gpu::{VulkanBackend, VulkanOptions};
 
 fn fnv(hash: &mut u64, values: &[f32]) {
@@ -17,6 +19,7 @@ fn fnv(hash: &mut u64, values: &[f32]) {
 }
 
 fn main() -> vkbrdf::Result<()> {
+    let engine = std::env::args().nth(2).unwrap_or_else(|| "vulkan".into());
     let n: usize = match std::env::args().nth(1) {
         None => 200_000,
         Some(a) => a.parse().unwrap_or_else(|_| {
@@ -26,7 +29,14 @@ fn main() -> vkbrdf::Result<()> {
     };
     let (materials, batch, _) = vkbrdf::stress::corpus::corpus(n, 7);
     let columns = batch.columns();
-    let mut gpu = VulkanBackend::new(None, VulkanOptions::default())?;
+    let mut backend: Box<dyn Backend> = match engine.as_str() {
+        "vulkan" => Box::new(VulkanBackend::new(None, VulkanOptions::default())?),
+        "cpu" => Box::new(CpuEngine::new()),
+        other => {
+            eprintln!("not an engine: {other} (vulkan or cpu)");
+            std::process::exit(2);
+        }
+    };
     let request = Request { terms: true };
     let mut total = 0xcbf2_9ce4_8422_2325u64;
     for (index, material) in materials.iter().enumerate() {
@@ -44,7 +54,7 @@ fn main() -> vkbrdf::Result<()> {
         }
         let count = rows.len() / columns;
         let one = Batch::new(rows, columns, 1, std::path::Path::new("corpus"))?;
-        let out = gpu.evaluate(&one, std::slice::from_ref(material), &request)?;
+        let out = backend.evaluate(&one, std::slice::from_ref(material), &request)?;
         let mut hash = 0xcbf2_9ce4_8422_2325u64;
         fnv(&mut hash, &out.brdf);
         fnv(&mut hash, out.terms.as_deref().unwrap_or(&[]));
@@ -56,5 +66,10 @@ fn main() -> vkbrdf::Result<()> {
         );
     }
     println!("all {total:016x}");
+    let out = backend.evaluate(&batch, &materials, &request)?;
+    let mut mixed = 0xcbf2_9ce4_8422_2325u64;
+    fnv(&mut mixed, &out.brdf);
+    fnv(&mut mixed, out.terms.as_deref().unwrap_or(&[]));
+    println!("mixed {mixed:016x}");
     Ok(())
 }

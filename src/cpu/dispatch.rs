@@ -1,55 +1,111 @@
-//! Which lanes run a block: the exhaustive dispatch from a material group's [`Plan`] (its
-//! terms' enums) to the lanes' const-generic variants — the f32-frame groups compiled per
-//! form, the f64-frame groups in two passes, and the groups no lanes are compiled for sent
-//! to the reference.
+//! Which lanes run a run of blocks: the exhaustive dispatch from a material group's
+//! [`Plan`] (its terms' enums) to the lanes' const-generic variants — the f32-frame groups
+//! compiled per form, the f64-frame groups in two passes, and the groups no lanes are
+//! compiled for sent to the reference. Each variant is a function of its own ([`apart`]).
 
 use super::kernel::{self, Inputs, Outputs, LANES};
 use super::plan::Plan;
 use super::{aniso, lobes};
+use crate::terms::FresnelKind;
 
-/// One block of `plan`'s lanes; `z`: every lane's N is (0, 0, 1) (the local form), which
-/// the groups with an f32 frame run without N's arithmetic, to the same bits. The groups
-/// whose frame is always the f64 one (which serves both forms: the local form's lanes
-/// carry N) are compiled once, not once per form.
+/// A run of blocks of `plan`'s lanes, each `inp[b]` into `out[b]`; `z`: every lane's N is
+/// (0, 0, 1) (the local form), which the groups with an f32 frame run without N's
+/// arithmetic, to the same bits. The groups whose frame is always the f64 one (which
+/// serves both forms: the local form's lanes carry N) are compiled once, not once per form.
 #[inline(always)]
-pub(crate) fn block(plan: &Plan, inp: &Inputs, out: &mut Outputs, z: bool) {
+pub(crate) fn block<S: pulp::Simd>(
+    simd: S,
+    plan: &Plan,
+    inp: &[Inputs],
+    out: &mut [Outputs],
+    z: bool,
+) {
     match plan {
         Plan::Lambert(_) => {}
         Plan::Microfacet { d, aniso, g, f, .. } if kernel::fused(*d, *aniso, *g, *f) => {}
-        _ => return f64_frame_block(plan, inp, out),
+        _ => return f64_frame_block(simd, plan, inp, out),
     }
     if z {
-        f32_frame_block::<true>(plan, inp, out)
+        f32_frame_block::<S, true>(simd, plan, inp, out)
     } else {
-        f32_frame_block::<false>(plan, inp, out)
+        f32_frame_block::<S, false>(simd, plan, inp, out)
     }
 }
 
-/// Every lane of the block to the reference: the groups no lanes are compiled for, which
+/// Runs `lanes`, one group's lanes over a run of blocks, as a function of its own compiled
+/// for `simd`'s instruction set (pulp's `vectorize`; the `inline(never)` keeps it apart
+/// from the chunk loop, and LLVM does not inline the instruction set's function into this
+/// one, which is compiled for the baseline). Inlined, every group's lanes made the chunk
+/// loop one function per instruction set several times the size of the rest of the
+/// engine, which LLVM optimises in time that grows faster than the size: it was most of
+/// the crate's build (docs/CPU_ENGINE.md, round 8). Apart, each group is a function of a
+/// few thousand instructions, and the codegen units share them.
+#[inline(never)]
+pub(crate) fn apart<S: pulp::Simd, R>(simd: S, lanes: impl FnOnce() -> R) -> R {
+    simd.vectorize(lanes)
+}
+
+/// `body` for each block `i` of a run and its outputs `o`, as one function apart
+/// ([`apart`]): the call is paid once a run.
+macro_rules! each_block {
+    ($simd:expr, $inp:expr, $out:expr, |$i:ident, $o:ident| $body:expr) => {
+        apart($simd, || {
+            for ($i, $o) in $inp.iter().zip($out.iter_mut()) {
+                $body;
+            }
+        })
+    };
+}
+
+/// Every lane of the run to the reference: the groups no lanes are compiled for, which
 /// the parser refuses (`terms::legality`), so a material never plans them.
-fn reference_block(out: &mut Outputs) {
-    out.rescue = [true; LANES];
+fn reference_block(out: &mut [Outputs]) {
+    for o in out {
+        o.rescue = [true; LANES];
+    }
 }
 
 /// Lambert and the fused microfacet groups ([`kernel::fused`]): the groups with an f32
 /// frame, compiled per form (`Z`: N = +z). The others go on to [`f64_frame_block`].
 #[inline(always)]
-fn f32_frame_block<const Z: bool>(plan: &Plan, inp: &Inputs, out: &mut Outputs) {
+fn f32_frame_block<S: pulp::Simd, const Z: bool>(
+    simd: S,
+    plan: &Plan,
+    inp: &[Inputs],
+    out: &mut [Outputs],
+) {
     use crate::terms::{DistributionKind as D, FresnelKind as F, Geometry as G};
     use kernel::*;
     let Plan::Microfacet { d, g, f, p, .. } = plan else {
         if let Plan::Lambert(p) = plan {
-            lambert_block::<Z>(p, inp, out);
+            for (i, o) in inp.iter().zip(out.iter_mut()) {
+                lambert_block::<Z>(p, i, o);
+            }
         }
         return;
     };
     macro_rules! by_f {
         ($d:expr, $g:expr) => {
             match f {
-                F::None => microfacet_block::<$d, $g, F_NONE, Z>(p, inp, out),
-                F::Schlick => microfacet_block::<$d, $g, F_SCHLICK, Z>(p, inp, out),
-                F::Conductor => microfacet_block::<$d, $g, F_CONDUCTOR, Z>(p, inp, out),
-                F::Dielectric => f64_frame_block(plan, inp, out),
+                F::None => each_block!(
+                    simd,
+                    inp,
+                    out,
+                    |i, o| microfacet_block::<$d, $g, F_NONE, Z>(p, i, o)
+                ),
+                F::Schlick => each_block!(simd, inp, out, |i, o| microfacet_block::<
+                    $d,
+                    $g,
+                    F_SCHLICK,
+                    Z,
+                >(p, i, o)),
+                F::Conductor => each_block!(simd, inp, out, |i, o| microfacet_block::<
+                    $d,
+                    $g,
+                    F_CONDUCTOR,
+                    Z,
+                >(p, i, o)),
+                F::Dielectric => f64_frame_block(simd, plan, inp, out),
             }
         };
     }
@@ -67,7 +123,7 @@ fn f32_frame_block<const Z: bool>(plan: &Plan, inp: &Inputs, out: &mut Outputs) 
         (D::Ggx, G::SmithFast) => reference_block(out),
         // Not fused (`kernel::fused`).
         (D::Ggx | D::Beckmann, G::SchlickSmith | G::Neubelt)
-        | (D::Gaussian | D::Blinn | D::Charlie, _) => f64_frame_block(plan, inp, out),
+        | (D::Gaussian | D::Blinn | D::Charlie, _) => f64_frame_block(simd, plan, inp, out),
     }
 }
 
@@ -76,34 +132,48 @@ fn f32_frame_block<const Z: bool>(plan: &Plan, inp: &Inputs, out: &mut Outputs) 
 /// distribution compiles the geometry terms its rules allow (`terms::legality`); the
 /// others take [`reference_block`].
 #[inline(always)]
-fn f64_frame_block(plan: &Plan, inp: &Inputs, out: &mut Outputs) {
-    use crate::terms::{DistributionKind as D, FresnelKind as F, Geometry as G};
+fn f64_frame_block<S: pulp::Simd>(simd: S, plan: &Plan, inp: &[Inputs], out: &mut [Outputs]) {
+    use crate::terms::{DistributionKind as D, Geometry as G};
     use kernel::*;
     use lobes::{lobe_block, Lobe, L_BLINN_PHONG, L_PHONG, L_RTR, L_WARD, L_WARD_ANISO};
     let (d, aniso, g, f, p) = match plan {
         Plan::Microfacet { d, aniso, g, f, p } => (*d, *aniso, *g, *f, p),
         Plan::Lobe { model, p } => {
             match *model {
-                Lobe::Phong => lobe_block::<L_PHONG>(p, inp, out),
-                Lobe::BlinnPhong => lobe_block::<L_BLINN_PHONG>(p, inp, out),
-                Lobe::Rtr => lobe_block::<L_RTR>(p, inp, out),
-                Lobe::Ward => lobe_block::<L_WARD>(p, inp, out),
-                Lobe::WardAniso => lobe_block::<L_WARD_ANISO>(p, inp, out),
+                Lobe::Phong => each_block!(simd, inp, out, |i, o| lobe_block::<L_PHONG>(p, i, o)),
+                Lobe::BlinnPhong => {
+                    each_block!(simd, inp, out, |i, o| lobe_block::<L_BLINN_PHONG>(p, i, o))
+                }
+                Lobe::Rtr => each_block!(simd, inp, out, |i, o| lobe_block::<L_RTR>(p, i, o)),
+                Lobe::Ward => each_block!(simd, inp, out, |i, o| lobe_block::<L_WARD>(p, i, o)),
+                Lobe::WardAniso => {
+                    each_block!(simd, inp, out, |i, o| lobe_block::<L_WARD_ANISO>(p, i, o))
+                }
             }
             return;
         }
-        Plan::Htsg { p, h } => return super::htsg::htsg_block(p, h, inp, out),
+        Plan::Htsg { p, h } => {
+            return each_block!(simd, inp, out, |i, o| super::htsg::htsg_block(p, h, i, o))
+        }
         Plan::Lambert(_) | Plan::Measured | Plan::Reference => return,
     };
-    let mut st = Stage::default();
+    // Both passes in one function apart per (D, G); F is matched in it, a block at a time.
     macro_rules! dg {
         ($d:expr, $g:expr) => {
-            dg_block64::<$d, $g>(p, inp, &mut st)
+            each_block!(simd, inp, out, |i, o| {
+                let mut st = Stage::default();
+                dg_block64::<$d, $g>(p, i, &mut st);
+                f_pass(f, p, &st, o)
+            })
         };
     }
     macro_rules! aniso {
         ($d:expr, $g:expr) => {
-            aniso::dg_block64_aniso::<$d, $g>(p, inp, &mut st)
+            each_block!(simd, inp, out, |i, o| {
+                let mut st = Stage::default();
+                aniso::dg_block64_aniso::<$d, $g>(p, i, &mut st);
+                f_pass(f, p, &st, o)
+            })
         };
     }
     // Gaussian, Blinn and Charlie: no Smith Λ (so no Smith or Schlick–Smith geometry) and
@@ -115,7 +185,7 @@ fn f64_frame_block(plan: &Plan, inp: &Inputs, out: &mut Outputs) {
                 G::CookTorrance => dg!($d, G_CT),
                 G::Neubelt => dg!($d, G_NEUBELT),
                 G::Smith | G::SmithCorrelated | G::SmithFast | G::SchlickSmith => {
-                    return reference_block(out)
+                    reference_block(out)
                 }
             }
         };
@@ -150,15 +220,21 @@ fn f64_frame_block(plan: &Plan, inp: &Inputs, out: &mut Outputs) {
         (D::Ggx, false, G::SmithFast)
         | (D::Ggx, true, G::SmithFast | G::SchlickSmith)
         | (D::Beckmann, true, G::SchlickSmith)
-        | (D::Gaussian | D::Blinn | D::Charlie, true, _) => return reference_block(out),
+        | (D::Gaussian | D::Blinn | D::Charlie, true, _) => reference_block(out),
         (D::Gaussian, false, _) => no_lambda!(D_GAUSSIAN),
         (D::Blinn, false, _) => no_lambda!(D_BLINN),
         (D::Charlie, false, _) => no_lambda!(D_CHARLIE),
     }
+}
+
+/// The second pass of the f64-frame groups: F, K and the outputs ([`kernel::f_block`]).
+#[inline(always)]
+fn f_pass(f: FresnelKind, p: &kernel::Params, st: &kernel::Stage, out: &mut Outputs) {
+    use kernel::*;
     match f {
-        F::None => f_block::<F_NONE>(p, &st, out),
-        F::Schlick => f_block::<F_SCHLICK>(p, &st, out),
-        F::Dielectric => f_block::<F_DIELECTRIC>(p, &st, out),
-        F::Conductor => f_block::<F_CONDUCTOR>(p, &st, out),
+        FresnelKind::None => f_block::<F_NONE>(p, st, out),
+        FresnelKind::Schlick => f_block::<F_SCHLICK>(p, st, out),
+        FresnelKind::Dielectric => f_block::<F_DIELECTRIC>(p, st, out),
+        FresnelKind::Conductor => f_block::<F_CONDUCTOR>(p, st, out),
     }
 }

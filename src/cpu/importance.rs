@@ -10,6 +10,7 @@
 //! core in turn; a point's block sums are added in block order, so the result does not
 //! depend on the thread count.
 
+use super::dispatch::apart;
 use super::kernel::{self, Inputs, Outputs, Params, LANES};
 use super::plan::Plan;
 use super::CpuEngine;
@@ -40,7 +41,7 @@ struct Point<'a> {
 /// asks the reference for every lane). Narrower than [`super::block`] on purpose: only
 /// these variants are compiled for the sums.
 #[inline(always)]
-fn f_none_block(plan: &Plan, inp: &Inputs, out: &mut Outputs) -> bool {
+fn f_none_block<S: pulp::Simd>(simd: S, plan: &Plan, inp: &Inputs, out: &mut Outputs) -> bool {
     use crate::terms::{DistributionKind as D, FresnelKind, Geometry as G};
     use kernel::*;
     let Plan::Microfacet {
@@ -55,7 +56,9 @@ fn f_none_block(plan: &Plan, inp: &Inputs, out: &mut Outputs) -> bool {
     };
     macro_rules! fused {
         ($d:expr, $g:expr) => {
-            microfacet_block::<$d, $g, F_NONE, true>(p, inp, out)
+            apart(simd, || {
+                microfacet_block::<$d, $g, F_NONE, true>(p, inp, out)
+            })
         };
     }
     match (*d, *g) {
@@ -68,10 +71,14 @@ fn f_none_block(plan: &Plan, inp: &Inputs, out: &mut Outputs) -> bool {
         (D::Beckmann, G::Smith) => fused!(D_BECKMANN, G_SMITH),
         (D::Beckmann, G::SmithCorrelated) => fused!(D_BECKMANN, G_SMITH_CORRELATED),
         (D::Beckmann, G::SmithFast) => fused!(D_BECKMANN, G_SMITH_FAST),
-        (D::Ggx, G::SchlickSmith) => two_pass::<D_GGX, G_SCHLICK_SMITH>(p, inp, out),
-        (D::Ggx, G::Neubelt) => two_pass::<D_GGX, G_NEUBELT>(p, inp, out),
-        (D::Beckmann, G::SchlickSmith) => two_pass::<D_BECKMANN, G_SCHLICK_SMITH>(p, inp, out),
-        (D::Beckmann, G::Neubelt) => two_pass::<D_BECKMANN, G_NEUBELT>(p, inp, out),
+        (D::Ggx, G::SchlickSmith) => {
+            apart(simd, || two_pass::<D_GGX, G_SCHLICK_SMITH>(p, inp, out))
+        }
+        (D::Ggx, G::Neubelt) => apart(simd, || two_pass::<D_GGX, G_NEUBELT>(p, inp, out)),
+        (D::Beckmann, G::SchlickSmith) => apart(simd, || {
+            two_pass::<D_BECKMANN, G_SCHLICK_SMITH>(p, inp, out)
+        }),
+        (D::Beckmann, G::Neubelt) => apart(simd, || two_pass::<D_BECKMANN, G_NEUBELT>(p, inp, out)),
         // The tables' importance sampler exists for GGX and Beckmann only (`importance`),
         // and smith-fast is Beckmann's.
         (D::Ggx, G::SmithFast) | (D::Gaussian | D::Blinn | D::Charlie, _) => return false,
@@ -100,15 +107,16 @@ impl pulp::WithSimd for ItemOp<'_> {
     type Output = ();
 
     #[inline(always)]
-    fn with_simd<S: pulp::Simd>(self, _simd: S) {
+    fn with_simd<S: pulp::Simd>(self, simd: S) {
         for (pt, sum) in self.points.iter().zip(self.sums.iter_mut()) {
-            *sum = point_sums(pt, self.units, self.cols);
+            *sum = point_sums(simd, pt, self.units, self.cols);
         }
     }
 }
 
 /// The samples of one point gathered into a block of lanes, and its sums so far.
-struct Acc<'a> {
+struct Acc<'a, S> {
+    simd: S,
     pt: &'a Point<'a>,
     v32: [f32; 3],
     inp: Inputs,
@@ -118,9 +126,9 @@ struct Acc<'a> {
     sums: [f64; 2],
 }
 
-impl<'a> Acc<'a> {
+impl<'a, S: pulp::Simd> Acc<'a, S> {
     #[inline(always)]
-    fn new(pt: &'a Point<'a>) -> Acc<'a> {
+    fn new(simd: S, pt: &'a Point<'a>) -> Acc<'a, S> {
         let v32 = pt.view.v.map(|x| x as f32);
         let mut inp = Inputs::default();
         for c in 0..3 {
@@ -128,6 +136,7 @@ impl<'a> Acc<'a> {
         }
         inp.v[8] = [1.0; LANES];
         Acc {
+            simd,
             pt,
             v32,
             inp,
@@ -156,7 +165,7 @@ impl<'a> Acc<'a> {
     /// The lanes' results of the samples gathered so far, added in order.
     #[inline(always)]
     fn flush(&mut self) {
-        let lanes = f_none_block(self.pt.plan, &self.inp, &mut self.out);
+        let lanes = f_none_block(self.simd, self.pt.plan, &self.inp, &mut self.out);
         for k in 0..self.n {
             let f = if lanes && !self.out.rescue[k] {
                 self.out.brdf[0][k]
@@ -182,8 +191,13 @@ impl<'a> Acc<'a> {
 /// `[Σ x, Σ x (1 − c)⁵]`, `x = f · cos_i/pdf`, over the samples `units` of one point, in
 /// sample order (a below-horizon sample adds nothing, as its weight 0 does on the host).
 #[inline(always)]
-fn point_sums(pt: &Point, units: &[UnitSample], cols: &[Vec<f64>; 3]) -> [f64; 2] {
-    let mut acc = Acc::new(pt);
+fn point_sums<S: pulp::Simd>(
+    simd: S,
+    pt: &Point,
+    units: &[UnitSample],
+    cols: &[Vec<f64>; 3],
+) -> [f64; 2] {
+    let mut acc = Acc::new(simd, pt);
     if pt.view.has_lanes() {
         // `LANES` samples at a time in wide f64 registers.
         let mut made = Samples::<LANES>::default();

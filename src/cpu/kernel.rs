@@ -127,6 +127,7 @@ impl Default for Inputs {
 }
 
 /// One block's outputs.
+#[derive(Clone, Copy)]
 pub struct Outputs {
     /// RGB per lane.
     pub brdf: [[f32; LANES]; 3],
@@ -1001,7 +1002,13 @@ mod tests {
             assert!(plan.is_simd(), "{body} is not in the lanes");
             let mut out = Outputs::default();
             lambert_terms(&mut out);
-            crate::cpu::block(&plan, &inp, &mut out, false);
+            crate::cpu::block(
+                pulp::Scalar::new(),
+                &plan,
+                std::slice::from_ref(&inp),
+                std::slice::from_mut(&mut out),
+                false,
+            );
             for k in 0..LANES {
                 assert!(!out.rescue[k], "{body}: lane {k} rescued");
                 let w = |a: usize| f64::from(dirs[k % 4][a]);
@@ -1059,7 +1066,13 @@ mod tests {
         )
         .unwrap()[0];
         let mut out = Outputs::default();
-        crate::cpu::block(&Plan::for_material(m), &inp, &mut out, false);
+        crate::cpu::block(
+            pulp::Scalar::new(),
+            &Plan::for_material(m),
+            std::slice::from_ref(&inp),
+            std::slice::from_mut(&mut out),
+            false,
+        );
         assert!(out.rescue.iter().all(|&r| r));
     }
 
@@ -1142,8 +1155,20 @@ mod tests {
                         assert!(plan.is_simd(), "{toml}");
                         for inp in &blocks {
                             let (mut a, mut b) = (Outputs::default(), Outputs::default());
-                            crate::cpu::block(&plan, inp, &mut a, false);
-                            crate::cpu::block(&plan, inp, &mut b, true);
+                            crate::cpu::block(
+                                pulp::Scalar::new(),
+                                &plan,
+                                std::slice::from_ref(inp),
+                                std::slice::from_mut(&mut a),
+                                false,
+                            );
+                            crate::cpu::block(
+                                pulp::Scalar::new(),
+                                &plan,
+                                std::slice::from_ref(inp),
+                                std::slice::from_mut(&mut b),
+                                true,
+                            );
                             assert_eq!(a.rescue, b.rescue, "{toml}");
                             for k in 0..LANES {
                                 if a.rescue[k] {
