@@ -6,8 +6,9 @@
 //! bit for bit the one its tuples give. The importance-sampled sums of the albedo and DFG
 //! tables are made the same way ([`super::importance`]).
 
+use super::chunk::Source;
 use super::slice_tuples::SliceTuples;
-use super::{CpuEngine, Source};
+use super::CpuEngine;
 use crate::backend::{GeneratedDirections, Output, Request};
 use crate::directions::{ImportanceJob, SliceGrid};
 use crate::error::Result;

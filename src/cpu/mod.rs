@@ -19,6 +19,7 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod aniso;
+mod chunk;
 mod generated;
 pub mod htsg;
 pub mod importance;
@@ -31,16 +32,18 @@ mod measured;
 pub mod plan;
 mod slice_tuples;
 pub mod transpose;
+pub use chunk::Tally;
+use chunk::{Source, Work};
+#[cfg(test)]
 pub(crate) use dispatch::block;
 
 use crate::backend::{Backend, Counts, Output, Request, TERM_COLUMNS};
-use crate::batch::{Batch, LocalBatch, Tuple, COLUMNS_LOCAL, COLUMNS_PLAIN, COLUMNS_TANGENT};
+use crate::batch::{Batch, LocalBatch};
 use crate::cancel::Cancel;
 use crate::error::Result;
-use crate::material::{Material, Model};
-use crate::reference::{evaluate_tuple, to_output_f32, Status};
+use crate::material::Material;
 pub use isa::Isa;
-use kernel::{Inputs, Outputs, LANES};
+use kernel::LANES;
 use plan::Plan;
 use std::sync::{Arc, Mutex};
 
@@ -77,26 +80,6 @@ pub struct CpuEngine {
     /// more than one chunk and kept for the engine's life (spawning threads per call cost
     /// a large share of a small batch's time).
     pool: Option<Arc<rayon_core::ThreadPool>>,
-}
-
-/// Where the tuples of the last evaluation went.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
-pub struct Tally {
-    /// Tuples of material groups that run in the lanes.
-    pub lanes: u64,
-    /// Of those, tuples re-evaluated by the reference (invalid, below the horizon, grazing,
-    /// or an output the lanes cannot vouch for).
-    pub rescued: u64,
-    /// Tuples of material groups that run on the reference.
-    pub reference: u64,
-}
-
-impl Tally {
-    fn add(&mut self, o: &Tally) {
-        self.lanes += o.lanes;
-        self.rescued += o.rescued;
-        self.reference += o.reference;
-    }
 }
 
 impl Default for CpuEngine {
@@ -157,69 +140,6 @@ impl CpuEngine {
     }
 }
 
-/// What the engine reads: ordinary rows, or the local-frame form.
-#[derive(Clone, Copy)]
-enum Source<'a> {
-    Rows(&'a Batch<'a>),
-    Local(&'a LocalBatch),
-    /// A half/difference slice whose tuples the workers make block by block.
-    Slice(&'a slice_tuples::SliceTuples),
-}
-
-impl Source<'_> {
-    fn len(&self) -> usize {
-        match self {
-            Source::Rows(b) => b.len(),
-            Source::Local(b) => b.len(),
-            Source::Slice(s) => s.len(),
-        }
-    }
-
-    fn material(&self, i: usize) -> usize {
-        match self {
-            Source::Rows(b) => b.material(i),
-            Source::Local(b) => b.material(),
-            Source::Slice(_) => 0,
-        }
-    }
-
-    fn tuple(&self, i: usize) -> Tuple {
-        match self {
-            Source::Rows(b) => b.tuple(i),
-            Source::Local(b) => b.tuple(i),
-            Source::Slice(s) => s.tuple(i),
-        }
-    }
-
-    fn data(&self) -> &[f32] {
-        match self {
-            Source::Rows(b) => b.as_slice(),
-            Source::Local(b) => b.as_slice(),
-            // Made block by block (see `run_chunk`), never read as rows.
-            Source::Slice(_) => &[],
-        }
-    }
-
-    fn columns(&self) -> usize {
-        match self {
-            Source::Rows(b) => b.columns(),
-            Source::Local(_) => COLUMNS_LOCAL,
-            // The columns its tuples would have as rows.
-            Source::Slice(s) => s.columns(),
-        }
-    }
-}
-
-/// One unit of work: its outputs, from position `start` of the order its rows are read
-/// in (the batch's, or a chunk's grouped order).
-struct Work<'a> {
-    /// The one material of its rows, or `None`: the chunk groups its rows itself.
-    material: Option<usize>,
-    start: usize,
-    brdf: &'a mut [f32],
-    terms: Option<&'a mut [f32]>,
-}
-
 /// What every chunk of one evaluation shares.
 struct Context<'a> {
     arch: pulp::Arch,
@@ -246,18 +166,14 @@ impl Context<'_> {
     /// Material `mi`'s lanes over `w`, whose rows are `order[w.start..]` (or the batch's
     /// rows from `w.start` on), in the instruction set pulp chose.
     fn lanes(&self, mi: usize, order: Option<&[usize]>, w: &mut Work) -> (Counts, Tally) {
-        let op = ChunkOp {
-            plan: &self.plans[mi],
-            batch: self.src,
+        chunk::lanes(
+            self.arch,
+            &self.plans[mi],
+            &self.materials[mi],
+            self.src,
             order,
-            material: &self.materials[mi],
-            work: w,
-        };
-        #[cfg(target_arch = "x86_64")]
-        if let pulp::Arch::V4(simd) = self.arch {
-            return simd.vectorize(ChunkOp4 { simd, op });
-        }
-        self.arch.dispatch(op)
+            w,
+        )
     }
 
     /// A chunk of a batch with several materials: its rows grouped by material (a stable
@@ -321,344 +237,6 @@ impl Context<'_> {
             }
         }
         (counts, tally)
-    }
-}
-
-/// The lanes over one chunk, inside the instruction set pulp chose.
-struct ChunkOp<'a, 'b> {
-    plan: &'a Plan,
-    batch: Source<'a>,
-    order: Option<&'a [usize]>,
-    work: &'a mut Work<'b>,
-    material: &'a Material,
-}
-
-impl pulp::WithSimd for ChunkOp<'_, '_> {
-    type Output = (Counts, Tally);
-
-    #[inline(always)]
-    fn with_simd<S: pulp::Simd>(self, simd: S) -> (Counts, Tally) {
-        run_chunk(
-            simd,
-            transpose::Portable,
-            self.plan,
-            self.batch,
-            self.order,
-            self.work,
-            self.material,
-        )
-    }
-}
-
-/// [`ChunkOp`] on AVX-512, where whole blocks are transposed by permutes.
-#[cfg(target_arch = "x86_64")]
-struct ChunkOp4<'a, 'b> {
-    simd: pulp::x86::V4,
-    op: ChunkOp<'a, 'b>,
-}
-
-#[cfg(target_arch = "x86_64")]
-impl pulp::NullaryFnOnce for ChunkOp4<'_, '_> {
-    type Output = (Counts, Tally);
-
-    #[inline(always)]
-    fn call(self) -> (Counts, Tally) {
-        let o = self.op;
-        run_chunk(
-            self.simd, self.simd, o.plan, o.batch, o.order, o.work, o.material,
-        )
-    }
-}
-
-/// Writes the f64 reference's result for batch row `row` at position `j` of the chunk and
-/// counts its status.
-fn rescue(batch: Source, m: &Material, row: usize, j: usize, w: &mut Work, counts: &mut Counts) {
-    let e = evaluate_tuple(&batch.tuple(row), m);
-    match e.status {
-        Status::Invalid => {
-            counts.invalid += 1;
-            counts.first_invalid = Some(
-                counts
-                    .first_invalid
-                    .map_or(row as u64, |f| f.min(row as u64)),
-            );
-        }
-        Status::BelowHorizon => counts.below_horizon += 1,
-        Status::Valid => counts.saturated += u64::from(e.saturated()),
-    }
-    for (ch, x) in e.brdf.into_iter().enumerate() {
-        w.brdf[j * 3 + ch] = to_output_f32(x);
-    }
-    if let Some(t) = w.terms.as_deref_mut() {
-        for (c, x) in e.terms().into_iter().enumerate() {
-            t[j * TERM_COLUMNS + c] = to_output_f32(x);
-        }
-    }
-}
-
-/// Columns `0..K` (L, V, and N when K = 9) of `LANES` consecutive rows of `C` columns into
-/// lanes.
-#[inline(always)]
-fn transpose<const C: usize, const K: usize>(rows: &[f32], inp: &mut Inputs) {
-    for (c, col) in inp.v[..K].iter_mut().enumerate() {
-        for (k, x) in col.iter_mut().enumerate() {
-            *x = rows[k * C + c];
-        }
-    }
-}
-
-/// The tangent columns (10–12) of `LANES` consecutive 13-column rows into components
-/// 9–11 of the lanes.
-#[inline(always)]
-fn tangent_columns(rows: &[f32], inp: &mut Inputs) {
-    for c in 0..3 {
-        for k in 0..LANES {
-            inp.v[9 + c][k] = rows[k * COLUMNS_TANGENT + 10 + c];
-        }
-    }
-}
-
-/// `C` lane arrays into `LANES` rows of `C` columns.
-#[inline(always)]
-fn untranspose<const C: usize>(cols: &[[f32; LANES]; C], rows: &mut [f32]) {
-    let rows = &mut rows[..LANES * C];
-    for k in 0..LANES {
-        for c in 0..C {
-            rows[k * C + c] = cols[c][k];
-        }
-    }
-}
-
-/// Blocks a chunk's loop fills before it runs their lanes: one call into a group's lanes
-/// ([`dispatch::apart`]) serves them all, so the call and the group's constants are paid
-/// once a run rather than once a block (about 9 KiB of inputs and outputs, in L1).
-const RUN: usize = 8;
-
-#[inline(always)]
-fn run_chunk<S: pulp::Simd, T: transpose::Transpose>(
-    simd: S,
-    tr: T,
-    plan: &Plan,
-    batch: Source,
-    order: Option<&[usize]>,
-    w: &mut Work,
-    m: &Material,
-) -> (Counts, Tally) {
-    if let Plan::Lambert(_) = plan {
-        // Block by block: Lambert's lanes are inline (no call to amortise), and with one
-        // block's arrays LLVM keeps its few values in registers (runs of `RUN` blocks
-        // took it from 31 to 76 instructions an evaluation).
-        run_blocks::<S, T, 1>(simd, tr, plan, batch, order, w, m)
-    } else {
-        run_blocks::<S, T, RUN>(simd, tr, plan, batch, order, w, m)
-    }
-}
-
-/// The chunk loop over runs of `R` blocks.
-#[inline(always)]
-fn run_blocks<S: pulp::Simd, T: transpose::Transpose, const R: usize>(
-    simd: S,
-    tr: T,
-    plan: &Plan,
-    batch: Source,
-    order: Option<&[usize]>,
-    w: &mut Work,
-    m: &Material,
-) -> (Counts, Tally) {
-    let mut counts = Counts::default();
-    let len = w.brdf.len() / 3;
-    let mut tally = Tally::default();
-    let cols = batch.columns();
-    // A group that reads the tangent, on rows without one: the reference counts those
-    // tuples invalid (FORMULAS.md §1).
-    let tangent = plan.needs_tangent();
-    if !plan.is_simd() || (tangent && cols != COLUMNS_TANGENT) {
-        let rows = |p: usize| order.map_or(p, |o| o[p]);
-        for j in 0..len {
-            rescue(batch, m, rows(w.start + j), j, w, &mut counts);
-        }
-        tally.reference = len as u64;
-        return (counts, tally);
-    }
-    tally.lanes = len as u64;
-    let mut inp = [Inputs::default(); R];
-    let mut out = [Outputs::default(); R];
-    for (i, o) in inp.iter_mut().zip(out.iter_mut()) {
-        // The local form's N = (0, 0, 1) in every lane; its transposes fill only L and V.
-        i.v[8] = [1.0; LANES];
-        if let Plan::Lambert(_) | Plan::Lobe { .. } | Plan::Measured = plan {
-            // G = F = K = 1 (and D = 0 for Lambert and measured data; a lobe's blocks
-            // write their D).
-            kernel::lambert_terms(o);
-        }
-    }
-    let mut idx = [[0usize; LANES]; R];
-    let mut j0 = 0;
-    while j0 < len {
-        // Fill up to `R` blocks, run their lanes, then write them out.
-        let blocks = R.min((len - j0).div_ceil(LANES));
-        for b in 0..blocks {
-            let j = j0 + b * LANES;
-            let n = LANES.min(len - j);
-            fill_block(
-                tr,
-                batch,
-                order,
-                tangent,
-                w.start + j,
-                n,
-                &mut inp[b],
-                &mut idx[b],
-            );
-        }
-        match (plan, &m.model) {
-            (Plan::Measured, Model::Measured(data)) => {
-                for b in 0..blocks {
-                    measured::measured_block(&data.data, data.lookup, &inp[b], &mut out[b]);
-                }
-            }
-            _ => block(
-                simd,
-                plan,
-                &inp[..blocks],
-                &mut out[..blocks],
-                cols == COLUMNS_LOCAL,
-            ),
-        }
-        for b in 0..blocks {
-            let j = j0 + b * LANES;
-            let n = LANES.min(len - j);
-            write_block(&out[b], j, n, w);
-            if out[b].any_rescue() {
-                let whole = order.is_none() && n == LANES;
-                for k in 0..n {
-                    if out[b].rescue[k] {
-                        let row = if whole { w.start + j + k } else { idx[b][k] };
-                        rescue(batch, m, row, j + k, w, &mut counts);
-                        tally.rescued += 1;
-                    }
-                }
-            }
-        }
-        j0 += (blocks * LANES).min(len - j0);
-    }
-    (counts, tally)
-}
-
-/// The block of rows `first..first + n` of the chunk's order (or of the batch) into
-/// `inp`'s lanes; `idx` gets each lane's batch row when the block is not a whole run of
-/// consecutive rows (the tail block repeats its last row: its extra lanes are computed
-/// and dropped).
-#[inline(always)]
-#[allow(clippy::too_many_arguments)]
-fn fill_block<T: transpose::Transpose>(
-    tr: T,
-    batch: Source,
-    order: Option<&[usize]>,
-    tangent: bool,
-    first: usize,
-    n: usize,
-    inp: &mut Inputs,
-    idx: &mut [usize; LANES],
-) {
-    let rows = |p: usize| order.map_or(p, |o| o[p]);
-    let cols = batch.columns();
-    let data = batch.data();
-    let take = cols.min(9);
-    // A whole block of consecutive rows (the common case): fixed-stride transposes the
-    // compiler unrolls, and no row indices to form.
-    let whole = order.is_none() && n == LANES;
-    if let Source::Slice(s) = batch {
-        // The block's tuples made here, lane by lane.
-        for (k, slot) in idx.iter_mut().enumerate() {
-            *slot = first + k.min(n - 1);
-            let t = s.tuple(*slot);
-            for c in 0..3 {
-                inp.v[c][k] = t.l[c];
-                inp.v[3 + c][k] = t.v[c];
-                inp.v[6 + c][k] = t.n[c];
-                if let Some(tt) = t.t {
-                    inp.v[9 + c][k] = tt[c];
-                }
-            }
-        }
-    } else if whole {
-        let base = first * cols;
-        match cols {
-            COLUMNS_LOCAL => tr.local(
-                data[base..base + transpose::BLOCK]
-                    .try_into()
-                    .expect("a whole block"),
-                inp,
-            ),
-            COLUMNS_PLAIN => tr.plain(
-                data[base..base + transpose::BLOCK_PLAIN]
-                    .try_into()
-                    .expect("a whole block"),
-                inp,
-            ),
-            _ => {
-                let rows = &data[base..base + LANES * COLUMNS_TANGENT];
-                transpose::<COLUMNS_TANGENT, 9>(rows, inp);
-                if tangent {
-                    tangent_columns(rows, inp);
-                }
-            }
-        }
-    } else {
-        for (k, slot) in idx.iter_mut().enumerate() {
-            *slot = rows(first + k.min(n - 1));
-        }
-        if cols == COLUMNS_PLAIN {
-            // Rows gathered whole into a block, then the block's transpose (on AVX-512
-            // permutes): a mixed batch's blocks are all gathered, and value by value the
-            // gather was a fifth of its time.
-            let mut block = [0f32; transpose::BLOCK_PLAIN];
-            for (k, &r) in idx.iter().enumerate() {
-                block[k * COLUMNS_PLAIN..(k + 1) * COLUMNS_PLAIN]
-                    .copy_from_slice(&data[r * cols..(r + 1) * cols]);
-            }
-            tr.plain(&block, inp);
-        }
-        for (k, &r) in idx.iter().enumerate() {
-            if cols != COLUMNS_PLAIN {
-                let row = &data[r * cols..r * cols + take];
-                for (c, &x) in row.iter().enumerate() {
-                    inp.v[c][k] = x;
-                }
-            }
-            if tangent {
-                for c in 0..3 {
-                    inp.v[9 + c][k] = data[r * cols + 10 + c];
-                }
-            }
-        }
-    }
-}
-
-/// A block's `n` lanes into the chunk's outputs from position `j` on.
-#[inline(always)]
-fn write_block(out: &Outputs, j: usize, n: usize, w: &mut Work) {
-    if n == LANES {
-        // Fixed-size interleaving stores the compiler turns into shuffles.
-        untranspose::<3>(&out.brdf, &mut w.brdf[j * 3..(j + LANES) * 3]);
-        if let Some(t) = w.terms.as_deref_mut() {
-            untranspose::<TERM_COLUMNS>(
-                &out.terms,
-                &mut t[j * TERM_COLUMNS..(j + LANES) * TERM_COLUMNS],
-            );
-        }
-    } else {
-        for k in 0..n {
-            for ch in 0..3 {
-                w.brdf[(j + k) * 3 + ch] = out.brdf[ch][k];
-            }
-            if let Some(t) = w.terms.as_deref_mut() {
-                for c in 0..TERM_COLUMNS {
-                    t[(j + k) * TERM_COLUMNS + c] = out.terms[c][k];
-                }
-            }
-        }
     }
 }
 
