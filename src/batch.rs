@@ -3,6 +3,7 @@
 //! to `.npy` with the `npyz` crate; and the local-frame form [`LocalBatch`], `n × 6` rows
 //! `Lx Ly Lz Vx Vy Vz` with N = +z and one material for the whole batch.
 
+pub mod columns;
 mod material_column;
 pub mod rows;
 

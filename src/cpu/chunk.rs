@@ -11,6 +11,7 @@ use super::kernel::{self, Inputs, Outputs, LANES};
 use super::plan::Plan;
 use super::{measured, slice_tuples, transpose};
 use crate::backend::{Counts, TERM_COLUMNS};
+use crate::batch::columns::{Column, ColumnBatch};
 use crate::batch::{Batch, LocalBatch, Tuple, COLUMNS_LOCAL, COLUMNS_PLAIN, COLUMNS_TANGENT};
 use crate::material::{Material, Model};
 use crate::reference::{evaluate_tuple, to_output_f32, Status};
@@ -42,6 +43,8 @@ pub(super) enum Source<'a> {
     Local(&'a LocalBatch),
     /// A half/difference slice whose tuples the workers make block by block.
     Slice(&'a slice_tuples::SliceTuples),
+    /// A batch given as columns, read in place.
+    Columns(&'a ColumnBatch<'a>),
 }
 
 impl Source<'_> {
@@ -50,6 +53,7 @@ impl Source<'_> {
             Source::Rows(b) => b.len(),
             Source::Local(b) => b.len(),
             Source::Slice(s) => s.len(),
+            Source::Columns(b) => b.len(),
         }
     }
 
@@ -58,6 +62,7 @@ impl Source<'_> {
             Source::Rows(b) => b.material(i),
             Source::Local(b) => b.material(),
             Source::Slice(_) => 0,
+            Source::Columns(b) => b.material(i),
         }
     }
 
@@ -66,6 +71,7 @@ impl Source<'_> {
             Source::Rows(b) => b.tuple(i),
             Source::Local(b) => b.tuple(i),
             Source::Slice(s) => s.tuple(i),
+            Source::Columns(b) => b.tuple(i),
         }
     }
 
@@ -74,7 +80,7 @@ impl Source<'_> {
             Source::Rows(b) => b.as_slice(),
             Source::Local(b) => b.as_slice(),
             // Made block by block (see `run_chunk`), never read as rows.
-            Source::Slice(_) => &[],
+            Source::Slice(_) | Source::Columns(_) => &[],
         }
     }
 
@@ -84,6 +90,19 @@ impl Source<'_> {
             Source::Local(_) => COLUMNS_LOCAL,
             // The columns its tuples would have as rows.
             Source::Slice(s) => s.columns(),
+            Source::Columns(b) => b.columns(),
+        }
+    }
+
+    /// Whether every row's N is (0, 0, 1) bit for bit, so that the groups with an f32 frame
+    /// may run their N = +z variants (the same bits as the general frame there).
+    fn normal_is_z(&self) -> bool {
+        match self {
+            Source::Local(_) => true,
+            Source::Columns(b) => {
+                matches!(b.directions()[2], Column::Every(n) if n.map(f32::to_bits) == [0.0f32, 0.0, 1.0].map(f32::to_bits))
+            }
+            Source::Rows(_) | Source::Slice(_) => false,
         }
     }
 }
@@ -323,7 +342,7 @@ fn run_blocks<S: pulp::Simd, T: transpose::Transpose, const R: usize>(
                 plan,
                 &inp[..blocks],
                 &mut out[..blocks],
-                cols == COLUMNS_LOCAL,
+                batch.normal_is_z(),
             ),
         }
         for b in 0..blocks {
@@ -383,6 +402,17 @@ fn fill_block<T: transpose::Transpose>(
                 }
             }
         }
+    } else if let Source::Columns(b) = batch {
+        for (k, slot) in idx.iter_mut().enumerate() {
+            *slot = rows(first + k.min(n - 1));
+        }
+        let at = whole.then_some(first);
+        for (c, column) in b.directions().into_iter().enumerate() {
+            column_lanes(column, 3 * c, at, idx, inp);
+        }
+        if let Some(t) = b.tangent().filter(|_| tangent) {
+            column_lanes(t, 9, at, idx, inp);
+        }
     } else if whole {
         let base = first * cols;
         match cols {
@@ -431,6 +461,42 @@ fn fill_block<T: transpose::Transpose>(
             if tangent {
                 for c in 0..3 {
                     inp.v[9 + c][k] = data[r * cols + 10 + c];
+                }
+            }
+        }
+    }
+}
+
+/// One column of a [`ColumnBatch`] into lanes `base..base + 3`: a vector for every row
+/// splatted, else the rows `first..first + LANES` (a whole block) or `idx`'s.
+#[inline(always)]
+fn column_lanes(
+    column: Column,
+    base: usize,
+    first: Option<usize>,
+    idx: &[usize; LANES],
+    inp: &mut Inputs,
+) {
+    match (column, first) {
+        (Column::Every(x), _) => {
+            for j in 0..3 {
+                inp.v[base + j] = [x[j]; LANES];
+            }
+        }
+        (Column::Each(c), Some(first)) => {
+            let block: &[f32; 3 * LANES] = c[3 * first..3 * (first + LANES)]
+                .try_into()
+                .expect("a whole block");
+            for k in 0..LANES {
+                for j in 0..3 {
+                    inp.v[base + j][k] = block[3 * k + j];
+                }
+            }
+        }
+        (Column::Each(c), None) => {
+            for (k, &r) in idx.iter().enumerate() {
+                for j in 0..3 {
+                    inp.v[base + j][k] = c[3 * r + j];
                 }
             }
         }

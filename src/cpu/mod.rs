@@ -38,6 +38,7 @@ use chunk::{Source, Work};
 pub(crate) use dispatch::block;
 
 use crate::backend::{Backend, Counts, Output, Request, TERM_COLUMNS};
+use crate::batch::columns::{ColumnBatch, MaterialColumn};
 use crate::batch::{Batch, LocalBatch};
 use crate::cancel::Cancel;
 use crate::error::Result;
@@ -259,6 +260,11 @@ impl CpuEngine {
             Source::Rows(_) => None,
             Source::Local(b) => Some(b.material()),
             Source::Slice(_) => Some(0),
+            Source::Columns(b) => match b.materials() {
+                MaterialColumn::Every(m) => Some(m),
+                MaterialColumn::Each(_) if materials.len() == 1 => Some(0),
+                MaterialColumn::Each(_) => None,
+            },
         };
         // The caller's buffers, reused: no fresh pages to fault in and zero.
         out.terms = request.terms.then(|| out.terms.take().unwrap_or_default());
@@ -429,6 +435,16 @@ impl Backend for CpuEngine {
         out: &mut Output,
     ) -> Result<()> {
         self.run(Source::Local(batch), materials, request, out)
+    }
+
+    fn evaluate_columns_into(
+        &mut self,
+        batch: &ColumnBatch,
+        materials: &[Material],
+        request: &Request,
+        out: &mut Output,
+    ) -> Result<()> {
+        self.run(Source::Columns(batch), materials, request, out)
     }
 
     fn generated_directions(&mut self) -> Option<&mut dyn crate::backend::GeneratedDirections> {
