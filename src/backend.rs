@@ -130,31 +130,15 @@ pub trait Backend {
         request: &Request,
         out: &mut Output,
     ) -> Result<()> {
-        let n = batch.len();
-        out.brdf.clear();
-        out.terms = request.terms.then(|| out.terms.take().unwrap_or_default());
-        if let Some(t) = out.terms.as_mut() {
-            t.clear();
-        }
-        out.counts = Counts {
-            tuples: n as u64,
-            ..Counts::default()
-        };
-        let mut part = Output::default();
-        let mut start = 0;
-        while start < n {
-            let end = n.min(start + LOCAL_EXPAND_ROWS);
-            self.evaluate_into(&batch.rows(start..end), materials, request, &mut part)?;
-            out.brdf.extend_from_slice(&part.brdf);
-            if let (Some(t), Some(p)) = (out.terms.as_mut(), part.terms.as_ref()) {
-                t.extend_from_slice(p);
-            }
-            let mut c = part.counts;
-            c.first_invalid = c.first_invalid.map(|r| r + start as u64);
-            out.counts.absorb(&c);
-            start = end;
-        }
-        Ok(())
+        evaluate_in_parts(
+            self,
+            batch.len(),
+            LOCAL_EXPAND_ROWS,
+            |range, _| batch.rows(range),
+            materials,
+            request,
+            out,
+        )
     }
 
     /// Evaluates a batch given as columns ([`ColumnBatch`]) into `out` (as
@@ -168,36 +152,15 @@ pub trait Backend {
         request: &Request,
         out: &mut Output,
     ) -> Result<()> {
-        let n = batch.len();
-        out.brdf.clear();
-        out.brdf.reserve(3 * n);
-        out.terms = request.terms.then(|| out.terms.take().unwrap_or_default());
-        if let Some(t) = out.terms.as_mut() {
-            t.clear();
-            t.reserve(TERM_COLUMNS * n);
-        }
-        out.counts = Counts {
-            tuples: n as u64,
-            ..Counts::default()
-        };
-        let mut part = Output::default();
-        let mut buffer = Vec::new();
-        let mut start = 0;
-        while start < n {
-            let end = n.min(start + COLUMNS_GATHER_ROWS);
-            let rows = batch.rows(start..end, buffer);
-            self.evaluate_into(&rows, materials, request, &mut part)?;
-            buffer = rows.into_data();
-            out.brdf.extend_from_slice(&part.brdf);
-            if let (Some(t), Some(p)) = (out.terms.as_mut(), part.terms.as_ref()) {
-                t.extend_from_slice(p);
-            }
-            let mut c = part.counts;
-            c.first_invalid = c.first_invalid.map(|r| r + start as u64);
-            out.counts.absorb(&c);
-            start = end;
-        }
-        Ok(())
+        evaluate_in_parts(
+            self,
+            batch.len(),
+            COLUMNS_GATHER_ROWS,
+            |range, buffer| batch.rows(range, buffer),
+            materials,
+            request,
+            out,
+        )
     }
 
     /// Whether this is the f64 reference, the judge: a spectral evaluation then takes the
@@ -225,6 +188,51 @@ pub trait Backend {
     fn generated_directions(&mut self) -> Option<&mut dyn GeneratedDirections> {
         None
     }
+}
+
+/// The default forms' common loop: `n` rows evaluated `part` at a time as ordinary rows,
+/// which `rows` makes for a range of row indices (given the previous part's allocation
+/// to reuse), their outputs and counts joined into `out` as one evaluation's (the first
+/// invalid row counted from the first part's first row).
+#[allow(clippy::too_many_arguments)]
+fn evaluate_in_parts<B: Backend + ?Sized>(
+    backend: &mut B,
+    n: usize,
+    part: usize,
+    mut rows: impl FnMut(std::ops::Range<usize>, Vec<f32>) -> Batch<'static>,
+    materials: &[Material],
+    request: &Request,
+    out: &mut Output,
+) -> Result<()> {
+    out.brdf.clear();
+    out.brdf.reserve(3 * n);
+    out.terms = request.terms.then(|| out.terms.take().unwrap_or_default());
+    if let Some(t) = out.terms.as_mut() {
+        t.clear();
+        t.reserve(TERM_COLUMNS * n);
+    }
+    out.counts = Counts {
+        tuples: n as u64,
+        ..Counts::default()
+    };
+    let mut evaluated = Output::default();
+    let mut buffer = Vec::new();
+    let mut start = 0;
+    while start < n {
+        let end = n.min(start + part);
+        let batch = rows(start..end, buffer);
+        backend.evaluate_into(&batch, materials, request, &mut evaluated)?;
+        buffer = batch.into_data();
+        out.brdf.extend_from_slice(&evaluated.brdf);
+        if let (Some(t), Some(p)) = (out.terms.as_mut(), evaluated.terms.as_ref()) {
+            t.extend_from_slice(p);
+        }
+        let mut c = evaluated.counts;
+        c.first_invalid = c.first_invalid.map(|r| r + start as u64);
+        out.counts.absorb(&c);
+        start = end;
+    }
+    Ok(())
 }
 
 /// Tables whose directions an engine makes itself (the Vulkan kernel does, on the device):
