@@ -250,7 +250,7 @@ fn untranspose<const C: usize>(cols: &[[f32; LANES]; C], rows: &mut [f32]) {
 }
 
 /// Blocks a chunk's loop fills before it runs their lanes: one call into a group's lanes
-/// ([`dispatch::apart`]) serves them all, so the call and the group's constants are paid
+/// ([`super::dispatch::apart`]) serves them all, so the call and the group's constants are paid
 /// once a run rather than once a block (about 9 KiB of inputs and outputs, in L1).
 const RUN: usize = 8;
 

@@ -38,7 +38,7 @@ struct Point<'a> {
 
 /// Evaluates one block of lanes of an F = 1 microfacet material (the tables' models) on
 /// the N = +z form, or returns `false` for a plan the tables never send (the caller then
-/// asks the reference for every lane). Narrower than [`super::block`] on purpose: only
+/// asks the reference for every lane). Narrower than [`super::dispatch::block`] on purpose: only
 /// these variants are compiled for the sums.
 #[inline(always)]
 fn f_none_block<S: pulp::Simd>(simd: S, plan: &Plan, inp: &Inputs, out: &mut Outputs) -> bool {

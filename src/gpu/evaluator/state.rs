@@ -99,7 +99,7 @@ pub struct VulkanBackend {
     pub(super) _commands: CommandPool,
     pub(super) kernels: Kernels,
     pub(super) last_features: Option<FeatureSet>,
-    /// The features [`Backend::share_kernels`] asked every kernel to include.
+    /// The features [`crate::backend::Backend::share_kernels`] asked every kernel to include.
     pub(super) shared_features: FeatureSet,
     pub(super) options: VulkanOptions,
     /// Checked before each chunk is submitted.
