@@ -9,8 +9,10 @@ use std::sync::mpsc::{sync_channel, SyncSender, TrySendError};
 use std::thread::JoinHandle;
 
 /// Bytes written between two early syncs: large enough that a sync's fixed cost is noise,
-/// small enough that the final one waits for little.
-pub(crate) const WRITEBACK_EVERY: u64 = 32 << 20;
+/// small enough that the final one waits for little — and that an output of a few MiB
+/// (2^20 tuples' BRDF is 12 MiB) is synced while it is computed: at 32 MiB its whole
+/// writeback came after the last chunk (docs/STREAMING.md).
+pub(crate) const WRITEBACK_EVERY: u64 = 4 << 20;
 
 /// The syncing thread of one file; see the module docs.
 pub(crate) struct Writeback {
