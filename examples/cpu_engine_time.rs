@@ -7,6 +7,9 @@
 //! - `rows fresh`: `evaluate` on 10-column rows, new output vectors every call;
 //! - `rows reused`: `evaluate_into` the previous call's output;
 //! - `local reused`: `evaluate_local_into` on the 6-column local form (N = +z);
+//! - `columns reused`: `evaluate_columns_into` on the same L and V as two `(n, 3)` columns
+//!   and N = (0, 0, 1) given once (the same 24 bytes a tuple, structure of arrays as
+//!   Mitsuba's `wi`/`wo`);
 //!
 //! each on one thread as the calling thread's CPU time (/proc/thread-self/schedstat, which
 //! other processes do not inflate) and on 1 and 2 threads as wall time (best round).
@@ -15,6 +18,7 @@
 
 use std::time::Instant;
 use vkbrdf::backend::{Backend, Output, Request};
+use vkbrdf::batch::columns::ColumnBatch;
 use vkbrdf::bench::scenarios;
 use vkbrdf::cpu::CpuEngine;
 use vkbrdf::gpu::{DeviceSelector, VulkanBackend, VulkanOptions};
@@ -46,6 +50,7 @@ enum Form {
     RowsFresh,
     RowsReused,
     LocalReused,
+    ColumnsReused,
 }
 
 fn main() {
@@ -102,11 +107,37 @@ fn main() {
         let mut forms = vec![Form::RowsFresh, Form::RowsReused];
         if local.is_some() {
             forms.push(Form::LocalReused);
+            forms.push(Form::ColumnsReused);
         }
+        // The local form's L and V as two columns, N given once.
+        let (cl, cv): (Vec<f32>, Vec<f32>) = match &local {
+            Some(b) => {
+                let rows = b.as_slice().chunks_exact(6);
+                (
+                    rows.clone().flat_map(|r| r[..3].to_vec()).collect(),
+                    rows.flat_map(|r| r[3..].to_vec()).collect(),
+                )
+            }
+            None => (Vec::new(), Vec::new()),
+        };
+        let z = [0.0f32, 0.0, 1.0];
+        let m = [local.as_ref().map_or(0.0, |b| b.material() as f32)];
+        let columns = local.as_ref().map(|_| {
+            ColumnBatch::new(
+                [&cl, &cv, &z],
+                None,
+                &m,
+                n,
+                &s.materials,
+                std::path::Path::new("columns"),
+            )
+            .expect("columns")
+        });
         let label = |f: Form| match f {
             Form::RowsFresh => "rows fresh",
             Form::RowsReused => "rows reused",
             Form::LocalReused => "local reused",
+            Form::ColumnsReused => "columns reused",
         };
         // (form, threads, CPU time?) → best seconds per call, and the last output.
         let mut variants: Vec<(Form, usize, bool, f64, Output, CpuEngine)> = Vec::new();
@@ -147,6 +178,14 @@ fn main() {
                         Form::LocalReused => e
                             .evaluate_local_into(
                                 local.as_ref().expect("local"),
+                                &s.materials,
+                                &req,
+                                out,
+                            )
+                            .expect("engine"),
+                        Form::ColumnsReused => e
+                            .evaluate_columns_into(
+                                columns.as_ref().expect("columns"),
                                 &s.materials,
                                 &req,
                                 out,

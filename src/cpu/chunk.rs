@@ -403,15 +403,17 @@ fn fill_block<T: transpose::Transpose>(
             }
         }
     } else if let Source::Columns(b) = batch {
-        for (k, slot) in idx.iter_mut().enumerate() {
-            *slot = rows(first + k.min(n - 1));
+        if !whole {
+            for (k, slot) in idx.iter_mut().enumerate() {
+                *slot = rows(first + k.min(n - 1));
+            }
         }
         let at = whole.then_some(first);
         for (c, column) in b.directions().into_iter().enumerate() {
-            column_lanes(column, 3 * c, at, idx, inp);
+            column_lanes(tr, column, 3 * c, at, idx, inp);
         }
         if let Some(t) = b.tangent().filter(|_| tangent) {
-            column_lanes(t, 9, at, idx, inp);
+            column_lanes(tr, t, 9, at, idx, inp);
         }
     } else if whole {
         let base = first * cols;
@@ -470,7 +472,8 @@ fn fill_block<T: transpose::Transpose>(
 /// One column of a [`ColumnBatch`] into lanes `base..base + 3`: a vector for every row
 /// splatted, else the rows `first..first + LANES` (a whole block) or `idx`'s.
 #[inline(always)]
-fn column_lanes(
+fn column_lanes<T: transpose::Transpose>(
+    tr: T,
     column: Column,
     base: usize,
     first: Option<usize>,
@@ -484,14 +487,13 @@ fn column_lanes(
             }
         }
         (Column::Each(c), Some(first)) => {
-            let block: &[f32; 3 * LANES] = c[3 * first..3 * (first + LANES)]
+            let block = c[3 * first..3 * (first + LANES)]
                 .try_into()
                 .expect("a whole block");
-            for k in 0..LANES {
-                for j in 0..3 {
-                    inp.v[base + j][k] = block[3 * k + j];
-                }
-            }
+            let lanes: &mut [[f32; LANES]; 3] = (&mut inp.v[base..base + 3])
+                .try_into()
+                .expect("three lanes");
+            tr.xyz(block, lanes);
         }
         (Column::Each(c), None) => {
             for (k, &r) in idx.iter().enumerate() {

@@ -15,18 +15,23 @@ pub const BLOCK: usize = LANES * COLUMNS_LOCAL;
 /// Floats in one whole block of 10-column rows.
 pub const BLOCK_PLAIN: usize = LANES * COLUMNS_PLAIN;
 
+/// Floats in one whole block of a 3-float column (`x y z` a row, as an `(n, 3)` array).
+pub const BLOCK_XYZ: usize = LANES * 3;
+
 /// A way to transpose whole blocks.
 pub trait Transpose: Copy {
     /// Columns 0–5 of `block` (16 rows of 6) into `inp.v[0..6]`.
     fn local(self, block: &[f32; BLOCK], inp: &mut Inputs);
     /// Columns 0–8 (L, V, N) of `block` (16 rows of 10) into `inp.v[0..9]`.
     fn plain(self, block: &[f32; BLOCK_PLAIN], inp: &mut Inputs);
+    /// The 3 columns of `block` (16 rows of `x y z`) into `lanes`.
+    fn xyz(self, block: &[f32; BLOCK_XYZ], lanes: &mut [[f32; LANES]; 3]);
 }
 
 /// Columns `0..K` of `LANES` rows of `C` columns into lanes, by fixed-stride loops.
 #[inline(always)]
-fn loops<const C: usize, const K: usize>(rows: &[f32], inp: &mut Inputs) {
-    for (c, col) in inp.v[..K].iter_mut().enumerate() {
+fn loops<const C: usize, const K: usize>(rows: &[f32], lanes: &mut [[f32; LANES]]) {
+    for (c, col) in lanes[..K].iter_mut().enumerate() {
         for (k, x) in col.iter_mut().enumerate() {
             *x = rows[k * C + c];
         }
@@ -44,12 +49,17 @@ impl Transpose for Portable {
         // transpose straight from the batch compiled to masked loads which, missing the
         // cache, cost twice the whole tuple.
         let block: [f32; BLOCK] = std::hint::black_box(*block);
-        loops::<COLUMNS_LOCAL, COLUMNS_LOCAL>(&block, inp)
+        loops::<COLUMNS_LOCAL, COLUMNS_LOCAL>(&block, &mut inp.v)
     }
 
     #[inline(always)]
     fn plain(self, block: &[f32; BLOCK_PLAIN], inp: &mut Inputs) {
-        loops::<COLUMNS_PLAIN, 9>(block, inp)
+        loops::<COLUMNS_PLAIN, 9>(block, &mut inp.v)
+    }
+
+    #[inline(always)]
+    fn xyz(self, block: &[f32; BLOCK_XYZ], lanes: &mut [[f32; LANES]; 3]) {
+        loops::<3, 3>(block, lanes)
     }
 }
 
@@ -102,15 +112,18 @@ const fn tables(cols: usize) -> Tables {
 const LOCAL: Tables = tables(COLUMNS_LOCAL);
 #[cfg(target_arch = "x86_64")]
 const PLAIN: Tables = tables(COLUMNS_PLAIN);
+#[cfg(target_arch = "x86_64")]
+const XYZ: Tables = tables(3);
 
-/// Columns `0..K` of `LANES` rows of `C` columns (C even, at most 10) by permutes.
+/// Columns `0..K` of `LANES` rows of `C` columns (at most 10) by permutes; an odd `C`'s
+/// last pair has a zero register for its second.
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
 fn permutes<const C: usize, const K: usize>(
     simd: pulp::x86::V4,
     rows: &[f32],
     t: &Tables,
-    inp: &mut Inputs,
+    lanes: &mut [[f32; LANES]],
 ) {
     use core::arch::x86_64::{__m512, __m512i};
     let f = simd.avx512f;
@@ -125,11 +138,11 @@ fn permutes<const C: usize, const K: usize>(
     for c in 0..K {
         let idx = |p: usize| -> __m512i { bytemuck::cast(t.indices[c][p]) };
         let mut col = f._mm512_permutex2var_ps(r[0], idx(0), r[1]);
-        for p in 1..C / 2 {
+        for p in 1..C.div_ceil(2) {
             let q = f._mm512_permutex2var_ps(r[2 * p], idx(p), r[2 * p + 1]);
             col = f._mm512_mask_blend_ps(t.masks[c][p], col, q);
         }
-        inp.v[c] = bytemuck::cast(col);
+        lanes[c] = bytemuck::cast(col);
     }
 }
 
@@ -137,12 +150,17 @@ fn permutes<const C: usize, const K: usize>(
 impl Transpose for pulp::x86::V4 {
     #[inline(always)]
     fn local(self, block: &[f32; BLOCK], inp: &mut Inputs) {
-        permutes::<COLUMNS_LOCAL, COLUMNS_LOCAL>(self, block, &LOCAL, inp)
+        permutes::<COLUMNS_LOCAL, COLUMNS_LOCAL>(self, block, &LOCAL, &mut inp.v)
     }
 
     #[inline(always)]
     fn plain(self, block: &[f32; BLOCK_PLAIN], inp: &mut Inputs) {
-        permutes::<COLUMNS_PLAIN, 9>(self, block, &PLAIN, inp)
+        permutes::<COLUMNS_PLAIN, 9>(self, block, &PLAIN, &mut inp.v)
+    }
+
+    #[inline(always)]
+    fn xyz(self, block: &[f32; BLOCK_XYZ], lanes: &mut [[f32; LANES]; 3]) {
+        permutes::<3, 3>(self, block, &XYZ, lanes)
     }
 }
 
@@ -165,6 +183,23 @@ mod tests {
                 }
             }
         };
+        let xyz: [f32; BLOCK_XYZ] = std::array::from_fn(|i| i as f32);
+        let check_xyz = |lanes: &[[f32; LANES]; 3]| {
+            for c in 0..3 {
+                for k in 0..LANES {
+                    assert_eq!(lanes[c][k], (3 * k + c) as f32, "xyz: column {c} lane {k}");
+                }
+            }
+        };
+        let mut lanes = [[-1.0; LANES]; 3];
+        Portable.xyz(&xyz, &mut lanes);
+        check_xyz(&lanes);
+        #[cfg(target_arch = "x86_64")]
+        if let pulp::Arch::V4(v4) = pulp::Arch::new() {
+            let mut lanes = [[-1.0; LANES]; 3];
+            v4.xyz(&xyz, &mut lanes);
+            check_xyz(&lanes);
+        }
         let local: [f32; BLOCK] = std::array::from_fn(|i| i as f32);
         let plain: [f32; BLOCK_PLAIN] = std::array::from_fn(|i| i as f32);
         let fresh = || Inputs {
