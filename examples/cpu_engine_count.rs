@@ -9,6 +9,9 @@
 //! valgrind … cpu_engine_count mitsuba-ggx 262144 3
 //! ```
 //!
+//! A fourth argument `columns` evaluates the same L and V as two `(n, 3)` columns with N
+//! given once (`ColumnBatch`) instead of the local form.
+//!
 //! For counts by source line, build with `--profile profiling` (the release profile drops
 //! the line tables) and annotate `target/profiling/examples/cpu_engine_count`'s output
 //! with `callgrind_annotate`.
@@ -17,7 +20,9 @@
 //! scenario's tuples, the materials) cancels. Valgrind 3.19 hides AVX-512 from the program,
 //! so the counts describe the AVX2+FMA path (`instruction set:` says which ran).
 
+use std::path::Path;
 use vkbrdf::backend::{Backend, Output, Request};
+use vkbrdf::batch::columns::ColumnBatch;
 use vkbrdf::bench::scenarios;
 use vkbrdf::cpu::CpuEngine;
 
@@ -34,12 +39,26 @@ fn main() {
         eprintln!("{name} has no local form (several materials or tangents)");
         std::process::exit(2);
     };
+    // `columns` as a fourth argument: the same L and V as two (n, 3) columns, N given once.
+    let columns = args.get(3).is_some_and(|a| a == "columns");
+    let rows = batch.as_slice().chunks_exact(6);
+    let l: Vec<f32> = rows.clone().flat_map(|r| r[..3].to_vec()).collect();
+    let v: Vec<f32> = rows.flat_map(|r| r[3..].to_vec()).collect();
+    let (z, m) = ([0.0f32, 0.0, 1.0], [batch.material() as f32]);
+    let cols =
+        ColumnBatch::new([&l, &v, &z], None, &m, n, &s.materials, Path::new("c")).expect("columns");
     let mut engine = CpuEngine::with_threads(1);
     let mut out = Output::default();
     for _ in 0..reps {
-        engine
-            .evaluate_local_into(&batch, &s.materials, &Request::default(), &mut out)
-            .expect("evaluates");
+        if columns {
+            engine
+                .evaluate_columns_into(&cols, &s.materials, &Request::default(), &mut out)
+                .expect("evaluates");
+        } else {
+            engine
+                .evaluate_local_into(&batch, &s.materials, &Request::default(), &mut out)
+                .expect("evaluates");
+        }
     }
     println!(
         "instruction set: {}; {name}: {n} tuples × {reps}; tally {:?}; first {:?}",
