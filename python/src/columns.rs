@@ -47,27 +47,17 @@ pub(crate) fn evaluate_columns<'py>(
             )
         })
     }
-    let mut columns = vec![
+    let directions = [
         slice(py, "l", &l)?,
         slice(py, "v", &v)?,
         slice(py, "n", &n)?,
     ];
-    if let Some(t) = &t {
-        columns.push(slice(py, "t", t)?);
-    }
+    let tangent = t.as_ref().map(|t| slice(py, "t", t)).transpose()?;
     let m = m
         .as_slice()
         .map_err(|e| raise(py, "BatchError", format!("material: internal: {e}")))?;
-    let [l, v, n] = [columns[0], columns[1], columns[2]];
-    let batch = ColumnBatch::new(
-        [l, v, n],
-        columns.get(3).copied(),
-        m,
-        count,
-        &list,
-        Path::new(TUPLES),
-    )
-    .map_err(|e| to_py(py, e))?;
+    let batch = ColumnBatch::new(directions, tangent, m, count, &list, Path::new(TUPLES))
+        .map_err(|e| to_py(py, e))?;
     let request = Request { terms };
     let out = run_engine(py, kind, |backend, _| {
         let mut out = Output::default();
