@@ -313,6 +313,7 @@ fn run_blocks<S: pulp::Simd, T: transpose::Transpose, const R: usize>(
         }
     }
     let mut idx = [[0usize; LANES]; R];
+    let z = batch.normal_is_z();
     let mut j0 = 0;
     while j0 < len {
         // Fill up to `R` blocks, run their lanes, then write them out.
@@ -337,13 +338,7 @@ fn run_blocks<S: pulp::Simd, T: transpose::Transpose, const R: usize>(
                     measured::measured_block(&data.data, data.lookup, &inp[b], &mut out[b]);
                 }
             }
-            _ => block(
-                simd,
-                plan,
-                &inp[..blocks],
-                &mut out[..blocks],
-                batch.normal_is_z(),
-            ),
+            _ => block(simd, plan, &inp[..blocks], &mut out[..blocks], z),
         }
         for b in 0..blocks {
             let j = j0 + b * LANES;
