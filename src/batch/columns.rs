@@ -201,7 +201,10 @@ impl<'a> ColumnBatch<'a> {
         let mut data = buffer;
         data.clear();
         data.resize(range.len() * width, 0.0);
-        let cores = std::thread::available_parallelism().map_or(1, |c| c.get());
+        // Read once: on Linux the count comes from the cgroup's files.
+        static CORES: std::sync::OnceLock<usize> = std::sync::OnceLock::new();
+        let cores =
+            *CORES.get_or_init(|| std::thread::available_parallelism().map_or(1, |c| c.get()));
         let parts = cores.min(range.len() / MIN_PART).max(1);
         if parts == 1 {
             self.gather(range.start, &mut data);
