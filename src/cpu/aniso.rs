@@ -6,9 +6,8 @@
 // The lane loops index several arrays with the same lane number (see `kernel`).
 #![allow(clippy::needless_range_loop)]
 
-use super::kernel::{
-    frame64, geometry, lane_inputs, rsqrt64, Frame64, Inputs, Lane, Params, Stage, LANES,
-};
+use super::frame::{frame64, rsqrt64, Frame64};
+use super::kernel::{geometry, lane_inputs, Inputs, Lane, Params, Stage, LANES};
 use crate::terms::d::{beckmann, ggx};
 use crate::terms::DistributionKind;
 

@@ -1,4 +1,4 @@
-//! HTSG (FORMULAS.md §8) in the lanes: the f64 frame (`kernel::frame64`, whose `ok` sends
+//! HTSG (FORMULAS.md §8) in the lanes: the f64 frame (`frame::frame64`, whose `ok` sends
 //! every lane with a cosine below 1e-4 to the reference), the model's f32 lane form
 //! (`terms::htsg::lanes`, the kernel's `glsl/htsg.glsl` function for function) and the
 //! conductor's F (`terms::f::conductor::f_lane`).
@@ -6,7 +6,8 @@
 // The lane loops index several arrays with the same lane number (see `kernel`).
 #![allow(clippy::needless_range_loop)]
 
-use super::kernel::{frame64, lane_inputs, Inputs, Outputs, Params, LANES, OUTPUT_LIMIT};
+use super::frame::frame64;
+use super::kernel::{lane_inputs, Inputs, Outputs, Params, LANES, OUTPUT_LIMIT};
 use crate::terms::f::conductor;
 use crate::terms::htsg;
 

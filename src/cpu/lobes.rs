@@ -1,6 +1,6 @@
 //! The empirical lobe models in the lanes (FORMULAS.md §6): Phong, Blinn–Phong, RTR and
 //! isotropic Ward, each `c_diff/π + c_spec · lobe` with the terms D = lobe, G = F = K = 1.
-//! The frame is the f64 one (`kernel::frame64`: these lobes raise cosines to exponents
+//! The frame is the f64 one (`frame::frame64`: these lobes raise cosines to exponents
 //! up to 1e4 and more, which multiply the frame's error), the lobe's `ln`/`exp` f32, as
 //! the kernel's `glsl/models.glsl` computes them, function for function. Anisotropic Ward
 //! adds the tangent frame (`src/cpu/aniso.rs`).
@@ -9,7 +9,8 @@
 #![allow(clippy::needless_range_loop)]
 
 use super::aniso::{lane_tangent, slope2, tangent};
-use super::kernel::{frame64, lane_inputs, Inputs, Outputs, Params, LANES, OUTPUT_LIMIT};
+use super::frame::frame64;
+use super::kernel::{lane_inputs, Inputs, Outputs, Params, LANES, OUTPUT_LIMIT};
 use crate::material::{Material, Model, Roughness};
 use crate::terms::math::{exp_neg, log_cos};
 use std::f64::consts::PI;

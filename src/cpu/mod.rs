@@ -28,6 +28,7 @@ pub mod kernel;
 pub mod lobes;
 
 mod dispatch;
+mod frame;
 mod measured;
 pub mod plan;
 mod slice_tuples;

@@ -1,0 +1,310 @@
+//! The lanes' two frames (FORMULAS.md §1) of one tuple: the f32 frame ([`frame`]), which
+//! the fused microfacet groups take where its error bound allows (docs/CPU_ENGINE.md, "The
+//! f32 frame's error bound"), and the f64 frame ([`frame64`]) every other lane takes, with
+//! the validity, horizon and grazing tests that send a lane to the reference.
+
+/// Cosines (`cos_i`, `cos_o`, `cos_h`, `c`) below this go to the reference: there K and
+/// the 1/cos factors of D and Λ leave the range where a few f32 roundings stay far inside
+/// the tolerance, and the reference's log-domain and scaled forms take over (FORMULAS.md
+/// §1, "Overflow": cosines down to the smallest subnormal must still come out exact).
+pub const GRAZING: f64 = 1e-4;
+
+/// The frame of one lane (FORMULAS.md §1) and whether the lanes may take it.
+#[derive(Clone, Copy, Default)]
+pub(super) struct Frame {
+    pub(super) cos_i: f32,
+    pub(super) cos_o: f32,
+    pub(super) cos_h: f32,
+    pub(super) c: f32,
+    /// `1 − c²`.
+    pub(super) s2: f32,
+    pub(super) sin2_h: f32,
+    pub(super) sin2_i: f32,
+    pub(super) sin2_o: f32,
+    pub(super) ok: bool,
+}
+
+/// Squared lengths in this range leave the lanes' f32 arithmetic a factor 1e19 either
+/// side before anything over- or underflows; directions outside it (finite, but longer
+/// than 1e15 or shorter than 1e-15) go to the reference, which normalises any f32.
+const LENGTH2_MIN: f32 = 1e-30;
+const LENGTH2_MAX: f32 = 1e30;
+
+/// Whether a squared length is in [`LENGTH2_MIN`, `LENGTH2_MAX`] (false for NaN).
+#[inline(always)]
+pub(super) fn length2_ok(q: f32) -> bool {
+    (LENGTH2_MIN..=LENGTH2_MAX).contains(&q)
+}
+
+/// [`length2_ok`] of a squared length formed in f64 (false for NaN).
+#[inline(always)]
+fn length2_ok64(q: f64) -> bool {
+    (f64::from(LENGTH2_MIN)..=f64::from(LENGTH2_MAX)).contains(&q)
+}
+
+/// `1/√x`, correctly rounded square root then division: within 1 ulp, and exactly 1 for
+/// x = 1 (the local form's N must come out exactly (0, 0, 1), see [`frame`]).
+#[inline(always)]
+pub(super) fn rsqrt(x: f32) -> f32 {
+    1.0 / x.sqrt()
+}
+
+/// The frame of one lane in f32; `Z`: N is (0, 0, 1) (the local form), whose dot and
+/// cross products with N reduce to single components — the same operations on the same
+/// values as the general frame with that N, so both give the same bits.
+///
+/// Why f32 suffices (the bound and its margin: docs/CPU_ENGINE.md, "The f32 frame's error
+/// bound"): l and v are the inputs times `1/|x|` formed in f64 and rounded once to f32, so
+/// each component is within u = 2⁻²⁴ (relative) of the exact unit vector's. Their lengths
+/// must agree to far better than f32's 1 ± 2u: h = normalize(l + v) turns by
+/// `(ε_l − ε_v) tan θ_d` when l and v are scaled by 1 + ε_l and 1 + ε_v, and near the peak of
+/// a lobe of roughness m that rotation δ moves D by ~2δ/m — with f32 lengths (ε up to
+/// 2.5u each) 2e-5 of D at m = 0.05, four times the inputs' own rounding. In the local form
+/// each cosine is one component of a unit vector (no cancellation at any angle), in the
+/// general form a dot product of the raw inputs in f64, then scaled. The half vector's
+/// components cancel near grazing mirror geometry (`l ≈ −v`), but only by as much as the
+/// inputs' own rounding turns h there, and those lanes (`c` < `kernel::FAST_MIN_C`) take the f64
+/// frame; `c` is taken as `|l + v|/2` rather than `v · h`, which would cancel a second time
+/// (`v·l + 1`). The sines are sums of squares (cross products with the raw N in f64, from
+/// the unrounded l, v and l + v), never `1 − cos²`.
+#[inline(always)]
+pub(super) fn frame<const Z: bool>(x: &[f32; 9]) -> Frame {
+    // l, v and h in f64, each rounded once to f32 (see the bound above): |L|² and |V|²
+    // are exact in f64 (squares of f32 values), 1/|x| by `rsqrt64_fast` (~1e-14 relative).
+    let w = |i: usize| f64::from(x[i]);
+    let sq3 = |a: [f64; 3]| a[0] * a[0] + a[1] * a[1] + a[2] * a[2];
+    let (l64, v64) = ([w(0), w(1), w(2)], [w(3), w(4), w(5)]);
+    let (ll, vv) = (sq3(l64), sq3(v64));
+    let (il, iv) = (rsqrt64_fast(ll), rsqrt64_fast(vv));
+    let (l64, v64) = (l64.map(|q| q * il), v64.map(|q| q * iv));
+    let h64: [f64; 3] = std::array::from_fn(|j| l64[j] + v64[j]);
+    let hh = sq3(h64);
+    let ih = rsqrt64_fast(hh);
+    let c = (0.5 * (hh * ih)) as f32;
+    let [lx, ly, lz] = l64.map(|q| q as f32);
+    let [vx, vy, vz] = v64.map(|q| q as f32);
+    // sin² of c from |l − v|/2 = sin θ_d: `1 − c²` of a c near 1 keeps only the bits c
+    // lost, and F near the horizon of η² = sin² is steep in sin². (In f32: its relative
+    // error, a few u, enters F no more than c's.)
+    let (dx, dy, dz) = (lx - vx, ly - vy, lz - vz);
+    let s2 = 0.25 * (dx * dx + dy * dy + dz * dz);
+    let hz = (h64[2] * ih) as f32;
+    let (cos_i, cos_o, cos_h, sin2_h, sin2_i, sin2_o, n_ok);
+    if Z {
+        // N = (0, 0, 1): |N|² = 1, `rsqrt(1)` = 1, each `n · w` is `0·wx + 0·wy + 1·wz =
+        // wz` (a zero's sign aside, and a zero cosine is rescued either way) and each
+        // `|n × w|²` is `(−wy)² + wx² + 0 = wy·wy + wx·wx`.
+        (cos_i, cos_o, cos_h) = (lz, vz, hz);
+        let side2 = |a: [f64; 3]| a[1] * a[1] + a[0] * a[0];
+        sin2_h = (side2(h64) * (ih * ih)) as f32;
+        sin2_i = side2(l64) as f32;
+        sin2_o = side2(v64) as f32;
+        n_ok = true;
+    } else {
+        let (nx, ny, nz) = (x[6], x[7], x[8]);
+        let nn = nx * nx + ny * ny + nz * nz;
+        let inn = rsqrt(nn);
+        // n · l and n · v from the raw inputs in f64 (the products are exact there): an
+        // f32 dot product of unit vectors has an absolute error of ~2 ulp, which a grazing
+        // cosine turns into a relative error of K of 1e-3; this one is a few ulp relative
+        // at any angle. (N · L)/|L| is rounded once, then scaled by 1/|N|: with N = (0, 0, 1)
+        // the dot product is Lz exactly and `inn` is 1, so these are the local form's `lz`
+        // and `vz`.
+        let raw_dot = |a: usize| w(6) * w(a) + w(7) * w(a + 1) + w(8) * w(a + 2);
+        let (nl, nv) = (raw_dot(0) * il, raw_dot(3) * iv);
+        cos_i = nl as f32 * inn;
+        cos_o = nv as f32 * inn;
+        // n · h = (n · l + n · v)/|l + v|: a sum of two cosines, which above the horizon
+        // does not cancel; with N = (0, 0, 1) it is the local form's `hz`.
+        cos_h = ((nl + nv) * ih) as f32 * inn;
+        // |N × w|² in f64 from the raw N and the f64 w (before w's rounding), scaled by
+        // 1/|N|² as the cosines are: near n (h at the peak, l or v near the normal) an f32
+        // cross product of unit vectors keeps only an absolute error of ~u, a relative
+        // error of u/sin θ that G's and D's 1/sin-like factors pass on whole. With
+        // N = (0, 0, 1) these are the local form's sums (the third term is +0 and `inn`
+        // is 1).
+        let n64 = [w(6), w(7), w(8)];
+        let cross2 = |a: [f64; 3]| {
+            let c = [
+                n64[1] * a[2] - n64[2] * a[1],
+                n64[2] * a[0] - n64[0] * a[2],
+                n64[0] * a[1] - n64[1] * a[0],
+            ];
+            c[0] * c[0] + c[1] * c[1] + c[2] * c[2]
+        };
+        let i2 = inn * inn;
+        sin2_h = (cross2(h64) * (ih * ih)) as f32 * i2;
+        sin2_i = cross2(l64) as f32 * i2;
+        sin2_o = cross2(v64) as f32 * i2;
+        n_ok = length2_ok(nn);
+    }
+    let g = GRAZING as f32;
+    // `>=` is false for NaN: lanes that went non-finite above are rescued too.
+    let ok = length2_ok64(ll)
+        && length2_ok64(vv)
+        && n_ok
+        && cos_i >= g
+        && cos_o >= g
+        && cos_h >= g
+        && c >= g;
+    Frame {
+        cos_i,
+        cos_o,
+        cos_h,
+        c,
+        s2,
+        sin2_h,
+        sin2_i,
+        sin2_o,
+        ok,
+    }
+}
+
+/// The f64 frame of one lane (FORMULAS.md §1) and whether the lanes may take it.
+#[derive(Clone, Copy, Default)]
+pub(crate) struct Frame64 {
+    pub(super) cos_i: f64,
+    pub(super) cos_o: f64,
+    pub(super) cos_h: f64,
+    pub(super) c: f64,
+    pub(super) sin2_h: f64,
+    pub(super) sin2_i: f64,
+    pub(super) sin2_o: f64,
+    /// `r · v` with `r = 2 cos_i n − l` (Phong), and `sin²` of the angle between r and v:
+    /// near the peak `1 − |r − v|²/2` and `|r − v|²/2 (2 − |r − v|²/2)`, which keep the
+    /// relative precision that `cos^e` needs (the reference's `phong_lobe`); elsewhere
+    /// `2 cos_i cos_o − l · v` and 1 (`log_cos` then takes the cosine itself). Only
+    /// Phong's lanes read them; the others' variants do not compute them.
+    pub(super) rv: f64,
+    pub(super) sin2_rv: f64,
+    /// The unit vectors, for the tangent frame (`src/cpu/aniso.rs`).
+    pub(super) n: [f64; 3],
+    pub(super) l: [f64; 3],
+    pub(super) v: [f64; 3],
+    pub(super) h: [f64; 3],
+    pub(super) ok: bool,
+}
+
+/// `1/√x` to f64 rounding for x in f32's range: the f32 estimate (cheap in wide lanes)
+/// refined by two Newton steps in f64, each of which squares the relative error (6e-8,
+/// 5e-15, then rounding). One step was not enough: a unit vector's length off by 5e-15
+/// turns h by as much, which near the peak of a lobe cos^e with e = 1e18 (sin_h ~ 1e-9)
+/// is 5e-6 of sin²_h and put the stress corpus's RTR 2e-4 off. Outside f32's range the
+/// estimate is 0 or ∞ and the result 0 or NaN: the frame then fails its tests and the lane
+/// is rescued.
+#[inline(always)]
+pub(super) fn rsqrt64(x: f64) -> f64 {
+    let y0 = f64::from(1.0 / (x as f32).sqrt());
+    let y1 = y0 * (1.5 - 0.5 * x * y0 * y0);
+    y1 * (1.5 - 0.5 * x * y1 * y1)
+}
+
+/// `1/√x` in f64 with one Newton step from f32's estimate: relative error below 1e-14
+/// (1.5 e² for the estimate's e ≤ 6e-8), for the f32 frame, which rounds every result to
+/// f32 and needs only that l and v be scaled alike to far better than u = 6e-8 (see
+/// [`frame`]). Outside f32's range the result is 0, ∞ or NaN and the frame's tests fail.
+#[inline(always)]
+fn rsqrt64_fast(x: f64) -> f64 {
+    let y0 = f64::from(1.0 / (x as f32).sqrt());
+    y0 * (1.5 - 0.5 * x * y0 * y0)
+}
+
+/// One lane's L, V, N in f64 with their squared lengths, and whether all three are lengths
+/// the f64 frame can normalise (see `in_range`).
+struct Raw {
+    l: [f64; 3],
+    v: [f64; 3],
+    n: [f64; 3],
+    ll: f64,
+    vv: f64,
+    nn: f64,
+    in_range: bool,
+}
+
+#[inline(always)]
+fn raw(x: &[f32; 9]) -> Raw {
+    let w = |i: usize| f64::from(x[i]);
+    let (l, v, n) = ([w(0), w(1), w(2)], [w(3), w(4), w(5)], [w(6), w(7), w(8)]);
+    // Products of f32 values are exact in f64, and squares of f32 magnitudes stay inside
+    // f64's normal range, so these lengths neither overflow nor underflow.
+    let sq = |a: [f64; 3]| a[0] * a[0] + a[1] * a[1] + a[2] * a[2];
+    let (ll, vv, nn) = (sq(l), sq(v), sq(n));
+    // Squared lengths inside f32's normal range, where `rsqrt64`'s estimate is finite and
+    // non-zero: outside it the Newton steps turn an estimate of ∞ into ±∞ (not NaN), which
+    // made every cosine of an N with components of 1e-43 come out +∞ and pass the
+    // frame's tests. The lanes outside it (zero, non-finite, or merely very short or long
+    // inputs) go to the reference, which decides whether they are invalid. NaN fails the
+    // range test.
+    let ok = |q: f64| (1e-37..=1e37).contains(&q);
+    Raw {
+        l,
+        v,
+        n,
+        ll,
+        vv,
+        nn,
+        in_range: ok(ll) && ok(vv) && ok(nn),
+    }
+}
+
+/// The f64 frame of one lane, for the lanes [`frame`] cannot serve (see
+/// `kernel::microfacet_block`); the local form's lanes carry N = (0, 0, 1).
+#[inline(always)]
+pub(super) fn frame64(x: &[f32; 9]) -> Frame64 {
+    let Raw {
+        l: [lx, ly, lz],
+        v: [vx, vy, vz],
+        n: [nx, ny, nz],
+        ll,
+        vv,
+        nn,
+        in_range,
+    } = raw(x);
+    let (il, iv, inn) = (rsqrt64(ll), rsqrt64(vv), rsqrt64(nn));
+    let (lx, ly, lz) = (lx * il, ly * il, lz * il);
+    let (vx, vy, vz) = (vx * iv, vy * iv, vz * iv);
+    let (nx, ny, nz) = (nx * inn, ny * inn, nz * inn);
+    let cos_i = nx * lx + ny * ly + nz * lz;
+    let cos_o = nx * vx + ny * vy + nz * vz;
+    let (hx, hy, hz) = (lx + vx, ly + vy, lz + vz);
+    let ih = rsqrt64(hx * hx + hy * hy + hz * hz);
+    let (hx, hy, hz) = (hx * ih, hy * ih, hz * ih);
+    let cos_h = nx * hx + ny * hy + nz * hz;
+    let c = vx * hx + vy * hy + vz * hz;
+    let cross2 = |ax: f64, ay: f64, az: f64| {
+        let (cx, cy, cz) = (ny * az - nz * ay, nz * ax - nx * az, nx * ay - ny * ax);
+        cx * cx + cy * cy + cz * cz
+    };
+    let (rx, ry, rz) = (
+        2.0 * cos_i * nx - lx,
+        2.0 * cos_i * ny - ly,
+        2.0 * cos_i * nz - lz,
+    );
+    let (dx, dy, dz) = (rx - vx, ry - vy, rz - vz);
+    let half_d2 = 0.5 * (dx * dx + dy * dy + dz * dz);
+    let near = half_d2 < 0.5;
+    let rv = if near {
+        1.0 - half_d2
+    } else {
+        2.0 * cos_i * cos_o - (lx * vx + ly * vy + lz * vz)
+    };
+    let sin2_rv = if near { half_d2 * (2.0 - half_d2) } else { 1.0 };
+    // `>=` is false for NaN: lanes that went non-finite above are rescued too.
+    let ok = in_range && cos_i >= GRAZING && cos_o >= GRAZING && cos_h >= GRAZING && c >= GRAZING;
+    Frame64 {
+        rv,
+        sin2_rv,
+        n: [nx, ny, nz],
+        l: [lx, ly, lz],
+        v: [vx, vy, vz],
+        h: [hx, hy, hz],
+        cos_i,
+        cos_o,
+        cos_h,
+        c,
+        sin2_h: cross2(hx, hy, hz),
+        sin2_i: cross2(lx, ly, lz),
+        sin2_o: cross2(vx, vy, vz),
+        ok,
+    }
+}
