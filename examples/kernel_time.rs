@@ -5,7 +5,9 @@
 //! Usage: cargo run --release --example kernel_time -- [--tuples N] [--rounds R]
 //!            [--variant NAME=VALUE,NAME2 …]… [SCENARIO …]
 //! Without --variant, the kernel as shipped. The variant token NO_GROUPING turns off the
-//! grouping of mixed-material batches by material (`VulkanOptions::group_by_material`).
+//! grouping of mixed-material batches by material (`VulkanOptions::group_by_material`); the
+//! token NO_FOLD keeps a single-material batch's material out of the kernel
+//! (`VulkanOptions::fold_material_min_tuples`).
 use vkbrdf::backend::Request;
 use vkbrdf::bench::scenarios;
 use vkbrdf::gpu::{VulkanBackend, VulkanOptions};
@@ -54,11 +56,16 @@ fn main() -> vkbrdf::Result<()> {
         // The token NO_GROUPING turns the grouping of mixed batches by material off.
         let defines: Vec<_> = parse_variant(v)
             .into_iter()
-            .filter(|(k, _)| k != "NO_GROUPING")
+            .filter(|(k, _)| k != "NO_GROUPING" && k != "NO_FOLD")
             .collect();
         let options = VulkanOptions {
             extra_defines: defines,
             group_by_material: !v.split(',').any(|d| d == "NO_GROUPING"),
+            fold_material_min_tuples: if v.split(',').any(|d| d == "NO_FOLD") {
+                usize::MAX
+            } else {
+                VulkanOptions::default().fold_material_min_tuples
+            },
             ..VulkanOptions::default()
         };
         gpus.push(VulkanBackend::new(None, options)?);

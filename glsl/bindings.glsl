@@ -20,6 +20,56 @@ layout(set = 0, binding = BINDING_TUPLE_TEXELS) uniform utextureBuffer tuple_tex
 layout(std430, set = 0, binding = BINDING_MATERIALS) readonly buffer Materials {
     GpuMaterial materials[];
 };
+// The batch's one material as specialization constants 1-29 (src/gpu/kernel.rs,
+// `SpecializedMaterial`): set by the host only for a large single-material batch, so that
+// the compiler folds the material's constants into the code (the conductor's complex
+// arithmetic, the terms' dispatch, the material's loads) as a kernel written for that
+// material would. Without them (MATERIAL_IS_CONSTANT false) the table is read.
+layout(constant_id = 1) const bool MATERIAL_IS_CONSTANT = false;
+layout(constant_id = 2) const float MATERIAL_DIFFUSE_X = 0.0;
+layout(constant_id = 3) const float MATERIAL_DIFFUSE_Y = 0.0;
+layout(constant_id = 4) const float MATERIAL_DIFFUSE_Z = 0.0;
+layout(constant_id = 5) const float MATERIAL_DIFFUSE_W = 0.0;
+layout(constant_id = 6) const float MATERIAL_SPECULAR_X = 0.0;
+layout(constant_id = 7) const float MATERIAL_SPECULAR_Y = 0.0;
+layout(constant_id = 8) const float MATERIAL_SPECULAR_Z = 0.0;
+layout(constant_id = 9) const float MATERIAL_SPECULAR_W = 0.0;
+layout(constant_id = 10) const float MATERIAL_FRESNEL0_X = 0.0;
+layout(constant_id = 11) const float MATERIAL_FRESNEL0_Y = 0.0;
+layout(constant_id = 12) const float MATERIAL_FRESNEL0_Z = 0.0;
+layout(constant_id = 13) const float MATERIAL_FRESNEL0_W = 0.0;
+layout(constant_id = 14) const float MATERIAL_FRESNEL1_X = 0.0;
+layout(constant_id = 15) const float MATERIAL_FRESNEL1_Y = 0.0;
+layout(constant_id = 16) const float MATERIAL_FRESNEL1_Z = 0.0;
+layout(constant_id = 17) const float MATERIAL_FRESNEL1_W = 0.0;
+layout(constant_id = 18) const float MATERIAL_LOBE_X = 0.0;
+layout(constant_id = 19) const float MATERIAL_LOBE_Y = 0.0;
+layout(constant_id = 20) const float MATERIAL_LOBE_Z = 0.0;
+layout(constant_id = 21) const float MATERIAL_LOBE_W = 0.0;
+layout(constant_id = 22) const float MATERIAL_SCALE_X = 0.0;
+layout(constant_id = 23) const float MATERIAL_SCALE_Y = 0.0;
+layout(constant_id = 24) const float MATERIAL_SCALE_Z = 0.0;
+layout(constant_id = 25) const float MATERIAL_SCALE_W = 0.0;
+layout(constant_id = 26) const uint MATERIAL_KIND_X = 0u;
+layout(constant_id = 27) const uint MATERIAL_KIND_Y = 0u;
+layout(constant_id = 28) const uint MATERIAL_KIND_Z = 0u;
+layout(constant_id = 29) const uint MATERIAL_KIND_W = 0u;
+
+// Material mi of the batch's table, or the constant one (see above).
+GpuMaterial material_at(uint mi) {
+    if (MATERIAL_IS_CONSTANT) {
+        return GpuMaterial(
+        vec4(MATERIAL_DIFFUSE_X, MATERIAL_DIFFUSE_Y, MATERIAL_DIFFUSE_Z, MATERIAL_DIFFUSE_W),
+        vec4(MATERIAL_SPECULAR_X, MATERIAL_SPECULAR_Y, MATERIAL_SPECULAR_Z, MATERIAL_SPECULAR_W),
+        vec4(MATERIAL_FRESNEL0_X, MATERIAL_FRESNEL0_Y, MATERIAL_FRESNEL0_Z, MATERIAL_FRESNEL0_W),
+        vec4(MATERIAL_FRESNEL1_X, MATERIAL_FRESNEL1_Y, MATERIAL_FRESNEL1_Z, MATERIAL_FRESNEL1_W),
+        vec4(MATERIAL_LOBE_X, MATERIAL_LOBE_Y, MATERIAL_LOBE_Z, MATERIAL_LOBE_W),
+        vec4(MATERIAL_SCALE_X, MATERIAL_SCALE_Y, MATERIAL_SCALE_Z, MATERIAL_SCALE_W),
+        uvec4(MATERIAL_KIND_X, MATERIAL_KIND_Y, MATERIAL_KIND_Z, MATERIAL_KIND_W));
+    }
+    return materials[mi];
+}
+
 // n x 3: RGB BRDF.
 layout(std430, set = 0, binding = BINDING_BRDF) writeonly buffer Brdf {
     float brdf_out[];

@@ -53,7 +53,7 @@ void evaluate_row(uint row) {
     Row r = load_row(row);
 #endif
     uint mi = min(uint(r.material), params.material_count - 1u);
-    GpuMaterial m = materials[mi];
+    GpuMaterial m = material_at(mi);
     Frame f;
     uint status = make_frame(r, m, f);
     Eval e = status == STATUS_VALID ? evaluate(f, m) : eval_zero();

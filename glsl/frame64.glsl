@@ -29,10 +29,32 @@ vec3 f32_of(dvec3 x) {
     return vec3(f32_of(x.x), f32_of(x.y), f32_of(x.z));
 }
 
+// 1/sqrt(q) for f64 q > 0 (here 1e-90 <= q <= 4e77: squared lengths of f32 vectors) to
+// within a few f64 ulps, without an f64 division or square root (each a long sequence
+// of instructions on GPUs, and llvmpipe's slowest vector operations: the frame's five
+// of each were a fifth of lavapipe's Cook-Torrance kernel). q = f 2^e with e even and f
+// in [0.5, 2) (exact); float32's inversesqrt of f, within 2 ulp (the Vulkan precision
+// table) plus f's rounding, so a relative error e0 <= 3e-7; each Newton step
+// y (3 - f y^2)/2 takes e to 1.5 e^2: 1.4e-13, then below f64's rounding (1.1e-16 per
+// operation, a few in all): the frame's quantities, rounded once to f32 or read in f64
+// by the tiny-cosine paths, are the correctly rounded quotients' to that.
+double rsqrt64(double q) {
+    int e;
+    double f = frexp(q, e); // f in [0.5, 1)
+    if ((e & 1) != 0) {
+        f *= 2.0;
+        e -= 1;
+    }
+    double y = double(inversesqrt(float(f)));
+    y *= 1.5 - 0.5 * f * y * y;
+    y *= 1.5 - 0.5 * f * y * y;
+    return ldexp(y, -e / 2);
+}
+
 // a/|a| in f64 from an input vector's f32 bits (finite and non-zero: checked before).
 dvec3 unit64(uvec3 b) {
     dvec3 d = dvec3(exact64(b.x), exact64(b.y), exact64(b.z));
-    return d / sqrt(dot(d, d));
+    return d * rsqrt64(dot(d, d));
 }
 
 // The scalars of the frame for a tuple whose l, v, n (and tangent) make_frame has found
@@ -64,11 +86,13 @@ uint frame_scalars_f64(Row r, GpuMaterial m, inout Frame f) {
     }
     // |l + v| >= cos_i + cos_o > 0 here, so h is well defined.
     dvec3 lv = dl + dv;
-    double len = sqrt(dot(lv, lv));
-    dvec3 h = lv / len;
+    double q = dot(lv, lv);
+    double inv_len = rsqrt64(q);
+    dvec3 h = lv * inv_len;
     f.h = f32_of(h);
     // cos_h = (cos_i + cos_o)/|l + v| and c = |l + v|/2: see frame32.glsl.
-    f.cos_h_exact = (cos_i + cos_o) / len;
+    f.cos_h_exact = (cos_i + cos_o) * inv_len;
+    double len = q * inv_len;
     f.cos_h = f32_of(f.cos_h_exact);
     f.c = f32_of(0.5 * len);
     f.c_exact = 0.5 * len;

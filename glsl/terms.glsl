@@ -58,12 +58,21 @@ vec2 gaussian_ln_d_xf(float cos_h, float sin2_h, float inv_m2) {
 // Surfaces"; anisotropic form from Walter et al. 2007. exp(-tan2_h/m^2) / (k m^2 cos_h^4):
 // includes the 1/cos_h^4 and the convention's 1/k (k = pi modern, 1 Cook–Torrance 1982,
 // 4 seed), the latter inside `norm`.
-// Evaluated in the log domain: at grazing h, exp(-tan2_h/m^2) underflows to 0 while
-// 1/cos_h^4 overflows to inf, and the direct product would be 0 * inf = NaN.
+// Formed as norm (e^(-x/2) / cos_h^2)^2, x = tan2_h/m^2: at grazing h, exp(-x) underflows
+// to 0 while 1/cos_h^4 overflows, and the direct product would be 0 * inf = NaN; the
+// halves stay in range while the value can matter. e^(-x/2) is normal up to x = 174.6,
+// and 1/cos_h^2 finite down to cos_h = 1.1e-19 (below, x >= 1e28 for every roughness
+// <= 1e4 and the value is 0 either way). Beyond x = 174.6 the exact value is below
+// norm e^-x (1 + m^2 x)^2 <= 1e-55 norm (1e4 the largest roughness), 0 to the rule's
+// floor of FORMULAS.md §1 even times the largest K the float32 path forms (2.5e29).
+// The error: exp_acc's 2 ulp and x's own (its 3 roundings, times x, as S_in carries
+// it), then 4 roundings: about the log domain's (exp(-x - 4 ln cos_h)), at one division
+// and one exp instead of a division, an exp and two logs (log_cos's branches).
 float beckmann_d(float slope2, float cos_h, float sin2_h, float norm) {
-    // slope2 / cos_h^2 is +inf when cos_h^2 underflows; exp_acc(-inf) is 0, not NaN.
-    float x = slope2 / (cos_h * cos_h);
-    return norm * exp_acc(-x - 4.0 * log_cos(cos_h, sin2_h));
+    // max: a cos_h^2 flushed to 0 gives x = inf, exp_acc(-inf) = 0, and 0, not 0/0.
+    float inv_c2 = 1.0 / max(cos_h * cos_h, FLT_MIN);
+    float half_lobe = exp_acc(-0.5 * (slope2 * inv_c2)) * inv_c2;
+    return norm * (half_lobe * half_lobe);
 }
 #if defined(HAS_FLOAT64)
 // beckmann_d in f64's range, given cos_h in f64 and ln cos_h: the same log domain, where
@@ -597,7 +606,7 @@ vec2 seed_k_xf(vec2 cos_i, vec2 cos_o) {
 #if defined(HAS_CONV_CT1982)
 // Cook & Torrance 1982: R_s = DGF / (pi (N.L)(N.V)): includes the 1/pi.
 float cook_torrance_1982_k(float cos_i, float cos_o) {
-    return INV_PI / cos_i / cos_o;
+    return INV_PI / (cos_i * cos_o); // one division: see modern_k
 }
 #if defined(HAS_FLOAT64)
 // In f64 the product of the cosines cannot underflow (each >= 1e-45).
@@ -614,10 +623,10 @@ vec2 cook_torrance_1982_k_xf(vec2 cos_i, vec2 cos_o) {
 // term k/modern: Walter et al. 2007
 #if defined(HAS_CONV_MODERN)
 // Walter et al. 2007: 1/(4 cos_i cos_o) (the Jacobian of the half vector), as in Mitsuba 3
-// and pbrt-v4. Divided one cosine at a time: the product cos_i cos_o can underflow where
-// each quotient is finite.
+// and pbrt-v4. One division of the product: above TINY_COS (1e-15) it is >= 1e-30, a
+// normal float32; below, the models form K from the exact cosines instead (models.glsl).
 float modern_k(float cos_i, float cos_o) {
-    return 0.25 / cos_i / cos_o;
+    return 0.25 / (cos_i * cos_o);
 }
 #if defined(HAS_FLOAT64)
 // In f64 the product of the cosines cannot underflow (each >= 1e-45).

@@ -15,7 +15,7 @@ mod options;
 mod state;
 mod timing;
 pub use link::LinkRates;
-pub use options::{validation_from_env, InjectedFault, VulkanOptions};
+pub use options::{validation_from_env, InjectedFault, VulkanOptions, FOLD_MATERIAL_MIN_TUPLES};
 pub use state::{HostStages, VulkanBackend, FRAMES_IN_FLIGHT};
 pub use timing::{KernelClock, KernelTiming};
 
@@ -121,6 +121,7 @@ impl VulkanBackend {
             _commands: commands,
             kernels,
             last_features: None,
+            last_folded: false,
             options,
             cancel: crate::cancel::Cancel::new(),
             shared_features: FeatureSet::EMPTY,
@@ -185,6 +186,12 @@ impl VulkanBackend {
     /// The FeatureSet (and so the pipeline) the last evaluation ran with.
     pub fn last_features(&self) -> Option<FeatureSet> {
         self.last_features
+    }
+
+    /// Whether the last evaluation's kernel had the batch's one material folded in as
+    /// specialization constants ([`VulkanOptions::fold_material_min_tuples`]).
+    pub fn last_material_folded(&self) -> bool {
+        self.last_folded
     }
 
     /// The SPIR-V of the kernel for `features` (compiled and cached on first use).
@@ -323,6 +330,28 @@ impl VulkanBackend {
         }
     }
 
+    /// The pipeline for `features` and a batch of `tuples` rows over `materials`: with the
+    /// material folded in ([`Kernels::folded`]) for a batch of one material and at least
+    /// [`VulkanOptions::fold_material_min_tuples`] rows, while the evaluator's budget of
+    /// folds lasts; else the table-reading one.
+    fn pipeline_for(
+        &mut self,
+        features: FeatureSet,
+        materials: &[GpuMaterial],
+        tuples: usize,
+    ) -> Result<vk::Pipeline> {
+        self.last_folded = false;
+        if let [material] = materials {
+            if tuples >= self.options.fold_material_min_tuples {
+                if let Some(p) = self.kernels.folded(features, material)? {
+                    self.last_folded = true;
+                    return Ok(p);
+                }
+            }
+        }
+        Ok(self.kernels.pipeline(features)?.raw())
+    }
+
     /// Evaluates `batch` with the pipeline for exactly `features`.
     fn run(
         &mut self,
@@ -340,8 +369,9 @@ impl VulkanBackend {
         let chunk = self.chunk_tuples(materials.len())?;
         // Before the pipeline: a device without f64 refuses measured materials here.
         self.upload_measured(materials)?;
-        let pipeline = self.kernels.pipeline(features)?.raw();
-        self.upload_materials(&gpu_materials(materials))?;
+        let gpu = gpu_materials(materials);
+        let pipeline = self.pipeline_for(features, &gpu, n)?;
+        self.upload_materials(&gpu)?;
         let bucketed = features.contains(FeatureSet::BUCKETED);
         self.stream(
             batch,

@@ -9,7 +9,9 @@
 
 use super::context::{Device, PhysicalInfo};
 use super::disk_cache::{key_of, DiskCache};
-use super::layout::{descriptor_type, shader_codes, PushConstants, BINDING_COUNT, SHADER_BINDINGS};
+use super::layout::{
+    descriptor_type, shader_codes, GpuMaterial, PushConstants, BINDING_COUNT, SHADER_BINDINGS,
+};
 use super::pipeline_cache::PipelineCache;
 use super::vk_error::vk_error;
 use crate::error::{Error, Result};
@@ -21,6 +23,10 @@ use std::sync::Arc;
 /// Invocations per workgroup (specialization constant 0 of every kernel). 64 is a multiple
 /// of every common subgroup size (8 on lavapipe, 32 NVIDIA, 64 AMD).
 pub const WORKGROUP_SIZE: u32 = 64;
+
+/// Materials one evaluator folds into pipelines at most ([`Kernels::folded`]): the bench's
+/// scenarios and a few large batches, never a fit's thousands of parameter sets.
+pub const FOLDED_MATERIALS_MAX: usize = 8;
 
 /// The GLSL sources embedded in the binary, by the name `#include` uses.
 pub const SOURCES: &[(&str, &str)] = &[
@@ -236,6 +242,10 @@ impl Drop for Pipeline {
 /// ([`super::disk_cache`]).
 pub(crate) struct Kernels {
     cache: HashMap<FeatureSet, Pipeline>,
+    /// Pipelines with a material folded in ([`Kernels::folded`]), in order of creation.
+    folded: Vec<(FeatureSet, GpuMaterial, Pipeline)>,
+    /// Materials folded so far, by this evaluator ([`FOLDED_MATERIALS_MAX`]).
+    folds: usize,
     probes: HashMap<String, Pipeline>,
     layout: vk::PipelineLayout,
     set_layout: vk::DescriptorSetLayout,
@@ -271,6 +281,8 @@ impl Kernels {
             .map_err(vk_error("vkCreateDescriptorSetLayout"))?;
         let mut kernels = Kernels {
             cache: HashMap::new(),
+            folded: Vec::new(),
+            folds: 0,
             probes: HashMap::new(),
             layout: vk::PipelineLayout::null(),
             set_layout,
@@ -330,10 +342,39 @@ impl Kernels {
                     words
                 }
             };
-            let pipeline = self.create(spirv)?;
+            let pipeline = self.create(spirv, None)?;
             self.cache.insert(features, pipeline);
         }
         Ok(&self.cache[&features])
+    }
+
+    /// The pipeline for `features` with `material` folded in as specialization constants
+    /// 1-29 (`material_at` in `glsl/bindings.glsl`): the compiler then treats the material
+    /// as a kernel written for it would, folding its constants and its terms' dispatch.
+    /// `None` once this evaluator has folded [`FOLDED_MATERIALS_MAX`] materials: each fold
+    /// is a compile, and a caller that changes the material from batch to batch (a fit)
+    /// must not compile in a loop; it gets [`pipeline`](Self::pipeline)'s kernel instead.
+    pub fn folded(
+        &mut self,
+        features: FeatureSet,
+        material: &GpuMaterial,
+    ) -> Result<Option<vk::Pipeline>> {
+        let found = self
+            .folded
+            .iter()
+            .find(|(f, m, _)| *f == features && m == material);
+        if let Some((_, _, p)) = found {
+            return Ok(Some(p.raw));
+        }
+        if self.folds >= FOLDED_MATERIALS_MAX {
+            return Ok(None);
+        }
+        let spirv = self.pipeline(features)?.spirv.clone();
+        let pipeline = self.create(spirv, Some(material))?;
+        let raw = pipeline.raw;
+        self.folds += 1;
+        self.folded.push((features, *material, pipeline));
+        Ok(Some(raw))
     }
 
     /// The SPIR-V of the pipeline for `features` (compiled on first use).
@@ -354,25 +395,34 @@ impl Kernels {
                 &kernel_defines(FeatureSet::EMPTY, false),
                 target(p),
             )?;
-            let pipeline = self.create(spirv)?;
+            let pipeline = self.create(spirv, None)?;
             self.probes.insert(source.to_string(), pipeline);
         }
         Ok(&self.probes[source])
     }
 
-    fn create(&mut self, spirv: Vec<u32>) -> Result<Pipeline> {
+    /// A pipeline from `spirv`: the workgroup size as constant 0 and, with `material`,
+    /// MATERIAL_IS_CONSTANT (1) and the material's 28 words (2-29, in field order).
+    fn create(&mut self, spirv: Vec<u32>, material: Option<&GpuMaterial>) -> Result<Pipeline> {
         let pipeline_cache = self.pipeline_cache.for_creation();
         let d = &self.device.raw;
         let info = vk::ShaderModuleCreateInfo::default().code(&spirv);
         // SAFETY: `spirv` is a complete module from shaderc; the device is live.
         let module = unsafe { d.create_shader_module(&info, None) }
             .map_err(vk_error("vkCreateShaderModule"))?;
-        let entries = [vk::SpecializationMapEntry {
-            constant_id: 0,
-            offset: 0,
-            size: 4,
-        }];
-        let data = WORKGROUP_SIZE.to_ne_bytes();
+        let mut data = WORKGROUP_SIZE.to_ne_bytes().to_vec();
+        if let Some(m) = material {
+            data.extend_from_slice(&vk::TRUE.to_ne_bytes());
+            data.extend_from_slice(bytemuck::bytes_of(m));
+        }
+        // Constant i at offset 4 i: the data above is laid out in constant order.
+        let entries: Vec<vk::SpecializationMapEntry> = (0..data.len() as u32 / 4)
+            .map(|i| vk::SpecializationMapEntry {
+                constant_id: i,
+                offset: 4 * i,
+                size: 4,
+            })
+            .collect();
         let specialization = vk::SpecializationInfo::default()
             .map_entries(&entries)
             .data(&data);
@@ -401,6 +451,7 @@ impl Drop for Kernels {
     fn drop(&mut self) {
         // Pipelines first (they were created with the layout), then the layouts.
         self.cache.clear();
+        self.folded.clear();
         self.probes.clear();
         // SAFETY: no pipeline or pending work uses the layouts any more (the evaluator waits
         // idle before dropping); each is destroyed exactly once, in reverse creation order.

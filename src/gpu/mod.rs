@@ -40,8 +40,10 @@ pub use context::{DeviceSelector, ValidationCounter, INSTALL_HINT};
 pub use devices::{list_devices, DeviceInfo, HeapInfo};
 pub use evaluator::{
     validation_from_env, BufferBytes, HostStages, InjectedFault, KernelClock, KernelTiming,
-    LinkRates, VulkanBackend, VulkanOptions, FRAMES_IN_FLIGHT, MAX_CHUNK_TUPLES,
+    LinkRates, VulkanBackend, VulkanOptions, FOLD_MATERIAL_MIN_TUPLES, FRAMES_IN_FLIGHT,
+    MAX_CHUNK_TUPLES,
 };
+pub use kernel::FOLDED_MATERIALS_MAX;
 
 /// The directory where compiled kernels are kept across runs (`VKBRDF_CACHE_DIR`, else the
 /// user's cache directory), or `None` when the cache is off or no home is known.

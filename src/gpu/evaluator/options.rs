@@ -20,6 +20,11 @@ pub struct VulkanOptions {
     /// Upload batches that mix materials grouped by material (the `BUCKETED` kernels;
     /// default on). Off only to measure what the grouping gains.
     pub group_by_material: bool,
+    /// A batch of one material and at least this many tuples is evaluated by a kernel with
+    /// the material folded in as specialization constants (default
+    /// [`FOLD_MATERIAL_MIN_TUPLES`]; `usize::MAX`: never). See docs/VULKAN.md, "Specialised
+    /// kernels", for where a fold pays.
+    pub fold_material_min_tuples: usize,
     /// Testing aid: a fault to inject into batch evaluations (see [`InjectedFault`]).
     /// Default: none, or what the environment variable `VKBRDF_INJECT_VK_FAULT` says
     /// (read by [`VulkanBackend::new`](crate::gpu::VulkanBackend::new)).
@@ -86,10 +91,14 @@ impl Default for VulkanOptions {
             validation: validation_from_env(),
             extra_defines: Vec::new(),
             group_by_material: true,
+            fold_material_min_tuples: FOLD_MATERIAL_MIN_TUPLES,
             inject_fault: None,
         }
     }
 }
+
+/// The default of [`VulkanOptions::fold_material_min_tuples`].
+pub const FOLD_MATERIAL_MIN_TUPLES: usize = 1 << 22;
 
 /// Whether `VKBRDF_VALIDATION` asks for the validation layer (`1`, `true` or `yes`).
 pub fn validation_from_env() -> bool {

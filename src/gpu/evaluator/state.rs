@@ -99,6 +99,8 @@ pub struct VulkanBackend {
     pub(super) _commands: CommandPool,
     pub(super) kernels: Kernels,
     pub(super) last_features: Option<FeatureSet>,
+    /// Whether the last evaluation's kernel had its material folded in.
+    pub(super) last_folded: bool,
     /// The features [`crate::backend::Backend::share_kernels`] asked every kernel to include.
     pub(super) shared_features: FeatureSet,
     pub(super) options: VulkanOptions,

@@ -164,8 +164,9 @@ impl VulkanBackend {
             ));
         }
         let features = self.grouping(Self::features_with(batch, materials, request, forced));
-        let pipeline = self.kernels.pipeline(features)?.raw();
-        self.upload_materials(&gpu_materials(materials))?;
+        let gpu = gpu_materials(materials);
+        let pipeline = self.pipeline_for(features, &gpu, total)?;
+        self.upload_materials(&gpu)?;
         let rows = &batch.as_slice()[..n * cols];
         // Grouping by material is host work done once here (the end-to-end timing has it).
         let order = features

@@ -1,0 +1,138 @@
+//! A batch of one material is evaluated by a kernel with the material folded in as
+//! specialization constants (docs/VULKAN.md, "Specialised kernels"): the compiler then
+//! folds the material's arithmetic, which may round differently from the kernel that reads
+//! the material table. These tests hold the folded kernels to FORMULAS.md §1's rule on each
+//! check combination's hardest tuples, and hold the folding to its budget: a caller that
+//! changes the material from batch to batch (a fit) must not compile a kernel each time.
+
+mod common;
+
+use common::rule::assert_within_rule;
+use std::collections::BTreeSet;
+use vkbrdf::backend::{Backend, Request};
+use vkbrdf::batch::Batch;
+use vkbrdf::check;
+use vkbrdf::gpu::{DeviceSelector, VulkanBackend, VulkanOptions, FOLDED_MATERIALS_MAX};
+use vkbrdf::material::{parse_materials, Material};
+use vkbrdf::reference::CpuReference;
+
+/// The Vulkan backend (validation on) folding every single-material batch of at least
+/// `min_tuples` rows, or `None` as `common::vulkan` decides.
+fn vulkan_folding(min_tuples: usize) -> Option<VulkanBackend> {
+    let options = VulkanOptions {
+        validation: true,
+        fold_material_min_tuples: min_tuples,
+        ..VulkanOptions::default()
+    };
+    match VulkanBackend::new(DeviceSelector::from_env(), options) {
+        Ok(b) => Some(b),
+        Err(e) => {
+            drop(common::vulkan()); // panics under VKBRDF_REQUIRE_VULKAN=1, else says it skips
+            eprintln!("no Vulkan device: {e}");
+            None
+        }
+    }
+}
+
+/// The rows of `batch` that use material `k`, as a batch of that one material.
+fn one_material(batch: &Batch, k: usize) -> Batch<'static> {
+    let cols = batch.columns();
+    let mut rows = Vec::new();
+    for row in batch.as_slice().chunks(cols) {
+        if row[9] as usize == k {
+            let at = rows.len() + 9;
+            rows.extend_from_slice(row);
+            rows[at] = 0.0;
+        }
+    }
+    Batch::new(rows, cols, 1, std::path::Path::new("one material")).expect("valid")
+}
+
+#[test]
+fn folded_kernels_are_within_the_rule_on_every_term() {
+    // Combinations chosen until every word of their names (the model, the convention and
+    // each term) has been seen: every term's code runs folded at least once.
+    let mut seen = BTreeSet::new();
+    let chosen: Vec<check::Combination> = check::combinations(11)
+        .expect("combinations")
+        .into_iter()
+        .filter(|c| {
+            let words: Vec<String> = c.name.split_whitespace().map(String::from).collect();
+            let new = words.iter().any(|w| !seen.contains(w));
+            seen.extend(words);
+            new
+        })
+        .collect();
+    assert!(
+        chosen.len() > FOLDED_MATERIALS_MAX,
+        "the budget is crossed below"
+    );
+    let mut reference = CpuReference::new();
+    let request = Request { terms: true };
+    for group in chosen.chunks(FOLDED_MATERIALS_MAX) {
+        let Some(mut gpu) = vulkan_folding(0) else {
+            return;
+        };
+        for (i, c) in group.iter().enumerate() {
+            let batch = one_material(&check::generate(c, 30_000, i as u64).expect("batch"), 0);
+            let mats = &c.materials[..1];
+            let out = gpu.evaluate(&batch, mats, &request).expect("evaluate");
+            assert!(gpu.last_material_folded(), "{}: not folded", c.name);
+            let want = reference
+                .evaluate(&batch, mats, &request)
+                .expect("reference");
+            assert_eq!(out.counts, want.counts, "{}", c.name);
+            assert_within_rule(&c.name, &batch, mats, &out, &want);
+        }
+    }
+}
+
+/// `n` GGX materials that differ only in their roughness.
+fn distinct_materials(n: usize) -> Vec<Material> {
+    (0..n)
+        .map(|i| {
+            let toml = format!(
+                "[[material]]\nname = \"m{i}\"\nmodel = \"cook-torrance\"\ndistribution = \"ggx\"\nroughness = {}\ngeometry = \"smith\"\nfresnel = \"schlick\"\nf0 = 0.04\n",
+                0.1 + 0.01 * i as f64
+            );
+            parse_materials(&toml, "test").expect("valid").remove(0)
+        })
+        .collect()
+}
+
+#[test]
+fn folding_stops_at_its_budget_and_below_its_size() {
+    let Some(mut gpu) = vulkan_folding(1_000) else {
+        return;
+    };
+    let mats = distinct_materials(FOLDED_MATERIALS_MAX + 2);
+    let batch = vkbrdf::sample::sample_batch(1_000, 1, 3, false);
+    let small = vkbrdf::sample::sample_batch(999, 1, 3, false);
+    let request = Request::default();
+    let mut table_gpu = vulkan_folding(usize::MAX).expect("a device, as above");
+    for (i, m) in mats.iter().enumerate() {
+        let one = std::slice::from_ref(m);
+        let out = gpu.evaluate(&batch, one, &request).expect("evaluate");
+        assert_eq!(
+            gpu.last_material_folded(),
+            i < FOLDED_MATERIALS_MAX,
+            "material {i}: folded only while the budget lasts"
+        );
+        let table = table_gpu.evaluate(&batch, one, &request).expect("evaluate");
+        assert!(!table_gpu.last_material_folded());
+        for (a, b) in out.brdf.iter().zip(&table.brdf) {
+            assert!((a - b).abs() <= 2e-6 * b.abs().max(1e-6), "{a} vs {b}");
+        }
+    }
+    // A material folded before is reused, past the budget too.
+    gpu.evaluate(&batch, &mats[..1], &request)
+        .expect("evaluate");
+    assert!(gpu.last_material_folded());
+    // Below the size, no fold; several materials, no fold.
+    gpu.evaluate(&small, &mats[..1], &request)
+        .expect("evaluate");
+    assert!(!gpu.last_material_folded());
+    let two = vkbrdf::sample::sample_batch(1_000, 2, 3, false);
+    gpu.evaluate(&two, &mats[..2], &request).expect("evaluate");
+    assert!(!gpu.last_material_folded());
+}
