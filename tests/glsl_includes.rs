@@ -91,8 +91,18 @@ fn unit(text: &str) -> Unit {
                 } else {
                     u.defines.insert(instance.to_string());
                 }
-            } else if let Some(name) = declared_name(block.trim_end().trim_end_matches(';')) {
-                u.defines.insert(name.to_string());
+            } else {
+                // A specialization constant, `layout(constant_id = N) const T NAME = value;`:
+                // the name is the word before the initializer, after the qualifier.
+                let decl = block.trim_end().trim_end_matches(';');
+                let qualifier_end = decl.find(')').map_or(0, |i| i + 1);
+                let decl = match decl[qualifier_end..].split_once('=') {
+                    Some((head, _)) => &decl[..qualifier_end + head.len()],
+                    None => decl,
+                };
+                if let Some(name) = declared_name(decl) {
+                    u.defines.insert(name.to_string());
+                }
             }
         } else if !line.starts_with(|c: char| c.is_whitespace() || c == '#') && words.len() >= 2 {
             // File scope: `struct S`, `const T NAME = ...`, `shared T NAME`, `T name(...)`.
