@@ -6,8 +6,8 @@
 //!            [--variant NAME=VALUE,NAME2 …]… [SCENARIO …]
 //! Without --variant, the kernel as shipped. The variant token NO_GROUPING turns off the
 //! grouping of mixed-material batches by material (`VulkanOptions::group_by_material`); the
-//! token NO_FOLD keeps a single-material batch's material out of the kernel
-//! (`VulkanOptions::fold_material_min_tuples`).
+//! tokens NO_FOLD and FOLD keep a single-material batch's material out of the kernel or
+//! fold it in whatever the batch's size (`VulkanOptions::fold_material_min_tuples`).
 use vkbrdf::backend::Request;
 use vkbrdf::bench::scenarios;
 use vkbrdf::gpu::{VulkanBackend, VulkanOptions};
@@ -56,13 +56,15 @@ fn main() -> vkbrdf::Result<()> {
         // The token NO_GROUPING turns the grouping of mixed batches by material off.
         let defines: Vec<_> = parse_variant(v)
             .into_iter()
-            .filter(|(k, _)| k != "NO_GROUPING" && k != "NO_FOLD")
+            .filter(|(k, _)| !["NO_GROUPING", "NO_FOLD", "FOLD"].contains(&k.as_str()))
             .collect();
         let options = VulkanOptions {
             extra_defines: defines,
             group_by_material: !v.split(',').any(|d| d == "NO_GROUPING"),
             fold_material_min_tuples: if v.split(',').any(|d| d == "NO_FOLD") {
                 usize::MAX
+            } else if v.split(',').any(|d| d == "FOLD") {
+                0
             } else {
                 VulkanOptions::default().fold_material_min_tuples
             },

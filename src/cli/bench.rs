@@ -322,7 +322,9 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
             &report
                 .results
                 .iter()
-                .filter(|r| r.precision != "specialised" && r.precision != "all-features")
+                .filter(|r| {
+                    !["specialised", "all-features", "folded"].contains(&r.precision.as_str())
+                })
                 .cloned()
                 .collect::<Vec<_>>(),
         )?;
@@ -474,8 +476,29 @@ fn compare_kernels(
         _ => None,
     };
     super::common::progress_message(bar, format!("{} kernels side by side", sc.name));
-    let mut best = [f64::INFINITY; 4]; // specialised, all-features, table, fast
+    let mut best = [f64::INFINITY; 5]; // specialised, all-features, table, fast, folded
+                                       // A single-material batch's kernel with its material folded in (specialization
+                                       // constants), whatever the batch's size, and that kernel's error.
+    let folded_err = if sc.materials.len() == 1 {
+        let usual = v.set_fold_material_min_tuples(0);
+        let out = vkbrdf::backend::Backend::evaluate(v, &batch, &sc.materials, &request);
+        v.set_fold_material_min_tuples(usual);
+        Some(bench::max_rel_err(
+            &batch,
+            &sc.materials,
+            &out?.brdf,
+            20_000,
+        ))
+    } else {
+        None
+    };
     for _ in 0..rounds {
+        if folded_err.is_some() {
+            let usual = v.set_fold_material_min_tuples(0);
+            let t = v.kernel_seconds(&batch, &sc.materials, &request, repeats);
+            v.set_fold_material_min_tuples(usual);
+            best[4] = best[4].min(t?);
+        }
         let t = v.kernel_seconds(&batch, &sc.materials, &request, repeats)?;
         best[0] = best[0].min(t);
         let t = v.kernel_seconds_with_features(
@@ -522,6 +545,9 @@ fn compare_kernels(
             best[2],
             err,
         ));
+    }
+    if let Some(err) = folded_err {
+        results.push(row("vulkan", sc.name, "kernel", "folded", n, best[4], err));
     }
     if fast.is_some() {
         let err = results

@@ -188,6 +188,12 @@ impl VulkanBackend {
         self.last_features
     }
 
+    /// Sets [`VulkanOptions::fold_material_min_tuples`] (for measuring the folded kernel
+    /// against the table-reading one) and returns the value it replaces.
+    pub fn set_fold_material_min_tuples(&mut self, tuples: usize) -> usize {
+        std::mem::replace(&mut self.options.fold_material_min_tuples, tuples)
+    }
+
     /// Whether the last evaluation's kernel had the batch's one material folded in as
     /// specialization constants ([`VulkanOptions::fold_material_min_tuples`]).
     pub fn last_material_folded(&self) -> bool {

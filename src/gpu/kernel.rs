@@ -26,7 +26,7 @@ pub const WORKGROUP_SIZE: u32 = 64;
 
 /// Materials one evaluator folds into pipelines at most ([`Kernels::folded`]): the bench's
 /// scenarios and a few large batches, never a fit's thousands of parameter sets.
-pub const FOLDED_MATERIALS_MAX: usize = 8;
+pub const FOLDED_MATERIALS_MAX: usize = 16;
 
 /// The GLSL sources embedded in the binary, by the name `#include` uses.
 pub const SOURCES: &[(&str, &str)] = &[
@@ -318,34 +318,37 @@ impl Kernels {
     /// The pipeline for `features`, compiled on first use.
     pub fn pipeline(&mut self, features: FeatureSet) -> Result<&Pipeline> {
         if !self.cache.contains_key(&features) {
-            let p = &self.device.physical;
-            let arithmetic =
-                p.subgroup_arithmetic && target(p) as u32 >= shaderc::EnvVersion::Vulkan1_1 as u32;
-            let mut defines = kernel_defines(features, arithmetic);
-            if p.shader_float64 {
-                defines.push(("HAS_FLOAT64".to_string(), "1".to_string()));
-            }
-            defines.extend(self.extra_defines.iter().cloned());
-            let key = spirv_key(&defines, target(p));
-            let spirv = match self.disk.load_words("spirv", &key) {
-                Some(words) => words,
-                None => {
-                    let words = compile(SOURCES, KERNEL_FILE, &defines, target(p)).map_err(
-                        |e| match e {
-                            Error::Shader(m) => {
-                                Error::Shader(format!("{m}\n(kernel for features {features})"))
-                            }
-                            e => e,
-                        },
-                    )?;
-                    self.disk.store_words("spirv", &key, &words);
-                    words
-                }
-            };
+            let spirv = self.compiled(features)?;
             let pipeline = self.create(spirv, None)?;
             self.cache.insert(features, pipeline);
         }
         Ok(&self.cache[&features])
+    }
+
+    /// The SPIR-V for `features`: the pipeline's if it exists, else from the disk cache,
+    /// else compiled now (and stored there).
+    fn compiled(&mut self, features: FeatureSet) -> Result<Vec<u32>> {
+        if let Some(p) = self.cache.get(&features) {
+            return Ok(p.spirv.clone());
+        }
+        let p = &self.device.physical;
+        let arithmetic =
+            p.subgroup_arithmetic && target(p) as u32 >= shaderc::EnvVersion::Vulkan1_1 as u32;
+        let mut defines = kernel_defines(features, arithmetic);
+        if p.shader_float64 {
+            defines.push(("HAS_FLOAT64".to_string(), "1".to_string()));
+        }
+        defines.extend(self.extra_defines.iter().cloned());
+        let key = spirv_key(&defines, target(p));
+        if let Some(words) = self.disk.load_words("spirv", &key) {
+            return Ok(words);
+        }
+        let words = compile(SOURCES, KERNEL_FILE, &defines, target(p)).map_err(|e| match e {
+            Error::Shader(m) => Error::Shader(format!("{m}\n(kernel for features {features})")),
+            e => e,
+        })?;
+        self.disk.store_words("spirv", &key, &words);
+        Ok(words)
     }
 
     /// The pipeline for `features` with `material` folded in as specialization constants
@@ -369,7 +372,7 @@ impl Kernels {
         if self.folds >= FOLDED_MATERIALS_MAX {
             return Ok(None);
         }
-        let spirv = self.pipeline(features)?.spirv.clone();
+        let spirv = self.compiled(features)?;
         let pipeline = self.create(spirv, Some(material))?;
         let raw = pipeline.raw;
         self.folds += 1;

@@ -22,8 +22,9 @@ pub struct VulkanOptions {
     pub group_by_material: bool,
     /// A batch of one material and at least this many tuples is evaluated by a kernel with
     /// the material folded in as specialization constants (default
-    /// [`FOLD_MATERIAL_MIN_TUPLES`]; `usize::MAX`: never). See docs/VULKAN.md, "Specialised
-    /// kernels", for where a fold pays.
+    /// [`FOLD_MATERIAL_MIN_TUPLES`], or the environment variable `VKBRDF_FOLD_MIN_TUPLES`:
+    /// a count, or `off`; `usize::MAX`: never). See docs/VULKAN.md, "Specialised kernels",
+    /// for where a fold pays.
     pub fold_material_min_tuples: usize,
     /// Testing aid: a fault to inject into batch evaluations (see [`InjectedFault`]).
     /// Default: none, or what the environment variable `VKBRDF_INJECT_VK_FAULT` says
@@ -91,14 +92,24 @@ impl Default for VulkanOptions {
             validation: validation_from_env(),
             extra_defines: Vec::new(),
             group_by_material: true,
-            fold_material_min_tuples: FOLD_MATERIAL_MIN_TUPLES,
+            fold_material_min_tuples: fold_min_tuples_from_env(),
             inject_fault: None,
         }
     }
 }
 
 /// The default of [`VulkanOptions::fold_material_min_tuples`].
-pub const FOLD_MATERIAL_MIN_TUPLES: usize = 1 << 22;
+pub const FOLD_MATERIAL_MIN_TUPLES: usize = 1 << 24;
+
+/// `VKBRDF_FOLD_MIN_TUPLES`: a tuple count, or `off` (never fold); unset, empty or
+/// unreadable, [`FOLD_MATERIAL_MIN_TUPLES`] (a setting for measurements, not worth an error).
+fn fold_min_tuples_from_env() -> usize {
+    match std::env::var("VKBRDF_FOLD_MIN_TUPLES").as_deref() {
+        Ok("off") => usize::MAX,
+        Ok(v) => v.trim().parse().unwrap_or(FOLD_MATERIAL_MIN_TUPLES),
+        Err(_) => FOLD_MATERIAL_MIN_TUPLES,
+    }
+}
 
 /// Whether `VKBRDF_VALIDATION` asks for the validation layer (`1`, `true` or `yes`).
 pub fn validation_from_env() -> bool {
