@@ -39,6 +39,14 @@ vec3 f32_of(dvec3 x) {
 // operation, a few in all): the frame's quantities, rounded once to f32 or read in f64
 // by the tiny-cosine paths, are the correctly rounded quotients' to that.
 double rsqrt64(double q) {
+    // The common case (squared lengths of unit-scale vectors, |l + v|^2 of non-mirror
+    // pairs) without the exponent split: float(q) is then a normal float32 (frexp and
+    // ldexp on f64 cost more than the Newton steps on llvmpipe).
+    if (q >= 1e-30 && q <= 1e30) {
+        double y = double(inversesqrt(float(q)));
+        y *= 1.5 - 0.5 * q * y * y;
+        return y * (1.5 - 0.5 * q * y * y);
+    }
     int e;
     double f = frexp(q, e); // f in [0.5, 1)
     if ((e & 1) != 0) {
@@ -52,8 +60,14 @@ double rsqrt64(double q) {
 }
 
 // a/|a| in f64 from an input vector's f32 bits (finite and non-zero: checked before).
+// Where no component is subnormal, double(float) is exact and exact64's integer path (a
+// device may flush a subnormal in the conversion) is skipped: one test of the three.
 dvec3 unit64(uvec3 b) {
-    dvec3 d = dvec3(exact64(b.x), exact64(b.y), exact64(b.z));
+    // Subnormal: 1 <= magnitude bits <= 0x7fffff (0 wraps around to the largest uint).
+    dvec3 d = dvec3(uintBitsToFloat(b));
+    if (any(lessThan((b & 0x7fffffffu) - 1u, uvec3(0x007fffffu)))) {
+        d = dvec3(exact64(b.x), exact64(b.y), exact64(b.z));
+    }
     return d * rsqrt64(dot(d, d));
 }
 
