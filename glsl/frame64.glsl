@@ -85,7 +85,8 @@ uint frame_scalars_f64(Row r, GpuMaterial m, inout Frame f) {
     //   error of u/|l + v| in |l + v| and in h's direction: ggx_d, which reads
     //   cos_h^2 + slope2 rather than a logarithm, was 1e-4 off at |l + v| = 2e-3 even at
     //   m = 1, where D is constant (found by tests/vulkan_properties.rs).
-    // Cost on lavapipe: 1.05-1.4x the f32 frame's time (examples/kernel_time.rs).
+    // Cost on lavapipe: 1.1-1.35x the time of a kernel with an unguarded f32 frame
+    // (examples/kernel_time.rs, folded materials; docs/VULKAN.md).
     dvec3 dn = unit64(r.n_bits), dl = unit64(r.l_bits), dv = unit64(r.v_bits);
     double cos_i = dot(dn, dl), cos_o = dot(dn, dv);
     f.cos_i = f32_of(cos_i);

@@ -18,7 +18,8 @@ use vkbrdf::reference::CpuReference;
 Measures, in one run: every scenario on Vulkan (end to end and kernel-only), on the native
 CPU engine (backend `cpu`) and on the f64 reference (backend `reference`, `cpu` before the
 engine existed; the JSON's schema_version is 2 since) at batch sizes 1e3 … 1e7; max relative error against the f64 reference; the
-specialised kernel against the all-features one; the sustained kernel rate on 1e8 tuples
+specialised kernel against the all-features one and (one material) against the kernel with
+the material folded in as specialization constants, with its error; the sustained kernel rate on 1e8 tuples
 (1e7 on a CPU device) against a device copy kernel moving the same bytes; the DFG table
 at 128 × 128 × 1024 samples; and the peers on the same directions — Mitsuba 3's LLVM
 backend and NumPy (benches/peers/peer.py; run benches/peers/install.sh once, else they are
