@@ -24,7 +24,8 @@ use std::sync::Arc;
 /// of every common subgroup size (8 on lavapipe, 32 NVIDIA, 64 AMD).
 pub const WORKGROUP_SIZE: u32 = 64;
 
-/// Materials one evaluator folds into pipelines at most ([`Kernels::folded`]): the bench's
+/// Materials one evaluator folds into pipelines at most (see
+/// [`VulkanOptions::fold_material_min_tuples`](super::VulkanOptions::fold_material_min_tuples)): the bench's
 /// scenarios and a few large batches, never a fit's thousands of parameter sets.
 pub const FOLDED_MATERIALS_MAX: usize = 16;
 
