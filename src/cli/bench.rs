@@ -1,6 +1,7 @@
 //! `vkbrdf bench`: the throughput report (table, JSON, SVG plots), peers in the same run.
 
 use super::backend_choice::{open_vulkan, DeviceArgs};
+use super::bandwidth::{print_bandwidth, BandwidthRow};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -93,21 +94,6 @@ struct Report {
     stages: Vec<stages::StageRow>,
     peers: Vec<peers::PeerRow>,
     equal_bytes: Vec<bench::equal::EqualBytesRow>,
-}
-
-/// The sustained kernel of one scenario beside the device copy kernel moving the same bytes.
-#[derive(serde::Serialize)]
-struct BandwidthRow {
-    scenario: String,
-    tuples: usize,
-    resident_tuples: usize,
-    bytes_per_tuple: usize,
-    clock: vkbrdf::gpu::KernelClock,
-    kernel_evals_per_s: f64,
-    kernel_bytes_per_s: f64,
-    copy_bytes_per_s: f64,
-    /// Kernel bytes/s over copy bytes/s.
-    fraction_of_copy: f64,
 }
 
 /// Runs `vkbrdf bench`.
@@ -478,11 +464,12 @@ fn compare_kernels(
     };
     super::common::progress_message(bar, format!("{} kernels side by side", sc.name));
     let mut best = [f64::INFINITY; 5]; // specialised, all-features, table, fast, folded
-                                       // A single-material batch's kernel with its material folded in (specialization
-                                       // constants), whatever the batch's size, and that kernel's error.
-    let folded_err = if sc.materials.len() == 1 {
+
+    // One material: the kernel with it folded in (specialization constants) whatever the
+    // batch's size, and that kernel's error.
+    let folded_err = if let [m] = sc.materials.as_slice() {
         let usual = v.set_fold_material_min_tuples(0);
-        let out = vkbrdf::backend::Backend::evaluate(v, &batch, &sc.materials, &request);
+        let out = vkbrdf::backend::Backend::evaluate(v, &batch, std::slice::from_ref(m), &request);
         v.set_fold_material_min_tuples(usual);
         Some(bench::max_rel_err(
             &batch,
@@ -636,56 +623,6 @@ fn dfg_row(v: &mut VulkanBackend, repeats: usize) -> anyhow::Result<ResultRow> {
         bench::median(secs),
         f64::NAN,
     ))
-}
-
-fn print_bandwidth(rows: &[BandwidthRow], peers: &[peers::PeerRow]) {
-    let Some(first) = rows.first() else { return };
-    outln!(
-        "\nsustained kernel vs device copy kernel ({} tuples, {} resident, clock: {:?}):",
-        first.tuples,
-        first.resident_tuples,
-        first.clock
-    );
-    outln!(
-        "  {:<26} {:>9} {:>12} {:>10} {:>10} {:>8}",
-        "scenario",
-        "B/tuple",
-        "M evals/s",
-        "GB/s",
-        "copy GB/s",
-        "of copy"
-    );
-    for r in rows {
-        outln!(
-            "  {:<26} {:>9} {:>12.1} {:>10.1} {:>10.1} {:>7.0} %",
-            r.scenario,
-            r.bytes_per_tuple,
-            r.kernel_evals_per_s / 1e6,
-            r.kernel_bytes_per_s / 1e9,
-            r.copy_bytes_per_s / 1e9,
-            100.0 * r.fraction_of_copy
-        );
-    }
-    // PyTorch's device-to-device copy (52 bytes moved per tuple) as a second ceiling.
-    if let Some(torch_copy) = peers
-        .iter()
-        .find(|p| p.name == "torch-copy")
-        .and_then(|p| p.evals_per_s)
-    {
-        let ceiling = torch_copy * 52.0;
-        outln!(
-            "  torch-copy ceiling: {:.1} GB/s; as a fraction of it:",
-            ceiling / 1e9
-        );
-        for r in rows {
-            outln!(
-                "    {:<26} kernel {:>4.0} %   copy kernel {:>4.0} %",
-                r.scenario,
-                100.0 * r.kernel_bytes_per_s / ceiling,
-                100.0 * r.copy_bytes_per_s / ceiling
-            );
-        }
-    }
 }
 
 fn row(

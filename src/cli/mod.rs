@@ -23,6 +23,7 @@ macro_rules! out {
 
 mod at;
 mod backend_choice;
+mod bandwidth;
 mod bench;
 mod check;
 mod common;

@@ -8,6 +8,7 @@
 //! The struct, its slots and what the methods here and in the children share are in
 //! `state`, the settings in `options`: the children use those, never this file.
 
+mod folding;
 mod generated;
 mod grouping;
 mod link;
@@ -188,18 +189,6 @@ impl VulkanBackend {
         self.last_features
     }
 
-    /// Sets [`VulkanOptions::fold_material_min_tuples`] (for measuring the folded kernel
-    /// against the table-reading one) and returns the value it replaces.
-    pub fn set_fold_material_min_tuples(&mut self, tuples: usize) -> usize {
-        std::mem::replace(&mut self.options.fold_material_min_tuples, tuples)
-    }
-
-    /// Whether the last evaluation's kernel had the batch's one material folded in as
-    /// specialization constants ([`VulkanOptions::fold_material_min_tuples`]).
-    pub fn last_material_folded(&self) -> bool {
-        self.last_folded
-    }
-
     /// The SPIR-V of the kernel for `features` (compiled and cached on first use).
     pub fn spirv(&mut self, features: FeatureSet) -> Result<Vec<u32>> {
         self.kernels.spirv(features)
@@ -334,28 +323,6 @@ impl VulkanBackend {
         } else {
             features.without(FeatureSet::BUCKETED)
         }
-    }
-
-    /// The pipeline for `features` and a batch of `tuples` rows over `materials`: with the
-    /// material folded in ([`Kernels::folded`]) for a batch of one material and at least
-    /// [`VulkanOptions::fold_material_min_tuples`] rows, while the evaluator's budget of
-    /// folds lasts; else the table-reading one.
-    fn pipeline_for(
-        &mut self,
-        features: FeatureSet,
-        materials: &[GpuMaterial],
-        tuples: usize,
-    ) -> Result<vk::Pipeline> {
-        self.last_folded = false;
-        if let [material] = materials {
-            if tuples >= self.options.fold_material_min_tuples {
-                if let Some(p) = self.kernels.folded(features, material)? {
-                    self.last_folded = true;
-                    return Ok(p);
-                }
-            }
-        }
-        Ok(self.kernels.pipeline(features)?.raw())
     }
 
     /// Evaluates `batch` with the pipeline for exactly `features`.
