@@ -58,15 +58,14 @@ fn main() -> vkbrdf::Result<()> {
             .into_iter()
             .filter(|(k, _)| !["NO_GROUPING", "NO_FOLD", "FOLD"].contains(&k.as_str()))
             .collect();
+        let token = |t: &str| v.split(',').any(|d| d == t);
         let options = VulkanOptions {
             extra_defines: defines,
-            group_by_material: !v.split(',').any(|d| d == "NO_GROUPING"),
-            fold_material_min_tuples: if v.split(',').any(|d| d == "NO_FOLD") {
-                usize::MAX
-            } else if v.split(',').any(|d| d == "FOLD") {
-                0
-            } else {
-                VulkanOptions::default().fold_material_min_tuples
+            group_by_material: !token("NO_GROUPING"),
+            fold_material_min_tuples: match (token("NO_FOLD"), token("FOLD")) {
+                (true, _) => usize::MAX,
+                (false, true) => 0,
+                _ => VulkanOptions::default().fold_material_min_tuples,
             },
             ..VulkanOptions::default()
         };

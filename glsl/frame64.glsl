@@ -31,32 +31,29 @@ vec3 f32_of(dvec3 x) {
 
 // 1/sqrt(q) for f64 q > 0 (here 1e-90 <= q <= 4e77: squared lengths of f32 vectors) to
 // within a few f64 ulps, without an f64 division or square root (each a long sequence
-// of instructions on GPUs, and llvmpipe's slowest vector operations: the frame's five
-// of each were a fifth of lavapipe's Cook-Torrance kernel). q = f 2^e with e even and f
+// of instructions on GPUs, and among llvmpipe's slowest vector operations). q = f 2^e with e even and f
 // in [0.5, 2) (exact); float32's inversesqrt of f, within 2 ulp (the Vulkan precision
 // table) plus f's rounding, so a relative error e0 <= 3e-7; each Newton step
 // y (3 - f y^2)/2 takes e to 1.5 e^2: 1.4e-13, then below f64's rounding (1.1e-16 per
 // operation, a few in all): the frame's quantities, rounded once to f32 or read in f64
 // by the tiny-cosine paths, are the correctly rounded quotients' to that.
 double rsqrt64(double q) {
-    // The common case (squared lengths of unit-scale vectors, |l + v|^2 of non-mirror
-    // pairs) without the exponent split: float(q) is then a normal float32 (frexp and
-    // ldexp on f64 cost more than the Newton steps on llvmpipe).
-    if (q >= 1e-30 && q <= 1e30) {
-        double y = double(inversesqrt(float(q)));
-        y *= 1.5 - 0.5 * q * y * y;
-        return y * (1.5 - 0.5 * q * y * y);
-    }
-    int e;
-    double f = frexp(q, e); // f in [0.5, 1)
-    if ((e & 1) != 0) {
-        f *= 2.0;
-        e -= 1;
+    // q = f 2^e. The common case (squared lengths of unit-scale vectors, |l + v|^2 of
+    // non-mirror pairs) keeps e = 0: float(q) is a normal float32 there, and frexp and
+    // ldexp on f64 cost more than the Newton steps on llvmpipe.
+    double f = q;
+    int e = 0;
+    if (!(q >= 1e-30 && q <= 1e30)) {
+        f = frexp(q, e); // f in [0.5, 1)
+        if ((e & 1) != 0) {
+            f *= 2.0;
+            e -= 1;
+        }
     }
     double y = double(inversesqrt(float(f)));
     y *= 1.5 - 0.5 * f * y * y;
     y *= 1.5 - 0.5 * f * y * y;
-    return ldexp(y, -e / 2);
+    return e == 0 ? y : ldexp(y, -e / 2);
 }
 
 // a/|a| in f64 from an input vector's f32 bits (finite and non-zero: checked before).

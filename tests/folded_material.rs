@@ -120,8 +120,10 @@ fn folding_stops_at_its_budget_and_below_its_size() {
         );
         let table = table_gpu.evaluate(&batch, one, &request).expect("evaluate");
         assert!(!table_gpu.last_material_folded());
+        // Bit for bit on lavapipe (measured); a compiler that fuses the folded constants
+        // differently moves the last bits only: 4 ulps.
         for (a, b) in out.brdf.iter().zip(&table.brdf) {
-            assert!((a - b).abs() <= 2e-6 * b.abs().max(1e-6), "{a} vs {b}");
+            assert!((a - b).abs() <= 4.0 * f32::EPSILON * b.abs(), "{a} vs {b}");
         }
     }
     // A material folded before is reused, past the budget too.

@@ -24,9 +24,10 @@ use std::sync::Arc;
 /// of every common subgroup size (8 on lavapipe, 32 NVIDIA, 64 AMD).
 pub const WORKGROUP_SIZE: u32 = 64;
 
-/// Materials one evaluator folds into pipelines at most (see
-/// [`VulkanOptions::fold_material_min_tuples`](super::VulkanOptions::fold_material_min_tuples)): the bench's
-/// scenarios and a few large batches, never a fit's thousands of parameter sets.
+/// Materials one evaluator folds into pipelines at most (see [`fold_material_min_tuples`]):
+/// the bench's scenarios and a few large batches, never a fit's thousands of parameter sets.
+///
+/// [`fold_material_min_tuples`]: super::VulkanOptions::fold_material_min_tuples
 pub const FOLDED_MATERIALS_MAX: usize = 16;
 
 /// The GLSL sources embedded in the binary, by the name `#include` uses.
@@ -216,10 +217,9 @@ pub fn spirv_names(words: &[u32]) -> Vec<String> {
     names
 }
 
-/// One compute pipeline and the SPIR-V it was made from.
+/// One compute pipeline.
 pub(crate) struct Pipeline {
     raw: vk::Pipeline,
-    spirv: Vec<u32>,
     device: Arc<Device>,
 }
 
@@ -243,10 +243,11 @@ impl Drop for Pipeline {
 /// ([`super::disk_cache`]).
 pub(crate) struct Kernels {
     cache: HashMap<FeatureSet, Pipeline>,
-    /// Pipelines with a material folded in ([`Kernels::folded`]), in order of creation.
+    /// The SPIR-V of each feature set compiled so far (the table kernel and its folds share it).
+    spirv: HashMap<FeatureSet, Arc<[u32]>>,
+    /// Pipelines with a material folded in ([`Kernels::folded`]), in order of creation: at
+    /// most [`FOLDED_MATERIALS_MAX`], never evicted.
     folded: Vec<(FeatureSet, GpuMaterial, Pipeline)>,
-    /// Materials folded so far, by this evaluator ([`FOLDED_MATERIALS_MAX`]).
-    folds: usize,
     probes: HashMap<String, Pipeline>,
     layout: vk::PipelineLayout,
     set_layout: vk::DescriptorSetLayout,
@@ -282,8 +283,8 @@ impl Kernels {
             .map_err(vk_error("vkCreateDescriptorSetLayout"))?;
         let mut kernels = Kernels {
             cache: HashMap::new(),
+            spirv: HashMap::new(),
             folded: Vec::new(),
-            folds: 0,
             probes: HashMap::new(),
             layout: vk::PipelineLayout::null(),
             set_layout,
@@ -320,17 +321,17 @@ impl Kernels {
     pub fn pipeline(&mut self, features: FeatureSet) -> Result<&Pipeline> {
         if !self.cache.contains_key(&features) {
             let spirv = self.compiled(features)?;
-            let pipeline = self.create(spirv, None)?;
+            let pipeline = self.create(&spirv, None)?;
             self.cache.insert(features, pipeline);
         }
         Ok(&self.cache[&features])
     }
 
-    /// The SPIR-V for `features`: the pipeline's if it exists, else from the disk cache,
-    /// else compiled now (and stored there).
-    fn compiled(&mut self, features: FeatureSet) -> Result<Vec<u32>> {
-        if let Some(p) = self.cache.get(&features) {
-            return Ok(p.spirv.clone());
+    /// The SPIR-V for `features`: kept from an earlier call, else from the disk cache, else
+    /// compiled now (and stored there).
+    fn compiled(&mut self, features: FeatureSet) -> Result<Arc<[u32]>> {
+        if let Some(words) = self.spirv.get(&features) {
+            return Ok(Arc::clone(words));
         }
         let p = &self.device.physical;
         let arithmetic =
@@ -341,14 +342,22 @@ impl Kernels {
         }
         defines.extend(self.extra_defines.iter().cloned());
         let key = spirv_key(&defines, target(p));
-        if let Some(words) = self.disk.load_words("spirv", &key) {
-            return Ok(words);
-        }
-        let words = compile(SOURCES, KERNEL_FILE, &defines, target(p)).map_err(|e| match e {
-            Error::Shader(m) => Error::Shader(format!("{m}\n(kernel for features {features})")),
-            e => e,
-        })?;
-        self.disk.store_words("spirv", &key, &words);
+        let words = match self.disk.load_words("spirv", &key) {
+            Some(words) => words,
+            None => {
+                let words =
+                    compile(SOURCES, KERNEL_FILE, &defines, target(p)).map_err(|e| match e {
+                        Error::Shader(m) => {
+                            Error::Shader(format!("{m}\n(kernel for features {features})"))
+                        }
+                        e => e,
+                    })?;
+                self.disk.store_words("spirv", &key, &words);
+                words
+            }
+        };
+        let words: Arc<[u32]> = words.into();
+        self.spirv.insert(features, Arc::clone(&words));
         Ok(words)
     }
 
@@ -370,20 +379,19 @@ impl Kernels {
         if let Some((_, _, p)) = found {
             return Ok(Some(p.raw));
         }
-        if self.folds >= FOLDED_MATERIALS_MAX {
+        if self.folded.len() >= FOLDED_MATERIALS_MAX {
             return Ok(None);
         }
         let spirv = self.compiled(features)?;
-        let pipeline = self.create(spirv, Some(material))?;
+        let pipeline = self.create(&spirv, Some(material))?;
         let raw = pipeline.raw;
-        self.folds += 1;
         self.folded.push((features, *material, pipeline));
         Ok(Some(raw))
     }
 
-    /// The SPIR-V of the pipeline for `features` (compiled on first use).
+    /// The SPIR-V of the kernel for `features` (compiled on first use).
     pub fn spirv(&mut self, features: FeatureSet) -> Result<Vec<u32>> {
-        Ok(self.pipeline(features)?.spirv.clone())
+        Ok(self.compiled(features)?.to_vec())
     }
 
     /// A pipeline for a probe shader (`main.comp` in `source`, with the embedded files
@@ -399,7 +407,7 @@ impl Kernels {
                 &kernel_defines(FeatureSet::EMPTY, false),
                 target(p),
             )?;
-            let pipeline = self.create(spirv, None)?;
+            let pipeline = self.create(&spirv, None)?;
             self.probes.insert(source.to_string(), pipeline);
         }
         Ok(&self.probes[source])
@@ -407,10 +415,10 @@ impl Kernels {
 
     /// A pipeline from `spirv`: the workgroup size as constant 0 and, with `material`,
     /// MATERIAL_IS_CONSTANT (1) and the material's 28 words (2-29, in field order).
-    fn create(&mut self, spirv: Vec<u32>, material: Option<&GpuMaterial>) -> Result<Pipeline> {
+    fn create(&mut self, spirv: &[u32], material: Option<&GpuMaterial>) -> Result<Pipeline> {
         let pipeline_cache = self.pipeline_cache.for_creation();
         let d = &self.device.raw;
-        let info = vk::ShaderModuleCreateInfo::default().code(&spirv);
+        let info = vk::ShaderModuleCreateInfo::default().code(spirv);
         // SAFETY: `spirv` is a complete module from shaderc; the device is live.
         let module = unsafe { d.create_shader_module(&info, None) }
             .map_err(vk_error("vkCreateShaderModule"))?;
@@ -445,7 +453,6 @@ impl Kernels {
         let raw = created.map_err(|(_, r)| vk_error("vkCreateComputePipelines")(r))?[0];
         Ok(Pipeline {
             raw,
-            spirv,
             device: Arc::clone(&self.device),
         })
     }
