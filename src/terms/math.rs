@@ -39,7 +39,13 @@ const ROUND_MAGIC: f32 = 12_582_912.0;
 #[inline(always)]
 pub fn exp_neg(x: f32) -> f32 {
     let xc = if x < -87.0 { -87.0 } else { x };
-    let k = (xc * std::f32::consts::LOG2_E + ROUND_MAGIC) - ROUND_MAGIC;
+    // k = round(x log₂e) in the low bits of `t` (ROUND_MAGIC's ulp is 1), taken from them
+    // as an integer: `k as i32` on the float is a saturating cast, which LLVM does not
+    // vectorise (it made every lane of a block a scalar conversion and compare, a third of
+    // Beckmann's block).
+    let t = xc * std::f32::consts::LOG2_E + ROUND_MAGIC;
+    let k = t - ROUND_MAGIC;
+    let ki = t.to_bits() as i32 - ROUND_MAGIC.to_bits() as i32;
     let r = (xc - k * LN2_HI) - k * LN2_LO;
     let p = 1.0
         + r * (1.0
@@ -47,7 +53,7 @@ pub fn exp_neg(x: f32) -> f32 {
                 + r * (1.0 / 6.0
                     + r * (1.0 / 24.0
                         + r * (1.0 / 120.0 + r * (1.0 / 720.0 + r * (1.0 / 5040.0)))))));
-    let scale = f32::from_bits(((k as i32 + 127) as u32) << 23);
+    let scale = f32::from_bits(((ki + 127) as u32) << 23);
     if x < -87.0 {
         0.0
     } else {
