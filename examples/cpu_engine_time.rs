@@ -2,7 +2,7 @@
 //! round (the machine is shared and noisy), with the largest relative error against the f64
 //! reference and cycles per evaluation (time × the TSC frequency, read from /proc/cpuinfo).
 //!
-//! `cargo run --release --example cpu_engine_time -- [--with-peers] [TUPLES] [SCENARIO…]`
+//! `cargo run --release --example cpu_engine_time -- [--with-peers] [--local-only] [TUPLES] [SCENARIO…]`
 //! (default 4,194,304 tuples; lambert, mitsuba-beckmann, mitsuba-ggx). Variants:
 //! - `rows fresh`: `evaluate` on 10-column rows, new output vectors every call;
 //! - `rows reused`: `evaluate_into` the previous call's output;
@@ -11,6 +11,7 @@
 //!   and N = (0, 0, 1) given once (the same 24 bytes a tuple, structure of arrays as
 //!   Mitsuba's `wi`/`wo`);
 //!
+//! (`--local-only`: the local form on one thread's CPU time alone, for quick A/B rounds)
 //! each on one thread as the calling thread's CPU time (/proc/thread-self/schedstat, which
 //! other processes do not inflate) and on 1 and 2 threads as wall time (best round).
 //! `--with-peers` adds the Vulkan kernel (lavapipe: `VK_DRIVER_FILES=…/lvp_icd.json`) and
@@ -56,7 +57,8 @@ enum Form {
 fn main() {
     let mut args: Vec<String> = std::env::args().skip(1).collect();
     let peers = args.iter().any(|a| a == "--with-peers");
-    args.retain(|a| a != "--with-peers");
+    let local_only = args.iter().any(|a| a == "--local-only");
+    args.retain(|a| a != "--with-peers" && a != "--local-only");
     let n: usize = args
         .first()
         .and_then(|a| a.parse().ok())
@@ -105,7 +107,9 @@ fn main() {
             );
         };
         let mut forms = vec![Form::RowsFresh, Form::RowsReused];
-        if local.is_some() {
+        if local_only && local.is_some() {
+            forms = vec![Form::LocalReused];
+        } else if local.is_some() {
             forms.push(Form::LocalReused);
             forms.push(Form::ColumnsReused);
         }
@@ -150,7 +154,7 @@ fn main() {
                 Output::default(),
                 CpuEngine::with_threads(1),
             ));
-            for threads in [1, 2] {
+            for threads in [1, 2].into_iter().filter(|_| !local_only) {
                 variants.push((
                     f,
                     threads,

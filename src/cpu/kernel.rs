@@ -80,6 +80,8 @@ pub struct Params {
     pub m2_f: f32,
     /// See `m2_f`.
     pub inv_m2_f: f32,
+    /// m rounded to f32 (smith-fast's `a = cos/(m sin)`).
+    pub m_f: f32,
     /// See `m2_f`.
     pub d_norm_f: f32,
     /// K (the convention's lane form).
@@ -92,6 +94,9 @@ pub struct Params {
     pub mu2m1: [f64; 3],
     /// The conductor's constants.
     pub conductor: conductor::LaneConstants,
+    /// Whether the caller asked for the terms (D, G, F, K): without them the lanes form
+    /// D·G·K over one division and never divide out the terms (see `finish_lane`).
+    pub terms: bool,
     /// Whether the material may take the f32 frame (see [`microfacet_block`]): m ≥
     /// [`FAST_MIN_ROUGHNESS`] and a Fresnel term other than the dielectric (whose f64
     /// evaluation near total internal reflection wants the f64 `c`).
@@ -330,8 +335,9 @@ pub fn microfacet_block<const D: u8, const G: u8, const F: u8, const Z: bool>(
             }
             ok[k] = fr.ok;
         }
-        for k in 0..LANES {
-            let fr = Frame {
+        // Two loops, so that the one without terms divides nothing out.
+        let lane = |k: usize| {
+            Lane::from32(&Frame {
                 cos_i: fs[0][k],
                 cos_o: fs[1][k],
                 cos_h: fs[2][k],
@@ -341,8 +347,16 @@ pub fn microfacet_block<const D: u8, const G: u8, const F: u8, const Z: bool>(
                 sin2_o: fs[6][k],
                 s2: fs[7][k],
                 ok: ok[k],
-            };
-            microfacet_lane::<D, G, F, true>(p, &Lane::from32(&fr), out, k);
+            })
+        };
+        if p.terms {
+            for k in 0..LANES {
+                microfacet_lane::<D, G, F, true, true>(p, &lane(k), out, k);
+            }
+        } else {
+            for k in 0..LANES {
+                microfacet_lane::<D, G, F, true, false>(p, &lane(k), out, k);
+            }
         }
     }
     if u128::from_ne_bytes(slow.map(u8::from)) != 0 {
@@ -376,7 +390,7 @@ fn microfacet_block64<const D: u8, const G: u8, const F: u8>(
 ) {
     for k in 0..LANES {
         let fr = frame64(&lane_inputs(inp, k));
-        microfacet_lane::<D, G, F, false>(p, &Lane::from64(&fr), out, k);
+        microfacet_lane::<D, G, F, false, true>(p, &Lane::from64(&fr), out, k);
     }
 }
 
@@ -439,7 +453,7 @@ pub fn dg_block64<const D: u8, const G: u8>(p: &Params, inp: &Inputs, st: &mut S
     for k in 0..LANES {
         let fr = Lane::from64(&frame64(&lane_inputs(inp, k)));
         let (d, g) = microfacet_dg::<D, G, false>(p, &fr);
-        st.put(k, &fr, d, g);
+        st.put(k, &fr, d.0 / d.1, g.0 / g.1);
     }
 }
 
@@ -482,48 +496,73 @@ pub fn f_block<const F: u8>(p: &Params, st: &Stage, out: &mut Outputs) {
             s2_64: st.s2_64[k],
             ok: st.ok[k],
         };
-        finish_lane::<F>(p, &fr, st.d[k], st.g[k], out, k);
+        finish_lane::<F, true>(p, &fr, (st.d[k], 1.0), (st.g[k], 1.0), out, k);
     }
 }
 
-/// The terms and the BRDF of lane `k` from its frame (`FAST`: the f32 frame's, see D).
+/// The terms and the BRDF of lane `k` from its frame (`FAST`: the f32 frame's, see D;
+/// `T`: the terms are wanted).
 #[inline(always)]
-fn microfacet_lane<const D: u8, const G: u8, const F: u8, const FAST: bool>(
+fn microfacet_lane<const D: u8, const G: u8, const F: u8, const FAST: bool, const T: bool>(
     p: &Params,
     fr: &Lane,
     out: &mut Outputs,
     k: usize,
 ) {
     let (d, g) = microfacet_dg::<D, G, FAST>(p, fr);
-    finish_lane::<F>(p, fr, d, g, out, k);
+    finish_lane::<F, T>(p, fr, d, g, out, k);
 }
 
-/// D and G of one lane (FORMULAS.md §2–§3) from its frame (`FAST`: the f32 frame's).
+/// D and G of one lane (FORMULAS.md §2–§3) from its frame (`FAST`: the f32 frame's), each
+/// as a quotient `(num, den)` where a form has one without a division of its own (GGX's
+/// D on the f32 frame, GGX's Smith terms), else `(value, 1)`.
 #[inline(always)]
-fn microfacet_dg<const D: u8, const G: u8, const FAST: bool>(p: &Params, fr: &Lane) -> (f32, f32) {
+fn microfacet_dg<const D: u8, const G: u8, const FAST: bool>(
+    p: &Params,
+    fr: &Lane,
+) -> ((f32, f32), (f32, f32)) {
     let (cos_i, cos_o, cos_h) = (fr.cos_i, fr.cos_o, fr.cos_h);
     // D (FORMULAS.md §2): the f32 frame's lanes (`FAST`) take GGX's and Beckmann's f32
     // forms, the f64 frame's their f64 ones.
     let d = match const { DistributionKind::from_code(D) } {
-        DistributionKind::Gaussian => gaussian::d_lane(cos_h, fr.sin2_h32, p.inv_m2_f),
-        DistributionKind::Blinn => blinn::d_lane(cos_h, fr.sin2_h32, p.exponent, p.d_norm_f),
-        DistributionKind::Charlie => {
-            charlie::d_lane(fr.cos_h2 as f32, fr.sin2_h32, p.exponent, p.d_norm_f)
-        }
-        DistributionKind::Ggx if FAST => ggx::d_lane32(cos_h, fr.sin2_h32, p.m2_f, p.d_norm_f),
-        DistributionKind::Ggx => ggx::d_lane64(fr.cos_h2, fr.sin2_h, p.m2, p.d_norm),
-        DistributionKind::Beckmann if FAST => {
-            beckmann::d_lane32(cos_h, fr.sin2_h32, p.inv_m2_f, p.d_norm_f)
-        }
-        DistributionKind::Beckmann => beckmann::d_lane64(fr.cos_h2, fr.sin2_h, p.inv_m2, p.d_norm),
+        DistributionKind::Gaussian => (gaussian::d_lane(cos_h, fr.sin2_h32, p.inv_m2_f), 1.0),
+        DistributionKind::Blinn => (
+            blinn::d_lane(cos_h, fr.sin2_h32, p.exponent, p.d_norm_f),
+            1.0,
+        ),
+        DistributionKind::Charlie => (
+            charlie::d_lane(fr.cos_h2 as f32, fr.sin2_h32, p.exponent, p.d_norm_f),
+            1.0,
+        ),
+        DistributionKind::Ggx if FAST => ggx::d_ratio32(cos_h, fr.sin2_h32, p.m2_f, p.d_norm_f),
+        DistributionKind::Ggx => (ggx::d_lane64(fr.cos_h2, fr.sin2_h, p.m2, p.d_norm), 1.0),
+        DistributionKind::Beckmann if FAST => (
+            beckmann::d_lane32(cos_h, fr.sin2_h32, p.inv_m2_f, p.d_norm_f),
+            1.0,
+        ),
+        DistributionKind::Beckmann => (
+            beckmann::d_lane64(fr.cos_h2, fr.sin2_h, p.inv_m2, p.d_norm),
+            1.0,
+        ),
     };
-    // G (FORMULAS.md §3) from q2 = m² tan²θ = m² |n × w|² / cos²θ: products and
-    // quotients of positive numbers, which f32 carries to a few ulp (the cancelling
-    // parts, |n × w|² and the cosines, come from the frame).
     let m2 = p.m2 as f32;
-    let q2_i = m2 * fr.sin2_i / (cos_i * cos_i);
-    let q2_o = m2 * fr.sin2_o / (cos_o * cos_o);
-    (d, geometry::<D, G>(p, fr, q2_i, q2_o))
+    let ggx = const { matches!(DistributionKind::from_code(D), DistributionKind::Ggx) };
+    let g = match const { Geometry::from_code(G) } {
+        Geometry::Smith if ggx => smith::g_ratio_ggx(cos_i, fr.sin2_i, cos_o, fr.sin2_o, m2),
+        Geometry::SmithCorrelated if ggx => {
+            smith_correlated::g_ratio_ggx(cos_i, fr.sin2_i, cos_o, fr.sin2_o, m2)
+        }
+        Geometry::SmithFast => smith_fast::g_ratio(cos_i, fr.sin2_i, cos_o, fr.sin2_o, p.m_f),
+        _ => {
+            // q2 = m² tan²θ = m² |n × w|² / cos²θ: products and quotients of positive
+            // numbers, which f32 carries to a few ulp (the cancelling parts, |n × w|² and
+            // the cosines, come from the frame).
+            let q2_i = m2 * fr.sin2_i / (cos_i * cos_i);
+            let q2_o = m2 * fr.sin2_o / (cos_o * cos_o);
+            (geometry::<D, G>(p, fr, q2_i, q2_o), 1.0)
+        }
+    };
+    (d, g)
 }
 
 /// G (FORMULAS.md §3) of one lane given `q2 = m² tan²θ` of each direction (for
@@ -549,9 +588,19 @@ pub(super) fn geometry<const D: u8, const G: u8>(
     }
 }
 
-/// F, K and the outputs of lane `k` given its D and G (FORMULAS.md §4–§6).
+/// F, K and the outputs of lane `k` given its D and G as quotients (FORMULAS.md §4–§6):
+/// D·G·K takes one division (the divider is what a block waits on); the terms themselves
+/// are divided out only when wanted (`T`), after the BRDF, whose bits do not depend on
+/// `T`.
 #[inline(always)]
-fn finish_lane<const F: u8>(p: &Params, fr: &Lane, d: f32, g: f32, out: &mut Outputs, k: usize) {
+fn finish_lane<const F: u8, const T: bool>(
+    p: &Params,
+    fr: &Lane,
+    d: (f32, f32),
+    g: (f32, f32),
+    out: &mut Outputs,
+    k: usize,
+) {
     let (cos_i, cos_o, c) = (fr.cos_i, fr.cos_o, fr.c);
     // F (FORMULAS.md §4) per channel.
     let (one_minus_c, s2_f) = (fr.one_minus_c, fr.s2);
@@ -566,22 +615,27 @@ fn finish_lane<const F: u8>(p: &Params, fr: &Lane, d: f32, g: f32, out: &mut Out
             FresnelKind::Conductor => conductor::f_lane(c, s2_f, &p.conductor, ch),
         };
     }
-    // K (FORMULAS.md §5), one cosine at a time.
-    let kk = p.k.k(cos_i, cos_o);
+    // K (FORMULAS.md §5) as a quotient. Each denominator is ≥ 1e-20 and the product of
+    // the three ≤ 1e24 on the lanes' cosines (≥ 1e-4), so the one division neither
+    // overflows nor loses the quotient to underflow.
+    let (kn, kd) = p.k.ratio(cos_i, cos_o);
+    let dgk = (d.0 * g.0 * kn) / (d.1 * g.1 * kd);
     // One test for every output: a sum of magnitudes is NaN if any is, and above
     // OUTPUT_LIMIT if any is (a sum that only rounds up past it sends a lane to the
     // reference needlessly, never the other way) — 18 operations where a test a value
-    // took 45.
-    let dgk = d * g * kk;
-    let mut size = d.abs() + g.abs() + kk.abs();
+    // took 45. The quotients' parts stand for the terms (each term is finite when they
+    // are), so the test, and with it the BRDF, is the same with and without terms.
+    let mut size = d.0.abs() + d.1 + g.0.abs() + g.1 + dgk.abs();
     for ch in 0..3 {
         let b = p.diffuse[ch] + p.spec[ch] * (dgk * f[ch]);
         out.brdf[ch][k] = b;
         size += b.abs() + f[ch].abs();
     }
-    let terms = [d, g, f[0], f[1], f[2], kk];
-    for (t, x) in terms.into_iter().enumerate() {
-        out.terms[t][k] = x;
+    if T {
+        let terms = [d.0 / d.1, g.0 / g.1, f[0], f[1], f[2], p.k.k(cos_i, cos_o)];
+        for (t, x) in terms.into_iter().enumerate() {
+            out.terms[t][k] = x;
+        }
     }
     // `<=` is false for NaN: one comparison catches both.
     #[allow(clippy::neg_cmp_op_on_partial_ord)]

@@ -252,7 +252,10 @@ impl CpuEngine {
         out: &mut Output,
     ) -> Result<()> {
         let n = src.len();
-        let plans: Vec<Plan> = materials.iter().map(Plan::for_material).collect();
+        let plans: Vec<Plan> = materials
+            .iter()
+            .map(|m| Plan::for_material(m).with_terms(request.terms))
+            .collect();
         // The material of every row when the batch says so without a pass over it; else
         // each chunk groups its own rows (`mixed_chunk`).
         let single = match src {

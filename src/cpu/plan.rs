@@ -146,8 +146,18 @@ impl Plan {
         p.fast_frame = slope && mr >= FAST_MIN_ROUGHNESS && f != FresnelKind::Dielectric;
         if slope {
             (p.m2_f, p.inv_m2_f, p.d_norm_f) = (p.m2 as f32, p.inv_m2 as f32, p.d_norm as f32);
+            p.m_f = mr as f32;
         }
         Plan::Microfacet { d, aniso, g, f, p }
+    }
+
+    /// The plan with the terms (D, G, F, K) formed in the lanes when `terms` (see
+    /// [`Params::terms`]); without them the microfacet lanes never divide them out.
+    pub fn with_terms(mut self, terms: bool) -> Plan {
+        if let Plan::Microfacet { p, .. } = &mut self {
+            p.terms = terms;
+        }
+        self
     }
 
     /// Whether the plan runs in the lanes.

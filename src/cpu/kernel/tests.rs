@@ -103,7 +103,7 @@ fn every_lanes_group_computes_without_rescue() {
              specular = [0.9, 0.8, 0.7]\n"
         );
         let m = &parse_materials(&toml, "t").unwrap()[0];
-        let plan = Plan::for_material(m);
+        let plan = Plan::for_material(m).with_terms(true);
         assert!(plan.is_simd(), "{body} is not in the lanes");
         let mut out = Outputs::default();
         lambert_terms(&mut out);
@@ -256,10 +256,21 @@ fn the_local_frame_lanes_give_the_general_bits() {
                     let Ok(ms) = parse_materials(&toml, "t") else {
                         continue; // smith-fast is Beckmann's only
                     };
-                    let plan = Plan::for_material(&ms[0]);
+                    let plan = Plan::for_material(&ms[0]).with_terms(true);
+                    let bare = Plan::for_material(&ms[0]);
                     assert!(plan.is_simd(), "{toml}");
                     for inp in &blocks {
                         let (mut a, mut b) = (Outputs::default(), Outputs::default());
+                        // Without the terms the lanes form D·G·K without dividing them
+                        // out: the BRDF and the rescue decisions must not change.
+                        let mut c = Outputs::default();
+                        crate::cpu::block(
+                            pulp::Scalar::new(),
+                            &bare,
+                            std::slice::from_ref(inp),
+                            std::slice::from_mut(&mut c),
+                            true,
+                        );
                         crate::cpu::block(
                             pulp::Scalar::new(),
                             &plan,
@@ -275,6 +286,7 @@ fn the_local_frame_lanes_give_the_general_bits() {
                             true,
                         );
                         assert_eq!(a.rescue, b.rescue, "{toml}");
+                        assert_eq!(b.rescue, c.rescue, "{toml}");
                         for k in 0..LANES {
                             if a.rescue[k] {
                                 continue; // the reference writes these lanes
@@ -284,6 +296,11 @@ fn the_local_frame_lanes_give_the_general_bits() {
                                     a.brdf[ch][k].to_bits(),
                                     b.brdf[ch][k].to_bits(),
                                     "{toml}"
+                                );
+                                assert_eq!(
+                                    b.brdf[ch][k].to_bits(),
+                                    c.brdf[ch][k].to_bits(),
+                                    "{toml}: the terms changed the BRDF"
                                 );
                             }
                             for t in 0..TERM_COLUMNS {

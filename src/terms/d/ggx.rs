@@ -52,8 +52,16 @@ pub fn lambda(x: f64) -> f64 {
 /// materials and lanes keep `m² cos²_h ≥ 5.6e-11`: the square stays normal).
 #[inline(always)]
 pub fn d_lane32(cos_h: f32, sin2_h: f32, m2: f32, norm: f32) -> f32 {
+    let (n, d) = d_ratio32(cos_h, sin2_h, m2, norm);
+    n / d
+}
+
+/// [`d_lane32`] as a quotient `(norm, s²)`, for a lane that takes D·G·K over one division
+/// (`s² ∈ [min(m², 1)², (1 + m²)²]` on the f32 frame's materials, m ≥ 0.075).
+#[inline(always)]
+pub fn d_ratio32(cos_h: f32, sin2_h: f32, m2: f32, norm: f32) -> (f32, f32) {
     let s = m2 * (cos_h * cos_h) + sin2_h;
-    norm / (s * s)
+    (norm, s * s)
 }
 
 /// D in a lane of the f64 frame: as [`d`], in f64 because the square of the sum leaves

@@ -125,9 +125,9 @@ impl LaneConstants {
 /// F in a lane (f32) for channel `ch`, after the kernel's GLSL form: `η²` divided through
 /// `|η|²` so that large extinctions do not overflow — here by the per-material constants
 /// `c_a`, `c_eb`, `c_iq`, `c_bq` — and the complex root taken by its larger component,
-/// whose square root both sign cases share: 4 divisions and 2 square roots a channel
-/// instead of 9 and 3 (division is the lanes' most expensive instruction). η = 1 (zi = 0)
-/// stays exactly 0.
+/// whose square root both sign cases share, and r∥ + r⊥ over one division: 2 divisions and
+/// 2 square roots a channel instead of 9 and 3 (the divider is what a block waits on).
+/// η = 1 (zi = 0) stays exactly 0.
 #[inline(always)]
 pub fn f_lane(c: f32, s2: f32, p: &LaneConstants, ch: usize) -> f32 {
     f_lane_with(
@@ -156,19 +156,15 @@ pub fn f_lane_with(c: f32, s2: f32, nk: [f32; 4], q: [f32; 4]) -> f32 {
     };
     let zr = (ar * c_a + c_eb) * c_iq;
     let zi = s2 * c_bq;
-    // Principal √(zr + i zi), scaled by the larger component (the squares underflow for
-    // |z| < 1e-19); the 1e-37 and 1e-30 floors keep z = 0 from 0/0.
-    // |z| = big·√(1 + (small/big)²): the larger component scaled by itself is exactly 1,
-    // as in the kernel's zr/m, zi/m, so a real z (zi = 0) gives r = |zr| exactly and the
-    // root √((r + zr)/2) = √(c²) the exact c; multiplying by 1/m instead (m·(1/m) ≠ 1)
-    // would leave F(η = 1) a rounding error, which a large D would multiply.
-    let (ar_, ai_) = (zr.abs(), zi.abs());
-    let big = ar_.max(ai_).max(1e-37);
-    let small = ar_.min(ai_);
-    let ratio = small / big;
-    let r = big * (1.0 + ratio * ratio).sqrt();
+    // Principal √(zr + i zi). |z| as √(zr² + zi²): z is cos²θt, O(1) for every legal η
+    // except where η² ≈ sin²θ, and there squares that underflow (|z| < 1e-19) leave F ≈ 1
+    // within far less than an ulp. A real z (zi = 0) gives r = |zr| exactly (√ of a
+    // rounded square is the number), so η = 1 has the root √((r + zr)/2) = √(c²) = c
+    // exactly and F exactly 0 (a rounding error there would be multiplied by a large D).
+    let r = (zr * zr + zi * zi).sqrt();
     // The root's larger component is √((r + |zr|)/2) (the real part for zr ≥ 0, the
-    // imaginary one for zr < 0), the other zi/2 over it.
+    // imaginary one for zr < 0), the other zi/2 over it; the 1e-30 floor keeps z = 0 from
+    // 0/0.
     let t = (0.5 * (r + zr.abs())).sqrt();
     let o = 0.5 * zi / t.max(1e-30);
     let (ctr, cti) = if zr < 0.0 {
@@ -179,12 +175,16 @@ pub fn f_lane_with(c: f32, s2: f32, nk: [f32; 4], q: [f32; 4]) -> f32 {
     let (ecr, eci) = (n * c, k * c);
     let (pr, pi) = (ecr - ctr, eci - cti);
     let (qr, qi) = (ecr + ctr, eci + cti);
-    let r_par = (pr * pr + pi * pi) / (qr * qr + qi * qi);
     let ecr2 = n * ctr - k * cti;
     let eci2 = n * cti + k * ctr;
     let (ur, wr) = (c - ecr2, c + ecr2);
-    let r_perp = (ur * ur + eci2 * eci2) / (wr * wr + eci2 * eci2);
-    0.5 * (r_par + r_perp)
+    // (r∥ + r⊥)/2 = (a/b + e/d)/2 over one division: every term is a sum of squares, so
+    // nothing cancels. b ~ |η|²c² + |cos θt|² and d ~ c² + |η|²|cos θt|² keep the products
+    // inside f32's range for |η| from the legal 1e-6 up to ~1e9; beyond, F comes out
+    // non-finite and the lane goes to the reference (the lanes' size test).
+    let (a, b) = (pr * pr + pi * pi, qr * qr + qi * qi);
+    let (e, d) = (ur * ur + eci2 * eci2, wr * wr + eci2 * eci2);
+    0.5 * (a * d + e * b) / (b * d)
 }
 
 #[cfg(test)]

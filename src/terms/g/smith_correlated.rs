@@ -24,3 +24,15 @@ pub fn g(lambda_o: f64, lambda_i: f64) -> f64 {
 pub fn g_lane(lambda_o: f32, lambda_i: f32) -> f32 {
     1.0 / (1.0 + lambda_o + lambda_i)
 }
+
+/// GGX's G in a lane as a quotient `(num, den)`, with no division: with GGX's
+/// `1 + 2Λ = R/cos`, `R = √(cos² + m² sin²)`, `1 + Λ_o + Λ_i = (R_o cos_i + R_i cos_o)/(2
+/// cos_i cos_o)` (the form of Filament's `V_SmithGGXCorrelated`), so
+/// `G = 2 cos_i cos_o/(R_o cos_i + R_i cos_o)`: positive terms, nothing cancels, and the
+/// lane divides once for D·G·K.
+#[inline(always)]
+pub fn g_ratio_ggx(cos_i: f32, sin2_i: f32, cos_o: f32, sin2_o: f32, m2: f32) -> (f32, f32) {
+    let r_i = (cos_i * cos_i + m2 * sin2_i).sqrt();
+    let r_o = (cos_o * cos_o + m2 * sin2_o).sqrt();
+    (2.0 * cos_i * cos_o, r_o * cos_i + r_i * cos_o)
+}

@@ -16,4 +16,16 @@ impl LaneK {
     pub fn k(self, cos_i: f32, cos_o: f32) -> f32 {
         self.numerator / cos_o / if self.divides_cos_i { cos_i } else { 1.0 }
     }
+
+    /// K of one lane as a quotient `(numerator, cos_o · cos_i)` (or `cos_o`), for a lane
+    /// that takes D·G·K over one division; the denominator is ≥ 1e-8 for cosines ≥ 1e-4.
+    #[inline(always)]
+    pub fn ratio(self, cos_i: f32, cos_o: f32) -> (f32, f32) {
+        let d = if self.divides_cos_i {
+            cos_o * cos_i
+        } else {
+            cos_o
+        };
+        (self.numerator, d)
+    }
 }
