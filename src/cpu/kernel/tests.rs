@@ -260,31 +260,21 @@ fn the_local_frame_lanes_give_the_general_bits() {
                     let bare = Plan::for_material(&ms[0]);
                     assert!(plan.is_simd(), "{toml}");
                     for inp in &blocks {
-                        let (mut a, mut b) = (Outputs::default(), Outputs::default());
-                        // Without the terms the lanes form D·G·K without dividing them
-                        // out: the BRDF and the rescue decisions must not change.
-                        let mut c = Outputs::default();
-                        crate::cpu::block(
-                            pulp::Scalar::new(),
-                            &bare,
-                            std::slice::from_ref(inp),
-                            std::slice::from_mut(&mut c),
-                            true,
-                        );
-                        crate::cpu::block(
-                            pulp::Scalar::new(),
-                            &plan,
-                            std::slice::from_ref(inp),
-                            std::slice::from_mut(&mut a),
-                            false,
-                        );
-                        crate::cpu::block(
-                            pulp::Scalar::new(),
-                            &plan,
-                            std::slice::from_ref(inp),
-                            std::slice::from_mut(&mut b),
-                            true,
-                        );
+                        let run = |plan: &Plan, z: bool| {
+                            let mut o = Outputs::default();
+                            crate::cpu::block(
+                                pulp::Scalar::new(),
+                                plan,
+                                std::slice::from_ref(inp),
+                                std::slice::from_mut(&mut o),
+                                z,
+                            );
+                            o
+                        };
+                        // The general frame, the local form's, and the local form's without
+                        // the terms (D·G·K is then formed without dividing them out: the
+                        // BRDF and the rescue decisions must not change).
+                        let (a, b, c) = (run(&plan, false), run(&plan, true), run(&bare, true));
                         assert_eq!(a.rescue, b.rescue, "{toml}");
                         assert_eq!(b.rescue, c.rescue, "{toml}");
                         for k in 0..LANES {
