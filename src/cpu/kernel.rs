@@ -515,7 +515,7 @@ fn microfacet_lane<const D: u8, const G: u8, const F: u8, const FAST: bool, cons
 
 /// D and G of one lane (FORMULAS.md §2–§3) from its frame (`FAST`: the f32 frame's), each
 /// as a quotient `(num, den)` where a form has one without a division of its own (GGX's
-/// D on the f32 frame, GGX's Smith terms), else `(value, 1)`.
+/// D on the f32 frame, GGX's Smith terms, smith-fast), else `(value, 1)`.
 #[inline(always)]
 fn microfacet_dg<const D: u8, const G: u8, const FAST: bool>(
     p: &Params,

@@ -48,16 +48,9 @@ pub fn lambda(x: f64) -> f64 {
     }
 }
 
-/// D in a lane of the f32 frame, given `m²` and `m²/π` rounded once (the f32 frame's
-/// materials and lanes keep `m² cos²_h ≥ 5.6e-11`: the square stays normal).
-#[inline(always)]
-pub fn d_lane32(cos_h: f32, sin2_h: f32, m2: f32, norm: f32) -> f32 {
-    let (n, d) = d_ratio32(cos_h, sin2_h, m2, norm);
-    n / d
-}
-
-/// [`d_lane32`] as a quotient `(norm, s²)`, for a lane that takes D·G·K over one division
-/// (`s² ∈ [min(m², 1)², (1 + m²)²]` on the f32 frame's materials, m ≥ 0.075).
+/// D in a lane of the f32 frame as a quotient `(norm, s²)`, given `m²` and `m²/π` rounded
+/// once, for a lane that takes D·G·K over one division (`s² ∈ [min(m², 1)², (1 + m²)²]`
+/// on the f32 frame's materials, m ≥ 0.075: the square stays normal).
 #[inline(always)]
 pub fn d_ratio32(cos_h: f32, sin2_h: f32, m2: f32, norm: f32) -> (f32, f32) {
     let s = m2 * (cos_h * cos_h) + sin2_h;
@@ -78,6 +71,14 @@ pub fn d_lane64(cos_h2: f64, sin2_h: f64, m2: f64, norm: f64) -> f32 {
 pub fn d_aniso_lane(slope2: f64, cos_h2: f64, norm: f64) -> f32 {
     let s = slope2 + cos_h2;
     (norm / (s * s)) as f32
+}
+
+/// `R = √(cos² + m² sin²)` in a lane: GGX's Λ in root form, `1 + 2Λ = R/cos`, which the
+/// Smith terms' quotients (`smith::g_ratio_ggx`, `smith_correlated::g_ratio_ggx`) take
+/// without a division and without Λ's cancellation for small `m² tan²θ`.
+#[inline(always)]
+pub fn lambda_root_lane(cos: f32, sin2: f32, m2: f32) -> f32 {
+    (cos * cos + m2 * sin2).sqrt()
 }
 
 /// Smith's Λ in a lane, given `q2 = m² tan²θ`, rewritten for `q2 ≤ 1` as [`lambda`].

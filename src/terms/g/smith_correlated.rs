@@ -2,7 +2,7 @@
 //! the height-correlated Smith term `1/(1 + Λ(v) + Λ(l))`, Λ the distribution's. Needs a
 //! distribution with Λ (Beckmann, GGX).
 
-use crate::terms::d::DistributionKind;
+use crate::terms::d::{ggx, DistributionKind};
 
 /// The spelling in a materials file.
 pub const NAME: &str = "smith-correlated";
@@ -32,7 +32,8 @@ pub fn g_lane(lambda_o: f32, lambda_i: f32) -> f32 {
 /// lane divides once for D·G·K.
 #[inline(always)]
 pub fn g_ratio_ggx(cos_i: f32, sin2_i: f32, cos_o: f32, sin2_o: f32, m2: f32) -> (f32, f32) {
-    let r_i = (cos_i * cos_i + m2 * sin2_i).sqrt();
-    let r_o = (cos_o * cos_o + m2 * sin2_o).sqrt();
+    let r_i = ggx::lambda_root_lane(cos_i, sin2_i, m2);
+    let r_o = ggx::lambda_root_lane(cos_o, sin2_o, m2);
     (2.0 * cos_i * cos_o, r_o * cos_i + r_i * cos_o)
 }
+

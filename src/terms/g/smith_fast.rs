@@ -62,3 +62,42 @@ pub fn g1_lane(q2: f32) -> f32 {
         1.0
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The quotient of both directions against `g1 · g1` in f64 on the same f32 values:
+    /// cosines from grazing to the normal (sin = 0, the floor's case), m from the f64
+    /// frame's smallest to the largest legal, and `a` a hair either side of the fit's 1.6.
+    #[test]
+    fn the_quotient_is_the_product_of_the_fits() {
+        let mut lanes: Vec<(f32, f32, f64)> = Vec::new();
+        for m in [1e-7f64, 1e-3, 0.075, 0.3, 1.0, 10.0, 1e4] {
+            for c in [1e-4f64, 0.01, 0.3, 0.7, 0.99, 1.0] {
+                lanes.push((c as f32, ((1.0 - c) * (1.0 + c)) as f32, m));
+            }
+            for a in [1.6 * (1.0 - 1e-4), 1.6 * (1.0 + 1e-4), 0.5, 1.2] {
+                // cos/(m sin) = a: tan θ = 1/(a m).
+                let t: f64 = 1.0 / (a * m);
+                let c = 1.0 / (1.0 + t * t).sqrt();
+                lanes.push((c as f32, (t * t * c * c) as f32, m));
+            }
+        }
+        let mut worst = 0f64;
+        for &i in &lanes {
+            for &o in lanes.iter().filter(|o| o.2 == i.2) {
+                let m = i.2;
+                let (n, d) = g_ratio(i.0, i.1, o.0, o.1, m as f32);
+                let q2 = |w: (f32, f32, f64)| {
+                    let c = f64::from(w.0);
+                    f64::from(m as f32).powi(2) * f64::from(w.1) / (c * c)
+                };
+                let want = g1(q2(o)) * g1(q2(i));
+                worst = worst.max((f64::from(n / d) - want).abs() / want);
+            }
+        }
+        // Measured 3.6e-7 (a few f32 roundings of G).
+        assert!(worst < 5e-7, "{worst:e}");
+    }
+}
