@@ -199,6 +199,16 @@ impl View {
     /// one formula behind [`View::normal`] and [`View::lane_samples`].
     #[inline(always)]
     fn lane_normal(&self, c0: f64, c1: f64, c2: f64) -> [f64; 3] {
+        let (m, inv_mm) = self.lane_normal_unnormalised(c0, c1, c2);
+        m.map(|x| x * inv_mm.sqrt())
+    }
+
+    /// The microfacet normal of one unit sample's columns before its normalisation, and
+    /// one over its squared length: GGX's point on the stretched hemisphere, unstretched
+    /// (Heitz 2018, listing 3); Beckmann's `(tan θ cos φ, tan θ sin φ, 1)`, whose squared
+    /// length is `1 + tan²θ`.
+    #[inline(always)]
+    fn lane_normal_unnormalised(&self, c0: f64, c1: f64, c2: f64) -> ([f64; 3], f64) {
         let a = self.alpha;
         match self.lobe {
             Lobe::Ggx => {
@@ -207,14 +217,14 @@ impl View {
                 let p2 = (1.0 - self.s) * chord + self.s * disk1;
                 let p3 = (1.0 - p1 * p1 - p2 * p2).max(0.0).sqrt();
                 let n: [f64; 3] = std::array::from_fn(|i| p1 * t1[i] + p2 * t2[i] + p3 * vh[i]);
-                normalize_reciprocal([a * n[0], a * n[1], n[2].max(0.0)])
+                let m = [a * n[0], a * n[1], n[2].max(0.0)];
+                (m, 1.0 / dot(m, m))
             }
             Lobe::Beckmann => {
                 let (neg_log, cos_phi, sin_phi) = (c0, c1, c2);
                 let tan2 = a * a * neg_log;
-                let cos = 1.0 / (1.0 + tan2).sqrt();
-                let sin = tan2.sqrt() * cos;
-                [sin * cos_phi, sin * sin_phi, cos]
+                let tan = tan2.sqrt();
+                ([tan * cos_phi, tan * sin_phi, 1.0], 1.0 / (1.0 + tan2))
             }
         }
     }
@@ -284,40 +294,75 @@ impl View {
         c2: &[f64; L],
         out: &mut Samples<L>,
     ) {
+        let a = self.alpha;
+        // The divider is what a lane waits on (an f64 square root or division is a chain of
+        // tens of cycles): the microfacet normal and the half vector are left unnormalised
+        // where only their direction or a ratio of their components is read — the
+        // reflection takes `1/|h|²`, D and the pdf ratios of squares — so that a lane takes
+        // three square roots and three (GGX) or five (Beckmann) divisions, where
+        // normalising took four and six or eight.
+        // The constant parts of the weights `cos_i/pdf`, once per view: GGX
+        // `4π/(G1 α²)`, Beckmann `4π α²` (see below).
+        let (ggx_weight, beckmann_weight) = (4.0 * PI / (self.g1 * (a * a)), 4.0 * PI * (a * a));
+        // One loop a lobe: a loop over both computed both in every lane and selected.
+        match self.lobe {
+            Lobe::Ggx => self.lanes::<L, true>(c0, c1, c2, ggx_weight, out),
+            Lobe::Beckmann => self.lanes::<L, false>(c0, c1, c2, beckmann_weight, out),
+        }
+    }
+
+    /// [`View::lane_samples`]' loop for one lobe (`GGX`, else Beckmann), with the constant
+    /// part of its weight.
+    #[inline(always)]
+    fn lanes<const L: usize, const GGX: bool>(
+        &self,
+        c0: &[f64; L],
+        c1: &[f64; L],
+        c2: &[f64; L],
+        weight_constant: f64,
+        out: &mut Samples<L>,
+    ) {
         let (a, v, vf) = (self.alpha, self.v, self.vf);
-        let ggx = self.lobe == Lobe::Ggx;
         let dot3 = |x: [f64; 3], y: [f64; 3]| (x[0] * y[0] + x[1] * y[1]) + x[2] * y[2];
         let unit = |x: [f64; 3]| {
             let inv = 1.0 / dot3(x, x).sqrt();
             x.map(|c| c * inv)
         };
         for k in 0..L {
-            let h = self.lane_normal(c0[k], c1[k], c2[k]);
-            // The sample.
-            let vdh = dot3(v, h);
-            let l: [f64; 3] = std::array::from_fn(|i| 2.0 * vdh * h[i] - v[i]);
+            // The microfacet normal m (unnormalised), `1/|m|²`, and the sample
+            // `l = 2 (v·m) m/|m|² − v`.
+            let (m, inv_mm) = self.lane_normal_unnormalised(c0[k], c1[k], c2[k]);
+            let s = 2.0 * dot3(v, m) * inv_mm;
+            let l: [f64; 3] = std::array::from_fn(|i| s * m[i] - v[i]);
+            // l as the backend reads it, normalised, and the half vector `h = lf + vf`
+            // (unnormalised): `cos_h² = h_z²/|h|²`, `c = (vf·h)/|h|`.
             let lf = unit(as_f32(l));
             let (cos_i, cos_o) = (lf[2], vf[2]);
-            let hf = unit(std::array::from_fn(|i| lf[i] + vf[i]));
-            let (cos_h, sin2_h, c) = (hf[2], hf[0] * hf[0] + hf[1] * hf[1], dot3(vf, hf));
-            let (pdf, redo) = if ggx {
-                (self.g1 * ggx::d(cos_h, sin2_h, a) / (4.0 * cos_o), false)
+            let h: [f64; 3] = std::array::from_fn(|i| lf[i] + vf[i]);
+            let inv_hh = 1.0 / dot3(h, h);
+            let (side2, vh) = (h[0] * h[0] + h[1] * h[1], dot3(vf, h));
+            let (weight, redo) = if GGX {
+                // pdf = G1 D/(4 cos_o), `D = α²/(π q²)`, `q = (α² h_z² + h_x² + h_y²)/|h|²`:
+                // `cos_i/pdf = (4π/(G1 α²)) cos_o cos_i q²`.
+                let q = ((a * a) * (h[2] * h[2]) + side2) * inv_hh;
+                (weight_constant * (cos_o * cos_i) * (q * q), false)
             } else {
-                // Beckmann's D, exp(−tan²/α²)/(π α² cos⁴), in its direct form; where that
-                // form under- or overflows the lane is redone with the reference's guarded
-                // one (`sample_one`).
-                let arg = -(sin2_h / (cos_h * cos_h)) / (a * a);
-                let c4 = cos_h.powi(4);
-                let d = exp_neg(arg) / (PI * a * a * c4);
-                let pdf = d * cos_h / (4.0 * c);
-                (pdf, !(arg >= EXP_NEG_MIN && c4.is_normal()))
+                // pdf = D cos_h/(4c), `D = e^−x/(π α² cos_h⁴)`, `x = tan²θ_h/α²`:
+                // `cos_i/pdf = 4π α² cos_i c cos_h³ e^x = 4π α² cos_i h_z³ (vf·h)/(|h|⁴ e^−x)`,
+                // in this direct form; where it under- or overflows the lane is redone with
+                // the reference's guarded one (`sample_one`).
+                let arg = -side2 / ((a * a) * (h[2] * h[2]));
+                let cos_h2 = (h[2] * h[2]) * inv_hh;
+                let num = weight_constant * cos_i * (h[2] * h[2] * h[2]) * vh;
+                let weight = num * (inv_hh * inv_hh) / exp_neg(arg);
+                let ok = arg >= EXP_NEG_MIN && (cos_h2 * cos_h2).is_normal();
+                (weight, !ok)
             };
-            let weight = cos_i / pdf;
             for (o, x) in out.l.iter_mut().zip(l) {
                 o[k] = x;
             }
             out.weight[k] = weight;
-            out.c[k] = c;
+            out.c[k] = vh * inv_hh.sqrt();
             // Below the horizon (or a degenerate l: NaN), or a pdf that underflowed.
             out.ok[k] = cos_i > 0.0 && weight.is_finite();
             out.redo[k] = redo && cos_i > 0.0;
@@ -341,7 +386,8 @@ fn exp_neg(x: f64) -> f64 {
     // call below SSE4.1).
     const ROUND: f64 = 6_755_399_441_055_744.0;
     let x = x.clamp(EXP_NEG_MIN, 0.0);
-    let k = (x * std::f64::consts::LOG2_E + ROUND) - ROUND;
+    let sum = x * std::f64::consts::LOG2_E + ROUND;
+    let k = sum - ROUND;
     let r = (x - k * LN2_HI) - k * LN2_LO;
     let mut p = 1.0 / 6_227_020_800.0; // 1/13!
     let mut f = 6_227_020_800.0;
@@ -350,7 +396,10 @@ fn exp_neg(x: f64) -> f64 {
         p = p * r + 1.0 / f;
     }
     let p = p * r + 1.0;
-    p * f64::from_bits(((k as i64 + 1023) as u64) << 52)
+    // 2^k from the integer in the sum's low bits (`k as i64` is a saturating cast, which
+    // LLVM does not vectorise: it made every lane of Beckmann's samples scalar code).
+    let k_int = sum.to_bits().wrapping_sub(ROUND.to_bits());
+    p * f64::from_bits(k_int.wrapping_add(1023) << 52)
 }
 
 /// `L` samples of [`View::lane_samples`], lane by lane.

@@ -162,27 +162,63 @@ impl<'a, S: pulp::Simd> Acc<'a, S> {
         }
     }
 
+    /// A whole block of made samples (none to be made again), evaluated in place of
+    /// [`Acc::push`]ing them one by one: the lanes are the block's lanes, a lane that is no
+    /// sample (below the horizon) evaluates `l = v` and adds nothing. Each lane's result
+    /// depends on its own tuple alone, and the sums take the samples in the same order, so
+    /// this gives `push`'s bits without its per-sample gather (a scalar loop that was
+    /// about a third of the sampler's time).
+    #[inline(always)]
+    fn block(&mut self, made: &Samples<LANES>) {
+        if self.n > 0 {
+            self.flush();
+        }
+        for c in 0..3 {
+            for k in 0..LANES {
+                self.inp.v[c][k] = if made.ok[k] {
+                    made.l[c][k] as f32
+                } else {
+                    self.v32[c]
+                };
+            }
+        }
+        let lanes = f_none_block(self.simd, self.pt.plan, &self.inp, &mut self.out);
+        for k in 0..LANES {
+            if made.ok[k] {
+                let w = [made.weight[k], schlick_weight(made.c[k]) * made.weight[k]];
+                self.add(lanes, k, w);
+            }
+        }
+    }
+
+    /// Lane `k`'s f (the lanes', or the reference's where the lanes did not run or flagged
+    /// it) times its weights, added to the sums.
+    #[inline(always)]
+    fn add(&mut self, lanes: bool, k: usize, w: [f64; 2]) {
+        let f = if lanes && !self.out.rescue[k] {
+            self.out.brdf[0][k]
+        } else {
+            let t = Tuple {
+                l: [self.inp.v[0][k], self.inp.v[1][k], self.inp.v[2][k]],
+                v: self.v32,
+                n: [0.0, 0.0, 1.0],
+                material: 0,
+                t: None,
+            };
+            to_output_f32(evaluate_tuple(&t, self.pt.material).brdf[0])
+        };
+        let f = f64::from(f);
+        for (s, w) in self.sums.iter_mut().zip(w) {
+            *s += f * w;
+        }
+    }
+
     /// The lanes' results of the samples gathered so far, added in order.
     #[inline(always)]
     fn flush(&mut self) {
         let lanes = f_none_block(self.simd, self.pt.plan, &self.inp, &mut self.out);
         for k in 0..self.n {
-            let f = if lanes && !self.out.rescue[k] {
-                self.out.brdf[0][k]
-            } else {
-                let t = Tuple {
-                    l: [self.inp.v[0][k], self.inp.v[1][k], self.inp.v[2][k]],
-                    v: self.v32,
-                    n: [0.0, 0.0, 1.0],
-                    material: 0,
-                    t: None,
-                };
-                to_output_f32(evaluate_tuple(&t, self.pt.material).brdf[0])
-            };
-            let f = f64::from(f);
-            for (s, w) in self.sums.iter_mut().zip(self.weights[k]) {
-                *s += f * w;
-            }
+            self.add(lanes, k, self.weights[k]);
         }
         self.n = 0;
     }
@@ -208,6 +244,10 @@ fn point_sums<S: pulp::Simd>(
                     .expect("columns padded to whole blocks")
             };
             pt.view.lane_samples(col(0), col(1), col(2), &mut made);
+            if u.len() == LANES && !made.redo.contains(&true) {
+                acc.block(&made);
+                continue;
+            }
             for k in 0..u.len() {
                 if made.redo[k] {
                     if let Some(s) = pt.view.sample_one(&u[k]) {
