@@ -193,3 +193,125 @@ fn every_instruction_set_gives_results_within_the_rule_of_each_other_and_can_be_
     let out = devices("scalar");
     assert!(String::from_utf8_lossy(&out.stdout).contains("CPU engine: scalar"));
 }
+
+/// GGX materials from the f32 frame's smallest roughness up, where the local form's f32
+/// frame (`frame_local32`) is weakest: h placed where D's slope is steepest
+/// (tan θ_h = m, and twice and half that) and l, v spread about it so that `c = v·h` runs
+/// from `FAST_MIN_C` to 1 (the frame turns h by up to u (4.5/c + 1), so the guard
+/// `ggx::local_frame_ok` sends the smallest c there to the f64 frame). In the local form,
+/// and as rows whose N is +z in every other row (the blocks that take either frame lane by
+/// lane): within the rule on every instruction set, the +z rows' bits the local form's, and
+/// both the certified f32 lanes and the deferred f64 ones ran.
+#[test]
+fn ggx_local_frame_within_the_rule_where_ds_slope_is_steepest() {
+    use vkbrdf::batch::LocalBatch;
+    let mut toml = String::new();
+    let m_all = [FAST_MIN_ROUGHNESS, 0.1, 0.3, 0.7, 1.5];
+    for m in m_all {
+        for (geometry, fresnel) in [
+            (
+                "smith-correlated",
+                "fresnel = \"conductor\"\nior = [0.2, 0.9, 1.5]\nextinction = [3.0, 2.4, 1.9]",
+            ),
+            ("smith", "fresnel = \"schlick\"\nf0 = [0.04, 0.5, 0.9]"),
+            ("none", "fresnel = \"none\""),
+        ] {
+            toml.push_str(&format!(
+                "[[material]]\nname = \"m{m}-{geometry}\"\nmodel = \"cook-torrance\"\n\
+                 distribution = \"ggx\"\ngeometry = \"{geometry}\"\nroughness = {m}\n{fresnel}\n"
+            ));
+        }
+    }
+    let mats = parse_materials(&toml, "ggx-local").expect("materials");
+    let mut local = Vec::new();
+    let mut rows = Vec::new();
+    let mut i = 0usize;
+    for (mi, m) in m_all.into_iter().enumerate() {
+        for t in [0.5 * m, m, 2.0 * m] {
+            let th = t.atan();
+            for phi in [0.3f64, 1.9, 4.0] {
+                let h = [th.sin() * phi.cos(), th.sin() * phi.sin(), th.cos()];
+                // Two unit vectors perpendicular to h.
+                let a = [-phi.sin(), phi.cos(), 0.0];
+                let b = [
+                    h[1] * a[2] - h[2] * a[1],
+                    h[2] * a[0] - h[0] * a[2],
+                    h[0] * a[1] - h[1] * a[0],
+                ];
+                for k in 0..40 {
+                    let c =
+                        f64::from(FAST_MIN_C) + (1.0 - f64::from(FAST_MIN_C)) * f64::from(k) / 39.0;
+                    let (cd, sd) = (c, (1.0 - c * c).sqrt());
+                    for psi in [0.2f64, 1.3, 2.6] {
+                        let w: [f64; 3] =
+                            std::array::from_fn(|j| psi.cos() * a[j] + psi.sin() * b[j]);
+                        let l: [f64; 3] = std::array::from_fn(|j| cd * h[j] + sd * w[j]);
+                        let v: [f64; 3] = std::array::from_fn(|j| cd * h[j] - sd * w[j]);
+                        if l[2] < 1e-3 || v[2] < 1e-3 {
+                            continue;
+                        }
+                        // Unnormalised inputs: the frame's lengths are part of its error.
+                        let scale = 1.0 + 0.37 * (i % 7) as f64;
+                        i += 1;
+                        let lv: Vec<f32> = l
+                            .iter()
+                            .map(|x| (x * scale) as f32)
+                            .chain(v.iter().map(|&x| x as f32))
+                            .collect();
+                        for g in 0..3 {
+                            let material = (3 * mi + g) as f32;
+                            local.push((lv.clone(), 3 * mi + g));
+                            rows.extend_from_slice(&lv);
+                            // N = +z in every other row, tilted (and not unit) in the others.
+                            if rows.len() / 10 % 2 == 0 {
+                                rows.extend([0.0f32, 0.0, 1.0]);
+                            } else {
+                                rows.extend([0.03f32, -0.02, 1.7]);
+                            }
+                            rows.push(material);
+                        }
+                    }
+                }
+            }
+        }
+    }
+    let batch = Batch::new(rows, 10, mats.len(), &memory_source()).expect("batch");
+    let request = Request { terms: true };
+    let reference = CpuReference::new()
+        .evaluate(&batch, &mats, &request)
+        .expect("reference");
+    for isa in Isa::available_all() {
+        let mut engine = CpuEngine::with_isa(1, isa);
+        let out = engine.evaluate(&batch, &mats, &request).expect("rows");
+        let tally = engine.last_tally();
+        // Half the rows (N = +z) take the local frame: some of them certified, the
+        // steepest ones deferred (the tilted rows' c ≥ FAST_MIN_C keeps them on theirs).
+        assert!(
+            tally.deferred > 0 && tally.deferred < tally.lanes / 2,
+            "{isa}: the guard deferred {} of {} lanes",
+            tally.deferred,
+            tally.lanes
+        );
+        let worst = judge(&format!("rows on {isa}"), &batch, &mats, &out, &reference);
+        assert!(worst <= 1e-5, "{isa}: largest relative error {worst:.2e}");
+        // Each material's lanes in the local form: the +z rows' bits.
+        for mi in 0..mats.len() {
+            let picked: Vec<usize> = (0..local.len()).filter(|&r| local[r].1 == mi).collect();
+            let data: Vec<f32> = picked.iter().flat_map(|&r| local[r].0.clone()).collect();
+            let lb = LocalBatch::new(data, mi, &mats, &memory_source()).expect("local");
+            let mut got = Output::default();
+            engine
+                .evaluate_local_into(&lb, &mats, &request, &mut got)
+                .expect("local");
+            for (q, &r) in picked.iter().enumerate() {
+                if r % 2 == 0 {
+                    assert_eq!(
+                        got.brdf[3 * q..3 * q + 3],
+                        out.brdf[3 * r..3 * r + 3],
+                        "{isa}: material {mi}, row {r}: the local form's bits"
+                    );
+                }
+            }
+        }
+    }
+}

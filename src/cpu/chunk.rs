@@ -26,6 +26,9 @@ pub struct Tally {
     pub rescued: u64,
     /// Tuples of material groups that run on the reference.
     pub reference: u64,
+    /// Of `lanes`, tuples their block's f32 frame could not serve, gathered into blocks of
+    /// the f64 frame ([`kernel::Params::defer_slow`]).
+    pub deferred: u64,
 }
 
 impl Tally {
@@ -33,6 +36,7 @@ impl Tally {
         self.lanes += o.lanes;
         self.rescued += o.rescued;
         self.reference += o.reference;
+        self.deferred += o.deferred;
     }
 }
 
@@ -314,6 +318,7 @@ fn run_blocks<S: pulp::Simd, T: transpose::Transpose, const R: usize>(
     }
     let mut idx = [[0usize; LANES]; R];
     let z = batch.normal_is_z();
+    let (plan64, mut deferred) = (plan.f64_frame(), Deferred::new());
     let mut j0 = 0;
     while j0 < len {
         // Fill up to `R` blocks, run their lanes, then write them out.
@@ -344,20 +349,107 @@ fn run_blocks<S: pulp::Simd, T: transpose::Transpose, const R: usize>(
             let j = j0 + b * LANES;
             let n = LANES.min(len - j);
             write_block(&out[b], j, n, w);
+            let whole = order.is_none() && n == LANES;
+            let start = w.start;
+            let row = |k: usize| if whole { start + j + k } else { idx[b][k] };
             if out[b].any_rescue() {
-                let whole = order.is_none() && n == LANES;
                 for k in 0..n {
                     if out[b].rescue[k] {
-                        let row = if whole { w.start + j + k } else { idx[b][k] };
-                        rescue(batch, m, row, j + k, w, &mut counts);
+                        rescue(batch, m, row(k), j + k, w, &mut counts);
                         tally.rescued += 1;
+                    }
+                }
+            }
+            if out[b].any_slow() {
+                for k in 0..n {
+                    if out[b].slow[k] && deferred.push(&inp[b], k, j + k, row(k)) {
+                        deferred.run(simd, &plan64, z, batch, m, w, &mut counts, &mut tally);
                     }
                 }
             }
         }
         j0 += (blocks * LANES).min(len - j0);
     }
+    deferred.run(simd, &plan64, z, batch, m, w, &mut counts, &mut tally);
     (counts, tally)
+}
+
+/// The lanes a chunk's blocks left to the f64 frame ([`kernel::Params::defer_slow`]),
+/// gathered into one block: a few lanes in a hundred cost a few blocks in a hundred, where
+/// running the f64 frame over each block that had one cost a third of the blocks. Each
+/// lane's result depends on its own tuple alone, so where it is evaluated does not change
+/// it.
+struct Deferred {
+    inp: Inputs,
+    /// Each lane's output position in the chunk and its batch row.
+    at: [(usize, usize); LANES],
+    n: usize,
+}
+
+impl Deferred {
+    fn new() -> Deferred {
+        Deferred {
+            inp: Inputs::default(),
+            at: [(0, 0); LANES],
+            n: 0,
+        }
+    }
+
+    /// Lane `k` of `inp` (output position `j`, batch row `row`); whether the block is full.
+    #[inline(always)]
+    fn push(&mut self, inp: &Inputs, k: usize, j: usize, row: usize) -> bool {
+        for c in 0..9 {
+            self.inp.v[c][self.n] = inp.v[c][k];
+        }
+        self.at[self.n] = (j, row);
+        self.n += 1;
+        self.n == LANES
+    }
+
+    /// The gathered lanes on `plan64` (the group's f64 frame), into their places in `w`,
+    /// rescued where the lanes say so.
+    #[allow(clippy::too_many_arguments)]
+    fn run<S: pulp::Simd>(
+        &mut self,
+        simd: S,
+        plan64: &Plan,
+        z: bool,
+        batch: Source,
+        m: &Material,
+        w: &mut Work,
+        counts: &mut Counts,
+        tally: &mut Tally,
+    ) {
+        let n = self.n;
+        if n == 0 {
+            return;
+        }
+        // The unused lanes repeat the first (computed and dropped).
+        for k in n..LANES {
+            for c in 0..9 {
+                self.inp.v[c][k] = self.inp.v[c][0];
+            }
+        }
+        let mut out = [Outputs::default()];
+        block(simd, plan64, std::slice::from_ref(&self.inp), &mut out, z);
+        tally.deferred += n as u64;
+        for (k, &(j, row)) in self.at[..n].iter().enumerate() {
+            if out[0].rescue[k] {
+                rescue(batch, m, row, j, w, counts);
+                tally.rescued += 1;
+                continue;
+            }
+            for ch in 0..3 {
+                w.brdf[j * 3 + ch] = out[0].brdf[ch][k];
+            }
+            if let Some(t) = w.terms.as_deref_mut() {
+                for c in 0..TERM_COLUMNS {
+                    t[j * TERM_COLUMNS + c] = out[0].terms[c][k];
+                }
+            }
+        }
+        self.n = 0;
+    }
 }
 
 /// The block of rows `first..first + n` of the chunk's order (or of the batch) into

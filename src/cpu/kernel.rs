@@ -13,7 +13,7 @@
 // forms would hide that the loops are the vectorised dimension.
 #![allow(clippy::needless_range_loop)]
 
-use super::frame::{frame, frame64, length2_ok, rsqrt, Frame, Frame64, GRAZING};
+use super::frame::{frame, frame64, frame_local32, length2_ok, rsqrt, Frame, Frame64, GRAZING};
 use crate::backend::TERM_COLUMNS;
 use crate::terms::d::{beckmann, blinn, charlie, gaussian, ggx};
 use crate::terms::f::{conductor, dielectric, schlick};
@@ -84,6 +84,8 @@ pub struct Params {
     pub m_f: f32,
     /// See `m2_f`.
     pub d_norm_f: f32,
+    /// GGX's test of the local form's f32 frame (`ggx::local_frame_guard`).
+    pub ggx_local_guard: f32,
     /// K (the convention's lane form).
     pub k: LaneK,
     /// Schlick's F0.
@@ -97,6 +99,10 @@ pub struct Params {
     /// Whether the caller asked for the terms (D, G, F, K): without them the lanes form
     /// D·G·K over one division and never divide out the terms (see `finish_lane`).
     pub terms: bool,
+    /// Whether [`microfacet_block`] leaves the lanes its f32 frame cannot serve to the
+    /// caller ([`Outputs::slow`]), which gathers them from many blocks into blocks of the
+    /// f64 frame, instead of running the f64 frame over its whole block for them.
+    pub defer_slow: bool,
     /// Whether the material may take the f32 frame (see [`microfacet_block`]): m ≥
     /// [`FAST_MIN_ROUGHNESS`] and a Fresnel term other than the dielectric (whose f64
     /// evaluation near total internal reflection wants the f64 `c`).
@@ -135,6 +141,9 @@ pub struct Outputs {
     pub terms: [[f32; LANES]; TERM_COLUMNS],
     /// Lanes to re-evaluate with the reference.
     pub rescue: [bool; LANES],
+    /// Lanes left to the f64 frame by a block of a plan that defers them
+    /// ([`Params::defer_slow`]): their other outputs are not the lane's.
+    pub slow: [bool; LANES],
 }
 
 impl Outputs {
@@ -144,6 +153,12 @@ impl Outputs {
     pub fn any_rescue(&self) -> bool {
         u128::from_ne_bytes(self.rescue.map(u8::from)) != 0
     }
+
+    /// Whether any lane was left to the f64 frame ([`Outputs::slow`]), as [`Outputs::any_rescue`].
+    #[inline(always)]
+    pub fn any_slow(&self) -> bool {
+        u128::from_ne_bytes(self.slow.map(u8::from)) != 0
+    }
 }
 
 impl Default for Outputs {
@@ -152,6 +167,7 @@ impl Default for Outputs {
             brdf: [[0.0; LANES]; 3],
             terms: [[0.0; LANES]; TERM_COLUMNS],
             rescue: [false; LANES],
+            slow: [false; LANES],
         }
     }
 }
@@ -303,12 +319,14 @@ pub const FAST_MIN_ROUGHNESS: f64 = 0.075;
 /// Isotropic Cook–Torrance on one block, specialised to one distribution, geometry and
 /// Fresnel term, and (`Z`) to N = (0, 0, 1) for the local form.
 ///
-/// The frame is f32 (`frame`) when the material allows it ([`Params::fast_frame`]) and
-/// the lane does (`c` ≥ [`FAST_MIN_C`]); the other lanes take the f64 frame
-/// (`frame64`), which a block computes only when it has such a lane. The choice depends
-/// only on the lane's own f32 frame, whose bits the local form and the rows with
-/// N = (0, 0, 1) share, so a lane's result depends on its tuple alone and both forms give
-/// the same bits.
+/// The frame is f32 (`frame`; for GGX's lanes with N = +z `frame_local32`, where D's
+/// test `ggx::local_frame_ok` certifies it) when the material allows it
+/// ([`Params::fast_frame`]) and the lane does (`c` ≥ [`FAST_MIN_C`]); the other lanes take
+/// the f64 frame (`frame64`), which a block computes only when it has such a lane — or,
+/// for a plan that defers them ([`Params::defer_slow`]), leaves to the caller, which
+/// gathers them from many blocks. The choice depends only on the lane's own f32 frame,
+/// whose bits the local form and the rows with N = (0, 0, 1) share, so a lane's result
+/// depends on its tuple alone and both forms give the same bits.
 #[inline(always)]
 pub fn microfacet_block<const D: u8, const G: u8, const F: u8, const Z: bool>(
     p: &Params,
@@ -324,16 +342,29 @@ pub fn microfacet_block<const D: u8, const G: u8, const F: u8, const Z: bool>(
         // from vectorising either loop: 4× slower).
         let mut fs = [[0.0f32; LANES]; 8];
         let mut ok = [false; LANES];
-        for k in 0..LANES {
-            let fr = frame::<Z>(&lane_inputs(inp, k));
-            slow[k] = fr.ok && fr.c < FAST_MIN_C;
-            let v = [
-                fr.cos_i, fr.cos_o, fr.cos_h, fr.c, fr.sin2_h, fr.sin2_i, fr.sin2_o, fr.s2,
-            ];
-            for j in 0..8 {
-                fs[j][k] = v[j];
+        // GGX's lanes with N = +z take the f32 local frame where D's test certifies it
+        // (`frame_local32`): the local form's lanes always, the rows' where N is exactly
+        // (0, 0, 1) (so that both forms keep giving the same bits); a block computes only
+        // the frames its lanes take.
+        let ggx = const { matches!(DistributionKind::from_code(D), DistributionKind::Ggx) };
+        let mode = if !ggx {
+            FRAME_GENERAL
+        } else if Z {
+            FRAME_LOCAL
+        } else {
+            let z: [bool; LANES] = std::array::from_fn(|k| n_is_z(inp, k));
+            if !z.contains(&false) {
+                FRAME_LOCAL
+            } else if z.contains(&true) {
+                FRAME_EACH
+            } else {
+                FRAME_GENERAL
             }
-            ok[k] = fr.ok;
+        };
+        match mode {
+            FRAME_LOCAL => frames::<Z, FRAME_LOCAL>(p, inp, &mut fs, &mut ok, &mut slow),
+            FRAME_EACH => frames::<Z, FRAME_EACH>(p, inp, &mut fs, &mut ok, &mut slow),
+            _ => frames::<Z, FRAME_GENERAL>(p, inp, &mut fs, &mut ok, &mut slow),
         }
         // Two loops, so that the one without terms divides nothing out.
         let lane = |k: usize| {
@@ -359,7 +390,18 @@ pub fn microfacet_block<const D: u8, const G: u8, const F: u8, const Z: bool>(
             }
         }
     }
-    if u128::from_ne_bytes(slow.map(u8::from)) != 0 {
+    let any_slow = u128::from_ne_bytes(slow.map(u8::from)) != 0;
+    if p.defer_slow {
+        // The caller runs these lanes on the f64 frame (with the other blocks' ones).
+        out.slow = if p.fast_frame { slow } else { [false; LANES] };
+        if p.fast_frame {
+            for k in 0..LANES {
+                out.rescue[k] &= !slow[k];
+            }
+            return;
+        }
+    }
+    if any_slow {
         // The lanes the f32 frame cannot serve take the f64 frame's results, lane by lane:
         // what a lane gets must not depend on its neighbours in the block, or the output
         // would change with the chunking (the stream's, the shards').
@@ -376,6 +418,53 @@ pub fn microfacet_block<const D: u8, const G: u8, const F: u8, const Z: bool>(
                 out.rescue[k] = o64.rescue[k];
             }
         }
+    }
+}
+
+/// Which f32 frame a block's lanes take (see [`frames`]).
+const FRAME_GENERAL: u8 = 0;
+const FRAME_LOCAL: u8 = 1;
+const FRAME_EACH: u8 = 2;
+
+/// Whether lane `k`'s N is exactly (0, 0, 1) (`-0` components included).
+#[inline(always)]
+fn n_is_z(inp: &Inputs, k: usize) -> bool {
+    inp.v[6][k] == 0.0 && inp.v[7][k] == 0.0 && inp.v[8][k] == 1.0
+}
+
+/// The f32 frames of a block into `fs` (structure of arrays) and `ok`, and the lanes that
+/// must take the f64 frame into `slow`: `MODE` [`FRAME_GENERAL`] takes [`frame`] in every
+/// lane, [`FRAME_LOCAL`] [`frame_local32`] (GGX lanes with N = +z, each certified by D's
+/// test `ggx::local_frame_ok` or sent to the f64 frame), [`FRAME_EACH`] whichever of the
+/// two the lane's N asks for.
+#[inline(always)]
+fn frames<const Z: bool, const MODE: u8>(
+    p: &Params,
+    inp: &Inputs,
+    fs: &mut [[f32; LANES]; 8],
+    ok: &mut [bool; LANES],
+    slow: &mut [bool; LANES],
+) {
+    for k in 0..LANES {
+        let x = lane_inputs(inp, k);
+        let (fr, local) = match MODE {
+            FRAME_LOCAL => (frame_local32(&x), true),
+            FRAME_EACH => {
+                let (a, b, z) = (frame_local32(&x), frame::<Z>(&x), n_is_z(inp, k));
+                (if z { a } else { b }, z)
+            }
+            _ => (frame::<Z>(&x), false),
+        };
+        let certified =
+            !local || ggx::local_frame_ok(fr.cos_h, fr.sin2_h, fr.c, p.m2_f, p.ggx_local_guard);
+        slow[k] = fr.ok && (fr.c < FAST_MIN_C || !certified);
+        let v = [
+            fr.cos_i, fr.cos_o, fr.cos_h, fr.c, fr.sin2_h, fr.sin2_i, fr.sin2_o, fr.s2,
+        ];
+        for j in 0..8 {
+            fs[j][k] = v[j];
+        }
+        ok[k] = fr.ok;
     }
 }
 

@@ -254,7 +254,11 @@ impl CpuEngine {
         let n = src.len();
         let plans: Vec<Plan> = materials
             .iter()
-            .map(|m| Plan::for_material(m).with_terms(request.terms))
+            .map(|m| {
+                Plan::for_material(m)
+                    .with_terms(request.terms)
+                    .with_deferred_slow()
+            })
             .collect();
         // The material of every row when the batch says so without a pass over it; else
         // each chunk groups its own rows (`mixed_chunk`).

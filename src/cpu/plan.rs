@@ -147,8 +147,26 @@ impl Plan {
         if slope {
             (p.m2_f, p.inv_m2_f, p.d_norm_f) = (p.m2 as f32, p.inv_m2 as f32, p.d_norm as f32);
             p.m_f = mr as f32;
+            p.ggx_local_guard = crate::terms::d::ggx::local_frame_guard(p.m2);
         }
         Plan::Microfacet { d, aniso, g, f, p }
+    }
+
+    /// The plan whose microfacet blocks leave the lanes their f32 frame cannot serve to the
+    /// caller ([`Params::defer_slow`]).
+    pub fn with_deferred_slow(mut self) -> Plan {
+        if let Plan::Microfacet { p, .. } = &mut self {
+            p.defer_slow = true;
+        }
+        self
+    }
+
+    /// The plan with the f64 frame in every lane: what a deferred lane takes.
+    pub fn f64_frame(mut self) -> Plan {
+        if let Plan::Microfacet { p, .. } = &mut self {
+            p.fast_frame = false;
+        }
+        self
     }
 
     /// The plan with the terms (D, G, F, K) formed in the lanes when `terms` (see

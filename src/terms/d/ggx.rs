@@ -57,6 +57,35 @@ pub fn d_ratio32(cos_h: f32, sin2_h: f32, m2: f32, norm: f32) -> (f32, f32) {
     (norm, s * s)
 }
 
+/// The relative error of D that the local form's f32 frame (`cpu::frame::frame_local32`)
+/// may add through its rounding of h, beside the ~45u (u = 2⁻²⁴) of D's, G's, F's and K's
+/// own f32 arithmetic: 4e-6 + 2.7e-6 stays inside FORMULAS.md §1's 1e-5 (docs/CPU_ENGINE.md,
+/// "The local form's f32 frame").
+pub const LOCAL_FRAME_D_BUDGET: f64 = 4e-6;
+
+/// The constant of [`local_frame_ok`] for roughness² `m2`: `16 (1 − m²)² u²/B²`, with
+/// B = [`LOCAL_FRAME_D_BUDGET`].
+pub fn local_frame_guard(m2: f64) -> f32 {
+    let u = f64::from(f32::EPSILON) / 2.0;
+    let b = LOCAL_FRAME_D_BUDGET;
+    (16.0 * (1.0 - m2) * (1.0 - m2) * u * u / (b * b)) as f32
+}
+
+/// Whether D at this lane moves by at most [`LOCAL_FRAME_D_BUDGET`] (relative) when h is
+/// turned by the local f32 frame's bound `δ = u (4.5/c + 1)` radians: D's slope
+/// `|∂ ln D/∂θ_h| = 4 |1 − m²| sin θ_h cos θ_h/s`, `s = m² cos² θ_h + sin² θ_h` (at most
+/// `2|1 − m²|/m`, at tan θ_h = m), times δ, squared so that neither a root nor a division
+/// is taken: `guard · sin² cos² (4.5 + c)² ≤ (s c)²` with `guard` from
+/// [`local_frame_guard`]. Every operand is the f32 frame's own (their few-u errors move the
+/// test, not the bound, by a few u).
+#[inline(always)]
+pub fn local_frame_ok(cos_h: f32, sin2_h: f32, c: f32, m2: f32, guard: f32) -> bool {
+    let cos2 = cos_h * cos_h;
+    let s = m2 * cos2 + sin2_h;
+    let a = 4.5 + c;
+    guard * (sin2_h * cos2) * (a * a) <= (s * c) * (s * c)
+}
+
 /// D in a lane of the f64 frame: as [`d`], in f64 because the square of the sum leaves
 /// f32's normal range for m near its lower bound.
 #[inline(always)]
