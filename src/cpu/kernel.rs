@@ -390,18 +390,17 @@ pub fn microfacet_block<const D: u8, const G: u8, const F: u8, const Z: bool>(
             }
         }
     }
-    let any_slow = u128::from_ne_bytes(slow.map(u8::from)) != 0;
-    if p.defer_slow {
+    if p.defer_slow && p.fast_frame {
         // The caller runs these lanes on the f64 frame (with the other blocks' ones).
-        out.slow = if p.fast_frame { slow } else { [false; LANES] };
-        if p.fast_frame {
-            for k in 0..LANES {
-                out.rescue[k] &= !slow[k];
-            }
-            return;
+        out.slow = slow;
+        for k in 0..LANES {
+            out.rescue[k] &= !slow[k];
         }
+        return;
     }
-    if any_slow {
+    // Every lane of a material without the f32 frame is "slow": none is left to a caller.
+    out.slow = [false; LANES];
+    if u128::from_ne_bytes(slow.map(u8::from)) != 0 {
         // The lanes the f32 frame cannot serve take the f64 frame's results, lane by lane:
         // what a lane gets must not depend on its neighbours in the block, or the output
         // would change with the chunking (the stream's, the shards').
