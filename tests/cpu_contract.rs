@@ -293,7 +293,18 @@ fn ggx_local_frame_within_the_rule_where_ds_slope_is_steepest() {
             tally.lanes
         );
         let worst = judge(&format!("rows on {isa}"), &batch, &mats, &out, &reference);
-        assert!(worst <= 1e-5, "{isa}: largest relative error {worst:.2e}");
+        // The bound the guard is built on: its budget for D plus ~45u of the f32 terms'
+        // own arithmetic (measured 1.3e-6; 1.5e-5 with the guard off).
+        let bound =
+            vkbrdf::terms::d::ggx::LOCAL_FRAME_D_BUDGET + 45.0 * f64::from(f32::EPSILON) / 2.0;
+        assert!(
+            bound < 1e-5,
+            "the guard's bound {bound:.2e} leaves the rule's 1e-5"
+        );
+        assert!(
+            worst <= bound,
+            "{isa}: largest relative error {worst:.2e} above {bound:.2e}"
+        );
         // Each material's lanes in the local form: the +z rows' bits.
         for mi in 0..mats.len() {
             let picked: Vec<usize> = (0..local.len()).filter(|&r| local[r].1 == mi).collect();

@@ -437,15 +437,8 @@ impl Deferred {
             if out[0].rescue[k] {
                 rescue(batch, m, row, j, w, counts);
                 tally.rescued += 1;
-                continue;
-            }
-            for ch in 0..3 {
-                w.brdf[j * 3 + ch] = out[0].brdf[ch][k];
-            }
-            if let Some(t) = w.terms.as_deref_mut() {
-                for c in 0..TERM_COLUMNS {
-                    t[j * TERM_COLUMNS + c] = out[0].terms[c][k];
-                }
+            } else {
+                write_lane(&out[0], k, j, w);
             }
         }
         self.n = 0;
@@ -606,14 +599,20 @@ fn write_block(out: &Outputs, j: usize, n: usize, w: &mut Work) {
         }
     } else {
         for k in 0..n {
-            for ch in 0..3 {
-                w.brdf[(j + k) * 3 + ch] = out.brdf[ch][k];
-            }
-            if let Some(t) = w.terms.as_deref_mut() {
-                for c in 0..TERM_COLUMNS {
-                    t[(j + k) * TERM_COLUMNS + c] = out.terms[c][k];
-                }
-            }
+            write_lane(out, k, j + k, w);
+        }
+    }
+}
+
+/// Lane `k` of `out` into output position `j`.
+#[inline(always)]
+fn write_lane(out: &Outputs, k: usize, j: usize, w: &mut Work) {
+    for ch in 0..3 {
+        w.brdf[j * 3 + ch] = out.brdf[ch][k];
+    }
+    if let Some(t) = w.terms.as_deref_mut() {
+        for c in 0..TERM_COLUMNS {
+            t[j * TERM_COLUMNS + c] = out.terms[c][k];
         }
     }
 }

@@ -147,18 +147,24 @@ pub struct Outputs {
 }
 
 impl Outputs {
-    /// Whether any lane is flagged for rescue: one 16-byte test instead of a branch a lane
-    /// (the per-lane loop cost about 5 % of a microfacet block).
+    /// Whether any lane is flagged for rescue ([`any`]).
     #[inline(always)]
     pub fn any_rescue(&self) -> bool {
-        u128::from_ne_bytes(self.rescue.map(u8::from)) != 0
+        any(&self.rescue)
     }
 
-    /// Whether any lane was left to the f64 frame ([`Outputs::slow`]), as [`Outputs::any_rescue`].
+    /// Whether any lane was left to the f64 frame ([`Outputs::slow`], [`any`]).
     #[inline(always)]
     pub fn any_slow(&self) -> bool {
-        u128::from_ne_bytes(self.slow.map(u8::from)) != 0
+        any(&self.slow)
     }
+}
+
+/// Whether any of a block's flags is set: one 16-byte test instead of a branch a lane (the
+/// per-lane loop cost about 5 % of a microfacet block).
+#[inline(always)]
+pub fn any(flags: &[bool; LANES]) -> bool {
+    u128::from_ne_bytes(flags.map(u8::from)) != 0
 }
 
 impl Default for Outputs {
@@ -347,24 +353,23 @@ pub fn microfacet_block<const D: u8, const G: u8, const F: u8, const Z: bool>(
         // (0, 0, 1) (so that both forms keep giving the same bits); a block computes only
         // the frames its lanes take.
         let ggx = const { matches!(DistributionKind::from_code(D), DistributionKind::Ggx) };
-        let mode = if !ggx {
+        // Which lanes have N = +z (every lane of the local form).
+        let z: [bool; LANES] = if Z || !ggx {
+            [Z; LANES]
+        } else {
+            std::array::from_fn(|k| inp.v[6][k] == 0.0 && inp.v[7][k] == 0.0 && inp.v[8][k] == 1.0)
+        };
+        let mode = if !ggx || !any(&z) {
             FRAME_GENERAL
-        } else if Z {
+        } else if !z.contains(&false) {
             FRAME_LOCAL
         } else {
-            let z: [bool; LANES] = std::array::from_fn(|k| n_is_z(inp, k));
-            if !z.contains(&false) {
-                FRAME_LOCAL
-            } else if z.contains(&true) {
-                FRAME_EACH
-            } else {
-                FRAME_GENERAL
-            }
+            FRAME_EACH
         };
         match mode {
-            FRAME_LOCAL => frames::<Z, FRAME_LOCAL>(p, inp, &mut fs, &mut ok, &mut slow),
-            FRAME_EACH => frames::<Z, FRAME_EACH>(p, inp, &mut fs, &mut ok, &mut slow),
-            _ => frames::<Z, FRAME_GENERAL>(p, inp, &mut fs, &mut ok, &mut slow),
+            FRAME_LOCAL => frames::<Z, FRAME_LOCAL>(p, inp, &z, &mut fs, &mut ok, &mut slow),
+            FRAME_EACH => frames::<Z, FRAME_EACH>(p, inp, &z, &mut fs, &mut ok, &mut slow),
+            _ => frames::<Z, FRAME_GENERAL>(p, inp, &z, &mut fs, &mut ok, &mut slow),
         }
         // Two loops, so that the one without terms divides nothing out.
         let lane = |k: usize| {
@@ -400,7 +405,7 @@ pub fn microfacet_block<const D: u8, const G: u8, const F: u8, const Z: bool>(
     }
     // Every lane of a material without the f32 frame is "slow": none is left to a caller.
     out.slow = [false; LANES];
-    if u128::from_ne_bytes(slow.map(u8::from)) != 0 {
+    if any(&slow) {
         // The lanes the f32 frame cannot serve take the f64 frame's results, lane by lane:
         // what a lane gets must not depend on its neighbours in the block, or the output
         // would change with the chunking (the stream's, the shards').
@@ -425,21 +430,16 @@ const FRAME_GENERAL: u8 = 0;
 const FRAME_LOCAL: u8 = 1;
 const FRAME_EACH: u8 = 2;
 
-/// Whether lane `k`'s N is exactly (0, 0, 1) (`-0` components included).
-#[inline(always)]
-fn n_is_z(inp: &Inputs, k: usize) -> bool {
-    inp.v[6][k] == 0.0 && inp.v[7][k] == 0.0 && inp.v[8][k] == 1.0
-}
-
 /// The f32 frames of a block into `fs` (structure of arrays) and `ok`, and the lanes that
 /// must take the f64 frame into `slow`: `MODE` [`FRAME_GENERAL`] takes [`frame`] in every
 /// lane, [`FRAME_LOCAL`] [`frame_local32`] (GGX lanes with N = +z, each certified by D's
 /// test `ggx::local_frame_ok` or sent to the f64 frame), [`FRAME_EACH`] whichever of the
-/// two the lane's N asks for.
+/// two the lane's N asks for (`z`: N is exactly (0, 0, 1), `-0` components included).
 #[inline(always)]
 fn frames<const Z: bool, const MODE: u8>(
     p: &Params,
     inp: &Inputs,
+    z: &[bool; LANES],
     fs: &mut [[f32; LANES]; 8],
     ok: &mut [bool; LANES],
     slow: &mut [bool; LANES],
@@ -449,8 +449,8 @@ fn frames<const Z: bool, const MODE: u8>(
         let (fr, local) = match MODE {
             FRAME_LOCAL => (frame_local32(&x), true),
             FRAME_EACH => {
-                let (a, b, z) = (frame_local32(&x), frame::<Z>(&x), n_is_z(inp, k));
-                (if z { a } else { b }, z)
+                let (a, b) = (frame_local32(&x), frame::<Z>(&x));
+                (if z[k] { a } else { b }, z[k])
             }
             _ => (frame::<Z>(&x), false),
         };
