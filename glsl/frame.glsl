@@ -78,6 +78,30 @@ uint make_frame(Row r, GpuMaterial m, out Frame f) {
     }
 #endif
 #if defined(HAS_FLOAT64)
+#if !defined(NO_LOCAL_FRAME)
+    // Rows with N exactly +z (the local shading frame; the slices' generated rows) skip N's
+    // normalisation and the products with n: the same values, faster (docs/VULKAN.md, "The
+    // local frame"). Anisotropic materials keep the general frame, whose tangent frame
+    // needs n. NO_LOCAL_FRAME (a kernel_time variant) turns it off.
+    bool isotropic = true;
+#if defined(HAS_ANISOTROPIC)
+    isotropic = !is_anisotropic(m);
+#endif
+    if (isotropic && r.n_bits == LOCAL_N_BITS) {
+#if defined(HAS_COOK_TORRANCE) && defined(HAS_D_GGX) && !defined(NO_LOCAL32_FRAME)
+        // GGX's lanes in f32 where D's slope certifies it (frame_scalars_local32). Not with
+        // the dielectric Fresnel term, which reads c_exact near total internal reflection.
+        if (material_model(m) == MODEL_COOK_TORRANCE && material_distribution(m) == DIST_GGX
+            && material_fresnel(m) != FRESNEL_DIELECTRIC) {
+            uint status = frame_scalars_local32(r, m, f);
+            if (status != STATUS_UNCERTIFIED) {
+                return status;
+            }
+        }
+#endif
+        return frame_scalars_f64_local(r, m, f);
+    }
+#endif
     return frame_scalars_f64(r, m, f);
 #else
     return frame_scalars_f32(r, m, f);

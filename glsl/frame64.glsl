@@ -10,6 +10,7 @@
 #include "frame_fields.glsl"
 #include "material.glsl"
 #include "input.glsl"
+#include "terms.glsl"
 
 #if defined(HAS_FLOAT64)
 
@@ -68,6 +69,137 @@ dvec3 unit64(uvec3 b) {
     return d * rsqrt64(dot(d, d));
 }
 
+// The cosines into f, and the horizon test on the f64 cosines, as the reference decides
+// it: a cosine below 7e-46 rounds to 0 in f32, and testing the f32 value put such tuples
+// below the horizon while the reference evaluates them (FORMULAS.md §1: every
+// representable cosine). True when both are above the horizon.
+bool cosines_f64(double cos_i, double cos_o, inout Frame f) {
+    f.cos_i = f32_of(cos_i);
+    f.cos_o = f32_of(cos_o);
+    f.cos_i_exact = cos_i;
+    f.cos_o_exact = cos_o;
+    return !(cos_i <= 0.0 || cos_o <= 0.0);
+}
+
+// h = normalize(l + v), cos_h and c into f, from unit l, v above the horizon (|l + v| >=
+// cos_i + cos_o > 0, so h is well defined); returns h. cos_h = (cos_i + cos_o)/|l + v| and
+// c = |l + v|/2: see frame32.glsl.
+dvec3 half_vector_f64(dvec3 dl, dvec3 dv, double cos_i, double cos_o, inout Frame f) {
+    dvec3 lv = dl + dv;
+    double q = dot(lv, lv);
+    double inv_len = rsqrt64(q);
+    dvec3 h = lv * inv_len;
+    f.h = f32_of(h);
+    f.cos_h_exact = (cos_i + cos_o) * inv_len;
+    double len = q * inv_len;
+    f.cos_h = f32_of(f.cos_h_exact);
+    f.c = f32_of(0.5 * len);
+    f.c_exact = 0.5 * len;
+    return h;
+}
+
+#if defined(HAS_PHONG)
+// Phong's r.v and |r x v|^2 into f, for the mirror direction r of l.
+void phong_f64(dvec3 rr, dvec3 dv, inout Frame f) {
+    dvec3 rxv = cross(rr, dv);
+    f.rv = f32_of(dot(rr, dv));
+    f.sin2_rv = f32_of(dot(rxv, rxv));
+}
+#endif
+
+// N given as exactly (0, 0, 1): the local shading frame, which the peers and the bench's
+// scenarios use. make_frame sends such rows of isotropic materials to
+// frame_scalars_f64_local.
+const uvec3 LOCAL_N_BITS = uvec3(0u, 0u, 0x3f800000u);
+
+// frame_scalars_f64 for n = +z exactly: the same scalars (to f64's rounding before their
+// one rounding to f32) without N's normalisation and the products with n, which reduce to
+// components: cos_i = l.z, |n x l|^2 = l.x^2 + l.y^2, |n x h|^2 = h.x^2 + h.y^2, and
+// Phong's r = 2 cos_i n - l = (-l.x, -l.y, l.z).
+uint frame_scalars_f64_local(Row r, GpuMaterial m, inout Frame f) {
+    dvec3 dl = unit64(r.l_bits), dv = unit64(r.v_bits);
+    if (!cosines_f64(dl.z, dv.z, f)) {
+        return STATUS_BELOW_HORIZON;
+    }
+    dvec3 h = half_vector_f64(dl, dv, dl.z, dv.z, f);
+    f.sin2_h = f32_of(dot(h.xy, h.xy));
+#if defined(HAS_G_SMITH) || defined(HAS_G_SMITH_CORRELATED) || defined(HAS_G_SMITH_FAST) \
+    || defined(HAS_G_SCHLICK_SMITH) || defined(HAS_HTSG)
+    f.sin2_i = f32_of(dot(dl.xy, dl.xy));
+    f.sin2_o = f32_of(dot(dv.xy, dv.xy));
+#endif
+#if defined(HAS_PHONG)
+    if (material_model(m) == MODEL_PHONG) {
+        phong_f64(dvec3(-dl.xy, dl.z), dv, f);
+    }
+#endif
+    return STATUS_VALID;
+}
+
+#if defined(HAS_COOK_TORRANCE) && defined(HAS_D_GGX) && !defined(NO_LOCAL32_FRAME)
+// frame_scalars_local32's answer for a lane it does not certify: the f64 frame takes it.
+const uint STATUS_UNCERTIFIED = 3u;
+
+// Below this c the local f32 frame leaves the lane to the f64 one: its c is within
+// u (3 + 1/c) (docs/VULKAN.md, "The local f32 frame"), at most 19u here, which
+// Cook-Torrance's G and the Fresnel terms read with a log-slope of about 1.
+const float LOCAL32_MIN_C = 0.0625;
+// Below this cos_i, cos_o or cos_h, too: the CPU engine's GRAZING (src/cpu/frame.rs),
+// where the models' 1/cos factors stay far inside f32's range and the TINY_COS branches,
+// which read the f64 cosines, are never taken.
+const float LOCAL32_MIN_COS = 1e-4;
+
+// 1/|x| of an f32 vector to within u(1 + 1e-6), as f32: the squared length in f64 (exact
+// products, sums to f64's rounding), float32's inversesqrt (within 2 ulp, Vulkan's
+// precision table, plus the argument's rounding: e <= 5u) and one Newton step in f64
+// (1.5 e^2 < 2e-13), then one rounding. Squared lengths outside [1e-30, 1e30] give 0, and
+// the cosine tests send the lane to the f64 frame.
+float inv_length_local32(vec3 x) {
+    dvec3 d = dvec3(x);
+    double q = dot(d, d);
+    if (!(q >= 1e-30 && q <= 1e30)) {
+        return 0.0;
+    }
+    double y = double(inversesqrt(float(q)));
+    return float(y * (1.5 - 0.5 * q * y * y));
+}
+
+// The frame of a GGX Cook-Torrance lane with N = +z in f32, where D's certificate
+// (terms.glsl, ggx_local_frame_ok) and the cosine tests pass; else STATUS_UNCERTIFIED and
+// the caller takes the f64 frame. l and v are the inputs times their f32 scales
+// (inv_length_local32), so h = l + v turns by at most u (2/c + 1) radians from the exact
+// h; h's length, cos_h, |n x h|^2 and c are formed from that sum in f64 and rounded once.
+// The bound of every quantity, and what the rule keeps of 1e-5: docs/VULKAN.md.
+uint frame_scalars_local32(Row r, GpuMaterial m, inout Frame f) {
+    vec3 l = r.l * inv_length_local32(r.l), v = r.v * inv_length_local32(r.v);
+    // `>=` is false for NaN: no such lane passes.
+    if (!(l.z >= LOCAL32_MIN_COS && v.z >= LOCAL32_MIN_COS)) {
+        return STATUS_UNCERTIFIED;
+    }
+    dvec3 h = dvec3(l + v);
+    double q = dot(h, h);
+    double y = double(inversesqrt(float(q))); // q in [0.0001^2, 4]: see inv_length_local32
+    double inv_len = y * (1.5 - 0.5 * q * y * y);
+    f.cos_h = float(h.z * inv_len);
+    f.sin2_h = float(dot(h.xy, h.xy) * (inv_len * inv_len));
+    f.c = float(0.5 * q * inv_len);
+    if (!(f.cos_h >= LOCAL32_MIN_COS && f.c >= LOCAL32_MIN_C
+          && ggx_local_frame_ok(f.cos_h, f.sin2_h, f.c, material_roughness2(m).x))) {
+        return STATUS_UNCERTIFIED;
+    }
+    f.h = vec3(h * inv_len);
+    f.cos_i = l.z;
+    f.cos_o = v.z;
+    f.cos_i_exact = double(l.z);
+    f.cos_o_exact = double(v.z);
+    f.cos_h_exact = double(f.cos_h);
+    f.c_exact = 0.5 * q * inv_len;
+    f.sin2_i = dot(l.xy, l.xy);
+    f.sin2_o = dot(v.xy, v.xy);
+    return STATUS_VALID;
+}
+#endif
+
 // The scalars of the frame for a tuple whose l, v, n (and tangent) make_frame has found
 // valid, and the horizon test: STATUS_VALID or STATUS_BELOW_HORIZON.
 uint frame_scalars_f64(Row r, GpuMaterial m, inout Frame f) {
@@ -86,28 +218,10 @@ uint frame_scalars_f64(Row r, GpuMaterial m, inout Frame f) {
     // (examples/kernel_time.rs, folded materials; docs/VULKAN.md).
     dvec3 dn = unit64(r.n_bits), dl = unit64(r.l_bits), dv = unit64(r.v_bits);
     double cos_i = dot(dn, dl), cos_o = dot(dn, dv);
-    f.cos_i = f32_of(cos_i);
-    f.cos_o = f32_of(cos_o);
-    f.cos_i_exact = cos_i;
-    f.cos_o_exact = cos_o;
-    // The horizon test on the f64 cosines, as the reference decides it: a cosine below
-    // 7e-46 rounds to 0 in f32, and testing the f32 value put such tuples below the horizon
-    // while the reference evaluates them (FORMULAS.md §1: every representable cosine).
-    if (cos_i <= 0.0 || cos_o <= 0.0) {
+    if (!cosines_f64(cos_i, cos_o, f)) {
         return STATUS_BELOW_HORIZON;
     }
-    // |l + v| >= cos_i + cos_o > 0 here, so h is well defined.
-    dvec3 lv = dl + dv;
-    double q = dot(lv, lv);
-    double inv_len = rsqrt64(q);
-    dvec3 h = lv * inv_len;
-    f.h = f32_of(h);
-    // cos_h = (cos_i + cos_o)/|l + v| and c = |l + v|/2: see frame32.glsl.
-    f.cos_h_exact = (cos_i + cos_o) * inv_len;
-    double len = q * inv_len;
-    f.cos_h = f32_of(f.cos_h_exact);
-    f.c = f32_of(0.5 * len);
-    f.c_exact = 0.5 * len;
+    dvec3 h = half_vector_f64(dl, dv, cos_i, cos_o, f);
     dvec3 nxh = cross(dn, h);
     f.sin2_h = f32_of(dot(nxh, nxh));
 #if defined(HAS_ANISOTROPIC) && defined(HAS_TANGENTS)
@@ -132,10 +246,7 @@ uint frame_scalars_f64(Row r, GpuMaterial m, inout Frame f) {
 #endif
 #if defined(HAS_PHONG)
     if (material_model(m) == MODEL_PHONG) {
-        dvec3 rr = 2.0 * cos_i * dn - dl;
-        dvec3 rxv = cross(rr, dv);
-        f.rv = f32_of(dot(rr, dv));
-        f.sin2_rv = f32_of(dot(rxv, rxv));
+        phong_f64(2.0 * cos_i * dn - dl, dv, f);
     }
 #endif
     return STATUS_VALID;

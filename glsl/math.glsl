@@ -17,6 +17,7 @@ const float LN2_LO = 1.42860682030941723212e-6; // ln 2 - LN2_HI
 const float LOG2E = 1.44269504088896340736;
 const float FLT_MAX = 3.40282347e38; // the largest finite float32: outputs saturate to it
 const float FLT_MIN = 1.17549435e-38; // the smallest normal float32: GPUs flush below it
+const float F32_UNIT_ROUNDOFF = 5.96046448e-8; // u = 2^-24: a correctly rounded result is within u relative
 
 // ------------------------------------------------------------------ overflow (FORMULAS.md §1)
 

@@ -134,6 +134,24 @@ float ggx_d(float slope2, float cos_h, float norm) {
 }
 // No f64 or pair form: D >= 1/(pi m^2 (1/m^2)^2) > 1e-15 for roughness in [1e-7, 1e4], a
 // normal float32 at any cosine.
+
+// The certificate of the kernel's local f32 frame (frame64.glsl, frame_scalars_local32):
+// whether D moves by at most GGX_LOCAL_FRAME_D_BUDGET (relative) when h turns by that
+// frame's bound delta = u (2/c + 1) radians (docs/VULKAN.md, "The local f32 frame"). D's
+// slope |d ln D/d theta_h| = 4 |1 - m^2| sin cos/s, s = m^2 cos^2 + sin^2 (at most
+// 2 |1 - m^2|/m, at tan theta_h = m); slope x delta <= B squared and times c^2, so that no
+// root or division is taken: (4 |1 - m^2| u/B)^2 sin^2 cos^2 (2 + c)^2 <= (s c)^2. The
+// operands are the frame's own f32 values, whose few-u errors move the test by a few u of
+// B, not the bound. The CPU engine's test is terms/d/ggx.rs's local_frame_ok (its f32
+// frame turns h by up to u (4.5/c + 1)).
+const float GGX_LOCAL_FRAME_D_BUDGET = 4e-6;
+bool ggx_local_frame_ok(float cos_h, float sin2_h, float c, float m2) {
+    float k = 4.0 * abs(1.0 - m2) * (F32_UNIT_ROUNDOFF / GGX_LOCAL_FRAME_D_BUDGET);
+    float cos2 = cos_h * cos_h;
+    float s = m2 * cos2 + sin2_h;
+    float a = 2.0 + c;
+    return (k * k) * (sin2_h * cos2) * (a * a) <= (s * c) * (s * c);
+}
 #endif
 
 #if defined(HAS_LAMBDA_GGX)

@@ -585,7 +585,17 @@ pub fn generate(c: &Combination, tuples: usize, seed: u64) -> Result<Batch<'stat
     };
     for i in 0..tuples {
         let mi = i % c.materials.len();
-        let n = unit(&mut rng);
+        // Every fourth row in the local shading frame, N exactly (0, 0, 1) and unscaled: the
+        // form the peers and the bench use, which the engines' local frames take
+        // (`frame_local32` on the CPU, `frame_scalars_f64_local` in the kernel). The draw is
+        // made all the same, so that the other rows do not depend on this choice.
+        let local_row = i % 4 == 3;
+        let n = if local_row {
+            let _ = unit(&mut rng);
+            [0.0, 0.0, 1.0]
+        } else {
+            unit(&mut rng)
+        };
         let t0 = normalize_direct(cross(
             n,
             if n[0].abs() < 0.9 {
@@ -628,7 +638,8 @@ pub fn generate(c: &Combination, tuples: usize, seed: u64) -> Result<Batch<'stat
         };
         data.extend(scale(&mut rng, l));
         data.extend(scale(&mut rng, v));
-        data.extend(scale(&mut rng, n));
+        let n_scaled = scale(&mut rng, n);
+        data.extend(if local_row { [0.0, 0.0, 1.0] } else { n_scaled });
         data.push(mi as f32);
         if c.anisotropic {
             let t = loop {

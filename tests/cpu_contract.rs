@@ -227,51 +227,26 @@ fn ggx_local_frame_within_the_rule_where_ds_slope_is_steepest() {
     let mut rows = Vec::new();
     let mut i = 0usize;
     for (mi, m) in m_all.into_iter().enumerate() {
-        for t in [0.5 * m, m, 2.0 * m] {
-            let th = t.atan();
-            for phi in [0.3f64, 1.9, 4.0] {
-                let h = [th.sin() * phi.cos(), th.sin() * phi.sin(), th.cos()];
-                // Two unit vectors perpendicular to h.
-                let a = [-phi.sin(), phi.cos(), 0.0];
-                let b = [
-                    h[1] * a[2] - h[2] * a[1],
-                    h[2] * a[0] - h[0] * a[2],
-                    h[0] * a[1] - h[1] * a[0],
-                ];
-                for k in 0..40 {
-                    let c =
-                        f64::from(FAST_MIN_C) + (1.0 - f64::from(FAST_MIN_C)) * f64::from(k) / 39.0;
-                    let (cd, sd) = (c, (1.0 - c * c).sqrt());
-                    for psi in [0.2f64, 1.3, 2.6] {
-                        let w: [f64; 3] =
-                            std::array::from_fn(|j| psi.cos() * a[j] + psi.sin() * b[j]);
-                        let l: [f64; 3] = std::array::from_fn(|j| cd * h[j] + sd * w[j]);
-                        let v: [f64; 3] = std::array::from_fn(|j| cd * h[j] - sd * w[j]);
-                        if l[2] < 1e-3 || v[2] < 1e-3 {
-                            continue;
-                        }
-                        // Unnormalised inputs: the frame's lengths are part of its error.
-                        let scale = 1.0 + 0.37 * (i % 7) as f64;
-                        i += 1;
-                        let lv: Vec<f32> = l
-                            .iter()
-                            .map(|x| (x * scale) as f32)
-                            .chain(v.iter().map(|&x| x as f32))
-                            .collect();
-                        for g in 0..3 {
-                            let material = (3 * mi + g) as f32;
-                            local.push((lv.clone(), 3 * mi + g));
-                            rows.extend_from_slice(&lv);
-                            // N = +z in every other row, tilted (and not unit) in the others.
-                            if rows.len() / 10 % 2 == 0 {
-                                rows.extend([0.0f32, 0.0, 1.0]);
-                            } else {
-                                rows.extend([0.03f32, -0.02, 1.7]);
-                            }
-                            rows.push(material);
-                        }
-                    }
+        for (l, v) in common::steepest::ggx_pairs(m, f64::from(FAST_MIN_C)) {
+            // Unnormalised inputs: the frame's lengths are part of its error.
+            let scale = 1.0 + 0.37 * (i % 7) as f64;
+            i += 1;
+            let lv: Vec<f32> = l
+                .iter()
+                .map(|x| (x * scale) as f32)
+                .chain(v.iter().map(|&x| x as f32))
+                .collect();
+            for g in 0..3 {
+                let material = (3 * mi + g) as f32;
+                local.push((lv.clone(), 3 * mi + g));
+                rows.extend_from_slice(&lv);
+                // N = +z in every other row, tilted (and not unit) in the others.
+                if rows.len() / 10 % 2 == 0 {
+                    rows.extend([0.0f32, 0.0, 1.0]);
+                } else {
+                    rows.extend([0.03f32, -0.02, 1.7]);
                 }
+                rows.push(material);
             }
         }
     }

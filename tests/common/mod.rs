@@ -5,6 +5,7 @@ pub mod combinations;
 pub mod npy;
 pub mod quadrature;
 pub mod rule;
+pub mod steepest;
 pub mod strategies;
 
 use std::process::{Command, Output};
@@ -16,10 +17,14 @@ use vkbrdf::reference::CpuReference;
 /// exists. With `VKBRDF_REQUIRE_VULKAN=1` (CI) a missing device panics: Vulkan tests never
 /// pass silently.
 pub fn vulkan() -> Option<VulkanBackend> {
-    let options = VulkanOptions {
+    vulkan_with(VulkanOptions {
         validation: true,
         ..VulkanOptions::default()
-    };
+    })
+}
+
+/// [`vulkan`] with the given options.
+pub fn vulkan_with(options: VulkanOptions) -> Option<VulkanBackend> {
     match VulkanBackend::new(DeviceSelector::from_env(), options) {
         Ok(b) => Some(b),
         Err(e) if std::env::var("VKBRDF_REQUIRE_VULKAN").as_deref() == Ok("1") => {

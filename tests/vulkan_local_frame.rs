@@ -1,0 +1,108 @@
+//! The kernel's local f32 frame (glsl/frame64.glsl, `frame_scalars_local32`): GGX lanes
+//! with N = +z evaluated from f32 l, v where D's certificate (`ggx_local_frame_ok`) holds,
+//! the rest on the f64 frame. Tested where the certificate is hardest: h where D's slope is
+//! steepest (tan θ_h = m/2, m, 2m), c from 0.02 (below `LOCAL32_MIN_C`) to 1, unnormalised
+//! inputs, for the geometries and Fresnel terms that read c and the cosines.
+
+mod common;
+
+use vkbrdf::backend::{Backend, Request};
+use vkbrdf::batch::{memory_source, Batch};
+use vkbrdf::gpu::VulkanOptions;
+use vkbrdf::material::parse_materials;
+use vkbrdf::reference::CpuReference;
+
+/// Rows of N = +z where GGX's D is steepest (`common::steepest`), c from 0.02 (below
+/// `LOCAL32_MIN_C`) to 1, with unnormalised L and V, for `per_m` materials of each
+/// roughness of `m_all` (material `per_m · i + g` has roughness `m_all[i]`).
+fn steepest_rows(m_all: &[f64], per_m: usize) -> Vec<f32> {
+    let mut rows = Vec::new();
+    let mut i = 0usize;
+    for (mi, &m) in m_all.iter().enumerate() {
+        for (l, v) in common::steepest::ggx_pairs(m, 0.02) {
+            // Unnormalised inputs: the frame's lengths are part of its error.
+            let (sl, sv) = (1.0 + 0.37 * (i % 7) as f64, 0.6 + 0.29 * (i % 5) as f64);
+            i += 1;
+            for g in 0..per_m {
+                rows.extend(l.iter().map(|x| (x * sl) as f32));
+                rows.extend(v.iter().map(|x| (x * sv) as f32));
+                rows.extend([0.0f32, 0.0, 1.0, (per_m * mi + g) as f32]);
+            }
+        }
+    }
+    rows
+}
+
+#[test]
+fn ggx_local_f32_frame_within_its_bound_where_ds_slope_is_steepest() {
+    let m_all = [0.01, 0.05, 0.1, 0.3, 0.7, 1.5];
+    let kinds = [
+        (
+            "smith-correlated",
+            "fresnel = \"conductor\"\nior = [0.2, 0.9, 1.5]\nextinction = [3.0, 2.4, 1.9]",
+        ),
+        ("smith", "fresnel = \"schlick\"\nf0 = [0.04, 0.5, 0.9]"),
+        ("cook-torrance", "fresnel = \"none\""),
+        ("schlick-smith", "fresnel = \"schlick\"\nf0 = 0.04"),
+    ];
+    let mut toml = String::new();
+    for m in m_all {
+        for (geometry, fresnel) in kinds {
+            toml.push_str(&format!(
+                "[[material]]\nname = \"m{m}-{geometry}\"\nmodel = \"cook-torrance\"\n\
+                 distribution = \"ggx\"\ngeometry = \"{geometry}\"\nroughness = {m}\n{fresnel}\n"
+            ));
+        }
+    }
+    let mats = parse_materials(&toml, "ggx-local32").expect("materials");
+    let batch = Batch::new(
+        steepest_rows(&m_all, kinds.len()),
+        10,
+        mats.len(),
+        &memory_source(),
+    )
+    .expect("batch");
+    let request = Request { terms: true };
+    let reference = CpuReference::new()
+        .evaluate(&batch, &mats, &request)
+        .expect("reference");
+    let Some(mut gpu) = common::vulkan() else {
+        return;
+    };
+    if !gpu.float64_frame() {
+        eprintln!("the device has no f64 frame, so no local f32 frame either: nothing to test");
+        return;
+    }
+    let out = gpu.evaluate(&batch, &mats, &request).expect("vulkan");
+    let worst =
+        common::rule::assert_within_rule("local f32 frame", &batch, &mats, &out, &reference);
+    // The bound the certificate is built on (docs/VULKAN.md, "The local f32 frame"): its
+    // budget for D's turn plus 45u for the frame's other roundings and the f32 terms' own.
+    let bound = 4e-6 + 45.0 * f64::from(f32::EPSILON) / 2.0;
+    assert!(
+        worst <= bound,
+        "largest relative error {worst:.2e} above {bound:.2e}"
+    );
+    // Both frames ran: without the f32 frame (the f64 frame everywhere) some rows' bits
+    // change (the certified lanes) and others' do not (c below LOCAL32_MIN_C, steep slopes).
+    let mut f64_only = common::vulkan_with(VulkanOptions {
+        extra_defines: vec![("NO_LOCAL32_FRAME".into(), "1".into())],
+        ..VulkanOptions::default()
+    })
+    .expect("the same device");
+    let plain = f64_only
+        .evaluate(&batch, &mats, &request)
+        .expect("vulkan, f64 frame");
+    let rows_differ = (0..batch.len())
+        .filter(|&r| out.brdf[3 * r..3 * r + 3] != plain.brdf[3 * r..3 * r + 3])
+        .count();
+    assert!(
+        rows_differ > batch.len() / 4 && rows_differ < batch.len(),
+        "{rows_differ} of {} rows changed without the f32 frame",
+        batch.len()
+    );
+    eprintln!(
+        "{} rows, largest relative error {worst:.2e} (bound {bound:.2e}); {rows_differ} changed without the f32 frame",
+        batch.len()
+    );
+}
