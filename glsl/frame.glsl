@@ -11,6 +11,7 @@
 #include "input.glsl"
 #include "frame64.glsl"
 #include "frame32.glsl"
+#include "frame_local32.glsl"
 
 // Builds the frame of FORMULAS.md §1 and classifies the tuple. The invalid test comes first.
 uint make_frame(Row r, GpuMaterial m, out Frame f) {
@@ -77,28 +78,28 @@ uint make_frame(Row r, GpuMaterial m, out Frame f) {
 #endif
     }
 #endif
+    // Rows with N exactly +z (the local shading frame, and the rows the slices and tables
+    // generate) take a local frame: GGX's lanes the f32 one where D's slope certifies it
+    // (frame_local32.glsl), else, with f64, the f64 frame without N's normalisation and
+    // the products with n (frame_scalars_f64_local): the same values, faster
+    // (docs/VULKAN.md, "The local frames"). Anisotropic materials keep the general frame,
+    // whose tangent frame needs n. NO_LOCAL_FRAME and NO_LOCAL32_FRAME (kernel_time
+    // variants) turn them off.
+    bool local = r.n_bits == LOCAL_N_BITS;
+#if defined(HAS_ANISOTROPIC)
+    local = local && !is_anisotropic(m);
+#endif
+#if defined(HAS_LOCAL32_FRAME)
+    if (local && local32_material(m)) {
+        uint status = frame_scalars_local32(r, m, f);
+        if (status != STATUS_UNCERTIFIED) {
+            return status;
+        }
+    }
+#endif
 #if defined(HAS_FLOAT64)
 #if !defined(NO_LOCAL_FRAME)
-    // Rows with N exactly +z (the local shading frame; the slices' generated rows) skip N's
-    // normalisation and the products with n: the same values, faster (docs/VULKAN.md, "The
-    // local frame"). Anisotropic materials keep the general frame, whose tangent frame
-    // needs n. NO_LOCAL_FRAME (a kernel_time variant) turns it off.
-    bool isotropic = true;
-#if defined(HAS_ANISOTROPIC)
-    isotropic = !is_anisotropic(m);
-#endif
-    if (isotropic && r.n_bits == LOCAL_N_BITS) {
-#if defined(HAS_COOK_TORRANCE) && defined(HAS_D_GGX) && !defined(NO_LOCAL32_FRAME)
-        // GGX's lanes in f32 where D's slope certifies it (frame_scalars_local32). Not with
-        // the dielectric Fresnel term, which reads c_exact near total internal reflection.
-        if (material_model(m) == MODEL_COOK_TORRANCE && material_distribution(m) == DIST_GGX
-            && material_fresnel(m) != FRESNEL_DIELECTRIC) {
-            uint status = frame_scalars_local32(r, m, f);
-            if (status != STATUS_UNCERTIFIED) {
-                return status;
-            }
-        }
-#endif
+    if (local) {
         return frame_scalars_f64_local(r, m, f);
     }
 #endif

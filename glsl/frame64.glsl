@@ -10,7 +10,6 @@
 #include "frame_fields.glsl"
 #include "material.glsl"
 #include "input.glsl"
-#include "terms.glsl"
 
 #if defined(HAS_FLOAT64)
 
@@ -107,11 +106,6 @@ void phong_f64(dvec3 rr, dvec3 dv, inout Frame f) {
 }
 #endif
 
-// N given as exactly (0, 0, 1): the local shading frame, which the peers and the bench's
-// scenarios use. make_frame sends such rows of isotropic materials to
-// frame_scalars_f64_local.
-const uvec3 LOCAL_N_BITS = uvec3(0u, 0u, 0x3f800000u);
-
 // frame_scalars_f64 for n = +z exactly: the same scalars (to f64's rounding before their
 // one rounding to f32) without N's normalisation and the products with n, which reduce to
 // components: cos_i = l.z, |n x l|^2 = l.x^2 + l.y^2, |n x h|^2 = h.x^2 + h.y^2, and
@@ -135,70 +129,6 @@ uint frame_scalars_f64_local(Row r, GpuMaterial m, inout Frame f) {
 #endif
     return STATUS_VALID;
 }
-
-#if defined(HAS_COOK_TORRANCE) && defined(HAS_D_GGX) && !defined(NO_LOCAL32_FRAME)
-// frame_scalars_local32's answer for a lane it does not certify: the f64 frame takes it.
-const uint STATUS_UNCERTIFIED = 3u;
-
-// Below this c the local f32 frame leaves the lane to the f64 one: its c is within
-// u (3 + 1/c) (docs/VULKAN.md, "The local f32 frame"), at most 19u here, which
-// Cook-Torrance's G and the Fresnel terms read with a log-slope of about 1.
-const float LOCAL32_MIN_C = 0.0625;
-// Below this cos_i, cos_o or cos_h, too: the CPU engine's GRAZING (src/cpu/frame.rs),
-// where the models' 1/cos factors stay far inside f32's range and the TINY_COS branches,
-// which read the f64 cosines, are never taken.
-const float LOCAL32_MIN_COS = 1e-4;
-
-// 1/|x| of an f32 vector to within u(1 + 1e-6), as f32: the squared length in f64 (exact
-// products, sums to f64's rounding), float32's inversesqrt (within 2 ulp, Vulkan's
-// precision table, plus the argument's rounding: e <= 5u) and one Newton step in f64
-// (1.5 e^2 < 2e-13), then one rounding. Squared lengths outside [1e-30, 1e30] give 0, and
-// the cosine tests send the lane to the f64 frame.
-float inv_length_local32(vec3 x) {
-    dvec3 d = dvec3(x);
-    double q = dot(d, d);
-    if (!(q >= 1e-30 && q <= 1e30)) {
-        return 0.0;
-    }
-    double y = double(inversesqrt(float(q)));
-    return float(y * (1.5 - 0.5 * q * y * y));
-}
-
-// The frame of a GGX Cook-Torrance lane with N = +z in f32, where D's certificate
-// (terms.glsl, ggx_local_frame_ok) and the cosine tests pass; else STATUS_UNCERTIFIED and
-// the caller takes the f64 frame. l and v are the inputs times their f32 scales
-// (inv_length_local32), so h = l + v turns by at most u (2/c + 1) radians from the exact
-// h; h's length, cos_h, |n x h|^2 and c are formed from that sum in f64 and rounded once.
-// The bound of every quantity, and what the rule keeps of 1e-5: docs/VULKAN.md.
-uint frame_scalars_local32(Row r, GpuMaterial m, inout Frame f) {
-    vec3 l = r.l * inv_length_local32(r.l), v = r.v * inv_length_local32(r.v);
-    // `>=` is false for NaN: no such lane passes.
-    if (!(l.z >= LOCAL32_MIN_COS && v.z >= LOCAL32_MIN_COS)) {
-        return STATUS_UNCERTIFIED;
-    }
-    dvec3 h = dvec3(l + v);
-    double q = dot(h, h);
-    double y = double(inversesqrt(float(q))); // q in [0.0001^2, 4]: see inv_length_local32
-    double inv_len = y * (1.5 - 0.5 * q * y * y);
-    f.cos_h = float(h.z * inv_len);
-    f.sin2_h = float(dot(h.xy, h.xy) * (inv_len * inv_len));
-    f.c = float(0.5 * q * inv_len);
-    if (!(f.cos_h >= LOCAL32_MIN_COS && f.c >= LOCAL32_MIN_C
-          && ggx_local_frame_ok(f.cos_h, f.sin2_h, f.c, material_roughness2(m).x))) {
-        return STATUS_UNCERTIFIED;
-    }
-    f.h = vec3(h * inv_len);
-    f.cos_i = l.z;
-    f.cos_o = v.z;
-    f.cos_i_exact = double(l.z);
-    f.cos_o_exact = double(v.z);
-    f.cos_h_exact = double(f.cos_h);
-    f.c_exact = 0.5 * q * inv_len;
-    f.sin2_i = dot(l.xy, l.xy);
-    f.sin2_o = dot(v.xy, v.xy);
-    return STATUS_VALID;
-}
-#endif
 
 // The scalars of the frame for a tuple whose l, v, n (and tangent) make_frame has found
 // valid, and the horizon test: STATUS_VALID or STATUS_BELOW_HORIZON.

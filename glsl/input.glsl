@@ -26,6 +26,11 @@ struct Row {
     uvec3 l_bits, v_bits, n_bits, t_bits;
 };
 
+// The bits of N given as exactly (0, 0, 1): the local shading frame, which the peers and
+// the bench's scenarios use and the slices and tables generate. make_frame sends such rows
+// of isotropic materials to the local frames.
+const uvec3 LOCAL_N_BITS = uvec3(0u, 0u, 0x3f800000u);
+
 // The 4 words at offset `off` (0..3) of the 8 words a, b.
 uvec4 window4(uvec4 a, uvec4 b, uint off) {
     return off == 0u ? a

@@ -56,6 +56,10 @@ pub const SOURCES: &[(&str, &str)] = &[
     ("frame64.glsl", include_str!("../../glsl/frame64.glsl")),
     ("frame32.glsl", include_str!("../../glsl/frame32.glsl")),
     (
+        "frame_local32.glsl",
+        include_str!("../../glsl/frame_local32.glsl"),
+    ),
+    (
         "integrators.glsl",
         include_str!("../../glsl/integrators.glsl"),
     ),
