@@ -30,13 +30,18 @@
 //! used) is reported with its inputs.
 
 use crate::backend::{Backend, Request, TERM_COLUMNS};
-use crate::batch::{Batch, Tuple, COLUMNS_PLAIN, COLUMNS_TANGENT};
+use crate::batch::{Batch, Tuple};
 use crate::error::Result;
 use crate::material::{
     legality, parse_materials, Convention, DistributionKind, FresnelKind, Geometry, Material,
 };
 use crate::reference::{self, Status};
+mod rule;
 pub mod spectral;
+mod tuples;
+use rule::columns_of;
+pub use rule::{allowed_error, f32_sensitivity, CONDITIONING_FACTOR, FLOOR, RELATIVE_TOLERANCE};
+pub use tuples::MIN_COS;
 
 /// The materials whose spectral rows follow the combinations ([`spectral::run`]): every
 /// spectral preset ([`crate::material::presets::SPECTRAL`]) and the RGB `shiny-plastic`
@@ -54,16 +59,9 @@ pub fn spectral_name(material: &str) -> String {
 }
 
 use crate::stats::{relative_error, ErrorStats};
-use crate::vector::{cross, dot, normalize_direct};
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64Mcg;
 use std::fmt;
-
-/// Absolute floor of the relative error: below it an error counts as absolute. BRDF values
-/// and D below 1e-6 sr⁻¹ (G, F, K below 1e-6) are far beneath anything visible, and a
-/// value there can only be reached in an exponential tail whose relative error grows with
-/// the exponent (see [`tolerance`]).
-pub const FLOOR: f64 = 1e-6;
 
 /// Materials (random parameter draws) per combination.
 pub const MATERIALS_PER_COMBINATION: usize = 4;
@@ -74,9 +72,6 @@ pub const MIN_ROUGHNESS: f64 = 0.01;
 /// Largest exponent generated: the Blinn lobe of exponent `e` is about as wide as a
 /// Beckmann lobe of `m = sqrt(2/(e+2))`, so 20000 matches [`MIN_ROUGHNESS`].
 pub const MAX_EXPONENT: f64 = 20000.0;
-
-/// Smallest `cos_i`, `cos_o` generated.
-pub const MIN_COS: f64 = 1e-3;
 
 /// The column names, in comparison order.
 pub const COLUMNS: [&str; 9] = [
@@ -202,12 +197,6 @@ impl CombinationReport {
 pub fn tolerance() -> &'static str {
     "1e-5 × max(|ref|, 1e-6) + 4 × S_in (sensitivity to one rounding of the f32 inputs)"
 }
-
-/// The relative part of the tolerance (see [`tolerance`]).
-pub const RELATIVE_TOLERANCE: f64 = 1e-5;
-
-/// Multiple of [`f32_sensitivity`] allowed on top of the relative part (see [`tolerance`]).
-pub const CONDITIONING_FACTOR: f64 = 4.0;
 
 /// Options of a conformance run.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -536,207 +525,10 @@ fn fnv1a(s: &str) -> u64 {
     })
 }
 
-fn unit(rng: &mut Pcg64Mcg) -> [f64; 3] {
-    crate::sample::unit_vector(rng)
-}
-
-/// `x·t + y·b + z·n`.
-fn local(t: [f64; 3], b: [f64; 3], n: [f64; 3], x: f64, y: f64, z: f64) -> [f64; 3] {
-    std::array::from_fn(|k| x * t[k] + y * b[k] + z * n[k])
-}
-
-/// A direction of the hemisphere around n with `cos ≥ MIN_COS`, uniform in solid angle.
-fn hemisphere(rng: &mut Pcg64Mcg, t: [f64; 3], b: [f64; 3], n: [f64; 3]) -> [f64; 3] {
-    let z: f64 = rng.random_range(MIN_COS..1.0);
-    let phi: f64 = rng.random_range(0.0..std::f64::consts::TAU);
-    let r = (1.0 - z * z).sqrt();
-    local(t, b, n, r * phi.cos(), r * phi.sin(), z)
-}
-
-/// The angular width of a material's specular lobe (radians), used to aim half vectors.
-fn lobe_width(m: &Material) -> f64 {
-    use crate::material::Model;
-    use crate::terms::d::exponent_lobe_width;
-    match &m.model {
-        Model::Lambert | Model::Measured(_) => 1.0,
-        Model::Phong { exponent } | Model::BlinnPhong { exponent } | Model::Rtr { exponent } => {
-            exponent_lobe_width(*exponent)
-        }
-        Model::Ward { roughness } => roughness.xy().0.max(roughness.xy().1),
-        Model::CookTorrance(ct) => ct.distribution.lobe_width(),
-        // The rough limit's Beckmann m, or the diffraction width 1/T of a smooth surface.
-        Model::Htsg(p) => crate::terms::htsg::beckmann_m(p)
-            .max(p.wavelengths[1] / (2.0 * std::f64::consts::PI * p.tau)),
-    }
-}
-
-/// `tuples` rows for `c` (material `i % MATERIALS_PER_COMBINATION` on row `i`), seeded.
+/// `tuples` rows for `c` (material `i % MATERIALS_PER_COMBINATION` on row `i`), seeded
+/// (`check/tuples.rs`: where each term is hardest).
 pub fn generate(c: &Combination, tuples: usize, seed: u64) -> Result<Batch<'static>> {
-    let mut rng = Pcg64Mcg::seed_from_u64(seed.wrapping_add(0x5851_f42d_4c95_7f2d));
-    let cols = if c.anisotropic {
-        COLUMNS_TANGENT
-    } else {
-        COLUMNS_PLAIN
-    };
-    let mut data = Vec::with_capacity(tuples * cols);
-    let scale = |rng: &mut Pcg64Mcg, v: [f64; 3]| {
-        let s = 10f64.powf(rng.random_range(-2.0..2.0));
-        v.map(|x| (x * s) as f32)
-    };
-    for i in 0..tuples {
-        let mi = i % c.materials.len();
-        // Every fourth row in the local shading frame, N exactly (0, 0, 1) and unscaled: the
-        // form the peers and the bench use, which the engines' local frames take
-        // (`frame_local32` on the CPU, `frame_scalars_f64_local` in the kernel). The draw is
-        // made all the same, so that the other rows do not depend on this choice.
-        let local_row = i % 4 == 3;
-        let n = if local_row {
-            let _ = unit(&mut rng);
-            [0.0, 0.0, 1.0]
-        } else {
-            unit(&mut rng)
-        };
-        let t0 = normalize_direct(cross(
-            n,
-            if n[0].abs() < 0.9 {
-                [1.0, 0.0, 0.0]
-            } else {
-                [0.0, 1.0, 0.0]
-            },
-        ));
-        let b0 = cross(n, t0);
-        let v = hemisphere(&mut rng, t0, b0, n);
-        let l = if i % 2 == 0 {
-            hemisphere(&mut rng, t0, b0, n)
-        } else {
-            // Aim h around n at the lobe's scale (Rayleigh-distributed angle) and reflect v
-            // about it; keep it when it lands above the horizon, else fall back to uniform.
-            let w = lobe_width(&c.materials[mi]).min(1.0);
-            let mut l = None;
-            for _ in 0..64 {
-                let theta = 1.5 * w * (-2.0 * (1.0 - rng.random::<f64>()).ln()).sqrt();
-                let phi: f64 = rng.random_range(0.0..std::f64::consts::TAU);
-                if theta >= std::f64::consts::FRAC_PI_2 {
-                    continue;
-                }
-                let h = local(
-                    t0,
-                    b0,
-                    n,
-                    theta.sin() * phi.cos(),
-                    theta.sin() * phi.sin(),
-                    theta.cos(),
-                );
-                let vh = dot(v, h);
-                let cand: [f64; 3] = std::array::from_fn(|k| 2.0 * vh * h[k] - v[k]);
-                if vh > 0.0 && dot(cand, n) >= MIN_COS {
-                    l = Some(cand);
-                    break;
-                }
-            }
-            l.unwrap_or_else(|| hemisphere(&mut rng, t0, b0, n))
-        };
-        data.extend(scale(&mut rng, l));
-        data.extend(scale(&mut rng, v));
-        let n_scaled = scale(&mut rng, n);
-        data.extend(if local_row { [0.0, 0.0, 1.0] } else { n_scaled });
-        data.push(mi as f32);
-        if c.anisotropic {
-            let t = loop {
-                let t = unit(&mut rng);
-                if dot(cross(n, t), cross(n, t)).sqrt() >= 0.1 {
-                    break t;
-                }
-            };
-            data.extend(scale(&mut rng, t));
-        }
-    }
-    Batch::new(
-        data,
-        cols,
-        c.materials.len(),
-        &crate::batch::memory_source(),
-    )
-}
-
-/// The f32 rounding unit u = 2⁻²⁴.
-const U: f64 = 1.0 / (1u64 << 24) as f64;
-
-/// `S_in` of FORMULAS.md §1's rule, per column: how much each output moves when the given
-/// float32 inputs change by one rounding — `Σ_modes |f(perturbed) − f|` with the f64
-/// reference, over each input direction (L, V, N, and T when present) rotated by an angle
-/// u = 2⁻²⁴ about two axes perpendicular to it. There are no modes for the quantities an
-/// evaluator derives (the unit vectors' lengths, the half vector): their rounding is the
-/// evaluator's own error, which the f64 frames show is avoidable.
-///
-/// Large where the problem is ill-conditioned for f32 inputs (sharp lobes, grazing mirror
-/// configurations), tiny elsewhere; the tolerance scales with it
-/// ([`CONDITIONING_FACTOR`]).
-pub fn f32_sensitivity(t: &Tuple, m: &Material) -> [f64; 9] {
-    let w = |a: [f32; 3]| a.map(f64::from);
-    let (l, v, n, tan) = (w(t.l), w(t.v), w(t.n), t.t.map(w));
-    let values = |e: &reference::Evaluation| {
-        let terms = e.terms();
-        [
-            e.brdf[0], e.brdf[1], e.brdf[2], terms[0], terms[1], terms[2], terms[3], terms[4],
-            terms[5],
-        ]
-    };
-    let base = values(&reference::evaluate(l, v, n, tan, m));
-    let mut s = [0f64; 9];
-    let mut add = |l: [f64; 3], v: [f64; 3], n: [f64; 3], tan: Option<[f64; 3]>| {
-        for (acc, (a, b)) in s.iter_mut().zip(
-            values(&reference::evaluate(l, v, n, tan, m))
-                .iter()
-                .zip(base),
-        ) {
-            *acc += (a - b).abs();
-        }
-    };
-    // Rotations of each direction by u about two axes perpendicular to it.
-    let rotations = |x: [f64; 3]| -> [[f64; 3]; 2] {
-        let len = dot(x, x).sqrt();
-        let xn = x.map(|c| c / len);
-        let p1 = normalize_direct(cross(
-            xn,
-            if xn[0].abs() < 0.9 {
-                [1.0, 0.0, 0.0]
-            } else {
-                [0.0, 1.0, 0.0]
-            },
-        ));
-        let p2 = cross(xn, p1);
-        [p1, p2].map(|p| std::array::from_fn(|k| x[k] + U * len * p[k]))
-    };
-    for r in rotations(l) {
-        add(r, v, n, tan);
-    }
-    for r in rotations(v) {
-        add(l, r, n, tan);
-    }
-    for r in rotations(n) {
-        add(l, v, r, tan);
-    }
-    if let Some(tv) = tan {
-        for r in rotations(tv) {
-            add(l, v, n, Some(r));
-        }
-    }
-    s
-}
-
-/// The values of one tuple in [`COLUMNS`] order.
-fn columns_of(e: &reference::Evaluation) -> [f64; 9] {
-    let t = e.terms();
-    [
-        e.brdf[0], e.brdf[1], e.brdf[2], t[0], t[1], t[2], t[3], t[4], t[5],
-    ]
-}
-
-/// The error a value may have: `RELATIVE_TOLERANCE · max(|ref|, FLOOR) +
-/// CONDITIONING_FACTOR · sensitivity` (see [`tolerance`]).
-pub fn allowed_error(reference: f64, sensitivity: f64) -> f64 {
-    RELATIVE_TOLERANCE * reference.abs().max(FLOOR) + CONDITIONING_FACTOR * sensitivity
+    tuples::rows(&c.materials, c.anisotropic, tuples, seed)
 }
 
 /// Evaluates combination `c` on `backend` with `tuples` tuples from `seed` and compares
