@@ -485,6 +485,37 @@ impl Write for StagedWriter {
 }
 
 impl StagedWriter {
+    /// Whether [`StagedWriter::write_at`] can be used: the output is a regular file (a
+    /// temporary one until its rename), not a FIFO, a device or standard output.
+    pub fn is_positioned(&self) -> bool {
+        matches!(self.inner, WriterInner::Temp { .. })
+    }
+
+    /// Writes `bytes` at `offset` of the staged file, past the buffer and from any thread
+    /// (the pieces must not overlap): several workers then write the rows they evaluated
+    /// where those rows go. Only for a regular file ([`StagedWriter::is_positioned`]);
+    /// not to be mixed with buffered writes that are not flushed.
+    pub fn write_at(&self, offset: u64, bytes: &[u8]) -> Result<()> {
+        use std::os::unix::fs::FileExt;
+        let failed = |source| write_error(&self.cancel, &self.path, source);
+        if self.cancel.is_cancelled() {
+            return Err(failed(std::io::Error::other("cancelled")));
+        }
+        let WriterInner::Temp {
+            file, writeback, ..
+        } = &self.inner
+        else {
+            return Err(failed(std::io::Error::other(
+                "a positioned write to an output that is not a regular file",
+            )));
+        };
+        file.as_file().write_all_at(bytes, offset).map_err(failed)?;
+        if let Some(w) = writeback {
+            w.wrote(bytes.len() as u64);
+        }
+        Ok(())
+    }
+
     /// The error for a failed write to this output (or [`Error::Cancelled`]).
     pub fn error(&self, source: std::io::Error) -> Error {
         write_error(&self.cancel, &self.path, source)

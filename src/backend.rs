@@ -182,6 +182,16 @@ pub trait Backend {
     /// ignores it.
     fn share_kernels(&mut self, _materials: &[crate::material::Material]) {}
 
+    /// Single-thread copies of this engine, one a core, for [`crate::stream::evaluate`]:
+    /// each reads, checks, evaluates and writes its own slices of the batch, so a slice
+    /// stays in its core's cache from the file to the output and no stage waits on
+    /// another's thread. `None` (the default) for an engine the stream drives as one
+    /// (a device, whose host threads feed it). A copy must give the same bits as the
+    /// engine (every engine evaluates tuple by tuple).
+    fn stream_workers(&self) -> Option<Vec<Box<dyn Backend + Send>>> {
+        None
+    }
+
     /// The engine's own direction generators, if it has them ([`GeneratedDirections`]):
     /// the tables then send a material and a grid or sampling plan instead of tuples. The
     /// default is none, and the tables build the tuples on the host.

@@ -296,6 +296,11 @@ impl LocalBatch {
         &self.data
     }
 
+    /// The row-major data, for reuse (as [`Batch::into_data`]).
+    pub fn into_data(self) -> Vec<f32> {
+        self.data
+    }
+
     /// Tuple `i`, with N = (0, 0, 1).
     pub fn tuple(&self, i: usize) -> Tuple {
         let r = &self.data[i * COLUMNS_LOCAL..(i + 1) * COLUMNS_LOCAL];

@@ -98,12 +98,12 @@ fn a_batch_larger_than_its_budget_streams_to_the_same_output() {
     }
 }
 
-/// A batch whose only invalid tuple (row 70 000) and a bad material (row 90 000) lie in
-/// later chunks.
+/// A batch of 100 000 rows whose invalid tuple (a zero L) and bad materials (index 7) lie
+/// at the rows given.
 fn batch_with(
     dir: &Path,
     zero_l_row: Option<usize>,
-    bad_material_row: Option<usize>,
+    bad_material_rows: &[usize],
 ) -> std::path::PathBuf {
     let n = 100_000;
     let mut data = Vec::with_capacity(n * 10);
@@ -113,7 +113,7 @@ fn batch_with(
         } else {
             [0.3, 0.2, 0.9]
         };
-        let material = if Some(i) == bad_material_row {
+        let material = if bad_material_rows.contains(&i) {
             7.0
         } else {
             (i % 2) as f32
@@ -128,9 +128,16 @@ fn batch_with(
 
 #[test]
 fn strict_and_the_first_invalid_row_hold_across_chunks() {
+    // The reference streams through the pipeline, the CPU engine through its workers.
+    for backend in ["reference", "cpu"] {
+        strict_holds_across_chunks(backend);
+    }
+}
+
+fn strict_holds_across_chunks(backend: &str) {
     let dir = tempfile::tempdir().expect("tempdir");
     let m = materials(dir.path());
-    let t = batch_with(dir.path(), Some(70_000), None);
+    let t = batch_with(dir.path(), Some(70_000), &[]);
     let out = dir.path().join("o.npy");
     let r = eval(
         &m,
@@ -139,14 +146,14 @@ fn strict_and_the_first_invalid_row_hold_across_chunks() {
             "-o",
             path(&out),
             "--backend",
-            "reference",
+            backend,
             "--max-memory",
             "1MiB",
             "--strict",
         ],
     );
     let text = stderr(&r);
-    assert_eq!(r.status.code(), Some(1), "{text}");
+    assert_eq!(r.status.code(), Some(1), "{backend}: {text}");
     assert!(
         text.contains("70000"),
         "the first invalid row is named: {text}"
@@ -167,7 +174,7 @@ fn strict_and_the_first_invalid_row_hold_across_chunks() {
             "-o",
             path(&out),
             "--backend",
-            "reference",
+            backend,
             "--max-memory",
             "1MiB",
             "--json",
@@ -187,9 +194,17 @@ fn strict_and_the_first_invalid_row_hold_across_chunks() {
 
 #[test]
 fn a_bad_material_in_a_later_chunk_is_named_by_its_batch_row() {
+    for backend in ["reference", "cpu"] {
+        bad_material_is_named(backend);
+    }
+}
+
+/// Two bad rows in different chunks: the first in the batch is named, whichever worker
+/// meets its own first (the CPU engine's workers take slices side by side).
+fn bad_material_is_named(backend: &str) {
     let dir = tempfile::tempdir().expect("tempdir");
     let m = materials(dir.path());
-    let t = batch_with(dir.path(), None, Some(90_000));
+    let t = batch_with(dir.path(), None, &[90_000, 99_000]);
     let out = dir.path().join("o.npy");
     std::fs::write(&out, b"previous").unwrap();
     let r = eval(
@@ -199,13 +214,13 @@ fn a_bad_material_in_a_later_chunk_is_named_by_its_batch_row() {
             "-o",
             path(&out),
             "--backend",
-            "reference",
+            backend,
             "--max-memory",
             "1MiB",
         ],
     );
     let text = stderr(&r);
-    assert_eq!(r.status.code(), Some(2), "{text}");
+    assert_eq!(r.status.code(), Some(2), "{backend}: {text}");
     assert!(
         text.contains("row 90000") && text.contains("material value 7"),
         "{text}"
@@ -221,7 +236,7 @@ fn a_bad_material_in_a_later_chunk_is_named_by_its_batch_row() {
 fn max_memory_is_checked() {
     let dir = tempfile::tempdir().expect("tempdir");
     let m = materials(dir.path());
-    let t = batch_with(dir.path(), None, None);
+    let t = batch_with(dir.path(), None, &[]);
     let out = dir.path().join("o.npy");
     for bad in ["0", "12", "1KiB", "2TiB", "lots", "5 parsecs"] {
         let r = eval(&m, &t, &["-o", path(&out), "--max-memory", bad]);
@@ -535,4 +550,51 @@ fn float64_and_fortran_order_stream_to_the_same_output() {
     );
     assert!(!r.status.success());
     assert!(stderr(&r).contains("row 123456"), "{}", stderr(&r));
+}
+
+/// The CPU engine's stream workers (each reads, evaluates and writes its own slices, in
+/// whatever order they finish) write exactly what one call over the whole batch computes:
+/// mixed materials, a tail slice shorter than the others, the terms, slices of every size
+/// the budget allows, and a shard whose part starts mid-slice.
+#[test]
+fn the_cpu_engines_workers_write_what_one_call_computes() {
+    use vkbrdf::backend::{Backend, Request};
+    let dir = tempfile::tempdir().expect("tempdir");
+    let m = materials(dir.path());
+    let t = dir.path().join("t.npy");
+    let n = 300_001;
+    assert!(generate(&m, n, &t).status.success());
+    let table = vkbrdf::material::load_materials(&m).expect("materials");
+    let batch = vkbrdf::batch::Batch::read_npy(&t, table.len()).expect("batch");
+    let want = vkbrdf::cpu::CpuEngine::with_threads(1)
+        .evaluate(&batch, &table, &Request { terms: true })
+        .expect("one call");
+    let (o, ot) = (dir.path().join("o.npy"), dir.path().join("ot.npy"));
+    for extra in [
+        &["--max-memory", "1MiB"][..],
+        &["--max-memory", "512MiB"],
+        &["--shard", "2/3"],
+    ] {
+        let mut args = vec!["-o", path(&o), "--terms", path(&ot), "--backend", "cpu"];
+        args.extend_from_slice(extra);
+        let r = eval(&m, &t, &args);
+        assert!(r.status.success(), "{extra:?}: {}", stderr(&r));
+        let rows = match extra[0] {
+            "--shard" => n / 3..2 * n / 3,
+            _ => 0..n,
+        };
+        let (brdf, shape) = vkbrdf::batch::read_npy_f32(&o).expect("BRDF");
+        assert_eq!(shape, [rows.len() as u64, 3], "{extra:?}");
+        let (terms, _) = vkbrdf::batch::read_npy_f32(&ot).expect("terms");
+        let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert!(
+            bits(&brdf) == bits(&want.brdf[rows.start * 3..rows.end * 3]),
+            "{extra:?}: BRDF differs from one call"
+        );
+        let want_terms = want.terms.as_deref().expect("terms");
+        assert!(
+            bits(&terms) == bits(&want_terms[rows.start * 6..rows.end * 6]),
+            "{extra:?}: terms differ from one call"
+        );
+    }
 }

@@ -5,6 +5,7 @@
 //! sat idle at its end for the whole file's writeback (a fifth of a 10^7-tuple run here).
 
 use std::fs::File;
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::mpsc::{sync_channel, SyncSender, TrySendError};
 use std::thread::JoinHandle;
 
@@ -18,7 +19,7 @@ pub(crate) const WRITEBACK_EVERY: u64 = 4 << 20;
 pub(crate) struct Writeback {
     request: Option<SyncSender<()>>,
     thread: Option<JoinHandle<std::io::Result<()>>>,
-    since_last: u64,
+    since_last: AtomicU64,
 }
 
 impl Writeback {
@@ -40,20 +41,23 @@ impl Writeback {
         Some(Writeback {
             request: Some(request),
             thread: Some(thread),
-            since_last: 0,
+            since_last: AtomicU64::new(0),
         })
     }
 
     /// `bytes` more reached the file: asks for a sync once [`WRITEBACK_EVERY`] have since
     /// the last request (never waits: a sync still running takes the new bytes next time).
-    pub(crate) fn wrote(&mut self, bytes: u64) {
-        self.since_last += bytes;
-        if self.since_last < WRITEBACK_EVERY {
+    /// Writers on several threads may call it at once.
+    pub(crate) fn wrote(&self, bytes: u64) {
+        let since = self.since_last.fetch_add(bytes, Ordering::Relaxed) + bytes;
+        if since < WRITEBACK_EVERY {
             return;
         }
         if let Some(r) = &self.request {
             match r.try_send(()) {
-                Ok(()) | Err(TrySendError::Full(())) => self.since_last = 0,
+                Ok(()) | Err(TrySendError::Full(())) => {
+                    self.since_last.fetch_sub(since, Ordering::Relaxed);
+                }
                 // The thread stopped on an error, which `finish` reports.
                 Err(TrySendError::Disconnected(())) => {}
             }

@@ -9,7 +9,7 @@ use super::{
 use crate::error::{Error, Result};
 use crate::material::Material;
 use std::fs::File;
-use std::io::{BufReader, Read, Seek, SeekFrom};
+use std::io::BufReader;
 use std::os::unix::fs::FileExt;
 use std::path::{Path, PathBuf};
 
@@ -114,14 +114,8 @@ impl NpyRows {
 
     /// Reads only rows `range` (within the file's) from now on: the part of a shard.
     pub fn restrict(&mut self, range: std::ops::Range<u64>) -> Result<()> {
+        // Every read is positioned (`floats_at`): no seek.
         let range = range.start.min(self.rows)..range.end.min(self.rows);
-        let at = self.data_start + range.start * self.row_bytes() as u64;
-        self.reader
-            .seek(SeekFrom::Start(at))
-            .map_err(|source| Error::Io {
-                path: self.source.clone(),
-                source,
-            })?;
         self.next_row = range.start;
         self.end_row = range.end.max(range.start);
         Ok(())
@@ -172,12 +166,11 @@ impl NpyRows {
     }
 
     /// The next at most `max_rows` rows as floats (in `buffer`'s memory, row-major), with
-    /// the index of the first. float64 files and Fortran-order files go through a byte
-    /// buffer reused between calls, converted and laid out as rows chunk by chunk.
+    /// the index of the first.
     fn next_floats(
         &mut self,
         max_rows: usize,
-        buffer: Vec<f32>,
+        mut buffer: Vec<f32>,
     ) -> Result<Option<(u64, Vec<f32>)>> {
         let left = self.end_row - self.next_row;
         if left == 0 {
@@ -185,6 +178,25 @@ impl NpyRows {
         }
         let n = left.min(max_rows.max(1) as u64) as usize;
         let at = self.next_row;
+        let mut bytes = std::mem::take(&mut self.bytes);
+        let read = self.floats_at(at, n, &mut buffer, &mut bytes);
+        self.bytes = bytes;
+        read?;
+        self.next_row += n as u64;
+        Ok(Some((at, buffer)))
+    }
+
+    /// Rows `at..at + n` of the file as floats into `data` (resized to `n` rows, row-major),
+    /// by positioned reads, so that several threads may read their own rows at once (the
+    /// streamed path's workers). float64 files and Fortran-order files go through `bytes`
+    /// (reused between calls), converted and laid out as rows.
+    pub fn floats_at(
+        &self,
+        at: u64,
+        n: usize,
+        data: &mut Vec<f32>,
+        bytes: &mut Vec<u8>,
+    ) -> Result<()> {
         let truncated = |e: std::io::Error| {
             Error::Batch {
             path: self.source.clone(),
@@ -193,48 +205,84 @@ impl NpyRows {
             ),
         }
         };
+        let file = self.reader.get_ref();
         let columns = self.columns;
         let width = if self.dtype == Dtype::F8 { 8 } else { 4 };
-        let mut data = buffer;
         data.resize(n * columns, 0.0);
         if self.fortran {
             // Column j's rows [at, at + n) lie together at data_start + (j·rows + at)·width.
-            self.bytes.resize(n * width, 0);
+            bytes.resize(n * width, 0);
             for j in 0..columns {
                 let offset = self.data_start + (j as u64 * self.rows + at) * width as u64;
-                self.reader
-                    .get_ref()
-                    .read_exact_at(&mut self.bytes, offset)
-                    .map_err(truncated)?;
+                file.read_exact_at(bytes, offset).map_err(truncated)?;
                 let rows = data.iter_mut().skip(j).step_by(columns);
                 match self.dtype {
                     Dtype::F4 => rows
-                        .zip(self.bytes.chunks_exact(4))
+                        .zip(bytes.chunks_exact(4))
                         .for_each(|(x, b)| *x = f32::from_le_bytes(b.try_into().expect("4 bytes"))),
-                    Dtype::F8 => rows.zip(self.bytes.chunks_exact(8)).for_each(|(x, b)| {
+                    Dtype::F8 => rows.zip(bytes.chunks_exact(8)).for_each(|(x, b)| {
                         *x = f64::from_le_bytes(b.try_into().expect("8 bytes")) as f32
                     }),
                 }
             }
-        } else if self.dtype == Dtype::F4 {
+            return Ok(());
+        }
+        let offset = self.data_start + at * self.row_bytes() as u64;
+        if self.dtype == Dtype::F4 {
             // float32 rows go straight into the batch's buffer: one copy from the page
             // cache instead of two (the bytes, then the floats).
-            self.reader
-                .read_exact(bytemuck::cast_slice_mut(&mut data))
+            file.read_exact_at(bytemuck::cast_slice_mut(data), offset)
                 .map_err(truncated)?;
             if cfg!(target_endian = "big") {
-                for x in &mut data {
+                for x in data.iter_mut() {
                     *x = f32::from_bits(u32::from_le(x.to_bits()));
                 }
             }
         } else {
-            self.bytes.resize(n * self.row_bytes(), 0);
-            self.reader.read_exact(&mut self.bytes).map_err(truncated)?;
-            for (x, b) in data.iter_mut().zip(self.bytes.chunks_exact(8)) {
+            bytes.resize(n * self.row_bytes(), 0);
+            file.read_exact_at(bytes, offset).map_err(truncated)?;
+            for (x, b) in data.iter_mut().zip(bytes.chunks_exact(8)) {
                 *x = f64::from_le_bytes(b.try_into().expect("8 bytes")) as f32;
             }
         }
-        self.next_row += n as u64;
-        Ok(Some((at, data)))
+        Ok(())
+    }
+
+    /// Rows `at..at + n` as a checked [`Batch`] (as [`NpyRows::next_chunk`] makes it) in
+    /// `buffer`'s memory; see [`NpyRows::floats_at`].
+    pub fn batch_at(
+        &self,
+        at: u64,
+        n: usize,
+        mut buffer: Vec<f32>,
+        bytes: &mut Vec<u8>,
+    ) -> Result<Batch<'static>> {
+        self.floats_at(at, n, &mut buffer, bytes)?;
+        Batch::new_at(buffer, self.columns, self.material_count, &self.source, at)
+    }
+
+    /// Rows `at..at + n` of a local-frame file as a [`LocalBatch`] of material `material`
+    /// (as [`NpyRows::next_local`] makes it); see [`NpyRows::floats_at`].
+    pub fn local_at(
+        &self,
+        at: u64,
+        n: usize,
+        material: usize,
+        materials: &[Material],
+        mut buffer: Vec<f32>,
+        bytes: &mut Vec<u8>,
+    ) -> Result<LocalBatch> {
+        self.floats_at(at, n, &mut buffer, bytes)?;
+        LocalBatch::new(buffer, material, materials, &self.source)
+    }
+
+    /// The rows [`NpyRows::restrict`] left to read (all of them before any chunk is read).
+    pub fn remaining(&self) -> std::ops::Range<u64> {
+        self.next_row..self.end_row
+    }
+
+    /// The file the rows come from.
+    pub fn source(&self) -> &Path {
+        &self.source
     }
 }

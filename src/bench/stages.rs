@@ -137,13 +137,20 @@ pub fn measure(
     let output = dir.join("stages-output.npy");
     write_npy_f32(&input, batch.as_slice(), batch.columns())?;
     let chunk = stream::chunk_rows(max_memory, 4 * batch.columns(), batch.columns(), false);
+    // The read stage and its ceiling in the pieces `eval` reads on this engine.
+    let piece = stream::read_rows(
+        engine.backend(),
+        max_memory,
+        4 * batch.columns(),
+        batch.columns(),
+    );
     // Warm: the page cache holds the file, the engine has compiled its kernel.
     let chunks = read_all(&input, materials.len(), chunk)?;
     let first = engine
         .backend()
         .evaluate(&chunks[0], materials, &Request::default())?;
     let mut out = first.clone();
-    read_pass(&input, materials.len(), chunk)?;
+    read_pass(&input, materials.len(), piece)?;
 
     let [mut read, mut copy, mut eng, mut write, mut write_copy, mut e2e] =
         std::array::from_fn::<Times, 6, _>(|_| Times::default());
@@ -153,9 +160,9 @@ pub fn measure(
     // not depend on the values).
     let blocks: Vec<&[f32]> = chunks.iter().map(|c| &first.brdf[..3 * c.len()]).collect();
     for _ in 0..repeats.max(1) {
-        let ((), w, c) = timed(|| read_pass(&input, materials.len(), chunk))?;
+        let ((), w, c) = timed(|| read_pass(&input, materials.len(), piece))?;
         read.push(w, c);
-        let ((), w, c) = timed(|| copy_pass(&input, chunk * 4 * batch.columns()))?;
+        let ((), w, c) = timed(|| copy_pass(&input, piece * 4 * batch.columns()))?;
         copy.push(w, c);
 
         if let Engine::Vulkan(v) = &mut engine {

@@ -458,4 +458,16 @@ impl Backend for CpuEngine {
     fn generated_directions(&mut self) -> Option<&mut dyn crate::backend::GeneratedDirections> {
         Some(self)
     }
+
+    fn stream_workers(&self) -> Option<Vec<Box<dyn Backend + Send>>> {
+        Some(
+            (0..self.threads)
+                .map(|_| {
+                    let mut w = CpuEngine::with_isa(1, self.isa);
+                    w.cancel = self.cancel.clone();
+                    Box::new(w) as Box<dyn Backend + Send>
+                })
+                .collect(),
+        )
+    }
 }

@@ -1,0 +1,199 @@
+//! The streamed path of an engine driven as one (a device): three stages overlap, a
+//! reader thread, the engine on the calling thread, and a writer thread (see
+//! [`evaluate`]).
+
+use super::job::{NpyOut, Setup, StreamJob, StreamSummary};
+use crate::atomic::Staged;
+use crate::backend::{Backend, Output, TERM_COLUMNS};
+use crate::batch::rows::NpyRows;
+use crate::batch::{check_tangent_rows, Batch, LocalBatch};
+use crate::cancel::Cancel;
+use crate::error::Result;
+use crate::material::Material;
+
+/// Evaluates the rows `setup.part` of `rows` on `backend` chunk by chunk, into staged
+/// outputs (`None` when `strict` found an invalid tuple: nothing is to be written).
+pub(super) fn evaluate(
+    job: &StreamJob,
+    setup: &Setup,
+    mut rows: NpyRows,
+    backend: &mut dyn Backend,
+    cancel: &Cancel,
+    mut progress: impl FnMut(u64, u64),
+) -> Result<(StreamSummary, Option<Vec<Staged>>)> {
+    let Setup {
+        local,
+        ref part,
+        chunk,
+        out_columns,
+        ref request,
+    } = *setup;
+    let n = part.end - part.start;
+    let mut brdf = NpyOut::start(job.output, n, out_columns, cancel)?;
+    let mut terms = match job.terms {
+        Some(path) => Some(NpyOut::start(path, n, TERM_COLUMNS, cancel)?),
+        None => None,
+    };
+    let mut spike = match job.spike {
+        Some(path) => Some(NpyOut::start(path, n, 3, cancel)?),
+        None => None,
+    };
+    let mut summary = StreamSummary {
+        chunk_rows: chunk,
+        ..StreamSummary::default()
+    };
+    summary.counts.tuples = n;
+    // Three stages overlap: a reader thread reads chunk k+1 while the engine evaluates chunk
+    // k on this thread and a writer thread writes chunk k-1. One chunk waits in each
+    // channel, so at most about five are alive at once (`chunk_rows` divides the budget).
+    // The writer hands each written output back, and the engine evaluates into it again:
+    // a few buffers serve the whole batch, faulted in and zeroed once.
+    let (read_tx, read_rx) = std::sync::mpsc::sync_channel::<Result<(u64, Chunk, f64)>>(1);
+    let (write_tx, write_rx) = std::sync::mpsc::sync_channel::<(Output, Vec<f32>)>(1);
+    let (recycle_tx, recycle_rx) = std::sync::mpsc::channel::<Output>();
+    // Spent input buffers go back to the reader, which reads the next chunk into one.
+    let (spent_tx, spent_rx) = std::sync::mpsc::sync_channel::<Vec<f32>>(2);
+    let (written, evaluated) = std::thread::scope(|scope| {
+        let reader = scope.spawn(move || loop {
+            let t = std::time::Instant::now();
+            let next = match local {
+                Some(m) => rows
+                    .next_local(chunk, m, job.materials)
+                    .map(|c| c.map(|(first, b)| (first, Chunk::Local(b)))),
+                None => rows
+                    .next_chunk_reusing(chunk, spent_rx.try_recv().unwrap_or_default())
+                    .and_then(|c| {
+                        if let Some((first, batch)) = &c {
+                            check_tangent_rows(
+                                batch.as_slice(),
+                                batch.columns(),
+                                *first,
+                                job.materials,
+                                job.input,
+                            )?;
+                        }
+                        Ok(c.map(|(first, b)| (first, Chunk::Rows(b))))
+                    }),
+            };
+            let message = match next {
+                Ok(None) => break,
+                Ok(Some((first, batch))) => Ok((first, batch, t.elapsed().as_secs_f64())),
+                Err(e) => Err(e),
+            };
+            let failed = message.is_err();
+            if read_tx.send(message).is_err() || failed {
+                break; // the evaluator stopped, or this was the error it will report
+            }
+        });
+        let writer = scope.spawn(
+            move || -> Result<(NpyOut, Option<NpyOut>, Option<NpyOut>, f64)> {
+                let mut write_s = 0.0;
+                for (out, spikes) in write_rx {
+                    let t = std::time::Instant::now();
+                    brdf.rows(&out.brdf)?;
+                    if let (Some(w), Some(v)) = (terms.as_mut(), out.terms.as_ref()) {
+                        w.rows(v)?;
+                    }
+                    if let Some(w) = spike.as_mut() {
+                        w.rows(&spikes)?;
+                    }
+                    write_s += t.elapsed().as_secs_f64();
+                    // The evaluator may have stopped; then the buffer is simply dropped.
+                    let _ = recycle_tx.send(out);
+                }
+                Ok((brdf, terms, spike, write_s))
+            },
+        );
+        let evaluated = (|| -> Result<()> {
+            for message in read_rx {
+                cancel.check()?;
+                let (first, batch, read_s) = message?;
+                summary.read_s += read_s;
+                let t = std::time::Instant::now();
+                let mut out = recycle_rx.try_recv().unwrap_or_default();
+                let len = match (&batch, job.spectral) {
+                    (Chunk::Rows(b), None) => {
+                        backend.evaluate_into(b, job.materials, request, &mut out)?;
+                        b.len()
+                    }
+                    (Chunk::Local(b), None) => {
+                        backend.evaluate_local_into(b, job.materials, request, &mut out)?;
+                        b.len()
+                    }
+                    (Chunk::Rows(b), Some(s)) => {
+                        let triplets = backend.is_reference();
+                        s.evaluate_with(
+                            b.len(),
+                            triplets,
+                            &crate::spectral_eval::batch_rows(b),
+                            |m, o| backend.evaluate_into(b, m, request, o),
+                            &mut out,
+                        )?;
+                        b.len()
+                    }
+                    (Chunk::Local(b), Some(s)) => {
+                        let triplets = backend.is_reference();
+                        s.evaluate_with(
+                            b.len(),
+                            triplets,
+                            &crate::spectral_eval::local_rows(b),
+                            |m, o| backend.evaluate_local_into(b, m, request, o),
+                            &mut out,
+                        )?;
+                        b.len()
+                    }
+                };
+                // The spike's weights, when asked for: the host's f64 form (cheap next to
+                // the BRDF's series), in the same chunk, so all outputs advance together.
+                let spikes = match (&batch, job.spike.is_some()) {
+                    (_, false) => Vec::new(),
+                    (Chunk::Rows(b), true) => spike_rows(b, job.materials),
+                    (Chunk::Local(b), true) => spike_rows(&b.rows(0..b.len()), job.materials),
+                };
+                summary.eval_s += t.elapsed().as_secs_f64();
+                let mut counted = out.counts;
+                counted.first_invalid = counted.first_invalid.map(|r| r + first);
+                summary.counts.absorb(&counted);
+                summary.chunks += 1;
+                progress(first + len as u64 - part.start, n);
+                if let Chunk::Rows(b) = batch {
+                    let _ = spent_tx.try_send(b.into_data()); // full: the reader has spares
+                }
+                if write_tx.send((out, spikes)).is_err() {
+                    break; // the writer failed: its error is reported below
+                }
+            }
+            Ok(())
+        })();
+        drop(write_tx);
+        let written = writer.join().expect("the writer thread does not panic");
+        reader.join().expect("the reader thread does not panic");
+        (written, evaluated)
+    });
+    evaluated?;
+    let (brdf, terms, spike, write_s) = written?;
+    summary.write_s = write_s;
+    if job.strict && summary.counts.invalid > 0 {
+        return Ok((summary, None)); // the writers drop: their temporary files go
+    }
+    let mut staged = vec![brdf.finish()?];
+    if let Some(w) = terms {
+        staged.push(w.finish()?);
+    }
+    if let Some(w) = spike {
+        staged.push(w.finish()?);
+    }
+    Ok((summary, Some(staged)))
+}
+
+/// One chunk as read: rows, or the local-frame form.
+enum Chunk {
+    Rows(Batch<'static>),
+    Local(LocalBatch),
+}
+
+/// `ρ_s` of each row of `batch` ([`crate::reference::htsg_spike_rows`]); every material is
+/// HTSG's (`spike_allowed` checked it before any work), so no row can fail.
+fn spike_rows(batch: &crate::batch::Batch, materials: &[Material]) -> Vec<f32> {
+    crate::reference::htsg_spike_rows(batch, materials).unwrap_or_default()
+}
