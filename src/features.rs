@@ -3,6 +3,7 @@
 //! variant per feature set, so code a batch does not use is never run.
 
 use crate::backend::Request;
+use crate::batch::columns::{ColumnBatch, MaterialColumn};
 use crate::batch::Batch;
 use crate::material::{Convention, DistributionKind, FresnelKind, Geometry, Material, Model, Term};
 use crate::precision::Precision;
@@ -205,9 +206,34 @@ impl FeatureSet {
         for i in 0..batch.len() {
             used[batch.material(i)] = true;
         }
+        FeatureSet::of_used(&used, materials, batch.has_tangents(), request)
+    }
+
+    /// [`FeatureSet::of_batch`] for a batch given as columns.
+    pub fn of_columns(
+        batch: &ColumnBatch,
+        materials: &[Material],
+        request: &Request,
+    ) -> FeatureSet {
+        let mut used = vec![false; materials.len()];
+        match batch.materials() {
+            MaterialColumn::Every(m) if !batch.is_empty() => used[m] = true,
+            MaterialColumn::Every(_) => {}
+            MaterialColumn::Each(m) => m.iter().for_each(|&i| used[i as usize] = true),
+        }
+        FeatureSet::of_used(&used, materials, batch.tangent().is_some(), request)
+    }
+
+    /// The features of the materials marked `used`, with tangents and the request's outputs.
+    fn of_used(
+        used: &[bool],
+        materials: &[Material],
+        tangents: bool,
+        request: &Request,
+    ) -> FeatureSet {
         let mut f = materials
             .iter()
-            .zip(&used)
+            .zip(used)
             .filter(|(_, &u)| u)
             .fold(FeatureSet::EMPTY, |a, (m, _)| {
                 a | FeatureSet::of_material(m)
@@ -215,7 +241,7 @@ impl FeatureSet {
         // Built-in math only when every material used asked for the fast variant: an exact
         // material in the same batch keeps the accurate functions (and fast ones then run
         // with them, still with their rewritten terms).
-        let used_fast = materials.iter().zip(&used).filter(|(_, &u)| u);
+        let used_fast = materials.iter().zip(used).filter(|(_, &u)| u);
         if used.iter().any(|&u| u)
             && used_fast
                 .clone()
@@ -226,13 +252,24 @@ impl FeatureSet {
         if used.iter().filter(|&&u| u).count() > 1 {
             f |= FeatureSet::BUCKETED;
         }
-        if batch.has_tangents() {
+        if tangents {
             f |= FeatureSet::TANGENTS;
         }
         if request.terms {
             f |= FeatureSet::TERMS;
         }
         f
+    }
+
+    /// These features and `forced`'s, but the tangent layout and the terms output as they
+    /// are here (they follow the batch and the request, not a kernel choice).
+    pub fn with_forced(self, forced: FeatureSet) -> FeatureSet {
+        FeatureSet::all_named()
+            .into_iter()
+            .filter(|&(f, _)| {
+                forced.contains(f) && f != FeatureSet::TANGENTS && f != FeatureSet::TERMS
+            })
+            .fold(self, |a, (f, _)| a | f)
     }
 
     /// The preprocessor names of the features in this set.

@@ -1,8 +1,12 @@
 //! A batch given as columns (`vkbrdf::batch::columns::ColumnBatch`, the Python package's
 //! broadcast form) gives the results, counts and first invalid row of the same rows given
 //! as one array, bit for bit: on the CPU engine, which reads the columns in place, on each
-//! instruction set this machine has, and on the reference, which takes the trait's default
-//! (rows gathered a chunk at a time).
+//! instruction set this machine has; on the reference, which reads its tuples from the
+//! columns; on Vulkan, which gathers each chunk while the device works on the ones before
+//! it (one chunk, and several under a small memory limit); and through the trait's default
+//! (rows gathered a part at a time), for an engine that reads rows only.
+
+mod common;
 
 use std::path::Path;
 use vkbrdf::backend::{Backend, Output, Request};
@@ -36,6 +40,24 @@ fn same(a: &Output, b: &Output, what: &str) {
     assert_eq!(a.counts, b.counts, "{what}: counts");
 }
 
+/// An engine with rows only (the reference's `evaluate`): the trait's defaults serve it.
+struct RowsOnly(CpuReference);
+
+impl Backend for RowsOnly {
+    fn name(&self) -> String {
+        "rows only".into()
+    }
+
+    fn evaluate(
+        &mut self,
+        batch: &Batch,
+        materials: &[Material],
+        request: &Request,
+    ) -> vkbrdf::Result<Output> {
+        self.0.evaluate(batch, materials, request)
+    }
+}
+
 fn engines() -> Vec<(String, Box<dyn Backend>)> {
     let mut e: Vec<(String, Box<dyn Backend>)> = Isa::available_all()
         .into_iter()
@@ -45,6 +67,22 @@ fn engines() -> Vec<(String, Box<dyn Backend>)> {
         })
         .collect();
     e.push(("reference".into(), Box::new(CpuReference::new())));
+    e.push((
+        "the trait's default".into(),
+        Box::new(RowsOnly(CpuReference::new())),
+    ));
+    if let Some(v) = common::vulkan() {
+        e.push(("vulkan".into(), Box::new(v)));
+    }
+    // Chunks of about 15 K rows: the corpus spans several, each gathered from the columns.
+    let small = vkbrdf::gpu::VulkanOptions {
+        validation: true,
+        max_gpu_memory: 4 << 20,
+        ..vkbrdf::gpu::VulkanOptions::default()
+    };
+    if let Some(v) = common::vulkan_with(small) {
+        e.push(("vulkan, 4 MiB".into(), Box::new(v)));
+    }
     e
 }
 

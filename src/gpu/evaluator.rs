@@ -13,6 +13,7 @@ mod generated;
 mod grouping;
 mod link;
 mod options;
+mod row_source;
 mod state;
 mod timing;
 pub use link::LinkRates;
@@ -30,14 +31,15 @@ use super::memory::{Buffer, MemoryUse, TexelView};
 use super::sync::{CommandPool, DescriptorPool, Fence};
 use super::vk_error::vk_error;
 use crate::backend::{Backend, Counts, Output, Request, TERM_COLUMNS};
+use crate::batch::columns::ColumnBatch;
 use crate::batch::{Batch, COLUMNS_TANGENT};
 use crate::error::{Error, FailedChunk, Result};
 use crate::features::FeatureSet;
 use crate::material::Material;
 use ash::vk;
 use grouping::{bucket_order, gather_rows, read_in_place};
+use row_source::RowSource;
 use state::{write_set, Pending, Slot};
-use std::sync::Arc;
 
 /// Upper bound on tuples per chunk (about 22 MiB of buffers per slot at the widest layout):
 /// small enough that a million-tuple batch already streams in several overlapped chunks,
@@ -258,7 +260,7 @@ impl VulkanBackend {
         forced: FeatureSet,
     ) -> Result<Output> {
         let features = self.grouping(Self::features_with(batch, materials, request, forced));
-        self.run(batch, materials, features)
+        self.run(RowSource::Rows(batch), materials, features)
     }
 
     /// Runs a probe shader — GLSL with `main()` that may `#include` the embedded files
@@ -328,7 +330,7 @@ impl VulkanBackend {
     /// Evaluates `batch` with the pipeline for exactly `features`.
     fn run(
         &mut self,
-        batch: &Batch,
+        batch: RowSource,
         materials: &[Material],
         features: FeatureSet,
     ) -> Result<Output> {
@@ -361,14 +363,15 @@ impl VulkanBackend {
     /// The chunk loop (see the module docs).
     fn stream(
         &mut self,
-        batch: &Batch,
+        batch: RowSource,
         material_count: u32,
         pipeline: vk::Pipeline,
         (chunk, bucketed): (usize, bool),
         terms: bool,
         out: &mut Output,
     ) -> Result<()> {
-        let (n, cols, data) = (batch.len(), batch.columns(), batch.as_slice());
+        let (n, cols) = (batch.len(), batch.columns());
+        let mut scratch = Vec::new();
         let chunks = n.div_ceil(chunk);
         // A failure names the chunk it happened in (index, rows) and the memory budget.
         let max_gpu_memory = self.options.max_gpu_memory;
@@ -387,7 +390,7 @@ impl VulkanBackend {
                     .map_err(|e| e.in_chunk(failed(done)))?;
             }
             let (start, len) = (c * chunk, chunk.min(n - c * chunk));
-            let rows = &data[start * cols..(start + len) * cols];
+            let rows = batch.rows(start..start + len, &mut scratch);
             let pending = self
                 .load_chunk(s, rows, cols, material_count as usize, bucketed, terms)
                 .map(|order| Pending {
@@ -463,7 +466,7 @@ impl VulkanBackend {
     fn upload_materials(&mut self, table: &[GpuMaterial]) -> Result<()> {
         debug_assert!(self.slots.iter().all(|s| s.pending.is_none()));
         let bytes = std::mem::size_of_val(table) as u64;
-        ensure(&self.device, &mut self.materials, bytes, MemoryUse::Upload)?;
+        Buffer::ensure(&self.device, &mut self.materials, bytes, MemoryUse::Upload)?;
         // SAFETY: no submitted work is pending (precondition), so the device does not read
         // the table while it is rewritten.
         unsafe { self.materials.as_mut().expect("ensured").write(0, table) };
@@ -560,7 +563,7 @@ impl VulkanBackend {
         if slot.input.as_ref().is_none_or(|b| b.size() < input_bytes) {
             slot.input_view = None; // the view goes before the buffer it views
         }
-        ensure(
+        Buffer::ensure(
             &self.device,
             &mut slot.input,
             input_bytes,
@@ -571,14 +574,14 @@ impl VulkanBackend {
             slot.input_view = None;
             slot.input_view = Some(TexelView::new(&self.device, input)?);
         }
-        ensure(
+        Buffer::ensure(
             &self.device,
             &mut slot.brdf,
             4 * brdf_floats as u64,
             MemoryUse::Readback,
         )?;
         if terms_floats > 0 {
-            ensure(
+            Buffer::ensure(
                 &self.device,
                 &mut slot.terms,
                 4 * terms_floats as u64,
@@ -586,7 +589,7 @@ impl VulkanBackend {
             )?;
         }
         if order_len > 0 {
-            ensure(
+            Buffer::ensure(
                 &self.device,
                 &mut slot.order,
                 4 * order_len as u64,
@@ -735,21 +738,6 @@ impl VulkanBackend {
     }
 }
 
-/// Makes `buffer` at least `bytes` large (replacing a smaller one; the old one is freed
-/// first, so the budget holds one of them at a time).
-fn ensure(
-    device: &Arc<Device>,
-    buffer: &mut Option<Buffer>,
-    bytes: u64,
-    usage: MemoryUse,
-) -> Result<()> {
-    if buffer.as_ref().is_none_or(|b| b.size() < bytes) {
-        *buffer = None;
-        *buffer = Some(Buffer::new(device, bytes, usage)?);
-    }
-    Ok(())
-}
-
 impl Backend for VulkanBackend {
     fn name(&self) -> String {
         format!("vulkan: {}", self.device_name())
@@ -771,7 +759,20 @@ impl Backend for VulkanBackend {
             Self::features_with(batch, materials, request, self.shared_features)
         };
         let features = self.grouping(features);
-        self.run(batch, materials, features)
+        self.run(RowSource::Rows(batch), materials, features)
+    }
+
+    fn evaluate_columns_into(
+        &mut self,
+        batch: &ColumnBatch,
+        materials: &[Material],
+        request: &Request,
+        out: &mut Output,
+    ) -> Result<()> {
+        let features = FeatureSet::of_columns(batch, materials, request);
+        let features = self.grouping(features.with_forced(self.shared_features));
+        *out = self.run(RowSource::Columns(batch), materials, features)?;
+        Ok(())
     }
 
     fn share_kernels(&mut self, materials: &[Material]) {

@@ -60,6 +60,21 @@ fn memory_type(
 }
 
 impl Buffer {
+    /// Makes `buffer` at least `bytes` large (replacing a smaller one; the old one is freed
+    /// first, so the budget holds one of them at a time).
+    pub fn ensure(
+        device: &Arc<Device>,
+        buffer: &mut Option<Buffer>,
+        bytes: u64,
+        usage: MemoryUse,
+    ) -> Result<()> {
+        if buffer.as_ref().is_none_or(|b| b.size() < bytes) {
+            *buffer = None;
+            *buffer = Some(Buffer::new(device, bytes, usage)?);
+        }
+        Ok(())
+    }
+
     /// A mapped storage buffer of at least `size` bytes (0 is rounded up to 16).
     pub fn new(device: &Arc<Device>, size: u64, usage: MemoryUse) -> Result<Buffer> {
         let size = size.max(16);

@@ -13,6 +13,7 @@ pub mod terms;
 pub use evaluation::{Evaluation, Status};
 
 use crate::backend::{Backend, Counts, Output, Request, TERM_COLUMNS};
+use crate::batch::columns::ColumnBatch;
 use crate::batch::{Batch, Tuple};
 use crate::cancel::Cancel;
 use crate::error::Result;
@@ -129,7 +130,31 @@ impl Backend for CpuReference {
         materials: &[Material],
         request: &Request,
     ) -> Result<Output> {
-        let n = batch.len();
+        self.evaluate_tuples(batch.len(), |i| batch.tuple(i), materials, request)
+    }
+
+    /// Tuple by tuple from the columns, as from rows: no rows are gathered.
+    fn evaluate_columns_into(
+        &mut self,
+        batch: &ColumnBatch,
+        materials: &[Material],
+        request: &Request,
+        out: &mut Output,
+    ) -> Result<()> {
+        *out = self.evaluate_tuples(batch.len(), |i| batch.tuple(i), materials, request)?;
+        Ok(())
+    }
+}
+
+impl CpuReference {
+    /// Tuples `tuple(0..n)` split over the threads (see [`Backend::evaluate`]).
+    fn evaluate_tuples(
+        &self,
+        n: usize,
+        tuple: impl Fn(usize) -> Tuple + Sync,
+        materials: &[Material],
+        request: &Request,
+    ) -> Result<Output> {
         let mut brdf = vec![0f32; n * 3];
         let mut terms = if request.terms {
             vec![0f32; n * TERM_COLUMNS]
@@ -152,6 +177,7 @@ impl Backend for CpuReference {
                 .zip(term_chunks)
                 .enumerate()
                 .map(|(c, (out, mut tout))| {
+                    let tuple = &tuple;
                     s.spawn(move || {
                         let start = c * per_thread;
                         let mut counts = Counts::default();
@@ -160,7 +186,7 @@ impl Backend for CpuReference {
                                 break;
                             }
                             let i = start + j;
-                            let tuple = batch.tuple(i);
+                            let tuple = tuple(i);
                             let e = evaluate_tuple(&tuple, &materials[tuple.material]);
                             match e.status {
                                 Status::Invalid => {

@@ -90,13 +90,7 @@ impl VulkanBackend {
         request: &Request,
         forced: FeatureSet,
     ) -> FeatureSet {
-        let mut features = FeatureSet::of_batch(batch, materials, request);
-        for (f, _) in FeatureSet::all_named() {
-            if forced.contains(f) && f != FeatureSet::TANGENTS && f != FeatureSet::TERMS {
-                features |= f;
-            }
-        }
-        features
+        FeatureSet::of_batch(batch, materials, request).with_forced(forced)
     }
 
     /// Median seconds to evaluate `batch` with its tuples resident in device memory (kernel
