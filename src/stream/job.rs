@@ -52,9 +52,11 @@ pub struct StreamSummary {
     pub counts: Counts,
     /// Rows per chunk.
     pub chunk_rows: usize,
-    /// Chunks evaluated.
+    /// Chunks evaluated (slices, where an engine's workers took them).
     pub chunks: usize,
-    /// Seconds spent reading, evaluating and writing.
+    /// Seconds spent reading, evaluating and writing: each stage's thread's, or summed
+    /// over the workers where an engine's workers run the stages side by side (so they
+    /// may add up to more than the wall time).
     pub read_s: f64,
     /// See `read_s`.
     pub eval_s: f64,
