@@ -2,7 +2,8 @@
 //! twice is refused before any work; symlinks are written through; FIFOs, devices and `-`
 //! are written directly, never replaced; a full disk, a failed write or a cancellation
 //! leaves the previous file intact and no temporary file; `eval --terms` writes both files
-//! or neither. The CLI runs on the CPU reference so the tests need no device.
+//! or neither. The CLI runs on the CPU reference so the tests need no device; the full
+//! disk also on the CPU engine, whose workers write their rows at offsets.
 
 mod common;
 use common::{generate, stderr, vkbrdf};
@@ -225,6 +226,13 @@ fn a_full_device_is_an_error_and_stays_a_device() {
 /// would be replaced and the BRDF not: one file of the pair lost.)
 #[test]
 fn a_full_disk_leaves_the_previous_files_and_no_temporary_file() {
+    // The reference writes in order (the pipeline), the CPU engine's workers at offsets.
+    for backend in ["reference", "cpu"] {
+        full_disk_keeps_the_previous_files(backend);
+    }
+}
+
+fn full_disk_keeps_the_previous_files(backend: &str) {
     let (dir, m, t) = setup();
     let bin = env!("CARGO_BIN_EXE_vkbrdf");
     let script = format!(
@@ -235,7 +243,7 @@ trap 'umount $mnt' EXIT
 head -c 32768 /dev/zero | tr '\0' 'b' > $mnt/brdf.npy
 head -c 4096 /dev/zero | tr '\0' 't' > $mnt/terms.npy
 set +e
-{bin} eval --backend reference -m {m} -i {t} -o $mnt/brdf.npy --terms $mnt/terms.npy
+{bin} eval --backend {backend} -m {m} -i {t} -o $mnt/brdf.npy --terms $mnt/terms.npy
 echo "exit=$?"
 set -e
 echo "brdf=$(tr -d 'b' < $mnt/brdf.npy | wc -c) $(wc -c < $mnt/brdf.npy)"
@@ -267,12 +275,16 @@ echo "strays=$(ls -A $mnt | grep -c '^\.vkbrdf-' || true)"
         "the tmpfs script failed (needs unshare and mount):\n{out}\n{}",
         stderr(&o)
     );
-    assert!(out.contains("exit=2"), "{out}\n{}", stderr(&o));
-    assert!(stderr(&o).contains("No space left"), "{}", stderr(&o));
+    assert!(out.contains("exit=2"), "{backend}: {out}\n{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("No space left"),
+        "{backend}: {}",
+        stderr(&o)
+    );
     // Every byte of both previous files is still the old one.
-    assert!(out.contains("brdf=0 32768"), "{out}");
-    assert!(out.contains("terms=0 4096"), "{out}");
-    assert!(out.contains("strays=0"), "{out}");
+    assert!(out.contains("brdf=0 32768"), "{backend}: {out}");
+    assert!(out.contains("terms=0 4096"), "{backend}: {out}");
+    assert!(out.contains("strays=0"), "{backend}: {out}");
 }
 
 /// A cancellation in the middle of a write (the token set by the body after its first
