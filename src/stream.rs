@@ -36,10 +36,9 @@ pub fn read_rows(
     row_bytes: usize,
     columns: usize,
 ) -> usize {
-    let chunk = chunk_rows(max_memory, row_bytes, columns, false);
     match backend.stream_workers() {
         Some(w) => fused::slice_rows(max_memory, row_bytes, columns, 3, w.len()),
-        None => chunk,
+        None => chunk_rows(max_memory, row_bytes, columns, false),
     }
 }
 

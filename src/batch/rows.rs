@@ -141,11 +141,9 @@ impl NpyRows {
         max_rows: usize,
         buffer: Vec<f32>,
     ) -> Result<Option<(u64, Batch<'static>)>> {
-        let Some((first, data)) = self.next_floats(max_rows, buffer)? else {
-            return Ok(None);
-        };
-        let batch = Batch::new_at(data, self.columns, self.material_count, &self.source, first)?;
-        Ok(Some((first, batch)))
+        self.next(max_rows, |rows, at, n, bytes| {
+            rows.batch_at(at, n, buffer, bytes)
+        })
     }
 
     /// [`NpyRows::next_chunk`] for a local-frame file (6 columns): the rows as a
@@ -156,22 +154,19 @@ impl NpyRows {
         material: usize,
         materials: &[Material],
     ) -> Result<Option<(u64, LocalBatch)>> {
-        let Some((first, data)) = self.next_floats(max_rows, Vec::new())? else {
-            return Ok(None);
-        };
-        Ok(Some((
-            first,
-            LocalBatch::new(data, material, materials, &self.source)?,
-        )))
+        self.next(max_rows, |rows, at, n, bytes| {
+            rows.local_at(at, n, material, materials, Vec::new(), bytes)
+        })
     }
 
-    /// The next at most `max_rows` rows as floats (in `buffer`'s memory, row-major), with
-    /// the index of the first.
-    fn next_floats(
+    /// The next at most `max_rows` rows as `read` makes them from their first row, their
+    /// count and the byte buffer reused between calls; the cursor moves past them once
+    /// they are read. `None` at the end.
+    fn next<T>(
         &mut self,
         max_rows: usize,
-        mut buffer: Vec<f32>,
-    ) -> Result<Option<(u64, Vec<f32>)>> {
+        read: impl FnOnce(&Self, u64, usize, &mut Vec<u8>) -> Result<T>,
+    ) -> Result<Option<(u64, T)>> {
         let left = self.end_row - self.next_row;
         if left == 0 {
             return Ok(None);
@@ -179,11 +174,11 @@ impl NpyRows {
         let n = left.min(max_rows.max(1) as u64) as usize;
         let at = self.next_row;
         let mut bytes = std::mem::take(&mut self.bytes);
-        let read = self.floats_at(at, n, &mut buffer, &mut bytes);
+        let made = read(self, at, n, &mut bytes);
         self.bytes = bytes;
-        read?;
+        let made = made?;
         self.next_row += n as u64;
-        Ok(Some((at, buffer)))
+        Ok(Some((at, made)))
     }
 
     /// Rows `at..at + n` of the file as floats into `data` (resized to `n` rows, row-major),
@@ -274,15 +269,5 @@ impl NpyRows {
     ) -> Result<LocalBatch> {
         self.floats_at(at, n, &mut buffer, bytes)?;
         LocalBatch::new(buffer, material, materials, &self.source)
-    }
-
-    /// The rows [`NpyRows::restrict`] left to read (all of them before any chunk is read).
-    pub fn remaining(&self) -> std::ops::Range<u64> {
-        self.next_row..self.end_row
-    }
-
-    /// The file the rows come from.
-    pub fn source(&self) -> &Path {
-        &self.source
     }
 }

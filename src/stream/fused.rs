@@ -26,7 +26,7 @@ use std::time::Instant;
 /// 36 with the terms) stay within a core's L2 cache (256 KiB to 2 MiB) while it reads,
 /// evaluates and writes them, and the pieces are large enough that a positioned read and
 /// write cost little per row. docs/STREAMING.md has the measurement.
-pub(super) const SLICE_ROWS: usize = 8192;
+const SLICE_ROWS: usize = 8192;
 
 /// Whether this path can run `job`: every output is a regular file ([`Outputs::start`]
 /// decides that), the rows are evaluated in RGB, and no HTSG spike is asked for (those
