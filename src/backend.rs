@@ -14,6 +14,19 @@ pub struct Request {
     pub terms: bool,
 }
 
+/// One kind of batch a caller is about to evaluate ([`Backend::prepare_kernels`]).
+#[derive(Debug, Clone, Copy)]
+pub struct KernelPlan<'a> {
+    /// The materials the batch uses (every one of them).
+    pub materials: &'a [crate::material::Material],
+    /// The [`Backend::share_kernels`] hint in force when it runs (empty: none).
+    pub shared: &'a [crate::material::Material],
+    /// Whether its rows carry tangents.
+    pub tangents: bool,
+    /// What it asks for.
+    pub request: Request,
+}
+
 /// Tuple counts of one evaluation.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct Counts {
@@ -181,6 +194,14 @@ pub trait Backend {
     /// combinations); each batch still evaluates only its own materials. The default
     /// ignores it.
     fn share_kernels(&mut self, _materials: &[crate::material::Material]) {}
+
+    /// A hint: batches like each of `plans` follow. An engine that compiles a kernel per
+    /// set of features may compile all of them now, several at once (`check` on a fresh
+    /// machine spends most of its time compiling). An error is one a batch of that plan
+    /// would have met; the default does nothing.
+    fn prepare_kernels(&mut self, _plans: &[KernelPlan<'_>]) -> crate::error::Result<()> {
+        Ok(())
+    }
 
     /// Single-thread copies of this engine, one a core, for [`crate::stream::evaluate`]:
     /// each reads, checks, evaluates and writes its own slices of the batch, so a slice

@@ -29,7 +29,7 @@
 //! invalid / below-horizon counts equal the reference's; the worst value (most tolerance
 //! used) is reported with its inputs.
 
-use crate::backend::{Backend, Request, TERM_COLUMNS};
+use crate::backend::{Backend, KernelPlan, Request, TERM_COLUMNS};
 use crate::batch::{Batch, Tuple};
 use crate::error::Result;
 use crate::material::{
@@ -540,7 +540,7 @@ pub fn check_combination(
     seed: u64,
 ) -> Result<CombinationReport> {
     let batch = generate(c, tuples, seed)?;
-    let out = backend.evaluate(&batch, &c.materials, &Request { terms: true })?;
+    let out = backend.evaluate(&batch, &c.materials, &CHECK_REQUEST)?;
     let terms = out.terms.as_deref().unwrap_or(&[]);
     let value = |row: usize, col: usize| -> f64 {
         let x = if col < 3 {
@@ -640,6 +640,9 @@ pub fn run(
 /// batch, the reference's outputs and the sensitivities allocated per combination.
 pub const MAX_TUPLES: usize = 10_000_000;
 
+/// What `check` asks of every batch: the BRDF and the terms, each judged.
+const CHECK_REQUEST: Request = Request { terms: true };
+
 /// A combination left out of a run, and why (the backend's message).
 pub type Skipped = (String, String);
 
@@ -677,6 +680,25 @@ pub fn run_with_skips(
             .or_default()
             .extend(c.materials.iter().cloned());
     }
+    // Every kernel the loop below will use, compiled up front and several at once
+    // ([`Backend::prepare_kernels`]). Measured combinations are left to the loop: a device
+    // may refuse them, which skips them there.
+    let plans: Vec<KernelPlan> = all
+        .iter()
+        .filter(|c| selected(c) && options.tuples >= c.materials.len())
+        .filter(|c| {
+            !c.materials
+                .iter()
+                .any(|m| matches!(m.model, crate::material::Model::Measured(_)))
+        })
+        .map(|c| KernelPlan {
+            materials: &c.materials,
+            shared: &groups[&kernel_group(c)],
+            tangents: c.anisotropic,
+            request: CHECK_REQUEST,
+        })
+        .collect();
+    backend.prepare_kernels(&plans)?;
     let mut reports = Vec::new();
     let mut skipped = Vec::new();
     for (i, c) in all.iter().enumerate() {
@@ -708,18 +730,18 @@ pub fn run_with_skips(
 }
 
 /// The combinations that share a kernel in [`run`]: a Cook–Torrance combination's
-/// distribution, anisotropy and geometry (its conventions and Fresnel terms share one
+/// distribution and anisotropy (its geometries, conventions and Fresnel terms share one
 /// kernel, as a material table mixing them would); the plain models by anisotropy; each
-/// measured combination alone (a backend may refuse it).
+/// measured combination alone (a backend may refuse it). Each distribution keeps a kernel
+/// of its own because its code differs most (the frames it may take, its Λ); 9 kernels in
+/// all. llvmpipe compiles each kernel on its first dispatch, one at a time, so the count
+/// is most of what a cold check pays (docs/VULKAN.md, "Kernels a check compiles").
 fn kernel_group(c: &Combination) -> String {
     let m = &c.materials[0];
     match &m.model {
-        crate::material::Model::CookTorrance(ct) => format!(
-            "{} {} {}",
-            ct.distribution.kind().toml_name(),
-            c.anisotropic,
-            ct.geometry.toml_name()
-        ),
+        crate::material::Model::CookTorrance(ct) => {
+            format!("{} {}", ct.distribution.kind().toml_name(), c.anisotropic)
+        }
         crate::material::Model::Measured(_) => c.name.clone(),
         _ => format!("plain {}", c.anisotropic),
     }

@@ -224,6 +224,18 @@ impl FeatureSet {
         FeatureSet::of_used(&used, materials, batch.tangent().is_some(), request)
     }
 
+    /// [`FeatureSet::of_batch`] of a batch that uses every material of `materials`.
+    pub fn of_used_all(materials: &[Material], tangents: bool, request: &Request) -> FeatureSet {
+        FeatureSet::of_used(&vec![true; materials.len()], materials, tangents, request)
+    }
+
+    /// The union of [`FeatureSet::of_material`] over `materials`.
+    pub fn of_materials(materials: &[Material]) -> FeatureSet {
+        materials
+            .iter()
+            .fold(FeatureSet::EMPTY, |f, m| f | FeatureSet::of_material(m))
+    }
+
     /// The features of the materials marked `used`, with tangents and the request's outputs.
     fn of_used(
         used: &[bool],

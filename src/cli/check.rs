@@ -134,6 +134,7 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
             }
         }
     };
+    super::common::set_status("preparing the kernels (a first run compiles them)");
     let (mut reports, skipped) = check::run_with_skips(gpu.as_mut(), &check_options, &mut row)?;
     // Then the spectral rows (FORMULAS.md §9): the spectral presets at 95 wavelengths.
     reports.extend(check::spectral::run(

@@ -191,6 +191,12 @@ impl VulkanBackend {
         self.last_features
     }
 
+    /// How many pipelines this backend has created (each a kernel compile, unless a cache
+    /// held it): a prepared `check` ([`Backend::prepare_kernels`]) creates none while it runs.
+    pub fn pipelines_created(&self) -> u64 {
+        self.kernels.created()
+    }
+
     /// The SPIR-V of the kernel for `features` (compiled and cached on first use).
     pub fn spirv(&mut self, features: FeatureSet) -> Result<Vec<u32>> {
         self.kernels.spirv(features)
@@ -776,9 +782,20 @@ impl Backend for VulkanBackend {
     }
 
     fn share_kernels(&mut self, materials: &[Material]) {
-        self.shared_features = materials
+        self.shared_features = FeatureSet::of_materials(materials);
+    }
+
+    fn prepare_kernels(&mut self, plans: &[crate::backend::KernelPlan<'_>]) -> Result<()> {
+        // The feature sets `evaluate` will pick for these batches (`FeatureSet::of_batch`,
+        // the shared features, the grouping).
+        let sets: Vec<FeatureSet> = plans
             .iter()
-            .fold(FeatureSet::EMPTY, |f, m| f | FeatureSet::of_material(m));
+            .map(|p| {
+                let used = FeatureSet::of_used_all(p.materials, p.tangents, &p.request);
+                self.grouping(used.with_forced(FeatureSet::of_materials(p.shared)))
+            })
+            .collect();
+        self.kernels.prepare(&sets)
     }
 
     fn generated_directions(&mut self) -> Option<&mut dyn crate::backend::GeneratedDirections> {

@@ -257,6 +257,8 @@ pub(crate) struct Kernels {
     set_layout: vk::DescriptorSetLayout,
     extra_defines: Vec<(String, String)>,
     disk: DiskCache,
+    /// Pipelines created so far ([`Kernels::created`]).
+    created: u64,
     /// Declared after the pipelines' owners, so that it is written back after they are
     /// gone (`Drop` below clears them first in any case).
     pipeline_cache: PipelineCache,
@@ -294,6 +296,7 @@ impl Kernels {
             set_layout,
             extra_defines,
             disk,
+            created: 0,
             pipeline_cache,
             device: Arc::clone(device),
         };
@@ -337,6 +340,14 @@ impl Kernels {
         if let Some(words) = self.spirv.get(&features) {
             return Ok(Arc::clone(words));
         }
+        let words: Arc<[u32]> = self.spirv_source(features).words()?.into();
+        self.spirv.insert(features, Arc::clone(&words));
+        Ok(words)
+    }
+
+    /// What [`compiled`](Self::compiled) needs to make the SPIR-V of `features`, without
+    /// `self`: for [`prepare`](Self::prepare)'s threads.
+    fn spirv_source(&self, features: FeatureSet) -> SpirvSource {
         let p = &self.device.physical;
         let arithmetic =
             p.subgroup_arithmetic && target(p) as u32 >= shaderc::EnvVersion::Vulkan1_1 as u32;
@@ -345,24 +356,93 @@ impl Kernels {
             defines.push(("HAS_FLOAT64".to_string(), "1".to_string()));
         }
         defines.extend(self.extra_defines.iter().cloned());
-        let key = spirv_key(&defines, target(p));
-        let words = match self.disk.load_words("spirv", &key) {
-            Some(words) => words,
-            None => {
-                let words =
-                    compile(SOURCES, KERNEL_FILE, &defines, target(p)).map_err(|e| match e {
-                        Error::Shader(m) => {
-                            Error::Shader(format!("{m}\n(kernel for features {features})"))
-                        }
-                        e => e,
-                    })?;
-                self.disk.store_words("spirv", &key, &words);
-                words
+        SpirvSource {
+            features,
+            defines,
+            target: target(p),
+            disk: self.disk.clone(),
+        }
+    }
+
+    /// Makes the pipelines of every feature set in `sets` that this evaluator has not made
+    /// yet, several at once: one thread a core, each compiling a kernel (shaderc, then the
+    /// driver's pipeline creation) from start to end: a `check` compiles 9 kernels, which a
+    /// driver that compiles at pipeline creation (NVIDIA, AMD) would otherwise compile one
+    /// after another (docs/VULKAN.md, "Kernels a check compiles"). Pipeline creation may run on several threads at once: the pipeline cache
+    /// was created without `EXTERNALLY_SYNCHRONIZED`, so the driver synchronises it, and
+    /// each thread has its own shaderc compiler. On an error the pipelines made are kept and
+    /// the first failing set's error (in `sets`' order) is returned.
+    pub fn prepare(&mut self, sets: &[FeatureSet]) -> Result<()> {
+        let mut missing: Vec<FeatureSet> = Vec::new();
+        for &f in sets {
+            if !self.cache.contains_key(&f) && !missing.contains(&f) {
+                missing.push(f);
             }
-        };
-        let words: Arc<[u32]> = words.into();
-        self.spirv.insert(features, Arc::clone(&words));
-        Ok(words)
+        }
+        let threads = std::thread::available_parallelism()
+            .map_or(1, |n| n.get())
+            .min(missing.len());
+        if threads <= 1 {
+            return missing
+                .iter()
+                .try_for_each(|&f| self.pipeline(f).map(|_| ()));
+        }
+        let jobs: Vec<(SpirvSource, Option<Arc<[u32]>>)> = missing
+            .iter()
+            .map(|&f| (self.spirv_source(f), self.spirv.get(&f).cloned()))
+            .collect();
+        let (device, layout) = (Arc::clone(&self.device), self.layout);
+        let cache = self.pipeline_cache.for_creation();
+        let next = std::sync::atomic::AtomicUsize::new(0);
+        let made: Vec<Vec<(usize, Made)>> = std::thread::scope(|s| {
+            let workers: Vec<_> = (0..threads)
+                .map(|_| {
+                    s.spawn(|| {
+                        let mut done = Vec::new();
+                        loop {
+                            let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                            let Some((source, kept)) = jobs.get(i) else {
+                                return done;
+                            };
+                            let made = match kept {
+                                Some(words) => Ok(Arc::clone(words)),
+                                None => source.words().map(Arc::from),
+                            }
+                            .and_then(|words| {
+                                let p = create_pipeline(&device, layout, cache, &words, None)?;
+                                Ok((words, p))
+                            });
+                            done.push((i, made));
+                        }
+                    })
+                })
+                .collect();
+            workers
+                .into_iter()
+                .map(|w| w.join().expect("a kernel compile thread panicked"))
+                .collect()
+        });
+        let mut made: Vec<(usize, Made)> = made.into_iter().flatten().collect();
+        made.sort_by_key(|(i, _)| *i);
+        let mut first_error = None;
+        for (i, r) in made {
+            match r {
+                Ok((words, pipeline)) => {
+                    self.spirv.insert(missing[i], words);
+                    self.cache.insert(missing[i], pipeline);
+                    self.created += 1;
+                }
+                Err(e) => {
+                    first_error.get_or_insert(e);
+                }
+            }
+        }
+        first_error.map_or(Ok(()), Err)
+    }
+
+    /// How many pipelines this evaluator has created (every kernel, fold and probe).
+    pub fn created(&self) -> u64 {
+        self.created
     }
 
     /// The pipeline for `features` with `material` folded in as specialization constants
@@ -417,49 +497,97 @@ impl Kernels {
         Ok(&self.probes[source])
     }
 
-    /// A pipeline from `spirv`: the workgroup size as constant 0 and, with `material`,
-    /// MATERIAL_IS_CONSTANT (1) and the material's 28 words (2-29, in field order).
+    /// A pipeline from `spirv` ([`create_pipeline`]), counted.
     fn create(&mut self, spirv: &[u32], material: Option<&GpuMaterial>) -> Result<Pipeline> {
-        let pipeline_cache = self.pipeline_cache.for_creation();
-        let d = &self.device.raw;
-        let info = vk::ShaderModuleCreateInfo::default().code(spirv);
-        // SAFETY: `spirv` is a complete module from shaderc; the device is live.
-        let module = unsafe { d.create_shader_module(&info, None) }
-            .map_err(vk_error("vkCreateShaderModule"))?;
-        let mut data = WORKGROUP_SIZE.to_ne_bytes().to_vec();
-        if let Some(m) = material {
-            data.extend_from_slice(&vk::TRUE.to_ne_bytes());
-            data.extend_from_slice(bytemuck::bytes_of(m));
-        }
-        // Constant i at offset 4 i: the data above is laid out in constant order.
-        let entries: Vec<vk::SpecializationMapEntry> = (0..data.len() as u32 / 4)
-            .map(|i| vk::SpecializationMapEntry {
-                constant_id: i,
-                offset: 4 * i,
-                size: 4,
-            })
-            .collect();
-        let specialization = vk::SpecializationInfo::default()
-            .map_entries(&entries)
-            .data(&data);
-        let stage = vk::PipelineShaderStageCreateInfo::default()
-            .stage(vk::ShaderStageFlags::COMPUTE)
-            .module(module)
-            .name(c"main")
-            .specialization_info(&specialization);
-        let infos = [vk::ComputePipelineCreateInfo::default()
-            .stage(stage)
-            .layout(self.layout)];
-        // SAFETY: the module, layout and specialization data are live for the call.
-        let created = unsafe { d.create_compute_pipelines(pipeline_cache, &infos, None) };
-        // SAFETY: the module is no longer needed once the pipeline exists (or failed).
-        unsafe { d.destroy_shader_module(module, None) };
-        let raw = created.map_err(|(_, r)| vk_error("vkCreateComputePipelines")(r))?[0];
-        Ok(Pipeline {
-            raw,
-            device: Arc::clone(&self.device),
-        })
+        let cache = self.pipeline_cache.for_creation();
+        let p = create_pipeline(&self.device, self.layout, cache, spirv, material)?;
+        self.created += 1;
+        Ok(p)
     }
+}
+
+/// What [`Kernels::prepare`]'s threads make of one feature set: its SPIR-V and pipeline.
+type Made = Result<(Arc<[u32]>, Pipeline)>;
+
+/// Everything the SPIR-V of one kernel depends on: the kernel's definitions and target,
+/// and the disk cache that may hold it already.
+struct SpirvSource {
+    features: FeatureSet,
+    defines: Vec<(String, String)>,
+    target: shaderc::EnvVersion,
+    disk: DiskCache,
+}
+
+impl SpirvSource {
+    /// The SPIR-V: from the disk cache, else compiled now (and stored there).
+    fn words(&self) -> Result<Vec<u32>> {
+        let key = spirv_key(&self.defines, self.target);
+        if let Some(words) = self.disk.load_words("spirv", &key) {
+            return Ok(words);
+        }
+        let words =
+            compile(SOURCES, KERNEL_FILE, &self.defines, self.target).map_err(|e| match e {
+                Error::Shader(m) => {
+                    Error::Shader(format!("{m}\n(kernel for features {})", self.features))
+                }
+                e => e,
+            })?;
+        self.disk.store_words("spirv", &key, &words);
+        Ok(words)
+    }
+}
+
+/// A pipeline from `spirv` with the shared `layout`, through `pipeline_cache`: the workgroup
+/// size as constant 0 and, with `material`, MATERIAL_IS_CONSTANT (1) and the material's 28
+/// words (2-29, in field order).
+fn create_pipeline(
+    device: &Arc<Device>,
+    layout: vk::PipelineLayout,
+    pipeline_cache: vk::PipelineCache,
+    spirv: &[u32],
+    material: Option<&GpuMaterial>,
+) -> Result<Pipeline> {
+    let d = &device.raw;
+    let info = vk::ShaderModuleCreateInfo::default().code(spirv);
+    // SAFETY: `spirv` is a complete module from shaderc; the device is live.
+    let module =
+        unsafe { d.create_shader_module(&info, None) }.map_err(vk_error("vkCreateShaderModule"))?;
+    let mut data = WORKGROUP_SIZE.to_ne_bytes().to_vec();
+    if let Some(m) = material {
+        data.extend_from_slice(&vk::TRUE.to_ne_bytes());
+        data.extend_from_slice(bytemuck::bytes_of(m));
+    }
+    // Constant i at offset 4 i: the data above is laid out in constant order.
+    let entries: Vec<vk::SpecializationMapEntry> = (0..data.len() as u32 / 4)
+        .map(|i| vk::SpecializationMapEntry {
+            constant_id: i,
+            offset: 4 * i,
+            size: 4,
+        })
+        .collect();
+    let specialization = vk::SpecializationInfo::default()
+        .map_entries(&entries)
+        .data(&data);
+    let stage = vk::PipelineShaderStageCreateInfo::default()
+        .stage(vk::ShaderStageFlags::COMPUTE)
+        .module(module)
+        .name(c"main")
+        .specialization_info(&specialization);
+    let infos = [vk::ComputePipelineCreateInfo::default()
+        .stage(stage)
+        .layout(layout)];
+    // SAFETY: the module, layout and specialization data are live for the call. Other
+    // threads may create pipelines through `pipeline_cache` at the same time
+    // (`Kernels::prepare`): it was created without `EXTERNALLY_SYNCHRONIZED`, so the driver
+    // synchronises access to it.
+    let created = unsafe { d.create_compute_pipelines(pipeline_cache, &infos, None) };
+    // SAFETY: the module is no longer needed once the pipeline exists (or failed).
+    unsafe { d.destroy_shader_module(module, None) };
+    let raw = created.map_err(|(_, r)| vk_error("vkCreateComputePipelines")(r))?[0];
+    Ok(Pipeline {
+        raw,
+        device: Arc::clone(device),
+    })
 }
 
 impl Drop for Kernels {
