@@ -69,6 +69,18 @@ fn a_check_compiles_every_kernel_before_its_first_batch() {
     assert!(reports.iter().all(|r| r.pass()), "every combination passes");
     let prepared = backend.prepared.expect("the check prepared its kernels");
     assert!(prepared >= 2, "{prepared} pipelines prepared");
+    // The kernels were made on several threads at once: the validation layer (with its
+    // thread-safety checks) reports nothing.
+    assert!(
+        backend.inner.validation_enabled(),
+        "the validation layer is not installed (apt-get install vulkan-validationlayers): this test needs it"
+    );
+    assert_eq!(
+        backend.inner.validation_message_count(),
+        0,
+        "{:?}",
+        backend.inner.validation_messages()
+    );
     assert_eq!(backend.at_evaluations.len(), reports.len());
     assert!(
         backend.at_evaluations.iter().all(|&n| n == prepared),
