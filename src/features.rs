@@ -276,12 +276,7 @@ impl FeatureSet {
     /// These features and `forced`'s, but the tangent layout and the terms output as they
     /// are here (they follow the batch and the request, not a kernel choice).
     pub fn with_forced(self, forced: FeatureSet) -> FeatureSet {
-        FeatureSet::all_named()
-            .into_iter()
-            .filter(|&(f, _)| {
-                forced.contains(f) && f != FeatureSet::TANGENTS && f != FeatureSet::TERMS
-            })
-            .fold(self, |a, (f, _)| a | f)
+        self | forced.without(FeatureSet::TANGENTS | FeatureSet::TERMS)
     }
 
     /// The preprocessor names of the features in this set.

@@ -4,7 +4,7 @@
 
 use super::job::{NpyOut, Setup, StreamJob, StreamSummary};
 use crate::atomic::Staged;
-use crate::backend::{Backend, Output, TERM_COLUMNS};
+use crate::backend::{Backend, Output, Request, TERM_COLUMNS};
 use crate::batch::rows::NpyRows;
 use crate::batch::{check_tangent_rows, Batch, LocalBatch};
 use crate::cancel::Cancel;
@@ -111,38 +111,8 @@ pub(super) fn evaluate(
                 summary.read_s += read_s;
                 let t = std::time::Instant::now();
                 let mut out = recycle_rx.try_recv().unwrap_or_default();
-                let len = match (&batch, job.spectral) {
-                    (Chunk::Rows(b), None) => {
-                        backend.evaluate_into(b, job.materials, request, &mut out)?;
-                        b.len()
-                    }
-                    (Chunk::Local(b), None) => {
-                        backend.evaluate_local_into(b, job.materials, request, &mut out)?;
-                        b.len()
-                    }
-                    (Chunk::Rows(b), Some(s)) => {
-                        let triplets = backend.is_reference();
-                        s.evaluate_with(
-                            b.len(),
-                            triplets,
-                            &crate::spectral_eval::batch_rows(b),
-                            |m, o| backend.evaluate_into(b, m, request, o),
-                            &mut out,
-                        )?;
-                        b.len()
-                    }
-                    (Chunk::Local(b), Some(s)) => {
-                        let triplets = backend.is_reference();
-                        s.evaluate_with(
-                            b.len(),
-                            triplets,
-                            &crate::spectral_eval::local_rows(b),
-                            |m, o| backend.evaluate_local_into(b, m, request, o),
-                            &mut out,
-                        )?;
-                        b.len()
-                    }
-                };
+                batch.evaluate(backend, job, request, &mut out)?;
+                let len = batch.len();
                 // The spike's weights, when asked for: the host's f64 form (cheap next to
                 // the BRDF's series), in the same chunk, so all outputs advance together.
                 let spikes = match (&batch, job.spike.is_some()) {
@@ -190,6 +160,57 @@ pub(super) fn evaluate(
 enum Chunk {
     Rows(Batch<'static>),
     Local(LocalBatch),
+}
+
+impl Chunk {
+    /// Rows in the chunk.
+    fn len(&self) -> usize {
+        match self {
+            Chunk::Rows(b) => b.len(),
+            Chunk::Local(b) => b.len(),
+        }
+    }
+
+    /// The chunk's outputs into `out` on `backend` with `materials`.
+    fn evaluate_into(
+        &self,
+        backend: &mut dyn Backend,
+        materials: &[Material],
+        request: &Request,
+        out: &mut Output,
+    ) -> Result<()> {
+        match self {
+            Chunk::Rows(b) => backend.evaluate_into(b, materials, request, out),
+            Chunk::Local(b) => backend.evaluate_local_into(b, materials, request, out),
+        }
+    }
+
+    /// The job's outputs of the chunk into `out`: the materials' BRDF, or the spectral
+    /// job's (its evaluations at the basis or wavelength materials, combined per row).
+    fn evaluate(
+        &self,
+        backend: &mut dyn Backend,
+        job: &StreamJob,
+        request: &Request,
+        out: &mut Output,
+    ) -> Result<()> {
+        let Some(s) = job.spectral else {
+            return self.evaluate_into(backend, job.materials, request, out);
+        };
+        type Row<'a> = Box<dyn Fn(usize) -> ([f32; 3], [f32; 3], usize) + Sync + 'a>;
+        let row: Row = match self {
+            Chunk::Rows(b) => Box::new(crate::spectral_eval::batch_rows(b)),
+            Chunk::Local(b) => Box::new(crate::spectral_eval::local_rows(b)),
+        };
+        let triplets = backend.is_reference();
+        s.evaluate_with(
+            self.len(),
+            triplets,
+            &row,
+            |m, o| self.evaluate_into(backend, m, request, o),
+            out,
+        )
+    }
 }
 
 /// `ρ_s` of each row of `batch` ([`crate::reference::htsg_spike_rows`]); every material is
