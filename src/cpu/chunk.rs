@@ -142,8 +142,10 @@ pub(super) fn lanes(
         work,
     };
     #[cfg(target_arch = "x86_64")]
-    if let pulp::Arch::V4(simd) = arch {
-        return simd.vectorize(ChunkOp4 { simd, op });
+    match arch {
+        pulp::Arch::V4(simd) => return simd.vectorize(ChunkOpX86 { simd, op }),
+        pulp::Arch::V3(simd) => return simd.vectorize(ChunkOpX86 { simd, op }),
+        _ => {}
     }
     arch.dispatch(op)
 }
@@ -174,15 +176,16 @@ impl pulp::WithSimd for ChunkOp<'_, '_> {
     }
 }
 
-/// [`ChunkOp`] on AVX-512, where whole blocks are transposed by permutes.
+/// [`ChunkOp`] on AVX-512 and AVX2, where whole blocks are transposed by the instruction
+/// set's shuffles (`transpose`).
 #[cfg(target_arch = "x86_64")]
-struct ChunkOp4<'a, 'b> {
-    simd: pulp::x86::V4,
+struct ChunkOpX86<'a, 'b, S> {
+    simd: S,
     op: ChunkOp<'a, 'b>,
 }
 
 #[cfg(target_arch = "x86_64")]
-impl pulp::NullaryFnOnce for ChunkOp4<'_, '_> {
+impl<S: pulp::Simd + transpose::Transpose> pulp::NullaryFnOnce for ChunkOpX86<'_, '_, S> {
     type Output = (Counts, Tally);
 
     #[inline(always)]
@@ -348,7 +351,7 @@ fn run_blocks<S: pulp::Simd, T: transpose::Transpose, const R: usize>(
         for b in 0..blocks {
             let j = j0 + b * LANES;
             let n = LANES.min(len - j);
-            write_block(&out[b], j, n, w);
+            write_block(tr, &out[b], j, n, w);
             let whole = order.is_none() && n == LANES;
             let start = w.start;
             let row = |k: usize| if whole { start + j + k } else { idx[b][k] };
@@ -587,10 +590,14 @@ fn column_lanes<T: transpose::Transpose>(
 
 /// A block's `n` lanes into the chunk's outputs from position `j` on.
 #[inline(always)]
-fn write_block(out: &Outputs, j: usize, n: usize, w: &mut Work) {
+fn write_block<T: transpose::Transpose>(tr: T, out: &Outputs, j: usize, n: usize, w: &mut Work) {
     if n == LANES {
-        // Fixed-size interleaving stores the compiler turns into shuffles.
-        untranspose::<3>(&out.brdf, &mut w.brdf[j * 3..(j + LANES) * 3]);
+        tr.rgb(
+            &out.brdf,
+            (&mut w.brdf[j * 3..(j + LANES) * 3])
+                .try_into()
+                .expect("a whole block"),
+        );
         if let Some(t) = w.terms.as_deref_mut() {
             untranspose::<TERM_COLUMNS>(
                 &out.terms,
