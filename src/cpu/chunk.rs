@@ -355,17 +355,18 @@ fn run_blocks<S: pulp::Simd, T: transpose::Transpose, const R: usize>(
             let whole = order.is_none() && n == LANES;
             let start = w.start;
             let row = |k: usize| if whole { start + j + k } else { idx[b][k] };
+            // The flagged lanes by their bits: a few lanes a block, where a loop over the
+            // block's 16 tested each.
+            let valid = u32::MAX >> (32 - n);
             if out[b].any_rescue() {
-                for k in 0..n {
-                    if out[b].rescue[k] {
-                        rescue(batch, m, row(k), j + k, w, &mut counts);
-                        tally.rescued += 1;
-                    }
+                for k in lanes_of(kernel::bits(&out[b].rescue) & valid) {
+                    rescue(batch, m, row(k), j + k, w, &mut counts);
+                    tally.rescued += 1;
                 }
             }
             if out[b].any_slow() {
-                for k in 0..n {
-                    if out[b].slow[k] && deferred.push(&inp[b], k, j + k, row(k)) {
+                for k in lanes_of(kernel::bits(&out[b].slow) & valid) {
+                    if deferred.push(&inp[b], k, j + k, row(k)) {
                         deferred.run(simd, &plan64, z, batch, m, w, &mut counts, &mut tally);
                     }
                 }
@@ -375,6 +376,18 @@ fn run_blocks<S: pulp::Simd, T: transpose::Transpose, const R: usize>(
     }
     deferred.run(simd, &plan64, z, batch, m, w, &mut counts, &mut tally);
     (counts, tally)
+}
+
+/// The lanes whose bits are set in `bits`, lowest first.
+#[inline(always)]
+fn lanes_of(mut bits: u32) -> impl Iterator<Item = usize> {
+    std::iter::from_fn(move || {
+        (bits != 0).then(|| {
+            let k = bits.trailing_zeros() as usize;
+            bits &= bits - 1;
+            k
+        })
+    })
 }
 
 /// The lanes a chunk's blocks left to the f64 frame ([`kernel::Params::defer_slow`]),

@@ -167,6 +167,15 @@ pub fn any(flags: &[bool; LANES]) -> bool {
     u128::from_ne_bytes(flags.map(u8::from)) != 0
 }
 
+/// A block's flags as bits (lane k is bit k).
+#[inline(always)]
+pub fn bits(flags: &[bool; LANES]) -> u32 {
+    flags
+        .iter()
+        .enumerate()
+        .fold(0, |m, (k, &f)| m | (u32::from(f) << k))
+}
+
 impl Default for Outputs {
     fn default() -> Self {
         Outputs {
