@@ -288,7 +288,23 @@ mod avx2 {
 
         #[inline(always)]
         fn xyz(self, block: &[f32; BLOCK_XYZ], lanes: &mut [[f32; LANES]; 3]) {
-            super::Portable.xyz(block, lanes)
+            // 8 rows of `x y z` are 6 quarters q0..q5; q0|q3, q1|q4, q2|q5 put rows k and
+            // k + 4 in the same place of each half, and 5 shuffles sort the columns out.
+            let a = self.avx;
+            for half in 0..2 {
+                let rows = &block[24 * half..24 * half + 24];
+                let m03 = pair(self, rows, 0, 3);
+                let m14 = pair(self, rows, 4, 3);
+                let m25 = pair(self, rows, 8, 3);
+                let xy = a._mm256_shuffle_ps::<0x9E>(m14, m25);
+                let yz = a._mm256_shuffle_ps::<0x49>(m03, m14);
+                let x = a._mm256_shuffle_ps::<0x8C>(m03, xy);
+                let y = a._mm256_shuffle_ps::<0xD8>(yz, xy);
+                let z = a._mm256_shuffle_ps::<0xCD>(yz, m25);
+                for (c, v) in [x, y, z].into_iter().enumerate() {
+                    put(&mut lanes[c], half, v);
+                }
+            }
         }
 
         #[inline(always)]
