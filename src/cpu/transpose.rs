@@ -188,8 +188,8 @@ mod avx2 {
     #[inline(always)]
     fn pair(simd: pulp::x86::V3, rows: &[f32], at: usize, cols: usize) -> __m256 {
         let q = |i: usize| -> __m128 {
-            let a: [f32; 4] = rows[i..i + 4].try_into().expect("4 floats");
-            bytemuck::cast(a)
+            let a: &[f32; 4] = rows[i..i + 4].try_into().expect("4 floats");
+            bytemuck::cast(*a)
         };
         simd.avx._mm256_set_m128(q(at + 4 * cols), q(at))
     }
@@ -238,10 +238,27 @@ mod avx2 {
         cols: usize,
         first: usize,
     ) -> [__m256; 4] {
-        four(
-            simd,
-            std::array::from_fn(|k| pair(simd, rows, (r0 + k) * cols + first, cols)),
-        )
+        four(simd, quad(simd, rows, r0, cols, first))
+    }
+
+    /// [`pair`] of rows `r0 + k` (and `r0 + k + 4`) from float `first` on, k = 0..4. (Not
+    /// `array::from_fn`: LLVM stopped inlining it once the transposes had several callers,
+    /// and out of line the intrinsics lose the instruction set and become calls.)
+    #[inline(always)]
+    fn quad(
+        simd: pulp::x86::V3,
+        rows: &[f32],
+        r0: usize,
+        cols: usize,
+        first: usize,
+    ) -> [__m256; 4] {
+        let at = |k: usize| (r0 + k) * cols + first;
+        [
+            pair(simd, rows, at(0), cols),
+            pair(simd, rows, at(1), cols),
+            pair(simd, rows, at(2), cols),
+            pair(simd, rows, at(3), cols),
+        ]
     }
 
     #[inline(always)]
@@ -258,10 +275,7 @@ mod avx2 {
                 let r0 = 8 * half;
                 // Lx Ly Lz Vx from floats 0..4 of each row, Vy Vz from floats 2..6.
                 let a = group(self, block, r0, C, 0);
-                let b = upper_two(
-                    self,
-                    std::array::from_fn(|k| pair(self, block, (r0 + k) * C + 2, C)),
-                );
+                let b = upper_two(self, quad(self, block, r0, C, 2));
                 for (c, x) in a.into_iter().chain(b).enumerate() {
                     put(&mut inp.v[c], half, x);
                 }
@@ -276,10 +290,7 @@ mod avx2 {
                 // L and Vx from floats 0..4, Vy Vz Nx Ny from 4..8, Nz from 6..10.
                 let a = group(self, block, r0, C, 0);
                 let b = group(self, block, r0, C, 4);
-                let n = upper_two(
-                    self,
-                    std::array::from_fn(|k| pair(self, block, (r0 + k) * C + 6, C)),
-                );
+                let n = upper_two(self, quad(self, block, r0, C, 6));
                 for (c, x) in a.into_iter().chain(b).chain([n[0]]).enumerate() {
                     put(&mut inp.v[c], half, x);
                 }
