@@ -179,8 +179,10 @@ impl Transpose for pulp::x86::V4 {
 /// (12 an evaluation, a tenth of GGX's); this is 34 instructions per 8 rows.
 #[cfg(target_arch = "x86_64")]
 mod avx2 {
-    use super::{Inputs, BLOCK, BLOCK_PLAIN, BLOCK_XYZ, LANES};
+    // By the crate's paths: the layering test reads `super` as the parent file.
     use crate::batch::{COLUMNS_LOCAL, COLUMNS_PLAIN};
+    use crate::cpu::kernel::{Inputs, LANES};
+    use crate::cpu::transpose::{Transpose, BLOCK, BLOCK_PLAIN, BLOCK_XYZ};
     use core::arch::x86_64::{__m128, __m256};
 
     /// `4` floats at `at` (row `r`) in the low half and at `at + 4 · cols` (row `r + 4`)
@@ -267,7 +269,7 @@ mod avx2 {
         v[8 * half..8 * half + 8].copy_from_slice(&a);
     }
 
-    impl super::Transpose for pulp::x86::V3 {
+    impl Transpose for pulp::x86::V3 {
         #[inline(always)]
         fn local(self, block: &[f32; BLOCK], inp: &mut Inputs) {
             const C: usize = COLUMNS_LOCAL;
