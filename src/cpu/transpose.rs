@@ -199,48 +199,41 @@ mod avx2 {
     /// The 4 × 4 transpose of `r` inside each half: `out[j]`'s lane is `r[lane]`'s `j`.
     #[inline(always)]
     fn four(simd: pulp::x86::V3, r: [__m256; 4]) -> [__m256; 4] {
-        let a = simd.avx;
-        let (t0, t1) = (
-            a._mm256_unpacklo_ps(r[0], r[1]),
-            a._mm256_unpackhi_ps(r[0], r[1]),
-        );
-        let (t2, t3) = (
-            a._mm256_unpacklo_ps(r[2], r[3]),
-            a._mm256_unpackhi_ps(r[2], r[3]),
-        );
-        [
-            a._mm256_shuffle_ps::<0x44>(t0, t2),
-            a._mm256_shuffle_ps::<0xEE>(t0, t2),
-            a._mm256_shuffle_ps::<0x44>(t1, t3),
-            a._mm256_shuffle_ps::<0xEE>(t1, t3),
-        ]
+        let [x, y] = two::<false>(simd, r);
+        let [z, w] = two::<true>(simd, r);
+        [x, y, z, w]
     }
 
-    /// Elements `j, j + 1` of the 4 × 4 transpose (`j` = 2: the upper two), for a group
-    /// whose other two columns are not wanted.
+    /// Elements 0 and 1 of the 4 × 4 transpose (`HIGH`: 2 and 3, for a group whose other
+    /// two columns are not wanted).
     #[inline(always)]
-    fn upper_two(simd: pulp::x86::V3, r: [__m256; 4]) -> [__m256; 2] {
-        let a = simd.avx;
-        let (t1, t3) = (
-            a._mm256_unpackhi_ps(r[0], r[1]),
-            a._mm256_unpackhi_ps(r[2], r[3]),
-        );
-        [
-            a._mm256_shuffle_ps::<0x44>(t1, t3),
-            a._mm256_shuffle_ps::<0xEE>(t1, t3),
-        ]
+    fn two<const HIGH: bool>(simd: pulp::x86::V3, r: [__m256; 4]) -> [__m256; 2] {
+        let un = [
+            unpack::<HIGH>(simd, r[0], r[1]),
+            unpack::<HIGH>(simd, r[2], r[3]),
+        ];
+        sort_pairs(simd, un)
     }
 
-    /// Columns `first..first + 4` of the 8 rows from row `r0` on, `cols` floats a row.
+    /// `vunpcklps` (`HIGH`: `vunpckhps`) of `x` and `y`.
     #[inline(always)]
-    fn group(
-        simd: pulp::x86::V3,
-        rows: &[f32],
-        r0: usize,
-        cols: usize,
-        first: usize,
-    ) -> [__m256; 4] {
-        four(simd, quad(simd, rows, r0, cols, first))
+    fn unpack<const HIGH: bool>(simd: pulp::x86::V3, x: __m256, y: __m256) -> __m256 {
+        if HIGH {
+            simd.avx._mm256_unpackhi_ps(x, y)
+        } else {
+            simd.avx._mm256_unpacklo_ps(x, y)
+        }
+    }
+
+    /// `[p0 q0 p1 q1]` of rows 0, 1 and of rows 2, 3 (an unpack's result) into the
+    /// columns p and q.
+    #[inline(always)]
+    fn sort_pairs(simd: pulp::x86::V3, t: [__m256; 2]) -> [__m256; 2] {
+        let a = simd.avx;
+        [
+            a._mm256_shuffle_ps::<0x44>(t[0], t[1]),
+            a._mm256_shuffle_ps::<0xEE>(t[0], t[1]),
+        ]
     }
 
     /// [`pair`] of rows `r0 + k` (and `r0 + k + 4`) from float `first` on, k = 0..4. (Not
@@ -269,54 +262,75 @@ mod avx2 {
         v[8 * half..8 * half + 8].copy_from_slice(&a);
     }
 
+    /// `regs` — columns of 8 rows, the first 4 in the low halves — into lanes
+    /// `8·half..8·half + 8` of `v[0..K]`.
+    #[inline(always)]
+    fn put_all<const K: usize>(v: &mut [[f32; LANES]], half: usize, regs: [__m256; K]) {
+        for (c, x) in regs.into_iter().enumerate() {
+            put(&mut v[c], half, x);
+        }
+    }
+
+    /// The local form's 6 columns of rows `r0..r0 + 8`: Lx Ly Lz Vx from floats 0..4 of
+    /// each row, Vy Vz from floats 2..6. (Functions, not closures: a closure LLVM leaves
+    /// out of line takes the intrinsics with it, as calls.)
+    #[inline(always)]
+    fn local_rows(simd: pulp::x86::V3, block: &[f32], r0: usize) -> [__m256; 6] {
+        const C: usize = COLUMNS_LOCAL;
+        let [lx, ly, lz, vx] = four(simd, quad(simd, block, r0, C, 0));
+        let [vy, vz] = two::<true>(simd, quad(simd, block, r0, C, 2));
+        [lx, ly, lz, vx, vy, vz]
+    }
+
+    /// L, V and N of 10-column rows `r0..r0 + 8`: L and Vx from floats 0..4, Vy Vz Nx Ny
+    /// from 4..8, Nz from 6..10.
+    #[inline(always)]
+    fn plain_rows(simd: pulp::x86::V3, block: &[f32], r0: usize) -> [__m256; 9] {
+        const C: usize = COLUMNS_PLAIN;
+        let [lx, ly, lz, vx] = four(simd, quad(simd, block, r0, C, 0));
+        let [vy, vz, nx, ny] = four(simd, quad(simd, block, r0, C, 4));
+        let [nz, _] = two::<true>(simd, quad(simd, block, r0, C, 6));
+        [lx, ly, lz, vx, vy, vz, nx, ny, nz]
+    }
+
+    /// The 3 columns of `x y z` rows `r0..r0 + 8`: their 6 quarters q0..q5 as q0|q3, q1|q4,
+    /// q2|q5 put rows k and k + 4 in the same place of each half, and 5 shuffles sort the
+    /// columns out.
+    #[inline(always)]
+    fn xyz_rows(simd: pulp::x86::V3, block: &[f32], r0: usize) -> [__m256; 3] {
+        let a = simd.avx;
+        let rows = &block[3 * r0..3 * r0 + 24];
+        let m03 = pair(simd, rows, 0, 3);
+        let m14 = pair(simd, rows, 4, 3);
+        let m25 = pair(simd, rows, 8, 3);
+        let xy = a._mm256_shuffle_ps::<0x9E>(m14, m25);
+        let yz = a._mm256_shuffle_ps::<0x49>(m03, m14);
+        [
+            a._mm256_shuffle_ps::<0x8C>(m03, xy),
+            a._mm256_shuffle_ps::<0xD8>(yz, xy),
+            a._mm256_shuffle_ps::<0xCD>(yz, m25),
+        ]
+    }
+
     impl Transpose for pulp::x86::V3 {
         #[inline(always)]
         fn local(self, block: &[f32; BLOCK], inp: &mut Inputs) {
-            const C: usize = COLUMNS_LOCAL;
             for half in 0..2 {
-                let r0 = 8 * half;
-                // Lx Ly Lz Vx from floats 0..4 of each row, Vy Vz from floats 2..6.
-                let a = group(self, block, r0, C, 0);
-                let b = upper_two(self, quad(self, block, r0, C, 2));
-                for (c, x) in a.into_iter().chain(b).enumerate() {
-                    put(&mut inp.v[c], half, x);
-                }
+                put_all(&mut inp.v, half, local_rows(self, block, 8 * half));
             }
         }
 
         #[inline(always)]
         fn plain(self, block: &[f32; BLOCK_PLAIN], inp: &mut Inputs) {
-            const C: usize = COLUMNS_PLAIN;
             for half in 0..2 {
-                let r0 = 8 * half;
-                // L and Vx from floats 0..4, Vy Vz Nx Ny from 4..8, Nz from 6..10.
-                let a = group(self, block, r0, C, 0);
-                let b = group(self, block, r0, C, 4);
-                let n = upper_two(self, quad(self, block, r0, C, 6));
-                for (c, x) in a.into_iter().chain(b).chain([n[0]]).enumerate() {
-                    put(&mut inp.v[c], half, x);
-                }
+                put_all(&mut inp.v, half, plain_rows(self, block, 8 * half));
             }
         }
 
         #[inline(always)]
         fn xyz(self, block: &[f32; BLOCK_XYZ], lanes: &mut [[f32; LANES]; 3]) {
-            // 8 rows of `x y z` are 6 quarters q0..q5; q0|q3, q1|q4, q2|q5 put rows k and
-            // k + 4 in the same place of each half, and 5 shuffles sort the columns out.
-            let a = self.avx;
             for half in 0..2 {
-                let rows = &block[24 * half..24 * half + 24];
-                let m03 = pair(self, rows, 0, 3);
-                let m14 = pair(self, rows, 4, 3);
-                let m25 = pair(self, rows, 8, 3);
-                let xy = a._mm256_shuffle_ps::<0x9E>(m14, m25);
-                let yz = a._mm256_shuffle_ps::<0x49>(m03, m14);
-                let x = a._mm256_shuffle_ps::<0x8C>(m03, xy);
-                let y = a._mm256_shuffle_ps::<0xD8>(yz, xy);
-                let z = a._mm256_shuffle_ps::<0xCD>(yz, m25);
-                for (c, v) in [x, y, z].into_iter().enumerate() {
-                    put(&mut lanes[c], half, v);
-                }
+                put_all(lanes, half, xyz_rows(self, block, 8 * half));
             }
         }
 
