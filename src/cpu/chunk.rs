@@ -414,11 +414,14 @@ impl Deferred {
     /// Lane `k` of `inp` (output position `j`, batch row `row`); whether the block is full.
     #[inline(always)]
     fn push(&mut self, inp: &Inputs, k: usize, j: usize, row: usize) -> bool {
+        // `n < LANES` always (a full block is run before the next push); the mask says so
+        // to the compiler, which then drops the ten bounds checks.
+        let (n, k) = (self.n % LANES, k % LANES);
         for c in 0..9 {
-            self.inp.v[c][self.n] = inp.v[c][k];
+            self.inp.v[c][n] = inp.v[c][k];
         }
-        self.at[self.n] = (j, row);
-        self.n += 1;
+        self.at[n] = (j, row);
+        self.n = n + 1;
         self.n == LANES
     }
 

@@ -309,3 +309,12 @@ fn the_local_frame_lanes_give_the_general_bits() {
     }
     assert!(groups > 40, "{groups}");
 }
+
+/// `bits` puts lane k's flag at bit k for every one of the 2^16 patterns of a block.
+#[test]
+fn bits_puts_each_lane_at_its_bit_for_every_pattern() {
+    for pattern in 0u32..1 << LANES {
+        let flags: [bool; LANES] = std::array::from_fn(|k| pattern >> k & 1 == 1);
+        assert_eq!(bits(&flags), pattern, "{pattern:016b}");
+    }
+}
