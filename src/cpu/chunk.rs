@@ -245,17 +245,6 @@ fn tangent_columns(rows: &[f32], inp: &mut Inputs) {
     }
 }
 
-/// `C` lane arrays into `LANES` rows of `C` columns.
-#[inline(always)]
-fn untranspose<const C: usize>(cols: &[[f32; LANES]; C], rows: &mut [f32]) {
-    let rows = &mut rows[..LANES * C];
-    for k in 0..LANES {
-        for c in 0..C {
-            rows[k * C + c] = cols[c][k];
-        }
-    }
-}
-
 /// Blocks a chunk's loop fills before it runs their lanes: one call into a group's lanes
 /// ([`super::dispatch::apart`]) serves them all, so the call and the group's constants are paid
 /// once a run rather than once a block (about 9 KiB of inputs and outputs, in L1).
@@ -615,7 +604,7 @@ fn write_block<T: transpose::Transpose>(tr: T, out: &Outputs, j: usize, n: usize
                 .expect("a whole block"),
         );
         if let Some(t) = w.terms.as_deref_mut() {
-            untranspose::<TERM_COLUMNS>(
+            transpose::untranspose::<TERM_COLUMNS>(
                 &out.terms,
                 &mut t[j * TERM_COLUMNS..(j + LANES) * TERM_COLUMNS],
             );

@@ -29,10 +29,18 @@ pub trait Transpose: Copy {
     /// The other way: 3 lane arrays (a block's RGB) into 16 rows of 3.
     #[inline(always)]
     fn rgb(self, lanes: &[[f32; LANES]; 3], rows: &mut [f32; BLOCK_XYZ]) {
-        for k in 0..LANES {
-            for c in 0..3 {
-                rows[k * 3 + c] = lanes[c][k];
-            }
+        untranspose(lanes, rows)
+    }
+}
+
+/// `C` lane arrays into `LANES` rows of `C` columns, by fixed-size loops (the portable way
+/// back; the block's terms take it on every instruction set).
+#[inline(always)]
+pub(super) fn untranspose<const C: usize>(cols: &[[f32; LANES]; C], rows: &mut [f32]) {
+    let rows = &mut rows[..LANES * C];
+    for k in 0..LANES {
+        for c in 0..C {
+            rows[k * C + c] = cols[c][k];
         }
     }
 }
