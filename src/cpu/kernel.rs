@@ -394,13 +394,30 @@ pub fn microfacet_block<const D: u8, const G: u8, const F: u8, const Z: bool>(
                 ok: ok[k],
             })
         };
-        if p.terms {
-            for k in 0..LANES {
-                microfacet_lane::<D, G, F, true, true>(p, &lane(k), out, k);
+        // A conductor whose every channel is legal for it takes F's metal form
+        // (`conductor::f_lane_metal`, half the arithmetic); the f64 frame's lanes keep the
+        // scaled form, as the other Fresnel terms keep theirs.
+        let metal = F == F_CONDUCTOR && p.conductor.metal;
+        match (p.terms, metal) {
+            (true, false) => {
+                for k in 0..LANES {
+                    microfacet_lane::<D, G, F, true, true, false>(p, &lane(k), out, k);
+                }
             }
-        } else {
-            for k in 0..LANES {
-                microfacet_lane::<D, G, F, true, false>(p, &lane(k), out, k);
+            (false, false) => {
+                for k in 0..LANES {
+                    microfacet_lane::<D, G, F, true, false, false>(p, &lane(k), out, k);
+                }
+            }
+            (true, true) => {
+                for k in 0..LANES {
+                    microfacet_lane::<D, G, F, true, true, true>(p, &lane(k), out, k);
+                }
+            }
+            (false, true) => {
+                for k in 0..LANES {
+                    microfacet_lane::<D, G, F, true, false, true>(p, &lane(k), out, k);
+                }
             }
         }
     }
@@ -487,7 +504,7 @@ fn microfacet_block64<const D: u8, const G: u8, const F: u8>(
 ) {
     for k in 0..LANES {
         let fr = frame64(&lane_inputs(inp, k));
-        microfacet_lane::<D, G, F, false, true>(p, &Lane::from64(&fr), out, k);
+        microfacet_lane::<D, G, F, false, true, false>(p, &Lane::from64(&fr), out, k);
     }
 }
 
@@ -593,21 +610,28 @@ pub fn f_block<const F: u8>(p: &Params, st: &Stage, out: &mut Outputs) {
             s2_64: st.s2_64[k],
             ok: st.ok[k],
         };
-        finish_lane::<F, true>(p, &fr, (st.d[k], 1.0), (st.g[k], 1.0), out, k);
+        finish_lane::<F, true, false>(p, &fr, (st.d[k], 1.0), (st.g[k], 1.0), out, k);
     }
 }
 
 /// The terms and the BRDF of lane `k` from its frame (`FAST`: the f32 frame's, see D;
-/// `T`: the terms are wanted).
+/// `T`: the terms are wanted; `M`: the conductor's metal form, see [`finish_lane`]).
 #[inline(always)]
-fn microfacet_lane<const D: u8, const G: u8, const F: u8, const FAST: bool, const T: bool>(
+fn microfacet_lane<
+    const D: u8,
+    const G: u8,
+    const F: u8,
+    const FAST: bool,
+    const T: bool,
+    const M: bool,
+>(
     p: &Params,
     fr: &Lane,
     out: &mut Outputs,
     k: usize,
 ) {
     let (d, g) = microfacet_dg::<D, G, FAST>(p, fr);
-    finish_lane::<F, T>(p, fr, d, g, out, k);
+    finish_lane::<F, T, M>(p, fr, d, g, out, k);
 }
 
 /// D and G of one lane (FORMULAS.md §2–§3) from its frame (`FAST`: the f32 frame's), each
@@ -688,9 +712,10 @@ pub(super) fn geometry<const D: u8, const G: u8>(
 /// F, K and the outputs of lane `k` given its D and G as quotients (FORMULAS.md §4–§6):
 /// D·G·K takes one division (the divider is what a block waits on); the terms themselves
 /// are divided out only when wanted (`T`), after the BRDF, whose bits do not depend on
-/// `T`.
+/// `T`. `M`: the conductor takes its metal form (`conductor::f_lane_metal`), which the
+/// caller chooses only for a material legal for it.
 #[inline(always)]
-fn finish_lane<const F: u8, const T: bool>(
+fn finish_lane<const F: u8, const T: bool, const M: bool>(
     p: &Params,
     fr: &Lane,
     d: (f32, f32),
@@ -709,6 +734,7 @@ fn finish_lane<const F: u8, const T: bool>(
             FresnelKind::None => 1.0,
             FresnelKind::Schlick => schlick::f_lane(one_minus_c, p.f0[ch]),
             FresnelKind::Dielectric => dielectric::f_lane(fr.c64, fr.s2_64, p.ior[ch], p.mu2m1[ch]),
+            FresnelKind::Conductor if M => conductor::f_lane_metal(c, s2_f, &p.conductor, ch),
             FresnelKind::Conductor => conductor::f_lane(c, s2_f, &p.conductor, ch),
         };
     }

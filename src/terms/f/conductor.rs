@@ -98,6 +98,12 @@ pub struct LaneConstants {
     pub c_iq: [f32; 3],
     /// `Im(η²)/|η|⁴`.
     pub c_bq: [f32; 3],
+    /// `Im(η²)² = 4n²k²`, for [`f_lane_metal`].
+    pub e2i2: [f32; 3],
+    /// `Im(η²)/2 = nk`, for [`f_lane_metal`].
+    pub e2ih: [f32; 3],
+    /// Whether every channel may take [`f_lane_metal`] ([`metal_form_legal`]).
+    pub metal: bool,
 }
 
 impl LaneConstants {
@@ -118,6 +124,9 @@ impl LaneConstants {
             c_eb: r(std::array::from_fn(|c| e2i[c] * e2i[c] / q[c])),
             c_iq: r(q.map(|q| 1.0 / q)),
             c_bq: r(std::array::from_fn(|c| e2i[c] / q[c] / q[c])),
+            e2i2: r(e2i.map(|x| x * x)),
+            e2ih: r(e2i.map(|x| 0.5 * x)),
+            metal: (0..3).all(|c| metal_form_legal(n[c], k[c])),
         }
     }
 }
@@ -187,9 +196,150 @@ pub fn f_lane_with(c: f32, s2: f32, nk: [f32; 4], q: [f32; 4]) -> f32 {
     0.5 * (a * d + e * b) / (b * d)
 }
 
+/// The largest error bound, in units of u = 2⁻²⁴ relative to F, for which a channel takes
+/// [`f_lane_metal`] ([`metal_form_bound`]): 2.9e-6, about what the scaled form's 50-odd
+/// roundings may add, and the share of FORMULAS.md §1's 1e-5 that docs/CPU_ENGINE.md ("The
+/// f32 frame's error bound") gives F. Copper, gold, silver, aluminium, iron and the other
+/// metals whose F0 ≥ ~0.3 in every channel take the metal form; dielectric-like η (small k,
+/// F0 a few %) keep [`f_lane`].
+pub const METAL_FORM_BUDGET: f64 = 48.0;
+
+/// [`f_lane_metal`]'s worst-case relative error in units of u for `η = n + ik`, over every
+/// `c` in (0, 1], with the frame's `c` and `sin²θ` taken as exact (their errors are the
+/// frame's):
+///
+/// `5.75/F0 + 24 + ρ (1/√F0 + 3)`, `ρ = (2|n² − k²| + 1)/min_s |η² − s|` (s ∈ [0, 1]).
+///
+/// - Every value but `Ns = |w|² + c² − 2cA` (`w = √(η² − sin²θ) = A + iB`) is a product,
+///   quotient, root or sum of non-negative numbers, so its rounding errors add: 24u in all.
+/// - `Ns` is a difference: the errors of its two parts (≤ 5.75u of `Ds = |w|² + c² + 2cA`)
+///   are relative to `Ns = R_s Ds`, and `R_s = |c − w|²/|c + w|²` falls from 1 at grazing to
+///   `F0 = ((n − 1)² + k²)/((n + 1)² + k²)` at normal incidence, monotonically.
+/// - `Re(η² − sin²θ)` is rounded once with its constant (≤ u(2|n² − k²| + 1) absolute),
+///   which moves `η² − sin²θ` by at most ρ relative and `w` by ρ/2 — the same `w` for every
+///   later use, so F moves by its condition in `w`: `2(1/√R_s + 1)` for `R_s`, 4 for the
+///   p-polarised factor.
+///
+/// Infinite (never legal) where η leaves the range that keeps every product normal and
+/// finite in f32: `|η| ≤ 1e4` and `min_s |η² − s| ≥ 1e-4`.
+pub fn metal_form_bound(n: f64, k: f64) -> f64 {
+    let (e2r, e2i) = (n * n - k * k, 2.0 * n * k);
+    // The distance from η² to the segment [0, 1] that sin²θ covers.
+    let gap = if e2r > 1.0 {
+        e2r - 1.0
+    } else if e2r < 0.0 {
+        -e2r
+    } else {
+        0.0
+    };
+    let mag_min = gap.hypot(e2i);
+    let f0 = ((n - 1.0).powi(2) + k * k) / ((n + 1.0).powi(2) + k * k);
+    // Written so that NaN parameters (never legal) fall through to the infinite bound.
+    let in_range = n.hypot(k) <= 1e4 && mag_min >= 1e-4 && f0 > 0.0;
+    if !in_range {
+        return f64::INFINITY;
+    }
+    let rho = (2.0 * e2r.abs() + 1.0) / mag_min;
+    5.75 / f0 + 24.0 + rho * (1.0 / f0.sqrt() + 3.0)
+}
+
+/// Whether a channel with `η = n + ik` may take [`f_lane_metal`]: its bound
+/// ([`metal_form_bound`]) within [`METAL_FORM_BUDGET`].
+pub fn metal_form_legal(n: f64, k: f64) -> bool {
+    metal_form_bound(n, k) <= METAL_FORM_BUDGET
+}
+
+/// F in a lane for channel `ch` of a material whose every channel is legal for it
+/// ([`metal_form_legal`]), in the real form of pbrt-v3's `FrConductor` (Pharr, Jakob &
+/// Humphreys 2016, §8.2.1): with `w = η cos θt = √(η² − sin²θ) = A + iB`,
+/// `R_s = (|w|² + c² − 2cA)/(|w|² + c² + 2cA)` and
+/// `R_p = R_s (|w|²c² + sin⁴θ − 2cA sin²θ)/(|w|²c² + sin⁴θ + 2cA sin²θ)`, so that
+/// `F = (R_s + R_p)/2 = R_s (|w|²c² + sin⁴θ)/(|w|²c² + sin⁴θ + 2cA sin²θ)` — over one
+/// division, with no B and about half [`f_lane`]'s arithmetic. Its one difference, `R_s`'s
+/// numerator, cancels as F0 → 0, which is what the legality rule bounds.
+#[inline(always)]
+pub fn f_lane_metal(c: f32, s2: f32, p: &LaneConstants, ch: usize) -> f32 {
+    let c2 = c * c;
+    let re = p.e2r[ch] - s2;
+    let mag = (re * re + p.e2i2[ch]).sqrt();
+    // √(η² − sin²θ)'s larger component from the sum that does not cancel, the other as
+    // Im/2 over it: A is the larger one where Re(η² − sin²θ) ≥ 0, else the quotient (the
+    // direct √((|w|² + Re)/2) cancels there: metals have Re(η²) < 0). `t ≥ √(mag/2)`, which
+    // the range of `metal_form_bound` keeps ≥ 7e-3.
+    let t = (0.5 * (mag + re.abs())).sqrt();
+    let q = p.e2ih[ch] / t;
+    // A select by bits: written as `if`, LLVM sank the division into the branch that uses
+    // it, and the branch kept the lane loop from vectorising (200 instructions an
+    // evaluation instead of 70).
+    let keep_t = u32::from(re >= 0.0).wrapping_neg();
+    let a = f32::from_bits((t.to_bits() & keep_t) | (q.to_bits() & !keep_t));
+    let ca2 = 2.0 * c * a;
+    let bs = mag + c2;
+    let bp = mag * c2 + s2 * s2;
+    (bs - ca2) * bp / ((bs + ca2) * (bp + ca2 * s2))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The metal form's largest relative error in units of u against the f64 form over
+    /// `c` in [1e-4, 1], denser towards normal incidence (where `R_s` is smallest and its
+    /// numerator cancels most), `sin²θ` rounded from f64 as a frame gives it.
+    fn metal_form_error(n: f64, k: f64) -> f64 {
+        let p = LaneConstants::new([n; 3], [k; 3]);
+        let mut worst = 0f64;
+        for i in 0..=40_000 {
+            let x = f64::from(i) / 40_000.0;
+            let c = (1e-4 + (1.0 - 1e-4) * x.sqrt()) as f32;
+            let cc = f64::from(c);
+            let s2 = ((1.0 - cc) * (1.0 + cc)) as f32;
+            let want = f(cc, n, k);
+            let got = f64::from(f_lane_metal(c, s2, &p, 0));
+            worst = worst.max((got - want).abs() / want);
+        }
+        worst / f64::from(f32::EPSILON / 2.0)
+    }
+
+    /// The metal form stays inside its written bound on metals and on the legal materials
+    /// nearest the budget: small F0 (n ≫ k and n ≈ k), Re(η²) near the ends of sin²θ's
+    /// range [0, 1] (the root's two branches), and |η| small.
+    #[test]
+    fn the_metal_form_stays_inside_its_bound() {
+        let cases = [
+            (0.2, 3.9),
+            (0.92, 2.45),
+            (1.1, 2.14),
+            (1.37, 1.77),
+            (1.35, 7.5),
+            (5.0, 0.0),
+            (4.5, 0.5),
+            (1.0, 1.3),
+            (1.3, 1.5),
+            (0.2, 0.9),
+            (0.02, 0.7),
+        ];
+        for (n, k) in cases {
+            let bound = metal_form_bound(n, k);
+            assert!(bound <= METAL_FORM_BUDGET, "η = {n} + {k}i should be legal ({bound})");
+            let err = metal_form_error(n, k);
+            assert!(err <= bound, "η = {n} + {k}i: {err}u against a bound of {bound}u");
+        }
+    }
+
+    /// Dielectric-like η (F0 of a few %) and η² on sin²θ's range are refused: there the
+    /// metal form's one difference cancels, and the scaled form keeps them.
+    #[test]
+    fn the_metal_form_refuses_low_reflectance_and_eta_squared_near_sin_squared() {
+        for (n, k) in [(1.5, 0.0), (1.5, 0.5), (1.0, 0.0), (0.5, 0.01), (1.0, 1e-6), (2e4, 1.0)] {
+            assert!(!metal_form_legal(n, k), "η = {n} + {k}i");
+        }
+        // Measured: the refused forms are worse than the scaled one (F0 = 0.04: 26u).
+        assert!(metal_form_error(1.5, 0.0) > 20.0);
+        let mixed = LaneConstants::new([0.2, 0.9, 1.5], [3.9, 2.4, 0.0]);
+        assert!(!mixed.metal, "one dielectric-like channel keeps the scaled form");
+        assert!(LaneConstants::new([0.2, 0.9, 1.1], [3.9, 2.4, 2.1]).metal);
+    }
 
     /// Small n and k near `c² = 1 − (n² − k²)`, where Re(η² − sin²) cancels: the form
     /// with the smaller terms keeps F to a few ulp (the other form is 1.6e-5 wrong here).
