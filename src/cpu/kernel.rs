@@ -380,45 +380,16 @@ pub fn microfacet_block<const D: u8, const G: u8, const F: u8, const Z: bool>(
             FRAME_EACH => frames::<Z, FRAME_EACH>(p, inp, &z, &mut fs, &mut ok, &mut slow),
             _ => frames::<Z, FRAME_GENERAL>(p, inp, &z, &mut fs, &mut ok, &mut slow),
         }
-        // Two loops, so that the one without terms divides nothing out.
-        let lane = |k: usize| {
-            Lane::from32(&Frame {
-                cos_i: fs[0][k],
-                cos_o: fs[1][k],
-                cos_h: fs[2][k],
-                c: fs[3][k],
-                sin2_h: fs[4][k],
-                sin2_i: fs[5][k],
-                sin2_o: fs[6][k],
-                s2: fs[7][k],
-                ok: ok[k],
-            })
-        };
-        // A conductor whose every channel is legal for it takes F's metal form
-        // (`conductor::f_lane_metal`, half the arithmetic); the f64 frame's lanes keep the
-        // scaled form, as the other Fresnel terms keep theirs.
+        // Two loops, so that the one without terms divides nothing out; a conductor whose
+        // every channel is legal for it takes F's metal form (`conductor::f_lane_metal`,
+        // half the arithmetic), while the f64 frame's lanes keep the scaled form, as the
+        // other Fresnel terms keep theirs.
         let metal = F == F_CONDUCTOR && p.conductor.metal;
         match (p.terms, metal) {
-            (true, false) => {
-                for k in 0..LANES {
-                    microfacet_lane::<D, G, F, true, true, false>(p, &lane(k), out, k);
-                }
-            }
-            (false, false) => {
-                for k in 0..LANES {
-                    microfacet_lane::<D, G, F, true, false, false>(p, &lane(k), out, k);
-                }
-            }
-            (true, true) => {
-                for k in 0..LANES {
-                    microfacet_lane::<D, G, F, true, true, true>(p, &lane(k), out, k);
-                }
-            }
-            (false, true) => {
-                for k in 0..LANES {
-                    microfacet_lane::<D, G, F, true, false, true>(p, &lane(k), out, k);
-                }
-            }
+            (true, false) => terms32::<D, G, F, true, false>(p, &fs, &ok, out),
+            (false, false) => terms32::<D, G, F, false, false>(p, &fs, &ok, out),
+            (true, true) => terms32::<D, G, F, true, true>(p, &fs, &ok, out),
+            (false, true) => terms32::<D, G, F, false, true>(p, &fs, &ok, out),
         }
     }
     if p.defer_slow && p.fast_frame {
@@ -448,6 +419,31 @@ pub fn microfacet_block<const D: u8, const G: u8, const F: u8, const Z: bool>(
                 out.rescue[k] = o64.rescue[k];
             }
         }
+    }
+}
+
+/// The terms and the BRDF of a block's lanes on their f32 frames (`fs`, `ok` from
+/// [`frames`]); `T` and `M` as [`finish_lane`] takes them.
+#[inline(always)]
+fn terms32<const D: u8, const G: u8, const F: u8, const T: bool, const M: bool>(
+    p: &Params,
+    fs: &[[f32; LANES]; 8],
+    ok: &[bool; LANES],
+    out: &mut Outputs,
+) {
+    for k in 0..LANES {
+        let lane = Lane::from32(&Frame {
+            cos_i: fs[0][k],
+            cos_o: fs[1][k],
+            cos_h: fs[2][k],
+            c: fs[3][k],
+            sin2_h: fs[4][k],
+            sin2_i: fs[5][k],
+            sin2_o: fs[6][k],
+            s2: fs[7][k],
+            ok: ok[k],
+        });
+        microfacet_lane::<D, G, F, true, T, M>(p, &lane, out, k);
     }
 }
 

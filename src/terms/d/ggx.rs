@@ -58,9 +58,10 @@ pub fn d_ratio32(cos_h: f32, sin2_h: f32, m2: f32, norm: f32) -> (f32, f32) {
 }
 
 /// The relative error of D that the local form's f32 frame (`cpu::frame::frame_local32`)
-/// may add through its rounding of h, beside the ~45u (u = 2⁻²⁴) of D's, G's, F's and K's
-/// own f32 arithmetic: 4e-6 + 2.7e-6 stays inside FORMULAS.md §1's 1e-5 (docs/CPU_ENGINE.md,
-/// "The local form's f32 frame").
+/// may add through its rounding of h, beside the rest of the frame (~14u, u = 2⁻²⁴), F
+/// (≤ 48u with the conductor's metal form, `conductor::METAL_FORM_BUDGET`) and D's, G's
+/// and K's own f32 arithmetic (~25u): 4e-6 + 87u = 9.2e-6 stays inside FORMULAS.md §1's
+/// 1e-5 (docs/CPU_ENGINE.md, "The f32 frame's error bound").
 pub const LOCAL_FRAME_D_BUDGET: f64 = 4e-6;
 
 /// The constant of [`local_frame_ok`] for roughness² `m2`: `16 (1 − m²)² u²/B²`, with
