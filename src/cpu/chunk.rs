@@ -15,6 +15,7 @@ use crate::batch::columns::{Column, ColumnBatch};
 use crate::batch::{Batch, LocalBatch, Tuple, COLUMNS_LOCAL, COLUMNS_PLAIN, COLUMNS_TANGENT};
 use crate::material::{Material, Model};
 use crate::reference::{evaluate_tuple, to_output_f32, Status};
+use crate::terms::math::{Fused, MulAdd, Rounded};
 
 /// Where the tuples of the last evaluation went.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
@@ -164,7 +165,8 @@ impl pulp::WithSimd for ChunkOp<'_, '_> {
 
     #[inline(always)]
     fn with_simd<S: pulp::Simd>(self, simd: S) -> (Counts, Tally) {
-        run_chunk(
+        // `S` may lack FMA (the scalar variant): `a·b + c` rounded twice.
+        run_chunk::<S, _, Rounded>(
             simd,
             transpose::Portable,
             self.plan,
@@ -191,7 +193,8 @@ impl<S: pulp::Simd + transpose::Transpose> pulp::NullaryFnOnce for ChunkOpX86<'_
     #[inline(always)]
     fn call(self) -> (Counts, Tally) {
         let o = self.op;
-        run_chunk(
+        // AVX2+FMA and AVX-512 both have FMA.
+        run_chunk::<S, S, Fused>(
             self.simd, self.simd, o.plan, o.batch, o.order, o.work, o.material,
         )
     }
@@ -251,7 +254,7 @@ fn tangent_columns(rows: &[f32], inp: &mut Inputs) {
 const RUN: usize = 8;
 
 #[inline(always)]
-fn run_chunk<S: pulp::Simd, T: transpose::Transpose>(
+fn run_chunk<S: pulp::Simd, T: transpose::Transpose, A: MulAdd>(
     simd: S,
     tr: T,
     plan: &Plan,
@@ -264,15 +267,15 @@ fn run_chunk<S: pulp::Simd, T: transpose::Transpose>(
         // Block by block: Lambert's lanes are inline (no call to amortise), and with one
         // block's arrays LLVM keeps its few values in registers (runs of `RUN` blocks
         // took it from 31 to 76 instructions an evaluation).
-        run_blocks::<S, T, 1>(simd, tr, plan, batch, order, w, m)
+        run_blocks::<S, T, A, 1>(simd, tr, plan, batch, order, w, m)
     } else {
-        run_blocks::<S, T, RUN>(simd, tr, plan, batch, order, w, m)
+        run_blocks::<S, T, A, RUN>(simd, tr, plan, batch, order, w, m)
     }
 }
 
 /// The chunk loop over runs of `R` blocks.
 #[inline(always)]
-fn run_blocks<S: pulp::Simd, T: transpose::Transpose, const R: usize>(
+fn run_blocks<S: pulp::Simd, T: transpose::Transpose, A: MulAdd, const R: usize>(
     simd: S,
     tr: T,
     plan: &Plan,
@@ -335,7 +338,7 @@ fn run_blocks<S: pulp::Simd, T: transpose::Transpose, const R: usize>(
                     measured::measured_block(&data.data, data.lookup, &inp[b], &mut out[b]);
                 }
             }
-            _ => block(simd, plan, &inp[..blocks], &mut out[..blocks], z),
+            _ => block::<S, A>(simd, plan, &inp[..blocks], &mut out[..blocks], z),
         }
         for b in 0..blocks {
             let j = j0 + b * LANES;
@@ -356,14 +359,23 @@ fn run_blocks<S: pulp::Simd, T: transpose::Transpose, const R: usize>(
             if out[b].any_slow() {
                 for k in lanes_of(kernel::bits(&out[b].slow) & valid) {
                     if deferred.push(&inp[b], k, j + k, row(k)) {
-                        deferred.run(simd, &plan64, z, batch, m, w, &mut counts, &mut tally);
+                        deferred.run::<S, A>(
+                            simd,
+                            &plan64,
+                            z,
+                            batch,
+                            m,
+                            w,
+                            &mut counts,
+                            &mut tally,
+                        );
                     }
                 }
             }
         }
         j0 += (blocks * LANES).min(len - j0);
     }
-    deferred.run(simd, &plan64, z, batch, m, w, &mut counts, &mut tally);
+    deferred.run::<S, A>(simd, &plan64, z, batch, m, w, &mut counts, &mut tally);
     (counts, tally)
 }
 
@@ -417,7 +429,7 @@ impl Deferred {
     /// The gathered lanes on `plan64` (the group's f64 frame), into their places in `w`,
     /// rescued where the lanes say so.
     #[allow(clippy::too_many_arguments)]
-    fn run<S: pulp::Simd>(
+    fn run<S: pulp::Simd, A: MulAdd>(
         &mut self,
         simd: S,
         plan64: &Plan,
@@ -439,7 +451,7 @@ impl Deferred {
             }
         }
         let mut out = [Outputs::default()];
-        block(simd, plan64, std::slice::from_ref(&self.inp), &mut out, z);
+        block::<S, A>(simd, plan64, std::slice::from_ref(&self.inp), &mut out, z);
         tally.deferred += n as u64;
         for (k, &(j, row)) in self.at[..n].iter().enumerate() {
             if out[0].rescue[k] {

@@ -6,14 +6,16 @@
 use super::kernel::{self, Inputs, Outputs, LANES};
 use super::plan::Plan;
 use super::{aniso, lobes};
+use crate::terms::math::MulAdd;
 use crate::terms::FresnelKind;
 
-/// A run of blocks of `plan`'s lanes, each `inp[b]` into `out[b]`; `z`: every lane's N is
+/// A run of blocks of `plan`'s lanes, each `inp[b]` into `out[b]`, forming `a·b + c` as `A`
+/// says (fused where `simd` has FMA); `z`: every lane's N is
 /// (0, 0, 1) (the local form), which the groups with an f32 frame run without N's
 /// arithmetic, to the same bits. The groups whose frame is always the f64 one (which
 /// serves both forms: the local form's lanes carry N) are compiled once, not once per form.
 #[inline(always)]
-pub(crate) fn block<S: pulp::Simd>(
+pub(crate) fn block<S: pulp::Simd, A: MulAdd>(
     simd: S,
     plan: &Plan,
     inp: &[Inputs],
@@ -26,9 +28,9 @@ pub(crate) fn block<S: pulp::Simd>(
         _ => return f64_frame_block(simd, plan, inp, out),
     }
     if z {
-        f32_frame_block::<S, true>(simd, plan, inp, out)
+        f32_frame_block::<S, A, true>(simd, plan, inp, out)
     } else {
-        f32_frame_block::<S, false>(simd, plan, inp, out)
+        f32_frame_block::<S, A, false>(simd, plan, inp, out)
     }
 }
 
@@ -68,7 +70,7 @@ fn reference_block(out: &mut [Outputs]) {
 /// Lambert and the fused microfacet groups ([`kernel::fused`]): the groups with an f32
 /// frame, compiled per form (`Z`: N = +z). The others go on to [`f64_frame_block`].
 #[inline(always)]
-fn f32_frame_block<S: pulp::Simd, const Z: bool>(
+fn f32_frame_block<S: pulp::Simd, A: MulAdd, const Z: bool>(
     simd: S,
     plan: &Plan,
     inp: &[Inputs],
@@ -87,19 +89,22 @@ fn f32_frame_block<S: pulp::Simd, const Z: bool>(
     macro_rules! by_f {
         ($d:expr, $g:expr) => {
             match f {
-                F::None => each_block!(
-                    simd,
-                    inp,
-                    out,
-                    |i, o| microfacet_block::<$d, $g, F_NONE, Z>(p, i, o)
-                ),
+                F::None => each_block!(simd, inp, out, |i, o| microfacet_block::<
+                    A,
+                    $d,
+                    $g,
+                    F_NONE,
+                    Z,
+                >(p, i, o)),
                 F::Schlick => each_block!(simd, inp, out, |i, o| microfacet_block::<
+                    A,
                     $d,
                     $g,
                     F_SCHLICK,
                     Z,
                 >(p, i, o)),
                 F::Conductor => each_block!(simd, inp, out, |i, o| microfacet_block::<
+                    A,
                     $d,
                     $g,
                     F_CONDUCTOR,

@@ -9,6 +9,8 @@
 /// §1, "Overflow": cosines down to the smallest subnormal must still come out exact).
 pub const GRAZING: f64 = 1e-4;
 
+use crate::terms::math::MulAdd;
+
 /// The frame of one lane (FORMULAS.md §1) and whether the lanes may take it.
 #[derive(Clone, Copy, Default)]
 pub(super) struct Frame {
@@ -169,19 +171,22 @@ pub(super) fn frame<const Z: bool>(x: &[f32; 9]) -> Frame {
 /// sums of squares of components, as in [`frame`] — which forms l, v and h in f64 to make
 /// that turn `u·√3/2` whatever c, at ~25 instructions an evaluation more (AVX2).
 #[inline(always)]
-pub(super) fn frame_local32(x: &[f32; 9]) -> Frame {
+pub(super) fn frame_local32<A: MulAdd>(x: &[f32; 9]) -> Frame {
     let (lx, ly, lz) = (x[0], x[1], x[2]);
     let (vx, vy, vz) = (x[3], x[4], x[5]);
-    let (ll, vv) = (lx * lx + ly * ly + lz * lz, vx * vx + vy * vy + vz * vz);
+    let (ll, vv) = (
+        A::mul_add(lz, lz, A::mul_add(lx, lx, ly * ly)),
+        A::mul_add(vz, vz, A::mul_add(vx, vx, vy * vy)),
+    );
     let (il, iv) = (rsqrt(ll), rsqrt(vv));
     let (lx, ly, lz) = (lx * il, ly * il, lz * il);
     let (vx, vy, vz) = (vx * iv, vy * iv, vz * iv);
     let (hx, hy, hz) = (lx + vx, ly + vy, lz + vz);
-    let hh = hx * hx + hy * hy + hz * hz;
+    let hh = A::mul_add(hz, hz, A::mul_add(hx, hx, hy * hy));
     let ih = rsqrt(hh);
     let c = 0.5 * (hh * ih);
     let (dx, dy, dz) = (lx - vx, ly - vy, lz - vz);
-    let s2 = 0.25 * (dx * dx + dy * dy + dz * dz);
+    let s2 = 0.25 * A::mul_add(dz, dz, A::mul_add(dx, dx, dy * dy));
     let (cos_i, cos_o, cos_h) = (lz, vz, hz * ih);
     let g = GRAZING as f32;
     // `>=` is false for NaN: lanes that went non-finite are rescued too.
@@ -192,9 +197,9 @@ pub(super) fn frame_local32(x: &[f32; 9]) -> Frame {
         cos_h,
         c,
         s2,
-        sin2_h: (hx * hx + hy * hy) * (ih * ih),
-        sin2_i: lx * lx + ly * ly,
-        sin2_o: vx * vx + vy * vy,
+        sin2_h: A::mul_add(hx, hx, hy * hy) * (ih * ih),
+        sin2_i: A::mul_add(lx, lx, ly * ly),
+        sin2_o: A::mul_add(vx, vx, vy * vy),
         ok,
     }
 }

@@ -20,6 +20,8 @@ use crate::error::{Error, Result};
 use crate::importance::{schlick_weight, Lobe, Sample, Samples, UnitSample, View};
 use crate::material::Material;
 use crate::reference::{evaluate_tuple, to_output_f32};
+use crate::terms::math::{MulAdd, Rounded};
+use std::marker::PhantomData;
 use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
 use std::sync::Mutex;
 
@@ -41,7 +43,12 @@ struct Point<'a> {
 /// asks the reference for every lane). Narrower than [`super::dispatch::block`] on purpose: only
 /// these variants are compiled for the sums.
 #[inline(always)]
-fn f_none_block<S: pulp::Simd>(simd: S, plan: &Plan, inp: &Inputs, out: &mut Outputs) -> bool {
+fn f_none_block<S: pulp::Simd, A: MulAdd>(
+    simd: S,
+    plan: &Plan,
+    inp: &Inputs,
+    out: &mut Outputs,
+) -> bool {
     use crate::terms::{DistributionKind as D, FresnelKind, Geometry as G};
     use kernel::*;
     let Plan::Microfacet {
@@ -57,7 +64,7 @@ fn f_none_block<S: pulp::Simd>(simd: S, plan: &Plan, inp: &Inputs, out: &mut Out
     macro_rules! fused {
         ($d:expr, $g:expr) => {
             apart(simd, || {
-                microfacet_block::<$d, $g, F_NONE, true>(p, inp, out)
+                microfacet_block::<A, $d, $g, F_NONE, true>(p, inp, out)
             })
         };
     }
@@ -108,14 +115,53 @@ impl pulp::WithSimd for ItemOp<'_> {
 
     #[inline(always)]
     fn with_simd<S: pulp::Simd>(self, simd: S) {
+        // `S` may lack FMA (the scalar variant): `a·b + c` rounded twice, as the chunks'.
+        self.sums::<S, Rounded>(simd);
+    }
+}
+
+impl ItemOp<'_> {
+    /// The item's sums in `simd`'s lanes, forming `a·b + c` as `A` (the chunks' choice
+    /// for the same instruction set, so that a table's lanes give `eval`'s bits).
+    #[inline(always)]
+    fn sums<S: pulp::Simd, A: MulAdd>(self, simd: S) {
         for (pt, sum) in self.points.iter().zip(self.sums.iter_mut()) {
-            *sum = point_sums(simd, pt, self.units, self.cols);
+            *sum = point_sums::<S, A>(simd, pt, self.units, self.cols);
         }
     }
 }
 
+/// [`ItemOp`] on AVX-512 and AVX2, both with FMA.
+#[cfg(target_arch = "x86_64")]
+struct ItemOpX86<'a, S> {
+    simd: S,
+    op: ItemOp<'a>,
+}
+
+#[cfg(target_arch = "x86_64")]
+impl<S: pulp::Simd> pulp::NullaryFnOnce for ItemOpX86<'_, S> {
+    type Output = ();
+
+    #[inline(always)]
+    fn call(self) {
+        self.op.sums::<S, crate::terms::math::Fused>(self.simd);
+    }
+}
+
+/// Runs `op` in `arch`'s lanes: AVX-512 and AVX2 with FMA (as the chunks run them), the
+/// rest through pulp's dispatch.
+fn run_item(arch: pulp::Arch, op: ItemOp) {
+    #[cfg(target_arch = "x86_64")]
+    match arch {
+        pulp::Arch::V4(simd) => return simd.vectorize(ItemOpX86 { simd, op }),
+        pulp::Arch::V3(simd) => return simd.vectorize(ItemOpX86 { simd, op }),
+        _ => {}
+    }
+    arch.dispatch(op)
+}
+
 /// The samples of one point gathered into a block of lanes, and its sums so far.
-struct Acc<'a, S> {
+struct Acc<'a, S, A> {
     simd: S,
     pt: &'a Point<'a>,
     v32: [f32; 3],
@@ -124,11 +170,13 @@ struct Acc<'a, S> {
     weights: [[f64; 2]; LANES],
     n: usize,
     sums: [f64; 2],
+    /// How the lanes form `a·b + c`.
+    mul_add: PhantomData<A>,
 }
 
-impl<'a, S: pulp::Simd> Acc<'a, S> {
+impl<'a, S: pulp::Simd, A: MulAdd> Acc<'a, S, A> {
     #[inline(always)]
-    fn new(simd: S, pt: &'a Point<'a>) -> Acc<'a, S> {
+    fn new(simd: S, pt: &'a Point<'a>) -> Acc<'a, S, A> {
         let v32 = pt.view.v.map(|x| x as f32);
         let mut inp = Inputs::default();
         for c in 0..3 {
@@ -144,6 +192,7 @@ impl<'a, S: pulp::Simd> Acc<'a, S> {
             weights: [[0f64; 2]; LANES],
             n: 0,
             sums: [0f64; 2],
+            mul_add: PhantomData,
         }
     }
 
@@ -182,7 +231,7 @@ impl<'a, S: pulp::Simd> Acc<'a, S> {
                 };
             }
         }
-        let lanes = f_none_block(self.simd, self.pt.plan, &self.inp, &mut self.out);
+        let lanes = f_none_block::<S, A>(self.simd, self.pt.plan, &self.inp, &mut self.out);
         for k in 0..LANES {
             if made.ok[k] {
                 let w = [made.weight[k], schlick_weight(made.c[k]) * made.weight[k]];
@@ -216,7 +265,7 @@ impl<'a, S: pulp::Simd> Acc<'a, S> {
     /// The lanes' results of the samples gathered so far, added in order.
     #[inline(always)]
     fn flush(&mut self) {
-        let lanes = f_none_block(self.simd, self.pt.plan, &self.inp, &mut self.out);
+        let lanes = f_none_block::<S, A>(self.simd, self.pt.plan, &self.inp, &mut self.out);
         for k in 0..self.n {
             self.add(lanes, k, self.weights[k]);
         }
@@ -227,13 +276,13 @@ impl<'a, S: pulp::Simd> Acc<'a, S> {
 /// `[Σ x, Σ x (1 − c)⁵]`, `x = f · cos_i/pdf`, over the samples `units` of one point, in
 /// sample order (a below-horizon sample adds nothing, as its weight 0 does on the host).
 #[inline(always)]
-fn point_sums<S: pulp::Simd>(
+fn point_sums<S: pulp::Simd, A: MulAdd>(
     simd: S,
     pt: &Point,
     units: &[UnitSample],
     cols: &[Vec<f64>; 3],
 ) -> [f64; 2] {
-    let mut acc = Acc::new(simd, pt);
+    let mut acc = Acc::<S, A>::new(simd, pt);
     if pt.view.has_lanes() {
         // `LANES` samples at a time in wide f64 registers.
         let mut made = Samples::<LANES>::default();
@@ -340,12 +389,15 @@ impl CpuEngine {
                 let group = &points[g * POINT_GROUP..points.len().min((g + 1) * POINT_GROUP)];
                 sums.clear();
                 sums.resize(group.len(), [0f64; 2]);
-                arch.dispatch(ItemOp {
-                    points: group,
-                    units: &units,
-                    cols: &cols,
-                    sums: &mut sums,
-                });
+                run_item(
+                    arch,
+                    ItemOp {
+                        points: group,
+                        units: &units,
+                        cols: &cols,
+                        sums: &mut sums,
+                    },
+                );
                 {
                     let mut all = block_sums.lock().expect("sums lock");
                     for (j, s) in sums.iter().enumerate() {

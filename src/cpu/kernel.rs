@@ -19,6 +19,7 @@ use crate::terms::d::{beckmann, blinn, charlie, gaussian, ggx};
 use crate::terms::f::{conductor, dielectric, schlick};
 use crate::terms::g::{cook_torrance, neubelt, schlick_smith, smith, smith_correlated, smith_fast};
 use crate::terms::k::LaneK;
+use crate::terms::math::{MulAdd, Rounded};
 use crate::terms::{DistributionKind, FresnelKind, Geometry};
 
 /// Tuples per block: 16 f32 lanes fill one AVX-512 register (two AVX2 registers).
@@ -343,7 +344,7 @@ pub const FAST_MIN_ROUGHNESS: f64 = 0.075;
 /// whose bits the local form and the rows with N = (0, 0, 1) share, so a lane's result
 /// depends on its tuple alone and both forms give the same bits.
 #[inline(always)]
-pub fn microfacet_block<const D: u8, const G: u8, const F: u8, const Z: bool>(
+pub fn microfacet_block<A: MulAdd, const D: u8, const G: u8, const F: u8, const Z: bool>(
     p: &Params,
     inp: &Inputs,
     out: &mut Outputs,
@@ -376,9 +377,9 @@ pub fn microfacet_block<const D: u8, const G: u8, const F: u8, const Z: bool>(
             FRAME_EACH
         };
         match mode {
-            FRAME_LOCAL => frames::<Z, FRAME_LOCAL>(p, inp, &z, &mut fs, &mut ok, &mut slow),
-            FRAME_EACH => frames::<Z, FRAME_EACH>(p, inp, &z, &mut fs, &mut ok, &mut slow),
-            _ => frames::<Z, FRAME_GENERAL>(p, inp, &z, &mut fs, &mut ok, &mut slow),
+            FRAME_LOCAL => frames::<A, Z, FRAME_LOCAL>(p, inp, &z, &mut fs, &mut ok, &mut slow),
+            FRAME_EACH => frames::<A, Z, FRAME_EACH>(p, inp, &z, &mut fs, &mut ok, &mut slow),
+            _ => frames::<A, Z, FRAME_GENERAL>(p, inp, &z, &mut fs, &mut ok, &mut slow),
         }
         // Two loops, so that the one without terms divides nothing out; a conductor whose
         // every channel is legal for it takes F's metal form (`conductor::f_lane_metal`,
@@ -386,10 +387,10 @@ pub fn microfacet_block<const D: u8, const G: u8, const F: u8, const Z: bool>(
         // other Fresnel terms keep theirs.
         let metal = F == F_CONDUCTOR && p.conductor.metal;
         match (p.terms, metal) {
-            (true, false) => terms32::<D, G, F, true, false>(p, &fs, &ok, out),
-            (false, false) => terms32::<D, G, F, false, false>(p, &fs, &ok, out),
-            (true, true) => terms32::<D, G, F, true, true>(p, &fs, &ok, out),
-            (false, true) => terms32::<D, G, F, false, true>(p, &fs, &ok, out),
+            (true, false) => terms32::<A, D, G, F, true, false>(p, &fs, &ok, out),
+            (false, false) => terms32::<A, D, G, F, false, false>(p, &fs, &ok, out),
+            (true, true) => terms32::<A, D, G, F, true, true>(p, &fs, &ok, out),
+            (false, true) => terms32::<A, D, G, F, false, true>(p, &fs, &ok, out),
         }
     }
     if p.defer_slow && p.fast_frame {
@@ -425,7 +426,7 @@ pub fn microfacet_block<const D: u8, const G: u8, const F: u8, const Z: bool>(
 /// The terms and the BRDF of a block's lanes on their f32 frames (`fs`, `ok` from
 /// [`frames`]); `T` and `M` as [`finish_lane`] takes them.
 #[inline(always)]
-fn terms32<const D: u8, const G: u8, const F: u8, const T: bool, const M: bool>(
+fn terms32<A: MulAdd, const D: u8, const G: u8, const F: u8, const T: bool, const M: bool>(
     p: &Params,
     fs: &[[f32; LANES]; 8],
     ok: &[bool; LANES],
@@ -443,7 +444,7 @@ fn terms32<const D: u8, const G: u8, const F: u8, const T: bool, const M: bool>(
             s2: fs[7][k],
             ok: ok[k],
         });
-        microfacet_lane::<D, G, F, true, T, M>(p, &lane, out, k);
+        microfacet_lane::<A, D, G, F, true, T, M>(p, &lane, out, k);
     }
 }
 
@@ -458,7 +459,7 @@ const FRAME_EACH: u8 = 2;
 /// test `ggx::local_frame_ok` or sent to the f64 frame), [`FRAME_EACH`] whichever of the
 /// two the lane's N asks for (`z`: N is exactly (0, 0, 1), `-0` components included).
 #[inline(always)]
-fn frames<const Z: bool, const MODE: u8>(
+fn frames<A: MulAdd, const Z: bool, const MODE: u8>(
     p: &Params,
     inp: &Inputs,
     z: &[bool; LANES],
@@ -469,9 +470,9 @@ fn frames<const Z: bool, const MODE: u8>(
     for k in 0..LANES {
         let x = lane_inputs(inp, k);
         let (fr, local) = match MODE {
-            FRAME_LOCAL => (frame_local32(&x), true),
+            FRAME_LOCAL => (frame_local32::<A>(&x), true),
             FRAME_EACH => {
-                let (a, b) = (frame_local32(&x), frame::<Z>(&x));
+                let (a, b) = (frame_local32::<A>(&x), frame::<Z>(&x));
                 (if z[k] { a } else { b }, z[k])
             }
             _ => (frame::<Z>(&x), false),
@@ -500,7 +501,7 @@ fn microfacet_block64<const D: u8, const G: u8, const F: u8>(
 ) {
     for k in 0..LANES {
         let fr = frame64(&lane_inputs(inp, k));
-        microfacet_lane::<D, G, F, false, true, false>(p, &Lane::from64(&fr), out, k);
+        microfacet_lane::<Rounded, D, G, F, false, true, false>(p, &Lane::from64(&fr), out, k);
     }
 }
 
@@ -562,7 +563,7 @@ impl Default for Stage {
 pub fn dg_block64<const D: u8, const G: u8>(p: &Params, inp: &Inputs, st: &mut Stage) {
     for k in 0..LANES {
         let fr = Lane::from64(&frame64(&lane_inputs(inp, k)));
-        let (d, g) = microfacet_dg::<D, G, false>(p, &fr);
+        let (d, g) = microfacet_dg::<Rounded, D, G, false>(p, &fr);
         st.put(k, &fr, d.0 / d.1, g.0 / g.1);
     }
 }
@@ -606,7 +607,7 @@ pub fn f_block<const F: u8>(p: &Params, st: &Stage, out: &mut Outputs) {
             s2_64: st.s2_64[k],
             ok: st.ok[k],
         };
-        finish_lane::<F, true, false>(p, &fr, (st.d[k], 1.0), (st.g[k], 1.0), out, k);
+        finish_lane::<Rounded, F, true, false>(p, &fr, (st.d[k], 1.0), (st.g[k], 1.0), out, k);
     }
 }
 
@@ -614,6 +615,7 @@ pub fn f_block<const F: u8>(p: &Params, st: &Stage, out: &mut Outputs) {
 /// `T`: the terms are wanted; `M`: the conductor's metal form, see [`finish_lane`]).
 #[inline(always)]
 fn microfacet_lane<
+    A: MulAdd,
     const D: u8,
     const G: u8,
     const F: u8,
@@ -626,15 +628,15 @@ fn microfacet_lane<
     out: &mut Outputs,
     k: usize,
 ) {
-    let (d, g) = microfacet_dg::<D, G, FAST>(p, fr);
-    finish_lane::<F, T, M>(p, fr, d, g, out, k);
+    let (d, g) = microfacet_dg::<A, D, G, FAST>(p, fr);
+    finish_lane::<A, F, T, M>(p, fr, d, g, out, k);
 }
 
 /// D and G of one lane (FORMULAS.md §2–§3) from its frame (`FAST`: the f32 frame's), each
 /// as a quotient `(num, den)` where a form has one without a division of its own (GGX's
 /// D on the f32 frame, GGX's Smith terms, smith-fast), else `(value, 1)`.
 #[inline(always)]
-fn microfacet_dg<const D: u8, const G: u8, const FAST: bool>(
+fn microfacet_dg<A: MulAdd, const D: u8, const G: u8, const FAST: bool>(
     p: &Params,
     fr: &Lane,
 ) -> ((f32, f32), (f32, f32)) {
@@ -651,7 +653,9 @@ fn microfacet_dg<const D: u8, const G: u8, const FAST: bool>(
             charlie::d_lane(fr.cos_h2 as f32, fr.sin2_h32, p.exponent, p.d_norm_f),
             1.0,
         ),
-        DistributionKind::Ggx if FAST => ggx::d_ratio32(cos_h, fr.sin2_h32, p.m2_f, p.d_norm_f),
+        DistributionKind::Ggx if FAST => {
+            ggx::d_ratio32::<A>(cos_h, fr.sin2_h32, p.m2_f, p.d_norm_f)
+        }
         DistributionKind::Ggx => (ggx::d_lane64(fr.cos_h2, fr.sin2_h, p.m2, p.d_norm), 1.0),
         DistributionKind::Beckmann if FAST => (
             beckmann::d_lane32(cos_h, fr.sin2_h32, p.inv_m2_f, p.d_norm_f),
@@ -665,9 +669,9 @@ fn microfacet_dg<const D: u8, const G: u8, const FAST: bool>(
     let m2 = p.m2 as f32;
     let ggx = const { matches!(DistributionKind::from_code(D), DistributionKind::Ggx) };
     let g = match const { Geometry::from_code(G) } {
-        Geometry::Smith if ggx => smith::g_ratio_ggx(cos_i, fr.sin2_i, cos_o, fr.sin2_o, m2),
+        Geometry::Smith if ggx => smith::g_ratio_ggx::<A>(cos_i, fr.sin2_i, cos_o, fr.sin2_o, m2),
         Geometry::SmithCorrelated if ggx => {
-            smith_correlated::g_ratio_ggx(cos_i, fr.sin2_i, cos_o, fr.sin2_o, m2)
+            smith_correlated::g_ratio_ggx::<A>(cos_i, fr.sin2_i, cos_o, fr.sin2_o, m2)
         }
         Geometry::SmithFast => smith_fast::g_ratio(cos_i, fr.sin2_i, cos_o, fr.sin2_o, p.m_f),
         _ => {
@@ -711,7 +715,7 @@ pub(super) fn geometry<const D: u8, const G: u8>(
 /// `T`. `M`: the conductor takes its metal form (`conductor::f_lane_metal`), which the
 /// caller chooses only for a material legal for it.
 #[inline(always)]
-fn finish_lane<const F: u8, const T: bool, const M: bool>(
+fn finish_lane<A: MulAdd, const F: u8, const T: bool, const M: bool>(
     p: &Params,
     fr: &Lane,
     d: (f32, f32),
@@ -730,7 +734,7 @@ fn finish_lane<const F: u8, const T: bool, const M: bool>(
             FresnelKind::None => 1.0,
             FresnelKind::Schlick => schlick::f_lane(one_minus_c, p.f0[ch]),
             FresnelKind::Dielectric => dielectric::f_lane(fr.c64, fr.s2_64, p.ior[ch], p.mu2m1[ch]),
-            FresnelKind::Conductor if M => conductor::f_lane_metal(c, s2_f, &p.conductor, ch),
+            FresnelKind::Conductor if M => conductor::f_lane_metal::<A>(c, s2_f, &p.conductor, ch),
             FresnelKind::Conductor => conductor::f_lane(c, s2_f, &p.conductor, ch),
         };
     }
@@ -746,7 +750,7 @@ fn finish_lane<const F: u8, const T: bool, const M: bool>(
     // are), so the test, and with it the BRDF, is the same with and without terms.
     let mut size = d.0.abs() + d.1 + g.0.abs() + g.1 + dgk.abs();
     for ch in 0..3 {
-        let b = p.diffuse[ch] + p.spec[ch] * (dgk * f[ch]);
+        let b = A::mul_add(p.spec[ch], dgk * f[ch], p.diffuse[ch]);
         out.brdf[ch][k] = b;
         size += b.abs() + f[ch].abs();
     }

@@ -3,6 +3,35 @@
 //! f64), written so that a loop over lanes vectorises — no calls into libm, no
 //! data-dependent branches; and the f64 power of a cosine the `cos^e` lobes share.
 
+/// How the lanes form `a·b + c`: [`Fused`] with one rounding where their instruction set
+/// has a fused multiply–add, [`Rounded`] with two where it has none (`f32::mul_add` is a
+/// call into libm there: the scalar variant ran 3.3× the instructions). The engine picks
+/// it with the instruction set, so a variant's bits never depend on where a lane runs.
+pub trait MulAdd {
+    /// `a·b + c`.
+    fn mul_add(a: f32, b: f32, c: f32) -> f32;
+}
+
+/// `a·b + c` rounded once (FMA): the AVX2+FMA and AVX-512 lanes'.
+pub struct Fused;
+
+/// `a·b + c` rounded twice: the lanes of an instruction set without FMA.
+pub struct Rounded;
+
+impl MulAdd for Fused {
+    #[inline(always)]
+    fn mul_add(a: f32, b: f32, c: f32) -> f32 {
+        a.mul_add(b, c)
+    }
+}
+
+impl MulAdd for Rounded {
+    #[inline(always)]
+    fn mul_add(a: f32, b: f32, c: f32) -> f32 {
+        a * b + c
+    }
+}
+
 /// `cos^e` of an angle given both `cos > 0` and `sin² = 1 − cos²` (each accurate), as
 /// `exp(e ln cos)`.
 ///

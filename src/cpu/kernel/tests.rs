@@ -107,7 +107,7 @@ fn every_lanes_group_computes_without_rescue() {
         assert!(plan.is_simd(), "{body} is not in the lanes");
         let mut out = Outputs::default();
         lambert_terms(&mut out);
-        crate::cpu::block(
+        crate::cpu::block::<_, crate::terms::math::Rounded>(
             pulp::Scalar::new(),
             &plan,
             std::slice::from_ref(&inp),
@@ -171,7 +171,7 @@ fn grazing_invalid_and_below_horizon_lanes_are_rescued() {
     )
     .unwrap()[0];
     let mut out = Outputs::default();
-    crate::cpu::block(
+    crate::cpu::block::<_, crate::terms::math::Rounded>(
         pulp::Scalar::new(),
         &Plan::for_material(m),
         std::slice::from_ref(&inp),
@@ -262,7 +262,7 @@ fn the_local_frame_lanes_give_the_general_bits() {
                     for inp in &blocks {
                         let run = |plan: &Plan, z: bool| {
                             let mut o = Outputs::default();
-                            crate::cpu::block(
+                            crate::cpu::block::<_, crate::terms::math::Rounded>(
                                 pulp::Scalar::new(),
                                 plan,
                                 std::slice::from_ref(inp),

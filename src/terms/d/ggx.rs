@@ -4,6 +4,7 @@
 //! Smith Λ `(−1 + √(1 + m² tan²θ))/2` (Walter et al. 2007; Heitz 2014).
 
 use crate::terms::k::Convention;
+use crate::terms::math::MulAdd;
 use std::f64::consts::PI;
 
 /// The spelling in a materials file.
@@ -52,8 +53,8 @@ pub fn lambda(x: f64) -> f64 {
 /// once, for a lane that takes D·G·K over one division (`s² ∈ [min(m², 1)², (1 + m²)²]`
 /// on the f32 frame's materials, m ≥ 0.075: the square stays normal).
 #[inline(always)]
-pub fn d_ratio32(cos_h: f32, sin2_h: f32, m2: f32, norm: f32) -> (f32, f32) {
-    let s = m2 * (cos_h * cos_h) + sin2_h;
+pub fn d_ratio32<A: MulAdd>(cos_h: f32, sin2_h: f32, m2: f32, norm: f32) -> (f32, f32) {
+    let s = A::mul_add(m2, cos_h * cos_h, sin2_h);
     (norm, s * s)
 }
 
@@ -107,8 +108,8 @@ pub fn d_aniso_lane(slope2: f64, cos_h2: f64, norm: f64) -> f32 {
 /// Smith terms' quotients (`smith::g_ratio_ggx`, `smith_correlated::g_ratio_ggx`) take
 /// without a division and without Λ's cancellation for small `m² tan²θ`.
 #[inline(always)]
-pub fn lambda_root_lane(cos: f32, sin2: f32, m2: f32) -> f32 {
-    (cos * cos + m2 * sin2).sqrt()
+pub fn lambda_root_lane<A: MulAdd>(cos: f32, sin2: f32, m2: f32) -> f32 {
+    A::mul_add(m2, sin2, cos * cos).sqrt()
 }
 
 /// Smith's Λ in a lane, given `q2 = m² tan²θ`, rewritten for `q2 ≤ 1` as [`lambda`].

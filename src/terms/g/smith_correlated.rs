@@ -3,6 +3,7 @@
 //! distribution with Λ (Beckmann, GGX).
 
 use crate::terms::d::{ggx, DistributionKind};
+use crate::terms::math::MulAdd;
 
 /// The spelling in a materials file.
 pub const NAME: &str = "smith-correlated";
@@ -31,9 +32,9 @@ pub fn g_lane(lambda_o: f32, lambda_i: f32) -> f32 {
 /// `G = 2 cos_i cos_o/(R_o cos_i + R_i cos_o)`: positive terms, nothing cancels, and the
 /// lane divides once for D·G·K.
 #[inline(always)]
-pub fn g_ratio_ggx(cos_i: f32, sin2_i: f32, cos_o: f32, sin2_o: f32, m2: f32) -> (f32, f32) {
-    let r_i = ggx::lambda_root_lane(cos_i, sin2_i, m2);
-    let r_o = ggx::lambda_root_lane(cos_o, sin2_o, m2);
+pub fn g_ratio_ggx<A: MulAdd>(cos_i: f32, sin2_i: f32, cos_o: f32, sin2_o: f32, m2: f32) -> (f32, f32) {
+    let r_i = ggx::lambda_root_lane::<A>(cos_i, sin2_i, m2);
+    let r_o = ggx::lambda_root_lane::<A>(cos_o, sin2_o, m2);
     (2.0 * cos_i * cos_o, r_o * cos_i + r_i * cos_o)
 }
 
