@@ -142,13 +142,7 @@ pub(super) fn lanes(
         material,
         work,
     };
-    #[cfg(target_arch = "x86_64")]
-    match arch {
-        pulp::Arch::V4(simd) => return simd.vectorize(ChunkOpX86 { simd, op }),
-        pulp::Arch::V3(simd) => return simd.vectorize(ChunkOpX86 { simd, op }),
-        _ => {}
-    }
-    arch.dispatch(op)
+    super::isa::run_lanes(arch, op)
 }
 
 /// The lanes over one chunk, inside the instruction set pulp chose.
@@ -178,24 +172,19 @@ impl pulp::WithSimd for ChunkOp<'_, '_> {
     }
 }
 
-/// [`ChunkOp`] on AVX-512 and AVX2, where whole blocks are transposed by the instruction
-/// set's shuffles (`transpose`).
-#[cfg(target_arch = "x86_64")]
-struct ChunkOpX86<'a, 'b, S> {
-    simd: S,
-    op: ChunkOp<'a, 'b>,
-}
-
-#[cfg(target_arch = "x86_64")]
-impl<S: pulp::Simd + transpose::Transpose> pulp::NullaryFnOnce for ChunkOpX86<'_, '_, S> {
-    type Output = (Counts, Tally);
-
+/// [`ChunkOp`] on AVX-512 and AVX2: whole blocks transposed by the instruction set's
+/// shuffles (`transpose`), `a·b + c` fused.
+impl super::isa::WithFma for ChunkOp<'_, '_> {
     #[inline(always)]
-    fn call(self) -> (Counts, Tally) {
-        let o = self.op;
-        // AVX2+FMA and AVX-512 both have FMA.
+    fn with_fma<S: pulp::Simd + transpose::Transpose>(self, simd: S) -> (Counts, Tally) {
         run_chunk::<S, S, Fused>(
-            self.simd, self.simd, o.plan, o.batch, o.order, o.work, o.material,
+            simd,
+            simd,
+            self.plan,
+            self.batch,
+            self.order,
+            self.work,
+            self.material,
         )
     }
 }

@@ -131,33 +131,12 @@ impl ItemOp<'_> {
     }
 }
 
-/// [`ItemOp`] on AVX-512 and AVX2, both with FMA.
-#[cfg(target_arch = "x86_64")]
-struct ItemOpX86<'a, S> {
-    simd: S,
-    op: ItemOp<'a>,
-}
-
-#[cfg(target_arch = "x86_64")]
-impl<S: pulp::Simd> pulp::NullaryFnOnce for ItemOpX86<'_, S> {
-    type Output = ();
-
+/// [`ItemOp`] on AVX-512 and AVX2, `a·b + c` fused (as the chunks run them).
+impl super::isa::WithFma for ItemOp<'_> {
     #[inline(always)]
-    fn call(self) {
-        self.op.sums::<S, crate::terms::math::Fused>(self.simd);
+    fn with_fma<S: pulp::Simd + super::transpose::Transpose>(self, simd: S) {
+        self.sums::<S, crate::terms::math::Fused>(simd);
     }
-}
-
-/// Runs `op` in `arch`'s lanes: AVX-512 and AVX2 with FMA (as the chunks run them), the
-/// rest through pulp's dispatch.
-fn run_item(arch: pulp::Arch, op: ItemOp) {
-    #[cfg(target_arch = "x86_64")]
-    match arch {
-        pulp::Arch::V4(simd) => return simd.vectorize(ItemOpX86 { simd, op }),
-        pulp::Arch::V3(simd) => return simd.vectorize(ItemOpX86 { simd, op }),
-        _ => {}
-    }
-    arch.dispatch(op)
 }
 
 /// The samples of one point gathered into a block of lanes, and its sums so far.
@@ -389,7 +368,7 @@ impl CpuEngine {
                 let group = &points[g * POINT_GROUP..points.len().min((g + 1) * POINT_GROUP)];
                 sums.clear();
                 sums.resize(group.len(), [0f64; 2]);
-                run_item(
+                super::isa::run_lanes(
                     arch,
                     ItemOp {
                         points: group,

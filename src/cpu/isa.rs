@@ -107,6 +107,43 @@ impl std::fmt::Display for Isa {
     }
 }
 
+/// Work in the lanes that runs fused multiply–adds where the instruction set has them:
+/// [`pulp::WithSimd`] for any instruction set, [`WithFma::with_fma`] for AVX-512 and AVX2,
+/// which both have FMA and the AVX transposes.
+pub(super) trait WithFma: pulp::WithSimd {
+    /// The work in `simd`'s lanes, with FMA.
+    fn with_fma<S: pulp::Simd + super::transpose::Transpose>(self, simd: S) -> Self::Output;
+}
+
+/// `op` in `arch`'s lanes: AVX-512 and AVX2 through [`WithFma::with_fma`] (inside the
+/// instruction set's target features), the others through pulp's dispatch.
+pub(super) fn run_lanes<O: WithFma>(arch: pulp::Arch, op: O) -> O::Output {
+    #[cfg(target_arch = "x86_64")]
+    match arch {
+        pulp::Arch::V4(simd) => return simd.vectorize(Fma { simd, op }),
+        pulp::Arch::V3(simd) => return simd.vectorize(Fma { simd, op }),
+        _ => {}
+    }
+    arch.dispatch(op)
+}
+
+/// `op` with the instruction set `simd` that has FMA, as a function pulp compiles for it.
+#[cfg(target_arch = "x86_64")]
+struct Fma<S, O> {
+    simd: S,
+    op: O,
+}
+
+#[cfg(target_arch = "x86_64")]
+impl<S: pulp::Simd + super::transpose::Transpose, O: WithFma> pulp::NullaryFnOnce for Fma<S, O> {
+    type Output = O::Output;
+
+    #[inline(always)]
+    fn call(self) -> O::Output {
+        self.op.with_fma(self.simd)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
