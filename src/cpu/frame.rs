@@ -70,18 +70,20 @@ pub(super) fn rsqrt(x: f32) -> f32 {
 /// (`v·l + 1`). The sines are sums of squares (cross products with the raw N in f64, from
 /// the unrounded l, v and l + v), never `1 − cos²`.
 #[inline(always)]
-pub(super) fn frame<const Z: bool>(x: &[f32; 9]) -> Frame {
+pub(super) fn frame<A: MulAdd, const Z: bool>(x: &[f32; 9]) -> Frame {
     // l, v and h in f64, each rounded once to f32 (see the bound above): |L|² and |V|²
     // are exact in f64 (squares of f32 values), 1/|x| by `rsqrt64_fast` (~1e-14 relative).
     let w = |i: usize| f64::from(x[i]);
-    let sq3 = |a: [f64; 3]| a[0] * a[0] + a[1] * a[1] + a[2] * a[2];
+    // `a·b + c` as the instruction set forms it (`A`); the N = +z forms below keep the
+    // general ones' order, so that both give the same bits.
+    let sq3 = |a: [f64; 3]| A::mul_add64(a[2], a[2], A::mul_add64(a[0], a[0], a[1] * a[1]));
     let (l64, v64) = ([w(0), w(1), w(2)], [w(3), w(4), w(5)]);
     let (ll, vv) = (sq3(l64), sq3(v64));
-    let (il, iv) = (rsqrt64_fast(ll), rsqrt64_fast(vv));
+    let (il, iv) = (rsqrt64_fast::<A>(ll), rsqrt64_fast::<A>(vv));
     let (l64, v64) = (l64.map(|q| q * il), v64.map(|q| q * iv));
     let h64: [f64; 3] = std::array::from_fn(|j| l64[j] + v64[j]);
     let hh = sq3(h64);
-    let ih = rsqrt64_fast(hh);
+    let ih = rsqrt64_fast::<A>(hh);
     let c = (0.5 * (hh * ih)) as f32;
     let [lx, ly, lz] = l64.map(|q| q as f32);
     let [vx, vy, vz] = v64.map(|q| q as f32);
@@ -97,7 +99,7 @@ pub(super) fn frame<const Z: bool>(x: &[f32; 9]) -> Frame {
         // wz` (a zero's sign aside, and a zero cosine is rescued either way) and each
         // `|n × w|²` is `(−wy)² + wx² + 0 = wy·wy + wx·wx`.
         (cos_i, cos_o, cos_h) = (lz, vz, hz);
-        let side2 = |a: [f64; 3]| a[1] * a[1] + a[0] * a[0];
+        let side2 = |a: [f64; 3]| A::mul_add64(a[1], a[1], a[0] * a[0]);
         sin2_h = (side2(h64) * (ih * ih)) as f32;
         sin2_i = side2(l64) as f32;
         sin2_o = side2(v64) as f32;
@@ -112,7 +114,8 @@ pub(super) fn frame<const Z: bool>(x: &[f32; 9]) -> Frame {
         // at any angle. (N · L)/|L| is rounded once, then scaled by 1/|N|: with N = (0, 0, 1)
         // the dot product is Lz exactly and `inn` is 1, so these are the local form's `lz`
         // and `vz`.
-        let raw_dot = |a: usize| w(6) * w(a) + w(7) * w(a + 1) + w(8) * w(a + 2);
+        let raw_dot =
+            |a: usize| A::mul_add64(w(8), w(a + 2), A::mul_add64(w(6), w(a), w(7) * w(a + 1)));
         let (nl, nv) = (raw_dot(0) * il, raw_dot(3) * iv);
         cos_i = nl as f32 * inn;
         cos_o = nv as f32 * inn;
@@ -128,11 +131,11 @@ pub(super) fn frame<const Z: bool>(x: &[f32; 9]) -> Frame {
         let n64 = [w(6), w(7), w(8)];
         let cross2 = |a: [f64; 3]| {
             let c = [
-                n64[1] * a[2] - n64[2] * a[1],
-                n64[2] * a[0] - n64[0] * a[2],
-                n64[0] * a[1] - n64[1] * a[0],
+                A::mul_add64(n64[1], a[2], -(n64[2] * a[1])),
+                A::mul_add64(n64[2], a[0], -(n64[0] * a[2])),
+                A::mul_add64(n64[0], a[1], -(n64[1] * a[0])),
             ];
-            c[0] * c[0] + c[1] * c[1] + c[2] * c[2]
+            sq3(c)
         };
         let i2 = inn * inn;
         sin2_h = (cross2(h64) * (ih * ih)) as f32 * i2;
@@ -248,9 +251,9 @@ pub(super) fn rsqrt64(x: f64) -> f64 {
 /// f32 and needs only that l and v be scaled alike to far better than u = 6e-8 (see
 /// [`frame`]). Outside f32's range the result is 0, ∞ or NaN and the frame's tests fail.
 #[inline(always)]
-fn rsqrt64_fast(x: f64) -> f64 {
+fn rsqrt64_fast<A: MulAdd>(x: f64) -> f64 {
     let y0 = f64::from(1.0 / (x as f32).sqrt());
-    y0 * (1.5 - 0.5 * x * y0 * y0)
+    y0 * A::mul_add64(-0.5 * x * y0, y0, 1.5)
 }
 
 /// One lane's L, V, N in f64 with their squared lengths, and whether all three are lengths

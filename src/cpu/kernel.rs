@@ -472,10 +472,10 @@ fn frames<A: MulAdd, const Z: bool, const MODE: u8>(
         let (fr, local) = match MODE {
             FRAME_LOCAL => (frame_local32::<A>(&x), true),
             FRAME_EACH => {
-                let (a, b) = (frame_local32::<A>(&x), frame::<Z>(&x));
+                let (a, b) = (frame_local32::<A>(&x), frame::<A, Z>(&x));
                 (if z[k] { a } else { b }, z[k])
             }
-            _ => (frame::<Z>(&x), false),
+            _ => (frame::<A, Z>(&x), false),
         };
         let certified =
             !local || ggx::local_frame_ok(fr.cos_h, fr.sin2_h, fr.c, p.m2_f, p.ggx_local_guard);

@@ -10,6 +10,8 @@
 pub trait MulAdd {
     /// `a·b + c`.
     fn mul_add(a: f32, b: f32, c: f32) -> f32;
+    /// `a·b + c` in f64.
+    fn mul_add64(a: f64, b: f64, c: f64) -> f64;
 }
 
 /// `a·b + c` rounded once (FMA): the AVX2+FMA and AVX-512 lanes'.
@@ -23,11 +25,21 @@ impl MulAdd for Fused {
     fn mul_add(a: f32, b: f32, c: f32) -> f32 {
         a.mul_add(b, c)
     }
+
+    #[inline(always)]
+    fn mul_add64(a: f64, b: f64, c: f64) -> f64 {
+        a.mul_add(b, c)
+    }
 }
 
 impl MulAdd for Rounded {
     #[inline(always)]
     fn mul_add(a: f32, b: f32, c: f32) -> f32 {
+        a * b + c
+    }
+
+    #[inline(always)]
+    fn mul_add64(a: f64, b: f64, c: f64) -> f64 {
         a * b + c
     }
 }
