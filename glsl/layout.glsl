@@ -35,7 +35,8 @@ struct GpuMaterial {
     // cancels in f32 for eta near 1); dielectric: the f32 rounding error of fresnel0.rgb
     // (mu^2 - 1 = fresnel0 + this, to ~48 bits); 0 otherwise.
     vec4 scale;
-    // x: MODEL_*, y: DIST_*, z: GEOM_*, w: FRESNEL_* | CONV_* << 8 | FLAG_ANISOTROPIC.
+    // x: MODEL_*, y: DIST_*, z: GEOM_*, w: FRESNEL_* | CONV_* << 8 | FLAG_ANISOTROPIC |
+    // FLAG_METAL_FORM.
     uvec4 kind;
 };
 

@@ -32,6 +32,11 @@ uint material_convention(GpuMaterial m) {
     return (m.kind.w >> 8) & 0xffu;
 }
 
+// kind.w & FLAG_METAL_FORM: the conductor takes F's metal form (conductor_f_metal).
+bool material_metal_form(GpuMaterial m) {
+    return (m.kind.w & FLAG_METAL_FORM) != 0u;
+}
+
 // kind.w & FLAG_ANISOTROPIC: the material reads the tangent frame.
 bool is_anisotropic(GpuMaterial m) {
     return (m.kind.w & FLAG_ANISOTROPIC) != 0u;

@@ -499,7 +499,18 @@ vec3 frame_conductor_f(Frame f, GpuMaterial m) {
         return conductor_f_xf(f.c_xf, m.fresnel0.rgb, m.fresnel1.rgb, material_fresnel_lo(m));
     }
 #endif
+#if !defined(NO_METAL_FORM)
+    // A material-uniform branch: a batch's lanes of one material all take the same side.
+    vec3 fr;
+    if (material_metal_form(m)) {
+        fr = conductor_f_metal(f.c, m.fresnel0.rgb, m.fresnel1.rgb, material_fresnel_lo(m));
+    } else {
+        fr = conductor_f(f.c, m.fresnel0.rgb, m.fresnel1.rgb, material_fresnel_lo(m));
+    }
+    return fr;
+#else
     return conductor_f(f.c, m.fresnel0.rgb, m.fresnel1.rgb, material_fresnel_lo(m));
+#endif
 }
 #endif
 

@@ -496,6 +496,31 @@ vec3 conductor_f(float c, vec3 n, vec3 k, vec3 e2rm1) {
 }
 #endif
 
+#if defined(HAS_F_CONDUCTOR)
+// The metal form (the lanes' conductor::f_lane_metal; pbrt-v3's real FrConductor): with
+// w = sqrt(eta^2 - sin^2) = A + iB, F = R_s (|w|^2 c^2 + sin^4)/(|w|^2 c^2 + sin^4 +
+// 2cA sin^2), R_s = (|w|^2 + c^2 - 2cA)/(|w|^2 + c^2 + 2cA): A alone, over one division,
+// about half conductor_f's arithmetic. R_s's numerator cancels as F0 -> 0, so only a
+// material whose every channel is legal for it (FLAG_METAL_FORM: the written bound of
+// conductor::metal_form_bound within 48u) takes it. Re(eta^2) = e2rm1 + 1 and nk come
+// from the f32 material (two and three roundings, where the lanes round f64 values once).
+vec3 conductor_f_metal(float c, vec3 n, vec3 k, vec3 e2rm1) {
+    float c2 = c * c;
+    float s2 = (1.0 - c) * (1.0 + c);
+    vec3 e2ih = n * k;                  // Im(eta^2)/2
+    vec3 re = (e2rm1 + 1.0) - s2;        // Re(eta^2 - sin^2)
+    vec3 mag = sqrt(re * re + 4.0 * e2ih * e2ih);
+    // The root's larger component from the sum that does not cancel, A as Im/2 over it
+    // where Re < 0 (metals); t >= sqrt(mag/2), which the legality range keeps >= 7e-3.
+    vec3 t = sqrt(0.5 * (mag + abs(re)));
+    vec3 a = mix(e2ih / t, t, greaterThanEqual(re, vec3(0.0)));
+    vec3 ca2 = 2.0 * c * a;
+    vec3 bs = mag + c2;
+    vec3 bp = mag * c2 + s2 * s2;
+    return (bs - ca2) * bp / ((bs + ca2) * (bp + ca2 * s2));
+}
+#endif
+
 #if defined(HAS_F_CONDUCTOR) && !defined(HAS_FLOAT64)
 // |p|^2 / |q|^2 for complex p, q per channel, both scaled by their largest component
 // first: at c below 1e-12 the squares underflow (0/0 = NaN for an index-matched conductor).

@@ -50,6 +50,9 @@ pub const CONV_NONE: u32 = 0;
 // and injected from there ([`shader_codes`]).
 /// `kind.w` bit: the material has anisotropic roughness (needs the tangent frame).
 pub const FLAG_ANISOTROPIC: u32 = 1 << 16;
+/// `kind.w` bit: a conductor whose every channel is legal for F's metal form
+/// (`terms::f::conductor::metal_form_legal`; `conductor_f_metal` in glsl/terms.glsl).
+pub const FLAG_METAL_FORM: u32 = 1 << 17;
 
 /// Descriptor binding of the tuple rows (read).
 pub const BINDING_TUPLES: u32 = 0;
@@ -91,6 +94,7 @@ pub fn shader_codes() -> Vec<(&'static str, u32)> {
         ("DIST_NONE", DIST_NONE),
         ("CONV_NONE", CONV_NONE),
         ("FLAG_ANISOTROPIC", FLAG_ANISOTROPIC),
+        ("FLAG_METAL_FORM", FLAG_METAL_FORM),
     ];
     own.into_iter()
         .chain(crate::terms::all_terms().map(|t| t.gpu_code))
@@ -382,6 +386,14 @@ pub fn gpu_material(m: &Material) -> GpuMaterial {
             let fresnel = code(ct.fresnel.kind().term());
             let convention = code(ct.convention.term());
             g.kind[3] = fresnel | convention << 8;
+            if let Fresnel::Conductor { ior, extinction } = ct.fresnel {
+                let legal = |ch: usize| {
+                    crate::terms::f::conductor::metal_form_legal(ior[ch], extinction[ch])
+                };
+                if (0..3).all(legal) {
+                    g.kind[3] |= FLAG_METAL_FORM;
+                }
+            }
         }
     }
     if m.is_anisotropic() {
@@ -429,6 +441,26 @@ pub fn measured_tables(
 mod tests {
     use super::*;
     use crate::material::parse_materials;
+
+    /// A metal takes F's metal form (`FLAG_METAL_FORM`); a conductor with one
+    /// dielectric-like channel, or another Fresnel term, does not.
+    #[test]
+    fn only_legal_conductors_carry_the_metal_form_flag() {
+        let m = |fresnel: &str| {
+            let toml = format!(
+                "[[material]]\nname = \"x\"\nmodel = \"cook-torrance\"\n\
+                 distribution = \"ggx\"\nroughness = 0.3\ngeometry = \"smith\"\n{fresnel}"
+            );
+            gpu_material(&parse_materials(&toml, "test").unwrap()[0]).kind[3]
+        };
+        let metal =
+            "fresnel = \"conductor\"\nior = [0.2, 0.92, 1.1]\nextinction = [3.9, 2.45, 2.14]\n";
+        let mixed =
+            "fresnel = \"conductor\"\nior = [0.2, 0.92, 1.5]\nextinction = [3.9, 2.45, 0.0]\n";
+        assert_ne!(m(metal) & FLAG_METAL_FORM, 0);
+        assert_eq!(m(mixed) & FLAG_METAL_FORM, 0);
+        assert_eq!(m("fresnel = \"schlick\"\nf0 = 0.04\n") & FLAG_METAL_FORM, 0);
+    }
 
     #[test]
     fn cook_torrance_constants_are_precomputed_in_f64() {
