@@ -25,7 +25,7 @@ pub(crate) fn block<S: pulp::Simd, A: MulAdd>(
     match plan {
         Plan::Lambert(_) => {}
         Plan::Microfacet { d, aniso, g, f, .. } if kernel::fused(*d, *aniso, *g, *f) => {}
-        _ => return f64_frame_block(simd, plan, inp, out),
+        _ => return f64_frame_block::<S, A>(simd, plan, inp, out),
     }
     if z {
         f32_frame_block::<S, A, true>(simd, plan, inp, out)
@@ -110,7 +110,7 @@ fn f32_frame_block<S: pulp::Simd, A: MulAdd, const Z: bool>(
                     F_CONDUCTOR,
                     Z,
                 >(p, i, o)),
-                F::Dielectric => f64_frame_block(simd, plan, inp, out),
+                F::Dielectric => f64_frame_block::<S, A>(simd, plan, inp, out),
             }
         };
     }
@@ -128,7 +128,7 @@ fn f32_frame_block<S: pulp::Simd, A: MulAdd, const Z: bool>(
         (D::Ggx, G::SmithFast) => reference_block(out),
         // Not fused (`kernel::fused`).
         (D::Ggx | D::Beckmann, G::SchlickSmith | G::Neubelt)
-        | (D::Gaussian | D::Blinn | D::Charlie, _) => f64_frame_block(simd, plan, inp, out),
+        | (D::Gaussian | D::Blinn | D::Charlie, _) => f64_frame_block::<S, A>(simd, plan, inp, out),
     }
 }
 
@@ -137,7 +137,12 @@ fn f32_frame_block<S: pulp::Simd, A: MulAdd, const Z: bool>(
 /// distribution compiles the geometry terms its rules allow (`terms::legality`); the
 /// others take [`reference_block`].
 #[inline(always)]
-fn f64_frame_block<S: pulp::Simd>(simd: S, plan: &Plan, inp: &[Inputs], out: &mut [Outputs]) {
+fn f64_frame_block<S: pulp::Simd, A: MulAdd>(
+    simd: S,
+    plan: &Plan,
+    inp: &[Inputs],
+    out: &mut [Outputs],
+) {
     use crate::terms::{DistributionKind as D, Geometry as G};
     use kernel::*;
     use lobes::{lobe_block, Lobe, L_BLINN_PHONG, L_PHONG, L_RTR, L_WARD, L_WARD_ANISO};
@@ -167,8 +172,8 @@ fn f64_frame_block<S: pulp::Simd>(simd: S, plan: &Plan, inp: &[Inputs], out: &mu
         ($d:expr, $g:expr) => {
             each_block!(simd, inp, out, |i, o| {
                 let mut st = Stage::default();
-                dg_block64::<$d, $g>(p, i, &mut st);
-                f_pass(f, p, &st, o)
+                dg_block64::<A, $d, $g>(p, i, &mut st);
+                f_pass::<A>(f, p, &st, o)
             })
         };
     }
@@ -177,7 +182,7 @@ fn f64_frame_block<S: pulp::Simd>(simd: S, plan: &Plan, inp: &[Inputs], out: &mu
             each_block!(simd, inp, out, |i, o| {
                 let mut st = Stage::default();
                 aniso::dg_block64_aniso::<$d, $g>(p, i, &mut st);
-                f_pass(f, p, &st, o)
+                f_pass::<A>(f, p, &st, o)
             })
         };
     }
@@ -234,12 +239,12 @@ fn f64_frame_block<S: pulp::Simd>(simd: S, plan: &Plan, inp: &[Inputs], out: &mu
 
 /// The second pass of the f64-frame groups: F, K and the outputs ([`kernel::f_block`]).
 #[inline(always)]
-fn f_pass(f: FresnelKind, p: &kernel::Params, st: &kernel::Stage, out: &mut Outputs) {
+fn f_pass<A: MulAdd>(f: FresnelKind, p: &kernel::Params, st: &kernel::Stage, out: &mut Outputs) {
     use kernel::*;
     match f {
-        FresnelKind::None => f_block::<F_NONE>(p, st, out),
-        FresnelKind::Schlick => f_block::<F_SCHLICK>(p, st, out),
-        FresnelKind::Dielectric => f_block::<F_DIELECTRIC>(p, st, out),
-        FresnelKind::Conductor => f_block::<F_CONDUCTOR>(p, st, out),
+        FresnelKind::None => f_block::<A, F_NONE>(p, st, out),
+        FresnelKind::Schlick => f_block::<A, F_SCHLICK>(p, st, out),
+        FresnelKind::Dielectric => f_block::<A, F_DIELECTRIC>(p, st, out),
+        FresnelKind::Conductor => f_block::<A, F_CONDUCTOR>(p, st, out),
     }
 }

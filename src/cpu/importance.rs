@@ -20,7 +20,7 @@ use crate::error::{Error, Result};
 use crate::importance::{schlick_weight, Lobe, Sample, Samples, UnitSample, View};
 use crate::material::Material;
 use crate::reference::{evaluate_tuple, to_output_f32};
-use crate::terms::math::{MulAdd, Rounded};
+use crate::terms::math::{Fused, MulAdd, Rounded};
 use std::marker::PhantomData;
 use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
 use std::sync::Mutex;
@@ -79,13 +79,15 @@ fn f_none_block<S: pulp::Simd, A: MulAdd>(
         (D::Beckmann, G::SmithCorrelated) => fused!(D_BECKMANN, G_SMITH_CORRELATED),
         (D::Beckmann, G::SmithFast) => fused!(D_BECKMANN, G_SMITH_FAST),
         (D::Ggx, G::SchlickSmith) => {
-            apart(simd, || two_pass::<D_GGX, G_SCHLICK_SMITH>(p, inp, out))
+            apart(simd, || two_pass::<A, D_GGX, G_SCHLICK_SMITH>(p, inp, out))
         }
-        (D::Ggx, G::Neubelt) => apart(simd, || two_pass::<D_GGX, G_NEUBELT>(p, inp, out)),
+        (D::Ggx, G::Neubelt) => apart(simd, || two_pass::<A, D_GGX, G_NEUBELT>(p, inp, out)),
         (D::Beckmann, G::SchlickSmith) => apart(simd, || {
-            two_pass::<D_BECKMANN, G_SCHLICK_SMITH>(p, inp, out)
+            two_pass::<A, D_BECKMANN, G_SCHLICK_SMITH>(p, inp, out)
         }),
-        (D::Beckmann, G::Neubelt) => apart(simd, || two_pass::<D_BECKMANN, G_NEUBELT>(p, inp, out)),
+        (D::Beckmann, G::Neubelt) => {
+            apart(simd, || two_pass::<A, D_BECKMANN, G_NEUBELT>(p, inp, out))
+        }
         // The tables' importance sampler exists for GGX and Beckmann only (`importance`),
         // and smith-fast is Beckmann's.
         (D::Ggx, G::SmithFast) | (D::Gaussian | D::Blinn | D::Charlie, _) => return false,
@@ -95,10 +97,10 @@ fn f_none_block<S: pulp::Simd, A: MulAdd>(
 
 /// The groups the engine runs in two passes ([`kernel::dg_block64`]), with F = 1.
 #[inline(always)]
-fn two_pass<const D: u8, const G: u8>(p: &Params, inp: &Inputs, out: &mut Outputs) {
+fn two_pass<A: MulAdd, const D: u8, const G: u8>(p: &Params, inp: &Inputs, out: &mut Outputs) {
     let mut st = kernel::Stage::default();
-    kernel::dg_block64::<D, G>(p, inp, &mut st);
-    kernel::f_block::<{ kernel::F_NONE }>(p, &st, out);
+    kernel::dg_block64::<A, D, G>(p, inp, &mut st);
+    kernel::f_block::<A, { kernel::F_NONE }>(p, &st, out);
 }
 
 /// One work item: samples `first..first + len` of every point in `points`.
@@ -135,7 +137,7 @@ impl ItemOp<'_> {
 impl super::isa::WithFma for ItemOp<'_> {
     #[inline(always)]
     fn with_fma<S: pulp::Simd + super::transpose::Transpose>(self, simd: S) {
-        self.sums::<S, crate::terms::math::Fused>(simd);
+        self.sums::<S, Fused>(simd);
     }
 }
 

@@ -19,7 +19,7 @@ use crate::terms::d::{beckmann, blinn, charlie, gaussian, ggx};
 use crate::terms::f::{conductor, dielectric, schlick};
 use crate::terms::g::{cook_torrance, neubelt, schlick_smith, smith, smith_correlated, smith_fast};
 use crate::terms::k::LaneK;
-use crate::terms::math::{MulAdd, Rounded};
+use crate::terms::math::MulAdd;
 use crate::terms::{DistributionKind, FresnelKind, Geometry};
 
 /// Tuples per block: 16 f32 lanes fill one AVX-512 register (two AVX2 registers).
@@ -408,7 +408,7 @@ pub fn microfacet_block<A: MulAdd, const D: u8, const G: u8, const F: u8, const 
         // what a lane gets must not depend on its neighbours in the block, or the output
         // would change with the chunking (the stream's, the shards').
         let mut o64 = Outputs::default();
-        microfacet_block64::<D, G, F>(p, inp, &mut o64);
+        microfacet_block64::<A, D, G, F>(p, inp, &mut o64);
         for k in 0..LANES {
             if slow[k] {
                 for ch in 0..3 {
@@ -494,14 +494,14 @@ fn frames<A: MulAdd, const Z: bool, const MODE: u8>(
 /// N = (0, 0, 1) in their lanes, so one variant serves both forms (an N = +z variant
 /// doubled the slow path's code and put the binary past its 48 MiB budget).
 #[inline(always)]
-fn microfacet_block64<const D: u8, const G: u8, const F: u8>(
+fn microfacet_block64<A: MulAdd, const D: u8, const G: u8, const F: u8>(
     p: &Params,
     inp: &Inputs,
     out: &mut Outputs,
 ) {
     for k in 0..LANES {
         let fr = frame64(&lane_inputs(inp, k));
-        microfacet_lane::<Rounded, D, G, F, false, true, false>(p, &Lane::from64(&fr), out, k);
+        microfacet_lane::<A, D, G, F, false, true, false>(p, &Lane::from64(&fr), out, k);
     }
 }
 
@@ -560,10 +560,10 @@ impl Default for Stage {
 /// (the fused form took the clean build from 113 to 255 s); these groups pay for it with
 /// a store and a load of ten values a lane.
 #[inline(always)]
-pub fn dg_block64<const D: u8, const G: u8>(p: &Params, inp: &Inputs, st: &mut Stage) {
+pub fn dg_block64<A: MulAdd, const D: u8, const G: u8>(p: &Params, inp: &Inputs, st: &mut Stage) {
     for k in 0..LANES {
         let fr = Lane::from64(&frame64(&lane_inputs(inp, k)));
-        let (d, g) = microfacet_dg::<Rounded, D, G, false>(p, &fr);
+        let (d, g) = microfacet_dg::<A, D, G, false>(p, &fr);
         st.put(k, &fr, d.0 / d.1, g.0 / g.1);
     }
 }
@@ -588,7 +588,7 @@ impl Stage {
 
 /// The second pass of [`dg_block64`]: F, K and the outputs.
 #[inline(always)]
-pub fn f_block<const F: u8>(p: &Params, st: &Stage, out: &mut Outputs) {
+pub fn f_block<A: MulAdd, const F: u8>(p: &Params, st: &Stage, out: &mut Outputs) {
     for k in 0..LANES {
         // The fields `finish_lane` reads; the others are not needed after D and G.
         let fr = Lane {
@@ -607,7 +607,7 @@ pub fn f_block<const F: u8>(p: &Params, st: &Stage, out: &mut Outputs) {
             s2_64: st.s2_64[k],
             ok: st.ok[k],
         };
-        finish_lane::<Rounded, F, true, false>(p, &fr, (st.d[k], 1.0), (st.g[k], 1.0), out, k);
+        finish_lane::<A, F, true, false>(p, &fr, (st.d[k], 1.0), (st.g[k], 1.0), out, k);
     }
 }
 
