@@ -13,14 +13,17 @@
 
 #if defined(HAS_FLOAT64)
 
-// An f64 value of the frame rounded to f32 as a GPU rounds it: below FLT_MIN, 0. GPUs
-// flush f32 subnormals (NVIDIA does, in conversions and arithmetic; lavapipe does not), so
-// the f32 copies of the frame's quantities are flushed on every device: the code that
-// reads them (and falls back to the f64 ones where they vanish) then behaves on lavapipe
-// as on a GPU, and the stress corpus tests it here (its cosines of 1e-45 made 0.1 M
-// non-finite outputs on an H200 before).
+// An f64 value of the frame rounded to f32 as a GPU rounds it: a result below FLT_MIN
+// after rounding, 0. GPUs flush f32 subnormals (NVIDIA does, in conversions and
+// arithmetic; lavapipe does not), so the f32 copies of the frame's quantities are flushed
+// on every device: the code that reads them (and falls back to the f64 ones where they
+// vanish) then behaves on lavapipe as on a GPU, and the stress corpus tests it here (its
+// cosines of 1e-45 made 0.1 M non-finite outputs on an H200 before). The test is on the
+// rounded f32, as a flushing conversion makes it (an f64 test cost lavapipe 5
+// instructions a tuple of 434 more).
 float f32_of(double x) {
-    return abs(x) < double(FLT_MIN) ? 0.0 : float(x);
+    float y = float(x);
+    return abs(y) < FLT_MIN ? 0.0 : y;
 }
 vec2 f32_of(dvec2 x) {
     return vec2(f32_of(x.x), f32_of(x.y));
