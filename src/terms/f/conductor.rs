@@ -244,6 +244,54 @@ pub fn metal_form_bound(n: f64, k: f64) -> f64 {
     5.75 / f0 + 24.0 + rho * (1.0 / f0.sqrt() + 3.0)
 }
 
+/// The kernel's metal form (`conductor_f_metal`, glsl/terms.glsl) — the same values as
+/// [`f_lane_metal`] from the f32 material `n`, `k`, `Re(η²) − 1` and the frame's `c` — has,
+/// under the precisions the Vulkan specification allows rather than those a device happens
+/// to have, a worst-case relative error in units of u = 2⁻²⁴ of (to first order, `c` as the
+/// frame gives it):
+///
+/// `20.5/F0 + 68 + ρ_v (1/√F0 + 3)`, `ρ_v = (3|n² − k²| + 5)/min_s |η² − s| + 3`.
+///
+/// Vulkan's precision table ("Precision and Operation of SPIR-V Instructions"): `+ − ×`
+/// correctly rounded (≤ u), `x/y` within 2.5 ULP (≤ 5u), `inversesqrt` within 2 ULP (4u)
+/// and `sqrt` inherited from `1/inversesqrt` (≤ 9u); a contracted `a·b + c` only removes a
+/// rounding, so each bound holds with and without contraction. The count, value by value
+/// (the CPU's in [`metal_form_bound`]: 5.75/F0 + 24 with one rounding a root or quotient):
+/// - `sin²θ = (1 − c)(1 + c)` is formed in the kernel: 3u; `n k` from f32 `n`, `k`: 3u.
+/// - `Re(η² − sin²θ) = (Re η² − 1) + 1 − sin²θ`: `Re η² − 1` rounded once on the host
+///   (u|n² − k² − 1|), the `+ 1`, the difference and sin²θ's 3u: at most
+///   u(3|n² − k²| + 5) absolute; with `n k`'s 3u this moves `η² − sin²θ` by ρ_v relative,
+///   the same for every later use, and F by its condition, `ρ_v (1/√R_s + 3)`.
+/// - `|w|² = √(Re² + 4(nk)²)`: 2u under the root, halved, plus the root's 9u: 10u;
+///   `t = √((|w|² + |Re|)/2)`: 14.5u; `A` (t or nk/t): 19.5u; `2cA`: 20.5u; `|w|² + c²`:
+///   11u; `|w|²c² + sin⁴θ`: 13u.
+/// - `N_s = |w|² + c² − 2cA`: 20.5u of `D_s = N_s/R_s` and its own rounding: 20.5u/R_s + u.
+/// - The numerator `N_s (|w|²c² + sin⁴θ)`: 14u more; the denominator
+///   `D_s (|w|²c² + sin⁴θ + 2cA sin²θ)`: 21.5u + 25.5u + u; the quotient 5u: 68u with the
+///   numerator's.
+///
+/// Copper (η = 0.27 + 3.61i, 0.68 + 2.63i, 1.2 + 2.3i) has 116–131u (7.8e-6 in blue) by
+/// this count, which adds every value's worst case although many move together; the worst
+/// execution the precisions allow, found by summing each operation's own effect (the test
+/// below), is 13–31u at the same c. Infinite where [`metal_form_bound`] is.
+pub fn metal_form_bound_vulkan(n: f64, k: f64) -> f64 {
+    if !metal_form_bound(n, k).is_finite() {
+        return f64::INFINITY;
+    }
+    let (e2r, e2i) = (n * n - k * k, 2.0 * n * k);
+    let gap = if e2r > 1.0 {
+        e2r - 1.0
+    } else if e2r < 0.0 {
+        -e2r
+    } else {
+        0.0
+    };
+    let mag_min = gap.hypot(e2i);
+    let f0 = ((n - 1.0).powi(2) + k * k) / ((n + 1.0).powi(2) + k * k);
+    let rho = (3.0 * e2r.abs() + 5.0) / mag_min + 3.0;
+    20.5 / f0 + 68.0 + rho * (1.0 / f0.sqrt() + 3.0)
+}
+
 /// Whether a channel with `η = n + ik` may take [`f_lane_metal`]: its bound
 /// ([`metal_form_bound`]) within [`METAL_FORM_BUDGET`].
 pub fn metal_form_legal(n: f64, k: f64) -> bool {
@@ -331,6 +379,92 @@ mod tests {
             assert!(bound <= METAL_FORM_BUDGET, "η = {n} + {k}i should be legal ({bound})");
             let err = metal_form_error(n, k);
             assert!(err <= bound, "η = {n} + {k}i: {err}u against a bound of {bound}u");
+        }
+    }
+
+    /// `conductor_f_metal` (glsl/terms.glsl) step by step in f64, operation `moved` (in
+    /// the order they run) moved up by its allowed error — u for `+ − ×`, 5u for a
+    /// division, 9u for a root (Vulkan's precision table) — and the others exact; `fused`:
+    /// the three `a·b + c` contracted, with one rounding each. The material as the kernel
+    /// gets it: `n`, `k` and `Re(η²) − 1` rounded to f32.
+    fn kernel_metal_form(c: f64, n: f64, k: f64, moved: Option<u32>, fused: bool) -> f64 {
+        let u = f64::from(f32::EPSILON) / 2.0;
+        let i = std::cell::Cell::new(0u32);
+        let op = |x: f64, e: f64| {
+            let this = i.get();
+            i.set(this + 1);
+            if moved == Some(this) {
+                x * (1.0 + e * u)
+            } else {
+                x
+            }
+        };
+        let (nf, kf) = (f64::from(n as f32), f64::from(k as f32));
+        let e2rm1 = f64::from((n * n - k * k - 1.0) as f32);
+        let c2 = op(c * c, 1.0);
+        let omc = if c >= 0.5 { 1.0 - c } else { op(1.0 - c, 1.0) };
+        let s2 = op(omc * op(1.0 + c, 1.0), 1.0);
+        let e2ih = op(nf * kf, 1.0);
+        let re = op(op(e2rm1 + 1.0, 1.0) - s2, 1.0);
+        let sum = if fused {
+            op(re * re + 4.0 * op(e2ih * e2ih, 1.0), 1.0)
+        } else {
+            op(op(re * re, 1.0) + 4.0 * op(e2ih * e2ih, 1.0), 1.0)
+        };
+        let mag = op(sum.sqrt(), 9.0);
+        let t = op((0.5 * op(mag + re.abs(), 1.0)).sqrt(), 9.0);
+        let a = if re >= 0.0 { t } else { op(e2ih / t, 5.0) };
+        let ca2 = op(2.0 * c * a, 1.0);
+        let bs = op(mag + c2, 1.0);
+        let s4 = op(s2 * s2, 1.0);
+        let bp = if fused { op(mag * c2 + s4, 1.0) } else { op(op(mag * c2, 1.0) + s4, 1.0) };
+        let bq = if fused {
+            op(ca2 * s2 + bp, 1.0)
+        } else {
+            op(op(ca2 * s2, 1.0) + bp, 1.0)
+        };
+        let num = op(op(bs - ca2, 1.0) * bp, 1.0);
+        let den = op(op(bs + ca2, 1.0) * bq, 1.0);
+        op(num / den, 5.0)
+    }
+
+    /// The kernel's metal form stays inside the bound written for Vulkan's precisions
+    /// ([`metal_form_bound_vulkan`]) in the worst execution the precisions allow: to first
+    /// order the error is a sum over the operations of each one's effect, so the worst is
+    /// the sum of their magnitudes, each measured by moving that operation alone (plus the
+    /// material's roundings), at 4,001 c, with and without contraction, on copper and on
+    /// the legal materials nearest the lanes' budget (small F0, Re η² near 0 and 1, small
+    /// |η|).
+    #[test]
+    fn the_kernels_metal_form_stays_inside_its_bound_under_vulkans_precisions() {
+        let cases = [
+            (0.27, 3.61),
+            (0.68, 2.63),
+            (1.2, 2.3),
+            (0.2, 3.9),
+            (1.37, 1.77),
+            (5.0, 0.0),
+            (1.0, 1.3),
+            (0.02, 0.7),
+        ];
+        let u = f64::from(f32::EPSILON) / 2.0;
+        for (n, k) in cases {
+            let bound = metal_form_bound_vulkan(n, k);
+            let mut worst = 0f64;
+            for j in 0..=4000 {
+                let y = f64::from(j) / 4000.0;
+                let c = f64::from((1e-4 + (1.0 - 1e-4) * y.sqrt()) as f32);
+                let want = f(c, n, k);
+                for fused in [false, true] {
+                    let base = kernel_metal_form(c, n, k, None, fused);
+                    let mut err = (base - want).abs() / want;
+                    for i in 0..32 {
+                        err += (kernel_metal_form(c, n, k, Some(i), fused) - base).abs() / want;
+                    }
+                    worst = worst.max(err / u);
+                }
+            }
+            assert!(worst <= bound, "η = {n} + {k}i: {worst}u against a bound of {bound}u");
         }
     }
 
