@@ -272,8 +272,8 @@ pub fn metal_form_bound(n: f64, k: f64) -> f64 {
 ///
 /// Copper (η = 0.27 + 3.61i, 0.68 + 2.63i, 1.2 + 2.3i) has 116–131u (7.8e-6 in blue) by
 /// this count, which adds every value's worst case although many move together; the worst
-/// execution the precisions allow, found by summing each operation's own effect (the test
-/// below), is 13–31u at the same c. Infinite where [`metal_form_bound`] is.
+/// execution the precisions allow, found by summing each operation's own effect
+/// (`tests/vulkan_precision.rs`), is 13–31u at the same c. Infinite where [`metal_form_bound`] is.
 pub fn metal_form_bound_vulkan(n: f64, k: f64) -> f64 {
     if !metal_form_bound(n, k).is_finite() {
         return f64::INFINITY;
@@ -379,92 +379,6 @@ mod tests {
             assert!(bound <= METAL_FORM_BUDGET, "η = {n} + {k}i should be legal ({bound})");
             let err = metal_form_error(n, k);
             assert!(err <= bound, "η = {n} + {k}i: {err}u against a bound of {bound}u");
-        }
-    }
-
-    /// `conductor_f_metal` (glsl/terms.glsl) step by step in f64, operation `moved` (in
-    /// the order they run) moved up by its allowed error — u for `+ − ×`, 5u for a
-    /// division, 9u for a root (Vulkan's precision table) — and the others exact; `fused`:
-    /// the three `a·b + c` contracted, with one rounding each. The material as the kernel
-    /// gets it: `n`, `k` and `Re(η²) − 1` rounded to f32.
-    fn kernel_metal_form(c: f64, n: f64, k: f64, moved: Option<u32>, fused: bool) -> f64 {
-        let u = f64::from(f32::EPSILON) / 2.0;
-        let i = std::cell::Cell::new(0u32);
-        let op = |x: f64, e: f64| {
-            let this = i.get();
-            i.set(this + 1);
-            if moved == Some(this) {
-                x * (1.0 + e * u)
-            } else {
-                x
-            }
-        };
-        let (nf, kf) = (f64::from(n as f32), f64::from(k as f32));
-        let e2rm1 = f64::from((n * n - k * k - 1.0) as f32);
-        let c2 = op(c * c, 1.0);
-        let omc = if c >= 0.5 { 1.0 - c } else { op(1.0 - c, 1.0) };
-        let s2 = op(omc * op(1.0 + c, 1.0), 1.0);
-        let e2ih = op(nf * kf, 1.0);
-        let re = op(op(e2rm1 + 1.0, 1.0) - s2, 1.0);
-        let sum = if fused {
-            op(re * re + 4.0 * op(e2ih * e2ih, 1.0), 1.0)
-        } else {
-            op(op(re * re, 1.0) + 4.0 * op(e2ih * e2ih, 1.0), 1.0)
-        };
-        let mag = op(sum.sqrt(), 9.0);
-        let t = op((0.5 * op(mag + re.abs(), 1.0)).sqrt(), 9.0);
-        let a = if re >= 0.0 { t } else { op(e2ih / t, 5.0) };
-        let ca2 = op(2.0 * c * a, 1.0);
-        let bs = op(mag + c2, 1.0);
-        let s4 = op(s2 * s2, 1.0);
-        let bp = if fused { op(mag * c2 + s4, 1.0) } else { op(op(mag * c2, 1.0) + s4, 1.0) };
-        let bq = if fused {
-            op(ca2 * s2 + bp, 1.0)
-        } else {
-            op(op(ca2 * s2, 1.0) + bp, 1.0)
-        };
-        let num = op(op(bs - ca2, 1.0) * bp, 1.0);
-        let den = op(op(bs + ca2, 1.0) * bq, 1.0);
-        op(num / den, 5.0)
-    }
-
-    /// The kernel's metal form stays inside the bound written for Vulkan's precisions
-    /// ([`metal_form_bound_vulkan`]) in the worst execution the precisions allow: to first
-    /// order the error is a sum over the operations of each one's effect, so the worst is
-    /// the sum of their magnitudes, each measured by moving that operation alone (plus the
-    /// material's roundings), at 4,001 c, with and without contraction, on copper and on
-    /// the legal materials nearest the lanes' budget (small F0, Re η² near 0 and 1, small
-    /// |η|).
-    #[test]
-    fn the_kernels_metal_form_stays_inside_its_bound_under_vulkans_precisions() {
-        let cases = [
-            (0.27, 3.61),
-            (0.68, 2.63),
-            (1.2, 2.3),
-            (0.2, 3.9),
-            (1.37, 1.77),
-            (5.0, 0.0),
-            (1.0, 1.3),
-            (0.02, 0.7),
-        ];
-        let u = f64::from(f32::EPSILON) / 2.0;
-        for (n, k) in cases {
-            let bound = metal_form_bound_vulkan(n, k);
-            let mut worst = 0f64;
-            for j in 0..=4000 {
-                let y = f64::from(j) / 4000.0;
-                let c = f64::from((1e-4 + (1.0 - 1e-4) * y.sqrt()) as f32);
-                let want = f(c, n, k);
-                for fused in [false, true] {
-                    let base = kernel_metal_form(c, n, k, None, fused);
-                    let mut err = (base - want).abs() / want;
-                    for i in 0..32 {
-                        err += (kernel_metal_form(c, n, k, Some(i), fused) - base).abs() / want;
-                    }
-                    worst = worst.max(err / u);
-                }
-            }
-            assert!(worst <= bound, "η = {n} + {k}i: {worst}u against a bound of {bound}u");
         }
     }
 

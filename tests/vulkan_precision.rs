@@ -1,0 +1,327 @@
+//! The kernel's f32 Cook–Torrance arithmetic (GGX D, Smith G, the conductor's metal form,
+//! the modern K and the product; glsl/terms.glsl and glsl/models.glsl) under the precisions
+//! the Vulkan specification allows, not those lavapipe happens to have: `+ − ×` correctly
+//! rounded (u = 2⁻²⁴), `x/y` within 2.5 ULP (5u), `sqrt` inherited from `1/inversesqrt`
+//! (2 + 2.5 ULP: 9u). Each GLSL step is replayed in f64 with the material as the kernel
+//! gets it (rounded to f32 on the host), the frame's values exact (their errors are the
+//! frame's bound, docs/VULKAN.md "The local frames"). To first order the error of an
+//! execution is the sum of each operation's own effect, so the worst execution the
+//! precisions allow is the sum of their magnitudes: each is measured by moving that one
+//! operation by its whole allowance. This needs no device.
+
+use std::cell::Cell;
+use vkbrdf::terms::d::ggx;
+use vkbrdf::terms::f::conductor;
+use vkbrdf::terms::g::smith;
+
+const U: f64 = f32::EPSILON as f64 / 2.0;
+
+/// One execution: operation `moved` (in the order they run) off by its whole allowance,
+/// the others exact.
+struct Execution {
+    moved: Option<u32>,
+    next: Cell<u32>,
+}
+
+impl Execution {
+    fn new(moved: Option<u32>) -> Execution {
+        Execution {
+            moved,
+            next: Cell::new(0),
+        }
+    }
+
+    fn op(&self, x: f64, allowance: f64) -> f64 {
+        let i = self.next.get();
+        self.next.set(i + 1);
+        if self.moved == Some(i) {
+            x * (1.0 + allowance * U)
+        } else {
+            x
+        }
+    }
+    fn add(&self, a: f64, b: f64) -> f64 {
+        self.op(a + b, 1.0)
+    }
+    fn sub(&self, a: f64, b: f64) -> f64 {
+        self.op(a - b, 1.0)
+    }
+    fn mul(&self, a: f64, b: f64) -> f64 {
+        self.op(a * b, 1.0)
+    }
+    fn div(&self, a: f64, b: f64) -> f64 {
+        self.op(a / b, 5.0)
+    }
+    fn sqrt(&self, a: f64) -> f64 {
+        self.op(a.sqrt(), 9.0)
+    }
+}
+
+/// The value as the host rounds it into the material table.
+fn f32_of(x: f64) -> f64 {
+    f64::from(x as f32)
+}
+
+/// A GGX + Smith + conductor + modern-K material (`specular` 1, no diffuse).
+struct Material {
+    m: f64,
+    n: [f64; 3],
+    k: [f64; 3],
+}
+
+/// The frame's values of one tuple with N = +z (exact).
+struct Geometry {
+    cos_i: f64,
+    cos_o: f64,
+    cos_h: f64,
+    c: f64,
+    sin2_h: f64,
+    sin2_i: f64,
+    sin2_o: f64,
+}
+
+/// `conductor_f_metal` (glsl/terms.glsl) at the frame's `c` for `η = n + ik`, from the
+/// material as the host gives it (`n`, `k`, `n² − k² − 1` rounded to f32).
+fn conductor_f_metal(x: &Execution, c: f64, n64: f64, k64: f64) -> f64 {
+    let (n, k) = (f32_of(n64), f32_of(k64));
+    let e2rm1 = f32_of(n64 * n64 - k64 * k64 - 1.0);
+    let c2 = x.mul(c, c);
+    let omc = if c >= 0.5 { 1.0 - c } else { x.sub(1.0, c) };
+    let s2 = x.mul(omc, x.add(1.0, c));
+    let e2ih = x.mul(n, k);
+    let re = x.sub(x.add(e2rm1, 1.0), s2);
+    let mag = x.sqrt(x.add(x.mul(re, re), 4.0 * x.mul(e2ih, e2ih)));
+    let t = x.sqrt(0.5 * x.add(mag, re.abs()));
+    let a = if re >= 0.0 { t } else { x.div(e2ih, t) };
+    let ca2 = x.mul(2.0 * c, a);
+    let bs = x.add(mag, c2);
+    let bp = x.add(x.mul(mag, c2), x.mul(s2, s2));
+    let num = x.mul(x.sub(bs, ca2), bp);
+    let den = x.mul(x.add(bs, ca2), x.add(bp, x.mul(ca2, s2)));
+    x.div(num, den)
+}
+
+/// The worst execution's relative error of `conductor_f_metal`, in u, at 4,001 c in
+/// [1e-4, 1] (denser towards normal incidence, where its one difference cancels most).
+fn conductor_worst_execution(n: f64, k: f64) -> f64 {
+    let mut worst = 0f64;
+    for j in 0..=4000 {
+        let y = f64::from(j) / 4000.0;
+        let c = f64::from((1e-4 + (1.0 - 1e-4) * y.sqrt()) as f32);
+        let want = conductor::f(c, n, k);
+        let base = conductor_f_metal(&Execution::new(None), c, n, k);
+        let mut err = (base - want).abs();
+        for i in 0..32 {
+            err += (conductor_f_metal(&Execution::new(Some(i)), c, n, k) - base).abs();
+        }
+        worst = worst.max(err / (U * want));
+    }
+    worst
+}
+
+/// `model_cook_torrance`'s f for one channel, step by step as the GLSL takes it.
+fn kernel_f(x: &Execution, g: &Geometry, mat: &Material, ch: usize) -> f64 {
+    let (inv_m2, m2) = (f32_of(1.0 / (mat.m * mat.m)), f32_of(mat.m * mat.m));
+    let norm = f32_of(1.0 / (std::f64::consts::PI * mat.m * mat.m));
+    // ggx_d(slope2_h, cos_h, norm)
+    let slope2 = x.mul(g.sin2_h, inv_m2);
+    let d = x.add(slope2, x.mul(g.cos_h, g.cos_h));
+    let dd = x.div(norm, x.mul(d, d));
+    // smith_g(ggx_lambda(m2_tan2(v)), ggx_lambda(m2_tan2(l)))
+    let lambda = |sin2: f64, cos: f64| {
+        let q2 = x.div(x.mul(m2, sin2), x.mul(cos, cos));
+        let r = x.sqrt(x.add(1.0, q2));
+        if q2 <= 1.0 {
+            x.div(q2, 2.0 * x.add(1.0, r))
+        } else {
+            0.5 * x.sub(r, 1.0)
+        }
+    };
+    let (lo, li) = (lambda(g.sin2_o, g.cos_o), lambda(g.sin2_i, g.cos_i));
+    let gg = x.div(1.0, x.mul(x.add(1.0, lo), x.add(1.0, li)));
+    let f = conductor_f_metal(x, g.c, mat.n[ch], mat.k[ch]);
+    // modern_k, then (D G) F K and the colour.
+    let kk = x.div(0.25, x.mul(g.cos_i, g.cos_o));
+    let dgf = x.mul(x.mul(dd, gg), f);
+    x.add(0.0, x.mul(1.0, x.mul(dgf, kk)))
+}
+
+/// The exact f of the same tuple (the reference's terms in f64).
+fn exact_f(g: &Geometry, mat: &Material, ch: usize) -> f64 {
+    let m2 = mat.m * mat.m;
+    let dd = ggx::d(g.cos_h, g.sin2_h, mat.m);
+    let lambda = |sin2: f64, cos: f64| ggx::lambda(m2 * sin2 / (cos * cos));
+    let gg = smith::g(lambda(g.sin2_o, g.cos_o), lambda(g.sin2_i, g.cos_i));
+    let f = conductor::f(g.c, mat.n[ch], mat.k[ch]);
+    dd * gg * f / (4.0 * g.cos_i * g.cos_o)
+}
+
+fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+fn unit(a: [f64; 3]) -> [f64; 3] {
+    let len = dot(a, a).sqrt();
+    a.map(|x| x / len)
+}
+
+/// The frame's values (FORMULAS.md §1) of unit l, v, n, exactly.
+fn frame(l: [f64; 3], v: [f64; 3], n: [f64; 3]) -> Geometry {
+    let s = [l[0] + v[0], l[1] + v[1], l[2] + v[2]];
+    let len = dot(s, s).sqrt();
+    let h = s.map(|x| x / len);
+    let sin2 = |w: [f64; 3]| dot(cross(n, w), cross(n, w));
+    Geometry {
+        cos_i: dot(n, l),
+        cos_o: dot(n, v),
+        cos_h: dot(n, h),
+        c: len / 2.0,
+        sin2_h: sin2(h),
+        sin2_i: sin2(l),
+        sin2_o: sin2(v),
+    }
+}
+
+/// `w` turned by the angle u about the unit axis `a` ⊥ `w`.
+fn turned(w: [f64; 3], a: [f64; 3]) -> [f64; 3] {
+    let (s, c) = U.sin_cos();
+    let axw = cross(a, w);
+    [0, 1, 2].map(|i| w[i] * c + axw[i] * s)
+}
+
+/// FORMULAS.md §1's S_in of channel `ch`: the sum over the rotation modes of L, V and N
+/// (each turned by u about two axes perpendicular to it) of |f(turned) − f|.
+fn s_in(l: [f64; 3], v: [f64; 3], n: [f64; 3], mat: &Material, ch: usize) -> f64 {
+    let f0 = exact_f(&frame(l, v, n), mat, ch);
+    let axes = |w: [f64; 3]| {
+        let other = if w[0].abs() < 0.9 {
+            [1.0, 0.0, 0.0]
+        } else {
+            [0.0, 1.0, 0.0]
+        };
+        let a = unit(cross(w, other));
+        [a, cross(w, a)]
+    };
+    let mut sum = 0.0;
+    for which in 0..3 {
+        let w = [l, v, n][which];
+        for a in axes(w) {
+            let mut dirs = [l, v, n];
+            dirs[which] = turned(w, a);
+            sum += (exact_f(&frame(dirs[0], dirs[1], dirs[2]), mat, ch) - f0).abs();
+        }
+    }
+    sum
+}
+
+/// The local f32 frame's own bound on a lane (docs/VULKAN.md, "The local frames"): D moves
+/// by its log-slope times h's turn δ = u (2/c + 1), at most B = 4e-6 on the lanes the
+/// certificate passes (the others take the accurate frame), and ~45u from the frame's
+/// other values.
+fn frame_bound(g: &Geometry, m: f64) -> f64 {
+    let m2 = m * m;
+    let (cos2, sin2) = (g.cos_h * g.cos_h, g.sin2_h);
+    let slope = 4.0 * (1.0 - m2).abs() * sin2.sqrt() * g.cos_h / (m2 * cos2 + sin2);
+    (slope * U * (2.0 / g.c + 1.0)).min(4e-6) + 45.0 * U
+}
+
+/// The smallest margin, in u, between what the rule leaves the terms' arithmetic on the
+/// local f32 frame's lanes — FORMULAS.md §1's `1e-5 |f| + 4 S_in` less the frame's own
+/// bound (docs/VULKAN.md "The local frames": D's certificate B = 4e-6 and ~45u) — and the
+/// worst execution of that arithmetic, over a grid of directions (cosines from 1e-4, the
+/// frame's least, to 1; mirror, retro and side azimuths; the specular peak), every
+/// channel. Also the worst execution itself, in u of f.
+fn margin(mat: &Material) -> (f64, f64) {
+    let (mut least, mut worst) = (f64::INFINITY, 0f64);
+    let angles: Vec<f64> = (0..=24)
+        .map(|i| 1e-4f64.powf(f64::from(i) / 24.0).acos())
+        .collect();
+    let n = [0.0, 0.0, 1.0];
+    for &ti in &angles {
+        for &to in &angles {
+            for phi in [0.0, 0.3, 1.0, 2.0, 3.0, std::f64::consts::PI] {
+                let l = [ti.sin(), 0.0, ti.cos()];
+                let v = [to.sin() * phi.cos(), to.sin() * phi.sin(), to.cos()];
+                let g = frame(l, v, n);
+                if g.c < 1.0 / 16.0 {
+                    continue; // LOCAL32_MIN_C: the accurate frame takes the lane
+                }
+                for ch in 0..3 {
+                    let want = exact_f(&g, mat, ch);
+                    let base = kernel_f(&Execution::new(None), &g, mat, ch);
+                    let mut err = (base - want).abs();
+                    for i in 0..64 {
+                        let moved = kernel_f(&Execution::new(Some(i)), &g, mat, ch);
+                        err += (moved - base).abs();
+                    }
+                    let allowed =
+                        1e-5 * want + 4.0 * s_in(l, v, n, mat, ch) - frame_bound(&g, mat.m) * want;
+                    least = least.min((allowed - err) / (U * want));
+                    worst = worst.max(err / (U * want));
+                }
+            }
+        }
+    }
+    (least, worst)
+}
+
+/// On the bench's mitsuba-ggx material and on copper and gold at low, middle and high
+/// roughness, the worst execution of the terms' arithmetic the specification allows
+/// keeps within what the local f32 frame leaves of the rule (FORMULAS.md §1) on every
+/// lane of the grid; and the replay is not idle (each operation moved does move f).
+#[test]
+fn the_kernels_cook_torrance_arithmetic_fits_the_rule_under_vulkans_precisions() {
+    let metals = [
+        ([0.2, 0.92, 1.1], [3.9, 2.45, 2.14]), // the bench's mitsuba-ggx
+        ([0.27, 0.68, 1.2], [3.61, 2.63, 2.3]), // copper
+        ([0.18, 0.42, 1.37], [3.42, 2.35, 1.77]), // gold
+    ];
+    for (n, k) in metals {
+        for m in [0.08, 0.3, 1.0] {
+            let (least, worst) = margin(&Material { m, n, k });
+            eprintln!("m = {m}, η = {n:?} + {k:?}i: worst {worst:.1}u, least margin {least:.1}u");
+            assert!(
+                least >= 0.0,
+                "m = {m}, η = {n:?} + {k:?}i: {least:.1}u short"
+            );
+            assert!(worst > 40.0, "the replay moved f by only {worst:.1}u");
+        }
+    }
+}
+
+/// The kernel's metal form keeps inside the bound written for Vulkan's precisions
+/// (`conductor::metal_form_bound_vulkan`) in its worst execution, on copper's channels
+/// and on the legal materials nearest the lanes' budget (small F0, Re η² near 0 and 1,
+/// small |η|). docs/VULKAN.md ("The metal form under Vulkan's precisions") has the
+/// figures: the written bound is 3–10× the worst execution.
+#[test]
+fn the_kernels_metal_form_keeps_its_bound_under_vulkans_precisions() {
+    let cases = [
+        (0.27, 3.61),
+        (0.68, 2.63),
+        (1.2, 2.3),
+        (0.2, 3.9),
+        (1.37, 1.77),
+        (5.0, 0.0),
+        (1.0, 1.3),
+        (0.02, 0.7),
+    ];
+    for (n, k) in cases {
+        let bound = conductor::metal_form_bound_vulkan(n, k);
+        let worst = conductor_worst_execution(n, k);
+        eprintln!("η = {n} + {k}i: worst {worst:.1}u, written bound {bound:.1}u");
+        assert!(
+            worst <= bound,
+            "η = {n} + {k}i: {worst:.1}u against {bound:.1}u"
+        );
+        assert!(worst > 5.0, "the replay moved F by only {worst:.1}u");
+    }
+}
