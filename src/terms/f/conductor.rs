@@ -224,6 +224,18 @@ pub const METAL_FORM_BUDGET: f64 = 48.0;
 /// Infinite (never legal) where η leaves the range that keeps every product normal and
 /// finite in f32: `|η| ≤ 1e4` and `min_s |η² − s| ≥ 1e-4`.
 pub fn metal_form_bound(n: f64, k: f64) -> f64 {
+    match metal_form_range(n, k) {
+        Some((e2r, mag_min, f0)) => {
+            let rho = (2.0 * e2r.abs() + 1.0) / mag_min;
+            5.75 / f0 + 24.0 + rho * (1.0 / f0.sqrt() + 3.0)
+        }
+        None => f64::INFINITY,
+    }
+}
+
+/// `(Re η², min_s |η² − s|, F0)` for the metal form's bounds, or `None` where η leaves
+/// their range (`|η| ≤ 1e4`, `min_s |η² − s| ≥ 1e-4`, F0 > 0; NaN parameters too).
+fn metal_form_range(n: f64, k: f64) -> Option<(f64, f64, f64)> {
     let (e2r, e2i) = (n * n - k * k, 2.0 * n * k);
     // The distance from η² to the segment [0, 1] that sin²θ covers.
     let gap = if e2r > 1.0 {
@@ -235,13 +247,9 @@ pub fn metal_form_bound(n: f64, k: f64) -> f64 {
     };
     let mag_min = gap.hypot(e2i);
     let f0 = ((n - 1.0).powi(2) + k * k) / ((n + 1.0).powi(2) + k * k);
-    // Written so that NaN parameters (never legal) fall through to the infinite bound.
+    // Written so that NaN parameters fall through to `None`.
     let in_range = n.hypot(k) <= 1e4 && mag_min >= 1e-4 && f0 > 0.0;
-    if !in_range {
-        return f64::INFINITY;
-    }
-    let rho = (2.0 * e2r.abs() + 1.0) / mag_min;
-    5.75 / f0 + 24.0 + rho * (1.0 / f0.sqrt() + 3.0)
+    in_range.then_some((e2r, mag_min, f0))
 }
 
 /// The kernel's metal form (`conductor_f_metal`, glsl/terms.glsl) — the same values as
@@ -273,23 +281,16 @@ pub fn metal_form_bound(n: f64, k: f64) -> f64 {
 /// Copper (η = 0.27 + 3.61i, 0.68 + 2.63i, 1.2 + 2.3i) has 116–131u (7.8e-6 in blue) by
 /// this count, which adds every value's worst case although many move together; the worst
 /// execution the precisions allow, found by summing each operation's own effect
-/// (`tests/vulkan_precision.rs`), is 13–31u at the same c. Infinite where [`metal_form_bound`] is.
+/// (`tests/vulkan_precision.rs`), is 13–31u at the same c. Infinite where
+/// [`metal_form_bound`] is.
 pub fn metal_form_bound_vulkan(n: f64, k: f64) -> f64 {
-    if !metal_form_bound(n, k).is_finite() {
-        return f64::INFINITY;
+    match metal_form_range(n, k) {
+        Some((e2r, mag_min, f0)) => {
+            let rho = (3.0 * e2r.abs() + 5.0) / mag_min + 3.0;
+            20.5 / f0 + 68.0 + rho * (1.0 / f0.sqrt() + 3.0)
+        }
+        None => f64::INFINITY,
     }
-    let (e2r, e2i) = (n * n - k * k, 2.0 * n * k);
-    let gap = if e2r > 1.0 {
-        e2r - 1.0
-    } else if e2r < 0.0 {
-        -e2r
-    } else {
-        0.0
-    };
-    let mag_min = gap.hypot(e2i);
-    let f0 = ((n - 1.0).powi(2) + k * k) / ((n + 1.0).powi(2) + k * k);
-    let rho = (3.0 * e2r.abs() + 5.0) / mag_min + 3.0;
-    20.5 / f0 + 68.0 + rho * (1.0 / f0.sqrt() + 3.0)
 }
 
 /// Whether a channel with `η = n + ik` may take [`f_lane_metal`]: its bound
