@@ -1,13 +1,16 @@
-//! The kernel's f32 Cook–Torrance arithmetic (GGX D, Smith G, the conductor's metal form,
-//! the modern K and the product; glsl/terms.glsl and glsl/models.glsl) under the precisions
-//! the Vulkan specification allows, not those lavapipe happens to have: `+ − ×` correctly
-//! rounded (u = 2⁻²⁴), `x/y` within 2.5 ULP (5u), `sqrt` inherited from `1/inversesqrt`
-//! (2 + 2.5 ULP: 9u). Each GLSL step is replayed in f64 with the material as the kernel
-//! gets it (rounded to f32 on the host), the frame's values exact (their errors are the
-//! frame's bound, docs/VULKAN.md "The local frames"). To first order the error of an
-//! execution is the sum of each operation's own effect, so the worst execution the
-//! precisions allow is the sum of their magnitudes: each is measured by moving that one
-//! operation by its whole allowance. This needs no device.
+//! The kernel's f32 Cook–Torrance arithmetic on the bench's Mitsuba paths (GGX D and Smith
+//! G on the local f32 frame; Beckmann D through `exp_acc` and Smith-fast G on the float64
+//! local frame; the conductor's metal form, the modern K and the product: glsl/terms.glsl,
+//! glsl/math.glsl, glsl/models.glsl) under the precisions the Vulkan specification allows,
+//! not those lavapipe happens to have: `+ − ×` correctly rounded (u = 2⁻²⁴), `x/y` within
+//! 2.5 ULP (5u), `inversesqrt` 2 ULP (4u), `sqrt` inherited from `1/inversesqrt` (2 + 2.5
+//! ULP: 9u). Each GLSL step is replayed in f64 with the material as the host writes it
+//! (rounded to f32); the f32 frame's values exact (their errors are that frame's bound,
+//! docs/VULKAN.md "The local frames"), the float64 frame's each rounded once to f32, an
+//! operation of the replay. To first order the error of an execution is the sum of each
+//! operation's own effect, so the worst execution the precisions allow is the sum of their
+//! magnitudes: each is measured by moving that one operation by its whole allowance. The
+//! replay is the GLSL rewritten by hand: a change to one is made in the other. No device.
 
 use std::cell::Cell;
 use vkbrdf::terms::d::{beckmann, ggx};
