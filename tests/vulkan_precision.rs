@@ -12,6 +12,7 @@
 //! magnitudes: each is measured by moving that one operation by its whole allowance. The
 //! replay is the GLSL rewritten by hand: a change to one is made in the other. No device.
 
+use glam::DVec3;
 use std::cell::Cell;
 use vkbrdf::terms::d::{beckmann, ggx};
 use vkbrdf::terms::f::conductor;
@@ -32,6 +33,11 @@ impl Execution {
             moved,
             next: Cell::new(0),
         }
+    }
+
+    /// The operations this execution ran.
+    fn count(&self) -> u32 {
+        self.next.get()
     }
 
     fn op(&self, x: f64, allowance: f64) -> f64 {
@@ -67,12 +73,23 @@ impl Execution {
     }
 }
 
+/// The first-order worst execution of `replay` against `want` (absolute): the unmoved
+/// execution's error plus, for each operation it ran, the magnitude of that operation's
+/// own effect.
+fn worst_execution(replay: impl Fn(&Execution) -> f64, want: f64) -> f64 {
+    let unmoved = Execution::new(None);
+    let base = replay(&unmoved);
+    let moves = (0..unmoved.count()).map(|i| (replay(&Execution::new(Some(i))) - base).abs());
+    (base - want).abs() + moves.sum::<f64>()
+}
+
 /// The value as the host rounds it into the material table.
 fn f32_of(x: f64) -> f64 {
     f64::from(x as f32)
 }
 
-/// A GGX + Smith + conductor + modern-K material (`specular` 1, no diffuse).
+/// A Cook–Torrance conductor of the bench's kind (GGX or Beckmann by the path; modern K,
+/// `specular` 1, no diffuse).
 struct Material {
     m: f64,
     n: [f64; 3],
@@ -119,11 +136,7 @@ fn conductor_worst_execution(n: f64, k: f64) -> f64 {
         let y = f64::from(j) / 4000.0;
         let c = f64::from((1e-4 + (1.0 - 1e-4) * y.sqrt()) as f32);
         let want = conductor::f(c, n, k);
-        let base = conductor_f_metal(&Execution::new(None), c, n, k);
-        let mut err = (base - want).abs();
-        for i in 0..32 {
-            err += (conductor_f_metal(&Execution::new(Some(i)), c, n, k) - base).abs();
-        }
+        let err = worst_execution(|x| conductor_f_metal(x, c, n, k), want);
         worst = worst.max(err / (U * want));
     }
     worst
@@ -150,8 +163,13 @@ fn kernel_f(x: &Execution, g: &Geometry, mat: &Material, ch: usize) -> f64 {
     let (lo, li) = (lambda(g.sin2_o, g.cos_o), lambda(g.sin2_i, g.cos_i));
     let gg = x.div(1.0, x.mul(x.add(1.0, lo), x.add(1.0, li)));
     let f = conductor_f_metal(x, g.c, mat.n[ch], mat.k[ch]);
-    // modern_k, then (D G) F K and the colour.
-    let kk = x.div(0.25, x.mul(g.cos_i, g.cos_o));
+    product(x, dd, gg, f, g.cos_i, g.cos_o)
+}
+
+/// `modern_k`, then `model_cook_torrance`'s (D G) F K and the colour (diffuse 0 plus
+/// specular 1 times it: two more roundings).
+fn product(x: &Execution, dd: f64, gg: f64, f: f64, cos_i: f64, cos_o: f64) -> f64 {
+    let kk = x.div(0.25, x.mul(cos_i, cos_o));
     let dgf = x.mul(x.mul(dd, gg), f);
     x.add(0.0, x.mul(1.0, x.mul(dgf, kk)))
 }
@@ -166,33 +184,15 @@ fn exact_f(g: &Geometry, mat: &Material, ch: usize) -> f64 {
     dd * gg * f / (4.0 * g.cos_i * g.cos_o)
 }
 
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-fn unit(a: [f64; 3]) -> [f64; 3] {
-    let len = dot(a, a).sqrt();
-    a.map(|x| x / len)
-}
-
 /// The frame's values (FORMULAS.md §1) of unit l, v, n, exactly.
-fn frame(l: [f64; 3], v: [f64; 3], n: [f64; 3]) -> Geometry {
-    let s = [l[0] + v[0], l[1] + v[1], l[2] + v[2]];
-    let len = dot(s, s).sqrt();
-    let h = s.map(|x| x / len);
-    let sin2 = |w: [f64; 3]| dot(cross(n, w), cross(n, w));
+fn frame(l: DVec3, v: DVec3, n: DVec3) -> Geometry {
+    let len = (l + v).length();
+    let h = (l + v) / len;
+    let sin2 = |w: DVec3| n.cross(w).length_squared();
     Geometry {
-        cos_i: dot(n, l),
-        cos_o: dot(n, v),
-        cos_h: dot(n, h),
+        cos_i: n.dot(l),
+        cos_o: n.dot(v),
+        cos_h: n.dot(h),
         c: len / 2.0,
         sin2_h: sin2(h),
         sin2_i: sin2(l),
@@ -201,25 +201,19 @@ fn frame(l: [f64; 3], v: [f64; 3], n: [f64; 3]) -> Geometry {
 }
 
 /// `w` turned by the angle u about the unit axis `a` ⊥ `w`.
-fn turned(w: [f64; 3], a: [f64; 3]) -> [f64; 3] {
+fn turned(w: DVec3, a: DVec3) -> DVec3 {
     let (s, c) = U.sin_cos();
-    let axw = cross(a, w);
-    [0, 1, 2].map(|i| w[i] * c + axw[i] * s)
+    w * c + a.cross(w) * s
 }
 
 /// FORMULAS.md §1's S_in of channel `ch`: the sum over the rotation modes of L, V and N
 /// (each turned by u about two axes perpendicular to it) of |f(turned) − f|.
-fn s_in(path: &Path, l: [f64; 3], v: [f64; 3], n: [f64; 3], mat: &Material, ch: usize) -> f64 {
+fn s_in(path: &Path, l: DVec3, v: DVec3, n: DVec3, mat: &Material, ch: usize) -> f64 {
     let exact_f = path.exact;
     let f0 = exact_f(&frame(l, v, n), mat, ch);
-    let axes = |w: [f64; 3]| {
-        let other = if w[0].abs() < 0.9 {
-            [1.0, 0.0, 0.0]
-        } else {
-            [0.0, 1.0, 0.0]
-        };
-        let a = unit(cross(w, other));
-        [a, cross(w, a)]
+    let axes = |w: DVec3| {
+        let a = w.any_orthonormal_vector();
+        [a, w.cross(a)]
     };
     let mut sum = 0.0;
     for which in 0..3 {
@@ -282,24 +276,19 @@ fn margin(path: &Path, mat: &Material) -> (f64, f64) {
     let angles: Vec<f64> = (0..=24)
         .map(|i| 1e-4f64.powf(f64::from(i) / 24.0).acos())
         .collect();
-    let n = [0.0, 0.0, 1.0];
+    let n = DVec3::Z;
     for &ti in &angles {
         for &to in &angles {
             for phi in [0.0, 0.3, 1.0, 2.0, 3.0, std::f64::consts::PI] {
-                let l = [ti.sin(), 0.0, ti.cos()];
-                let v = [to.sin() * phi.cos(), to.sin() * phi.sin(), to.cos()];
+                let l = DVec3::new(ti.sin(), 0.0, ti.cos());
+                let v = DVec3::new(to.sin() * phi.cos(), to.sin() * phi.sin(), to.cos());
                 let g = frame(l, v, n);
                 if g.c < path.min_c {
                     continue;
                 }
                 for ch in 0..3 {
                     let want = exact_f(&g, mat, ch);
-                    let base = kernel_f(&Execution::new(None), &g, mat, ch);
-                    let mut err = (base - want).abs();
-                    for i in 0..128 {
-                        let moved = kernel_f(&Execution::new(Some(i)), &g, mat, ch);
-                        err += (moved - base).abs();
-                    }
+                    let err = worst_execution(|x| kernel_f(x, &g, mat, ch), want);
                     // FORMULAS.md §1's floor: 1e-5 of at least 1e-6.
                     let scale = want.max(1e-6);
                     let allowed = 1e-5 * scale + 4.0 * s_in(path, l, v, n, mat, ch)
@@ -396,9 +385,7 @@ fn kernel_f_beckmann(x: &Execution, g: &Geometry, mat: &Material, ch: usize) -> 
     };
     let gg = x.mul(g1(sin2_o, cos_o), g1(sin2_i, cos_i));
     let f = conductor_f_metal(x, c, mat.n[ch], mat.k[ch]);
-    let kk = x.div(0.25, x.mul(cos_i, cos_o));
-    let dgf = x.mul(x.mul(dd, gg), f);
-    x.add(0.0, x.mul(1.0, x.mul(dgf, kk)))
+    product(x, dd, gg, f, cos_i, cos_o)
 }
 
 /// The exact f of the mitsuba-beckmann scenario's material.
