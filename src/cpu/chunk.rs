@@ -9,6 +9,7 @@
 use super::dispatch::block;
 use super::kernel::{self, Inputs, Outputs, LANES};
 use super::plan::Plan;
+use super::register::{self, Pair, Reg, RegisterIo, RegisterOp, Registers};
 use super::{measured, slice_tuples, transpose};
 use crate::backend::{Counts, TERM_COLUMNS};
 use crate::batch::columns::{Column, ColumnBatch};
@@ -30,6 +31,9 @@ pub struct Tally {
     /// Of `lanes`, tuples their block's f32 frame could not serve, gathered into blocks of
     /// the f64 frame ([`kernel::Params::defer_slow`]).
     pub deferred: u64,
+    /// Of `lanes`, tuples read and evaluated on the register path
+    /// (`cpu::register`; their deferred and rescued lanes are counted above too).
+    pub registers: u64,
 }
 
 impl Tally {
@@ -38,6 +42,7 @@ impl Tally {
         self.rescued += o.rescued;
         self.reference += o.reference;
         self.deferred += o.deferred;
+        self.registers += o.registers;
     }
 }
 
@@ -176,7 +181,22 @@ impl pulp::WithSimd for ChunkOp<'_, '_> {
 /// shuffles (`transpose`), `a·b + c` fused.
 impl super::isa::WithFma for ChunkOp<'_, '_> {
     #[inline(always)]
-    fn with_fma<S: pulp::Simd + transpose::Transpose>(self, simd: S) -> (Counts, Tally) {
+    fn with_fma<S: transpose::Transpose + Registers>(self, simd: S) -> (Counts, Tally) {
+        if let (Source::Local(_), None, Plan::Microfacet { d, aniso, g, f, p }) =
+            (self.batch, self.order, self.plan)
+        {
+            if register::serves(*d, *aniso, *g, *f, p) {
+                let op = LocalRegisters {
+                    plan: self.plan,
+                    batch: self.batch,
+                    work: &mut *self.work,
+                    material: self.material,
+                };
+                if let Some(r) = simd.serve(op) {
+                    return r;
+                }
+            }
+        }
         run_chunk::<S, S, Fused>(
             simd,
             simd,
@@ -187,6 +207,159 @@ impl super::isa::WithFma for ChunkOp<'_, '_> {
             self.material,
         )
     }
+}
+
+/// A chunk of the local form on the register path ([`register::serves`]).
+struct LocalRegisters<'a, 'b> {
+    plan: &'a Plan,
+    batch: Source<'a>,
+    work: &'a mut Work<'b>,
+    material: &'a Material,
+}
+
+impl RegisterOp for LocalRegisters<'_, '_> {
+    type Output = (Counts, Tally);
+
+    #[inline(always)]
+    fn run<S: RegisterIo>(self, simd: S) -> (Counts, Tally) {
+        use crate::terms::{FresnelKind as F, Geometry as G};
+        use kernel::{F_CONDUCTOR, F_NONE, F_SCHLICK, G_CT, G_NONE, G_SMITH, G_SMITH_CORRELATED};
+        let Plan::Microfacet { g, f, .. } = self.plan else {
+            unreachable!("the register path serves microfacet groups (`register::serves`)")
+        };
+        macro_rules! by_f {
+            ($g:expr) => {
+                match f {
+                    F::None => registers_apart::<S, $g, F_NONE>(simd, self),
+                    F::Schlick => registers_apart::<S, $g, F_SCHLICK>(simd, self),
+                    _ => registers_apart::<S, $g, F_CONDUCTOR>(simd, self),
+                }
+            };
+        }
+        match g {
+            G::None => by_f!(G_NONE),
+            G::CookTorrance => by_f!(G_CT),
+            G::Smith => by_f!(G_SMITH),
+            _ => by_f!(G_SMITH_CORRELATED),
+        }
+    }
+}
+
+/// [`run_registers`] as a function of its own compiled for `simd` (as each group's lanes
+/// are, `dispatch::apart`).
+#[inline(never)]
+fn registers_apart<S: RegisterIo, const G: u8, const F: u8>(
+    simd: S,
+    op: LocalRegisters,
+) -> (Counts, Tally) {
+    simd.vectorize(RegistersFn::<S, G, F> { simd, op })
+}
+
+/// [`run_registers`] as pulp calls it inside the instruction set's features (a struct,
+/// not a closure: LLVM left the closure out of line, and with it every intrinsic became a
+/// call).
+struct RegistersFn<'a, 'b, S, const G: u8, const F: u8> {
+    simd: S,
+    op: LocalRegisters<'a, 'b>,
+}
+
+impl<S: RegisterIo, const G: u8, const F: u8> pulp::NullaryFnOnce for RegistersFn<'_, '_, S, G, F> {
+    type Output = (Counts, Tally);
+
+    #[inline(always)]
+    fn call(self) -> (Counts, Tally) {
+        run_registers::<S, G, F>(self.simd, self.op)
+    }
+}
+
+/// The register path's loop over a chunk of the local form: a register of rows at a time
+/// read, evaluated (`register::ggx_local`) and written, the lanes it flags sent to the
+/// reference or gathered for the f64 frame as [`run_blocks`] does with a block's.
+#[inline(always)]
+fn run_registers<S: RegisterIo, const G: u8, const F: u8>(
+    simd: S,
+    op: LocalRegisters,
+) -> (Counts, Tally) {
+    let LocalRegisters {
+        plan,
+        batch,
+        work: w,
+        material: m,
+    } = op;
+    let Plan::Microfacet { p, .. } = plan else {
+        unreachable!("the register path serves microfacet groups (`register::serves`)")
+    };
+    // Two registers a step (`register::Pair`).
+    let width = 2 * S::WIDTH;
+    let len = w.brdf.len() / 3;
+    let data = batch.data();
+    let mut counts = Counts::default();
+    let mut tally = Tally {
+        lanes: len as u64,
+        registers: len as u64,
+        ..Tally::default()
+    };
+    let (plan64, mut deferred) = (plan.f64_frame(), Deferred::new());
+    // The tail's rows, the last repeated (its extra lanes are computed and dropped), and
+    // its outputs.
+    let mut tail_rows = [0f32; COLUMNS_LOCAL * 2 * LANES];
+    let mut tail_out = [0f32; 3 * 2 * LANES];
+    let mut j = 0;
+    while j < len {
+        let n = width.min(len - j);
+        let row0 = w.start + j;
+        let rows = if n == width {
+            &data[row0 * COLUMNS_LOCAL..(row0 + width) * COLUMNS_LOCAL]
+        } else {
+            for k in 0..width {
+                let r = row0 + k.min(n - 1);
+                tail_rows[k * COLUMNS_LOCAL..(k + 1) * COLUMNS_LOCAL]
+                    .copy_from_slice(&data[r * COLUMNS_LOCAL..(r + 1) * COLUMNS_LOCAL]);
+            }
+            &tail_rows[..width * COLUMNS_LOCAL]
+        };
+        let half = S::WIDTH;
+        let [ax, ay, az, au, av, aw] = simd.local_columns(&rows[..half * COLUMNS_LOCAL]);
+        let [bx, by, bz, bu, bv, bw] = simd.local_columns(&rows[half * COLUMNS_LOCAL..]);
+        let r = |x, y| Pair(Reg::new(simd, x), Reg::new(simd, y));
+        let (l, v) = (
+            [r(ax, bx), r(ay, by), r(az, bz)],
+            [r(au, bu), r(av, bv), r(aw, bw)],
+        );
+        let ([br, bg, bb], rescue_lanes, slow) = register::ggx_local::<_, G, F>(p, l, v);
+        let (lo, hi) = (
+            [br.0.get(), bg.0.get(), bb.0.get()],
+            [br.1.get(), bg.1.get(), bb.1.get()],
+        );
+        let out: &mut [f32] = if n == width {
+            &mut w.brdf[j * 3..(j + width) * 3]
+        } else {
+            &mut tail_out[..width * 3]
+        };
+        simd.rgb_rows(lo, &mut out[..half * 3]);
+        simd.rgb_rows(hi, &mut out[half * 3..]);
+        if n < width {
+            w.brdf[j * 3..(j + n) * 3].copy_from_slice(&tail_out[..n * 3]);
+        }
+        let valid = u32::MAX >> (32 - n);
+        let bits =
+            |m: Pair<register::RegMask<S>>| simd.bits(m.0.get()) | (simd.bits(m.1.get()) << half);
+        let (rb, sb) = (bits(rescue_lanes) & valid, bits(slow) & valid);
+        for k in lanes_of(rb) {
+            rescue(batch, m, row0 + k, j + k, w, &mut counts);
+            tally.rescued += 1;
+        }
+        for k in lanes_of(sb) {
+            let r = &data[(row0 + k) * COLUMNS_LOCAL..(row0 + k + 1) * COLUMNS_LOCAL];
+            let x = [r[0], r[1], r[2], r[3], r[4], r[5], 0.0, 0.0, 1.0];
+            if deferred.push_lane(x, j + k, row0 + k) {
+                deferred.run::<S, Fused>(simd, &plan64, true, batch, m, w, &mut counts, &mut tally);
+            }
+        }
+        j += n;
+    }
+    deferred.run::<S, Fused>(simd, &plan64, true, batch, m, w, &mut counts, &mut tally);
+    (counts, tally)
 }
 
 /// Writes the f64 reference's result for batch row `row` at position `j` of the chunk and
@@ -404,11 +577,18 @@ impl Deferred {
     /// Lane `k` of `inp` (output position `j`, batch row `row`); whether the block is full.
     #[inline(always)]
     fn push(&mut self, inp: &Inputs, k: usize, j: usize, row: usize) -> bool {
+        self.push_lane(kernel::lane_inputs(inp, k % LANES), j, row)
+    }
+
+    /// A lane's L, V, N `x` (output position `j`, batch row `row`); whether the block is
+    /// full.
+    #[inline(always)]
+    fn push_lane(&mut self, x: [f32; 9], j: usize, row: usize) -> bool {
         // `n < LANES` always (a full block is run before the next push); the mask says so
-        // to the compiler, which then drops the ten bounds checks.
-        let (n, k) = (self.n % LANES, k % LANES);
+        // to the compiler, which then drops the bounds checks.
+        let n = self.n % LANES;
         for c in 0..9 {
-            self.inp.v[c][n] = inp.v[c][k];
+            self.inp.v[c][n] = x[c];
         }
         self.at[n] = (j, row);
         self.n = n + 1;

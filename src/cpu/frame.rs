@@ -10,20 +10,22 @@
 pub const GRAZING: f64 = 1e-4;
 
 use crate::terms::math::MulAdd;
+use crate::terms::real::Real;
 
-/// The frame of one lane (FORMULAS.md §1) and whether the lanes may take it.
-#[derive(Clone, Copy, Default)]
-pub(super) struct Frame {
-    pub(super) cos_i: f32,
-    pub(super) cos_o: f32,
-    pub(super) cos_h: f32,
-    pub(super) c: f32,
+/// The frame of one lane (FORMULAS.md §1), or of a register of lanes
+/// (`cpu::register`), and whether the lanes may take it.
+#[derive(Clone, Copy)]
+pub(super) struct Frame<T: Real = f32> {
+    pub(super) cos_i: T,
+    pub(super) cos_o: T,
+    pub(super) cos_h: T,
+    pub(super) c: T,
     /// `1 − c²`.
-    pub(super) s2: f32,
-    pub(super) sin2_h: f32,
-    pub(super) sin2_i: f32,
-    pub(super) sin2_o: f32,
-    pub(super) ok: bool,
+    pub(super) s2: T,
+    pub(super) sin2_h: T,
+    pub(super) sin2_i: T,
+    pub(super) sin2_o: T,
+    pub(super) ok: T::Mask,
 }
 
 /// Squared lengths in this range leave the lanes' f32 arithmetic a factor 1e19 either
@@ -34,8 +36,8 @@ const LENGTH2_MAX: f32 = 1e30;
 
 /// Whether a squared length is in [`LENGTH2_MIN`, `LENGTH2_MAX`] (false for NaN).
 #[inline(always)]
-pub(super) fn length2_ok(q: f32) -> bool {
-    (LENGTH2_MIN..=LENGTH2_MAX).contains(&q)
+pub(super) fn length2_ok<T: Real>(q: T) -> T::Mask {
+    q.ge_scalar(LENGTH2_MIN) & q.le_scalar(LENGTH2_MAX)
 }
 
 /// [`length2_ok`] of a squared length formed in f64 (false for NaN).
@@ -47,8 +49,8 @@ fn length2_ok64(q: f64) -> bool {
 /// `1/√x`, correctly rounded square root then division: within 1 ulp, and exactly 1 for
 /// x = 1 (the local form's N must come out exactly (0, 0, 1), see [`frame`]).
 #[inline(always)]
-pub(super) fn rsqrt(x: f32) -> f32 {
-    1.0 / x.sqrt()
+pub(super) fn rsqrt<T: Real>(x: T) -> T {
+    x.splat_as(1.0) / x.sqrt()
 }
 
 /// The frame of one lane in f32; `Z`: N is (0, 0, 1) (the local form), whose dot and
@@ -174,9 +176,9 @@ pub(super) fn frame<A: MulAdd, const Z: bool>(x: &[f32; 9]) -> Frame {
 /// sums of squares of components, as in [`frame`] — which forms l, v and h in f64 to make
 /// that turn `u·√3/2` whatever c, at ~25 instructions an evaluation more (AVX2).
 #[inline(always)]
-pub(super) fn frame_local32<A: MulAdd>(x: &[f32; 9]) -> Frame {
-    let (lx, ly, lz) = (x[0], x[1], x[2]);
-    let (vx, vy, vz) = (x[3], x[4], x[5]);
+pub(super) fn frame_local32<A: MulAdd, T: Real>(l: [T; 3], v: [T; 3]) -> Frame<T> {
+    let [lx, ly, lz] = l;
+    let [vx, vy, vz] = v;
     let (ll, vv) = (
         A::mul_add(lz, lz, A::mul_add(lx, lx, ly * ly)),
         A::mul_add(vz, vz, A::mul_add(vx, vx, vy * vy)),
@@ -187,13 +189,18 @@ pub(super) fn frame_local32<A: MulAdd>(x: &[f32; 9]) -> Frame {
     let (hx, hy, hz) = (lx + vx, ly + vy, lz + vz);
     let hh = A::mul_add(hz, hz, A::mul_add(hx, hx, hy * hy));
     let ih = rsqrt(hh);
-    let c = 0.5 * (hh * ih);
+    let c = hh * ih * 0.5;
     let (dx, dy, dz) = (lx - vx, ly - vy, lz - vz);
-    let s2 = 0.25 * A::mul_add(dz, dz, A::mul_add(dx, dx, dy * dy));
+    let s2 = A::mul_add(dz, dz, A::mul_add(dx, dx, dy * dy)) * 0.25;
     let (cos_i, cos_o, cos_h) = (lz, vz, hz * ih);
     let g = GRAZING as f32;
-    // `>=` is false for NaN: lanes that went non-finite are rescued too.
-    let ok = length2_ok(ll) && length2_ok(vv) && cos_i >= g && cos_o >= g && cos_h >= g && c >= g;
+    // `≥` is false for NaN: lanes that went non-finite are rescued too.
+    let ok = length2_ok(ll)
+        & length2_ok(vv)
+        & cos_i.ge_scalar(g)
+        & cos_o.ge_scalar(g)
+        & cos_h.ge_scalar(g)
+        & c.ge_scalar(g);
     Frame {
         cos_i,
         cos_o,

@@ -112,7 +112,10 @@ impl std::fmt::Display for Isa {
 /// which both have FMA and the AVX transposes.
 pub(super) trait WithFma: pulp::WithSimd {
     /// The work in `simd`'s lanes, with FMA.
-    fn with_fma<S: pulp::Simd + super::transpose::Transpose>(self, simd: S) -> Self::Output;
+    fn with_fma<S: super::transpose::Transpose + super::register::Registers>(
+        self,
+        simd: S,
+    ) -> Self::Output;
 }
 
 /// `op` in `arch`'s lanes: AVX-512 and AVX2 through [`WithFma::with_fma`] (inside the
@@ -135,7 +138,9 @@ struct Fma<S, O> {
 }
 
 #[cfg(target_arch = "x86_64")]
-impl<S: pulp::Simd + super::transpose::Transpose, O: WithFma> pulp::NullaryFnOnce for Fma<S, O> {
+impl<S: super::transpose::Transpose + super::register::Registers, O: WithFma> pulp::NullaryFnOnce
+    for Fma<S, O>
+{
     type Output = O::Output;
 
     #[inline(always)]

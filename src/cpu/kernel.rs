@@ -20,6 +20,7 @@ use crate::terms::f::{conductor, dielectric, schlick};
 use crate::terms::g::{cook_torrance, neubelt, schlick_smith, smith, smith_correlated, smith_fast};
 use crate::terms::k::LaneK;
 use crate::terms::math::MulAdd;
+use crate::terms::real::Real;
 use crate::terms::{DistributionKind, FresnelKind, Geometry};
 
 /// Tuples per block: 16 f32 lanes fill one AVX-512 register (two AVX2 registers).
@@ -469,10 +470,11 @@ fn frames<A: MulAdd, const Z: bool, const MODE: u8>(
 ) {
     for k in 0..LANES {
         let x = lane_inputs(inp, k);
+        let (xl, xv) = ([x[0], x[1], x[2]], [x[3], x[4], x[5]]);
         let (fr, local) = match MODE {
-            FRAME_LOCAL => (frame_local32::<A>(&x), true),
+            FRAME_LOCAL => (frame_local32::<A, f32>(xl, xv), true),
             FRAME_EACH => {
-                let (a, b) = (frame_local32::<A>(&x), frame::<A, Z>(&x));
+                let (a, b) = (frame_local32::<A, f32>(xl, xv), frame::<A, Z>(&x));
                 (if z[k] { a } else { b }, z[k])
             }
             _ => (frame::<A, Z>(&x), false),
@@ -654,7 +656,7 @@ fn microfacet_dg<A: MulAdd, const D: u8, const G: u8, const FAST: bool>(
             1.0,
         ),
         DistributionKind::Ggx if FAST => {
-            ggx::d_ratio32::<A>(cos_h, fr.sin2_h32, p.m2_f, p.d_norm_f)
+            ggx::d_ratio32::<A, f32>(cos_h, fr.sin2_h32, p.m2_f, p.d_norm_f)
         }
         DistributionKind::Ggx => (ggx::d_lane64(fr.cos_h2, fr.sin2_h, p.m2, p.d_norm), 1.0),
         DistributionKind::Beckmann if FAST => (
@@ -669,9 +671,11 @@ fn microfacet_dg<A: MulAdd, const D: u8, const G: u8, const FAST: bool>(
     let m2 = p.m2 as f32;
     let ggx = const { matches!(DistributionKind::from_code(D), DistributionKind::Ggx) };
     let g = match const { Geometry::from_code(G) } {
-        Geometry::Smith if ggx => smith::g_ratio_ggx::<A>(cos_i, fr.sin2_i, cos_o, fr.sin2_o, m2),
+        Geometry::Smith if ggx => {
+            smith::g_ratio_ggx::<A, f32>(cos_i, fr.sin2_i, cos_o, fr.sin2_o, m2)
+        }
         Geometry::SmithCorrelated if ggx => {
-            smith_correlated::g_ratio_ggx::<A>(cos_i, fr.sin2_i, cos_o, fr.sin2_o, m2)
+            smith_correlated::g_ratio_ggx::<A, f32>(cos_i, fr.sin2_i, cos_o, fr.sin2_o, m2)
         }
         Geometry::SmithFast => smith_fast::g_ratio(cos_i, fr.sin2_i, cos_o, fr.sin2_o, p.m_f),
         _ => {
@@ -734,10 +738,38 @@ fn finish_lane<A: MulAdd, const F: u8, const T: bool, const M: bool>(
             FresnelKind::None => 1.0,
             FresnelKind::Schlick => schlick::f_lane(one_minus_c, p.f0[ch]),
             FresnelKind::Dielectric => dielectric::f_lane(fr.c64, fr.s2_64, p.ior[ch], p.mu2m1[ch]),
-            FresnelKind::Conductor if M => conductor::f_lane_metal::<A>(c, s2_f, &p.conductor, ch),
+            FresnelKind::Conductor if M => {
+                conductor::f_lane_metal::<A, f32>(c, s2_f, &p.conductor, ch)
+            }
             FresnelKind::Conductor => conductor::f_lane(c, s2_f, &p.conductor, ch),
         };
     }
+    let (brdf, too_large) = brdf_of::<A, f32>(p, d, g, f, cos_i, cos_o);
+    for ch in 0..3 {
+        out.brdf[ch][k] = brdf[ch];
+    }
+    if T {
+        let terms = [d.0 / d.1, g.0 / g.1, f[0], f[1], f[2], p.k.k(cos_i, cos_o)];
+        for (t, x) in terms.into_iter().enumerate() {
+            out.terms[t][k] = x;
+        }
+    }
+    out.rescue[k] = !fr.ok || too_large;
+}
+
+/// The BRDF's channels of a lane, or of a register of lanes (`cpu::register`), from D and
+/// G as quotients, F per channel and the cosines (FORMULAS.md §5–§6): D·G·K over one
+/// division (the divider is what a block waits on); and whether an output may be
+/// non-finite or above [`OUTPUT_LIMIT`] (the lane then goes to the reference).
+#[inline(always)]
+pub(super) fn brdf_of<A: MulAdd, T: Real>(
+    p: &Params,
+    d: (T, T),
+    g: (T, T),
+    f: [T; 3],
+    cos_i: T,
+    cos_o: T,
+) -> ([T; 3], T::Mask) {
     // K (FORMULAS.md §5) as a quotient. Each denominator is ≥ 1e-20 and the product of
     // the three ≤ 1e24 on the lanes' cosines (≥ 1e-4), so the one division neither
     // overflows nor loses the quotient to underflow.
@@ -749,21 +781,18 @@ fn finish_lane<A: MulAdd, const F: u8, const T: bool, const M: bool>(
     // took 45. The quotients' parts stand for the terms (each term is finite when they
     // are), so the test, and with it the BRDF, is the same with and without terms.
     let mut size = d.0.abs() + d.1 + g.0.abs() + g.1 + dgk.abs();
+    let mut brdf = f;
     for ch in 0..3 {
-        let b = A::mul_add(p.spec[ch], dgk * f[ch], p.diffuse[ch]);
-        out.brdf[ch][k] = b;
-        size += b.abs() + f[ch].abs();
+        let b = A::mul_add(
+            dgk.splat_as(p.spec[ch]),
+            dgk * f[ch],
+            dgk.splat_as(p.diffuse[ch]),
+        );
+        brdf[ch] = b;
+        size = size + (b.abs() + f[ch].abs());
     }
-    if T {
-        let terms = [d.0 / d.1, g.0 / g.1, f[0], f[1], f[2], p.k.k(cos_i, cos_o)];
-        for (t, x) in terms.into_iter().enumerate() {
-            out.terms[t][k] = x;
-        }
-    }
-    // `<=` is false for NaN: one comparison catches both.
-    #[allow(clippy::neg_cmp_op_on_partial_ord)]
-    let bad = !fr.ok || !(size <= OUTPUT_LIMIT);
-    out.rescue[k] = bad;
+    // `≤` is false for NaN: one comparison catches both.
+    (brdf, !size.le_scalar(OUTPUT_LIMIT))
 }
 
 #[cfg(test)]

@@ -31,6 +31,7 @@ mod dispatch;
 mod frame;
 mod measured;
 pub mod plan;
+mod register;
 mod slice_tuples;
 pub mod transpose;
 pub use chunk::Tally;

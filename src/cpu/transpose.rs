@@ -186,7 +186,7 @@ impl Transpose for pulp::x86::V4 {
 /// cross-lane permute. LLVM made the portable stride-6 loops 192 scalar moves a block here
 /// (12 an evaluation, a tenth of GGX's); this is 34 instructions per 8 rows.
 #[cfg(target_arch = "x86_64")]
-mod avx2 {
+pub(super) mod avx2 {
     // By the crate's paths: the layering test reads `super` as the parent file.
     use crate::batch::{COLUMNS_LOCAL, COLUMNS_PLAIN};
     use crate::cpu::kernel::{Inputs, LANES};
@@ -344,7 +344,6 @@ mod avx2 {
 
         #[inline(always)]
         fn rgb(self, lanes: &[[f32; LANES]; 3], rows: &mut [f32; BLOCK_XYZ]) {
-            let a = self.avx;
             for half in 0..2 {
                 let get = |c: usize| -> __m256 {
                     let v: [f32; 8] = lanes[c][8 * half..8 * half + 8]
@@ -352,28 +351,43 @@ mod avx2 {
                         .expect("8 lanes");
                     bytemuck::cast(v)
                 };
-                let (x, y, z) = (get(0), get(1), get(2));
-                // In each half, rows k..k+4 = x0 y0 z0 x1 | y1 z1 x2 y2 | z2 x3 y3 z3.
-                let t0 = a._mm256_unpacklo_ps(x, y);
-                let t1 = a._mm256_unpackhi_ps(x, y);
-                let u = a._mm256_shuffle_ps::<0x50>(z, x); // z0 z0 x1 x1
-                let v = a._mm256_shuffle_ps::<0x55>(y, z); // y1 y1 z1 z1
-                let w1 = a._mm256_shuffle_ps::<0xFA>(z, x); // z2 z2 x3 x3
-                let w2 = a._mm256_shuffle_ps::<0xFF>(y, z); // y3 y3 z3 z3
-                let o = [
-                    a._mm256_shuffle_ps::<0x84>(t0, u),
-                    a._mm256_shuffle_ps::<0x48>(v, t1),
-                    a._mm256_shuffle_ps::<0x88>(w1, w2),
-                ];
-                // Low halves are rows 8·half + 0..4, high halves rows 8·half + 4..8.
-                let base = 24 * half;
-                for (i, r) in o.into_iter().enumerate() {
-                    let lo: [f32; 4] = bytemuck::cast(a._mm256_castps256_ps128(r));
-                    let hi: [f32; 4] = bytemuck::cast(a._mm256_extractf128_ps::<1>(r));
-                    rows[base + 4 * i..base + 4 * i + 4].copy_from_slice(&lo);
-                    rows[base + 12 + 4 * i..base + 12 + 4 * i + 4].copy_from_slice(&hi);
-                }
+                let out: &mut [f32; 24] = (&mut rows[24 * half..24 * half + 24])
+                    .try_into()
+                    .expect("8 rows of 3");
+                rgb_rows(self, [get(0), get(1), get(2)], out);
             }
+        }
+    }
+
+    /// The local form's 6 columns of its 8 rows `block` (the register path's read).
+    #[inline(always)]
+    pub(crate) fn local_columns(simd: pulp::x86::V3, block: &[f32; 48]) -> [__m256; 6] {
+        local_rows(simd, block, 0)
+    }
+
+    /// 3 columns of 8 lanes (RGB) into 8 rows of 3.
+    #[inline(always)]
+    pub(crate) fn rgb_rows(simd: pulp::x86::V3, xyz: [__m256; 3], rows: &mut [f32; 24]) {
+        let a = simd.avx;
+        let [x, y, z] = xyz;
+        // In each half, rows k..k+4 = x0 y0 z0 x1 | y1 z1 x2 y2 | z2 x3 y3 z3.
+        let t0 = a._mm256_unpacklo_ps(x, y);
+        let t1 = a._mm256_unpackhi_ps(x, y);
+        let u = a._mm256_shuffle_ps::<0x50>(z, x); // z0 z0 x1 x1
+        let v = a._mm256_shuffle_ps::<0x55>(y, z); // y1 y1 z1 z1
+        let w1 = a._mm256_shuffle_ps::<0xFA>(z, x); // z2 z2 x3 x3
+        let w2 = a._mm256_shuffle_ps::<0xFF>(y, z); // y3 y3 z3 z3
+        let o = [
+            a._mm256_shuffle_ps::<0x84>(t0, u),
+            a._mm256_shuffle_ps::<0x48>(v, t1),
+            a._mm256_shuffle_ps::<0x88>(w1, w2),
+        ];
+        // Low halves are rows 0..4, high halves rows 4..8.
+        for (i, r) in o.into_iter().enumerate() {
+            let lo: [f32; 4] = bytemuck::cast(a._mm256_castps256_ps128(r));
+            let hi: [f32; 4] = bytemuck::cast(a._mm256_extractf128_ps::<1>(r));
+            rows[4 * i..4 * i + 4].copy_from_slice(&lo);
+            rows[12 + 4 * i..12 + 4 * i + 4].copy_from_slice(&hi);
         }
     }
 }

@@ -3,13 +3,15 @@
 //! f64), written so that a loop over lanes vectorises — no calls into libm, no
 //! data-dependent branches; and the f64 power of a cosine the `cos^e` lobes share.
 
+use super::real::Real;
+
 /// How the lanes form `a·b + c`: [`Fused`] with one rounding where their instruction set
 /// has a fused multiply–add, [`Rounded`] with two where it has none (`f32::mul_add` is a
 /// call into libm there: the scalar variant ran 3.3× the instructions). The engine picks
 /// it with the instruction set, so a variant's bits never depend on where a lane runs.
 pub trait MulAdd {
-    /// `a·b + c`.
-    fn mul_add(a: f32, b: f32, c: f32) -> f32;
+    /// `a·b + c`, in one lane or a register of them ([`Real`]).
+    fn mul_add<T: Real>(a: T, b: T, c: T) -> T;
     /// `a·b + c` in f64.
     fn mul_add64(a: f64, b: f64, c: f64) -> f64;
 }
@@ -22,8 +24,8 @@ pub struct Rounded;
 
 impl MulAdd for Fused {
     #[inline(always)]
-    fn mul_add(a: f32, b: f32, c: f32) -> f32 {
-        a.mul_add(b, c)
+    fn mul_add<T: Real>(a: T, b: T, c: T) -> T {
+        a.fused_mul_add(b, c)
     }
 
     #[inline(always)]
@@ -34,7 +36,7 @@ impl MulAdd for Fused {
 
 impl MulAdd for Rounded {
     #[inline(always)]
-    fn mul_add(a: f32, b: f32, c: f32) -> f32 {
+    fn mul_add<T: Real>(a: T, b: T, c: T) -> T {
         a * b + c
     }
 

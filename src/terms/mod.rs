@@ -21,6 +21,7 @@ pub mod g;
 pub mod htsg;
 pub mod k;
 pub mod math;
+pub mod real;
 
 pub use d::{Distribution, DistributionKind, Roughness};
 pub use f::{Fresnel, FresnelKind};

@@ -5,6 +5,7 @@
 
 use crate::terms::k::Convention;
 use crate::terms::math::MulAdd;
+use crate::terms::real::Real;
 use std::f64::consts::PI;
 
 /// The spelling in a materials file.
@@ -53,9 +54,9 @@ pub fn lambda(x: f64) -> f64 {
 /// once, for a lane that takes D·G·K over one division (`s² ∈ [min(m², 1)², (1 + m²)²]`
 /// on the f32 frame's materials, m ≥ 0.075: the square stays normal).
 #[inline(always)]
-pub fn d_ratio32<A: MulAdd>(cos_h: f32, sin2_h: f32, m2: f32, norm: f32) -> (f32, f32) {
-    let s = A::mul_add(m2, cos_h * cos_h, sin2_h);
-    (norm, s * s)
+pub fn d_ratio32<A: MulAdd, T: Real>(cos_h: T, sin2_h: T, m2: f32, norm: f32) -> (T, T) {
+    let s = A::mul_add(cos_h.splat_as(m2), cos_h * cos_h, sin2_h);
+    (cos_h.splat_as(norm), s * s)
 }
 
 /// The relative error of D that the local form's f32 frame (`cpu::frame::frame_local32`)
@@ -81,11 +82,11 @@ pub fn local_frame_guard(m2: f64) -> f32 {
 /// [`local_frame_guard`]. Every operand is the f32 frame's own (their few-u errors move the
 /// test, not the bound, by a few u).
 #[inline(always)]
-pub fn local_frame_ok(cos_h: f32, sin2_h: f32, c: f32, m2: f32, guard: f32) -> bool {
+pub fn local_frame_ok<T: Real>(cos_h: T, sin2_h: T, c: T, m2: f32, guard: f32) -> T::Mask {
     let cos2 = cos_h * cos_h;
-    let s = m2 * cos2 + sin2_h;
-    let a = 4.5 + c;
-    guard * (sin2_h * cos2) * (a * a) <= (s * c) * (s * c)
+    let s = cos2 * m2 + sin2_h;
+    let a = c + 4.5;
+    (cos_h.splat_as(guard) * (sin2_h * cos2) * (a * a)).le((s * c) * (s * c))
 }
 
 /// D in a lane of the f64 frame: as [`d`], in f64 because the square of the sum leaves
@@ -108,8 +109,8 @@ pub fn d_aniso_lane(slope2: f64, cos_h2: f64, norm: f64) -> f32 {
 /// Smith terms' quotients (`smith::g_ratio_ggx`, `smith_correlated::g_ratio_ggx`) take
 /// without a division and without Λ's cancellation for small `m² tan²θ`.
 #[inline(always)]
-pub fn lambda_root_lane<A: MulAdd>(cos: f32, sin2: f32, m2: f32) -> f32 {
-    A::mul_add(m2, sin2, cos * cos).sqrt()
+pub fn lambda_root_lane<A: MulAdd, T: Real>(cos: T, sin2: T, m2: f32) -> T {
+    A::mul_add(cos.splat_as(m2), sin2, cos * cos).sqrt()
 }
 
 /// Smith's Λ in a lane, given `q2 = m² tan²θ`, rewritten for `q2 ≤ 1` as [`lambda`].

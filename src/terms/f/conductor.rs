@@ -2,6 +2,7 @@
 //! term for complex `η = n + ik` (the form of pbrt-v4's `FrComplex`), unpolarised.
 
 use crate::terms::math::MulAdd;
+use crate::terms::real::Real;
 use num_complex::Complex64;
 
 /// The spelling in a materials file.
@@ -308,22 +309,19 @@ pub fn metal_form_legal(n: f64, k: f64) -> bool {
 /// division, with no B and about half [`f_lane`]'s arithmetic. Its one difference, `R_s`'s
 /// numerator, cancels as F0 → 0, which is what the legality rule bounds.
 #[inline(always)]
-pub fn f_lane_metal<A: MulAdd>(c: f32, s2: f32, p: &LaneConstants, ch: usize) -> f32 {
+pub fn f_lane_metal<A: MulAdd, T: Real>(c: T, s2: T, p: &LaneConstants, ch: usize) -> T {
     let c2 = c * c;
-    let re = p.e2r[ch] - s2;
-    let mag = A::mul_add(re, re, p.e2i2[ch]).sqrt();
+    let re = c.splat_as(p.e2r[ch]) - s2;
+    let mag = A::mul_add(re, re, c.splat_as(p.e2i2[ch])).sqrt();
     // √(η² − sin²θ)'s larger component from the sum that does not cancel, the other as
     // Im/2 over it: A is the larger one where Re(η² − sin²θ) ≥ 0, else the quotient (the
     // direct √((|w|² + Re)/2) cancels there: metals have Re(η²) < 0). `t ≥ √(mag/2)`, which
     // the range of `metal_form_bound` keeps ≥ 7e-3.
-    let t = (0.5 * (mag + re.abs())).sqrt();
-    let q = p.e2ih[ch] / t;
-    // A select by bits: written as `if`, LLVM sank the division into the branch that uses
-    // it, and the branch kept the lane loop from vectorising (200 instructions an
-    // evaluation instead of 70).
-    let keep_t = u32::from(re >= 0.0).wrapping_neg();
-    let a = f32::from_bits((t.to_bits() & keep_t) | (q.to_bits() & !keep_t));
-    let ca2 = 2.0 * c * a;
+    let t = ((mag + re.abs()) * 0.5).sqrt();
+    let q = c.splat_as(p.e2ih[ch]) / t;
+    // A select, not a branch (see `Real::select`).
+    let a = T::select(re.ge_scalar(0.0), t, q);
+    let ca2 = c * 2.0 * a;
     let bs = mag + c2;
     let bp = A::mul_add(mag, c2, s2 * s2);
     (bs - ca2) * bp / ((bs + ca2) * A::mul_add(ca2, s2, bp))
@@ -351,7 +349,7 @@ mod tests {
             let cc = f64::from(c);
             let s2 = ((1.0 - cc) * (1.0 + cc)) as f32;
             let want = f(cc, n, k);
-            let got = f64::from(f_lane_metal::<A>(c, s2, &p, 0));
+            let got = f64::from(f_lane_metal::<A, f32>(c, s2, &p, 0));
             worst = worst.max((got - want).abs() / want);
         }
         worst / f64::from(f32::EPSILON / 2.0)

@@ -1,6 +1,8 @@
 //! Schlick 1994, "An inexpensive BRDF model for physically-based rendering":
 //! `F = F0 + (1 − F0)(1 − c)⁵`.
 
+use crate::terms::real::Real;
+
 /// The spelling in a materials file.
 pub const NAME: &str = "schlick";
 /// The work the formula comes from.
@@ -13,9 +15,9 @@ pub fn f(c: f64, f0: f64) -> f64 {
 
 /// F in a lane (f32), given `1 − c` formed without cancelling (`sin²/(1 + c)`).
 #[inline(always)]
-pub fn f_lane(one_minus_c: f32, f0: f32) -> f32 {
+pub fn f_lane<T: Real>(one_minus_c: T, f0: f32) -> T {
     let x2 = one_minus_c * one_minus_c;
-    f0 + (1.0 - f0) * (x2 * x2 * one_minus_c)
+    x2 * x2 * one_minus_c * (1.0 - f0) + f0
 }
 
 /// `F0 = ((n-1)² + k²)/((n+1)² + k²)` per channel: the reflectance at normal incidence of

@@ -2,6 +2,7 @@
 //! `min(1, 2 cos_h cos_o / c, 2 cos_h cos_i / c)`. Defined with every distribution.
 
 use crate::terms::d::DistributionKind;
+use crate::terms::real::Real;
 
 /// The spelling in a materials file.
 pub const NAME: &str = "cook-torrance";
@@ -22,17 +23,14 @@ pub fn g(cos_h: f64, cos_i: f64, cos_o: f64, c: f64) -> f64 {
 
 /// G in a lane (f32).
 #[inline(always)]
-pub fn g_lane(cos_h: f32, cos_i: f32, cos_o: f32, c: f32) -> f32 {
-    let t = 2.0 * cos_h / c;
-    min(1.0, min(t * cos_o, t * cos_i))
+pub fn g_lane<T: Real>(cos_h: T, cos_i: T, cos_o: T, c: T) -> T {
+    let t = cos_h * 2.0 / c;
+    min(c.splat_as(1.0), min(t * cos_o, t * cos_i))
 }
 
-/// The smaller of two numbers, as one compare and select the lanes vectorise.
+/// The smaller of two numbers (the second where either is NaN), as one compare and
+/// select the lanes vectorise.
 #[inline(always)]
-fn min(a: f32, b: f32) -> f32 {
-    if a < b {
-        a
-    } else {
-        b
-    }
+fn min<T: Real>(a: T, b: T) -> T {
+    T::select(a.lt(b), a, b)
 }

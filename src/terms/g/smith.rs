@@ -3,6 +3,7 @@
 
 use crate::terms::d::{ggx, DistributionKind};
 use crate::terms::math::MulAdd;
+use crate::terms::real::Real;
 
 /// The spelling in a materials file.
 pub const NAME: &str = "smith";
@@ -31,10 +32,10 @@ pub fn g_lane(lambda_o: f32, lambda_i: f32) -> f32 {
 /// cancels (Λ's own `(√(1 + q²) − 1)/2` would, for small q²) — and the lane divides once
 /// for D·G·K. The denominator is within [4e-8, (1 + m)⁴] for cosines ≥ 1e-4.
 #[inline(always)]
-pub fn g_ratio_ggx<A: MulAdd>(cos_i: f32, sin2_i: f32, cos_o: f32, sin2_o: f32, m2: f32) -> (f32, f32) {
-    let r_i = ggx::lambda_root_lane::<A>(cos_i, sin2_i, m2);
-    let r_o = ggx::lambda_root_lane::<A>(cos_o, sin2_o, m2);
-    (4.0 * cos_i * cos_o, (cos_i + r_i) * (cos_o + r_o))
+pub fn g_ratio_ggx<A: MulAdd, T: Real>(cos_i: T, sin2_i: T, cos_o: T, sin2_o: T, m2: f32) -> (T, T) {
+    let r_i = ggx::lambda_root_lane::<A, T>(cos_i, sin2_i, m2);
+    let r_o = ggx::lambda_root_lane::<A, T>(cos_o, sin2_o, m2);
+    (cos_i * 4.0 * cos_o, (cos_i + r_i) * (cos_o + r_o))
 }
 
 #[cfg(test)]
@@ -69,10 +70,10 @@ mod tests {
         type Exact = fn(f64, f64) -> f64;
         use crate::terms::math::{Fused, Rounded};
         let forms: [(Ratio, Exact); 4] = [
-            (g_ratio_ggx::<Rounded>, g),
-            (smith_correlated::g_ratio_ggx::<Rounded>, smith_correlated::g),
-            (g_ratio_ggx::<Fused>, g),
-            (smith_correlated::g_ratio_ggx::<Fused>, smith_correlated::g),
+            (g_ratio_ggx::<Rounded, f32>, g),
+            (smith_correlated::g_ratio_ggx::<Rounded, f32>, smith_correlated::g),
+            (g_ratio_ggx::<Fused, f32>, g),
+            (smith_correlated::g_ratio_ggx::<Fused, f32>, smith_correlated::g),
         ];
         let s = sweep();
         for (ratio, exact) in forms {

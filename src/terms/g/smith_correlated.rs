@@ -4,6 +4,7 @@
 
 use crate::terms::d::{ggx, DistributionKind};
 use crate::terms::math::MulAdd;
+use crate::terms::real::Real;
 
 /// The spelling in a materials file.
 pub const NAME: &str = "smith-correlated";
@@ -32,9 +33,9 @@ pub fn g_lane(lambda_o: f32, lambda_i: f32) -> f32 {
 /// `G = 2 cos_i cos_o/(R_o cos_i + R_i cos_o)`: positive terms, nothing cancels, and the
 /// lane divides once for D·G·K.
 #[inline(always)]
-pub fn g_ratio_ggx<A: MulAdd>(cos_i: f32, sin2_i: f32, cos_o: f32, sin2_o: f32, m2: f32) -> (f32, f32) {
-    let r_i = ggx::lambda_root_lane::<A>(cos_i, sin2_i, m2);
-    let r_o = ggx::lambda_root_lane::<A>(cos_o, sin2_o, m2);
-    (2.0 * cos_i * cos_o, r_o * cos_i + r_i * cos_o)
+pub fn g_ratio_ggx<A: MulAdd, T: Real>(cos_i: T, sin2_i: T, cos_o: T, sin2_o: T, m2: f32) -> (T, T) {
+    let r_i = ggx::lambda_root_lane::<A, T>(cos_i, sin2_i, m2);
+    let r_o = ggx::lambda_root_lane::<A, T>(cos_o, sin2_o, m2);
+    (cos_i * 2.0 * cos_o, r_o * cos_i + r_i * cos_o)
 }
 

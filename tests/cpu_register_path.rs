@@ -1,0 +1,192 @@
+//! The CPU engine's register path (`cpu::register`: the local form's GGX groups on AVX2,
+//! two registers of tuples at a time) against the lane loops it stands in for: the same
+//! outputs bit for bit and the same counts, for every group it serves, on the tuples where
+//! each term is hardest — D's steepest slope at every c down to the f32 frame's threshold,
+//! the specular peak, normal incidence and retro-reflection, grazing cosines on either side
+//! of the rescue threshold, c on either side of `FAST_MIN_C`, lengths at the frame's
+//! limits, invalid and below-horizon tuples — and on uniform directions. The lane loops
+//! are what the 10-column rows with N = (0, 0, 1) take, so the test compares the local
+//! form with those rows on every instruction set (the register path runs only on AVX2;
+//! the others must agree with their own rows as before).
+
+mod common;
+
+use vkbrdf::backend::{Backend, Output, Request};
+use vkbrdf::batch::{memory_source, Batch, LocalBatch};
+use vkbrdf::cpu::{CpuEngine, Isa};
+use vkbrdf::material::{parse_materials, Material};
+
+/// Unit vector of polar angle `theta` and azimuth `phi` about +z.
+fn polar(theta: f64, phi: f64) -> [f64; 3] {
+    [
+        theta.sin() * phi.cos(),
+        theta.sin() * phi.sin(),
+        theta.cos(),
+    ]
+}
+
+/// The local rows (`Lx Ly Lz Vx Vy Vz`) of the hard tuples for roughness `m`.
+fn hard_rows(m: f64) -> Vec<f32> {
+    let mut pairs: Vec<([f64; 3], [f64; 3])> = Vec::new();
+    // D steepest in h (tan θ_h = m/2, m, 2m), c from 0.05 (below FAST_MIN_C) to 1.
+    pairs.extend(common::steepest::ggx_pairs(m, 0.05));
+    // The specular peak: v the mirror of l turned by a fraction of m, at every elevation.
+    for th in [0.0f64, 0.01, 0.3, 0.8, 1.2, 1.5, 1.565] {
+        for d in [0.0f64, 1e-4, 0.02 * m, 0.3 * m, m] {
+            let l = polar(th, 0.4);
+            let v = polar(
+                (th + d).min(std::f64::consts::FRAC_PI_2 - 1e-5),
+                0.4 + std::f64::consts::PI,
+            );
+            pairs.push((l, v));
+        }
+    }
+    // Normal incidence and retro-reflection.
+    for th in [0.0f64, 0.5, 1.4, 1.5706] {
+        pairs.push((polar(th, 1.0), polar(th, 1.0)));
+    }
+    // Grazing cosines either side of the rescue threshold (1e-4), for l and for v.
+    for c in [0.99e-4f64, 1.01e-4, 1e-3, 0.02] {
+        let th = c.acos();
+        pairs.push((polar(th, 0.2), polar(0.6, 2.0)));
+        pairs.push((polar(0.6, 2.0), polar(th, 0.2)));
+    }
+    // c = cos θ_d either side of FAST_MIN_C (0.1): l and v 2θ_d apart about h.
+    for c in [0.0999f64, 0.1, 0.1001, 0.2] {
+        let td = c.acos();
+        for th_h in [0.05f64, 0.4] {
+            let l = polar(th_h + td, 0.0);
+            let v = polar(th_h - td, 0.0);
+            if l[2] > 0.0 && v[2] > 0.0 {
+                pairs.push((l, v));
+            }
+        }
+    }
+    // Uniform directions over the hemisphere (some below it).
+    let mut s = 0x9e37_79b9_7f4a_7c15u64;
+    let mut rnd = move || {
+        s ^= s << 13;
+        s ^= s >> 7;
+        s ^= s << 17;
+        (s >> 11) as f64 / (1u64 << 53) as f64
+    };
+    for _ in 0..2000 {
+        let l = polar((rnd() * 1.0).acos(), 6.3 * rnd());
+        let v = polar((rnd() * 1.02 - 0.02).acos(), 6.3 * rnd());
+        pairs.push((l, v));
+    }
+    let mut rows = Vec::new();
+    for (i, (l, v)) in pairs.into_iter().enumerate() {
+        // Lengths other than 1, up to the frame's limits (|x|² in [1e-30, 1e30]) and past
+        // them, on some tuples.
+        let scale = match i % 13 {
+            3 => 3.7,
+            5 => 1e-6,
+            7 => 1e14,
+            9 => 1e-16,
+            _ => 1.0,
+        };
+        rows.extend(l.iter().map(|&x| (x * scale) as f32));
+        rows.extend(v.iter().map(|&x| x as f32));
+    }
+    // Invalid tuples: zero, NaN and infinite components.
+    for bad in [[0.0f32; 3], [f32::NAN, 0.0, 1.0], [0.0, f32::INFINITY, 1.0]] {
+        rows.extend_from_slice(&bad);
+        rows.extend_from_slice(&[0.1, 0.2, 0.9]);
+        rows.extend_from_slice(&[0.3, -0.1, 0.8]);
+        rows.extend_from_slice(&bad);
+    }
+    rows
+}
+
+/// The same tuples as 10-column rows with N = (0, 0, 1).
+fn as_rows(local: &[f32]) -> Batch<'static> {
+    let mut rows = Vec::with_capacity(local.len() / 6 * 10);
+    for r in local.chunks_exact(6) {
+        rows.extend_from_slice(r);
+        rows.extend_from_slice(&[0.0, 0.0, 1.0, 0.0]);
+    }
+    Batch::new(rows, 10, 1, &memory_source()).expect("rows")
+}
+
+/// GGX with every geometry and Fresnel term the register path serves (and a conductor it
+/// does not: small n and k, which the metal form's rule refuses), each convention, at
+/// roughness `m`.
+fn materials(m: f64) -> Vec<(Material, bool)> {
+    let mut out = Vec::new();
+    for g in ["none", "cook-torrance", "smith", "smith-correlated"] {
+        for (f, served) in [
+            ("fresnel = \"none\"", true),
+            ("fresnel = \"schlick\"\nf0 = [0.04, 0.5, 0.95]", true),
+            (
+                "fresnel = \"conductor\"\nior = [0.27, 0.68, 1.22]\nextinction = [3.61, 2.63, 2.29]",
+                true,
+            ),
+            (
+                "fresnel = \"conductor\"\nior = [0.05, 0.9, 1.1]\nextinction = [0.02, 0.1, 0.0]",
+                false,
+            ),
+        ] {
+            for conv in ["modern", "seed", "cook-torrance-1982"] {
+                let toml = format!(
+                    "[[material]]\nname = \"m\"\nmodel = \"cook-torrance\"\n\
+                     distribution = \"ggx\"\ngeometry = \"{g}\"\n{f}\nroughness = {m}\n\
+                     convention = \"{conv}\"\ndiffuse_weight = 0.3\nspecular_weight = 0.9\n"
+                );
+                let mut mats = parse_materials(&toml, "test").expect("material");
+                out.push((mats.remove(0), served));
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn the_register_path_gives_the_lane_loops_bits_on_every_group_it_serves() {
+    let avx2 = Isa::available_all().contains(&Isa::Avx2Fma);
+    let (mut deferred, mut rescued) = (0, 0);
+    for m in [0.075, 0.0751, 0.3, 1.0] {
+        let local = hard_rows(m);
+        let n = local.len() / 6;
+        assert!(!n.is_multiple_of(16), "a tail that is not a whole step");
+        let rows = as_rows(&local);
+        for (mat, served) in materials(m) {
+            let mats = vec![mat];
+            let lb = LocalBatch::new(local.clone(), 0, &mats, &memory_source()).expect("local");
+            for isa in Isa::available_all() {
+                let mut engine = CpuEngine::with_isa(1, isa);
+                for terms in [false, true] {
+                    let request = Request { terms };
+                    let want = engine.evaluate(&rows, &mats, &request).expect("rows");
+                    let mut got = Output::default();
+                    engine
+                        .evaluate_local_into(&lb, &mats, &request, &mut got)
+                        .expect("local");
+                    let what = format!("{} m = {m}, {isa}, terms {terms}", mats[0].name);
+                    assert_eq!(got.counts, want.counts, "{what}");
+                    for (i, (a, b)) in got.brdf.iter().zip(&want.brdf).enumerate() {
+                        assert_eq!(a.to_bits(), b.to_bits(), "{what}: row {}", i / 3);
+                    }
+                    assert_eq!(got.terms, want.terms, "{what}");
+                    let tally = engine.last_tally();
+                    // The register path takes exactly the local form's served groups
+                    // without terms, on AVX2.
+                    let on_registers = isa == Isa::Avx2Fma && served && !terms;
+                    assert_eq!(tally.registers > 0, on_registers, "{what}: {tally:?}");
+                    if on_registers {
+                        assert_eq!(tally.registers, n as u64, "{what}");
+                        deferred += tally.deferred;
+                        rescued += tally.rescued;
+                    }
+                }
+            }
+        }
+    }
+    // The tuples reached the register path's f64-frame and reference hand-offs.
+    if avx2 {
+        assert!(
+            deferred > 0 && rescued > 0,
+            "{deferred} deferred, {rescued} rescued"
+        );
+    }
+}
