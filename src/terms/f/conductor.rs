@@ -210,10 +210,12 @@ pub const METAL_FORM_BUDGET: f64 = 48.0;
 /// `c` in (0, 1], with the frame's `c` and `sin²θ` taken as exact (their errors are the
 /// frame's):
 ///
-/// `5.75/F0 + 24 + ρ (1/√F0 + 3)`, `ρ = (2|n² − k²| + 1)/min_s |η² − s|` (s ∈ [0, 1]).
+/// `5.75/F0 + 25 + ρ (1/√F0 + 3)`, `ρ = (2|n² − k²| + 1)/min_s |η² − s|` (s ∈ [0, 1]).
 ///
 /// - Every value but `Ns = |w|² + c² − 2cA` (`w = √(η² − sin²θ) = A + iB`) is a product,
-///   quotient, root or sum of non-negative numbers, so its rounding errors add: 24u in all.
+///   quotient, root or sum of non-negative numbers, so its rounding errors add: 25u in all
+///   (24u when A was divided out as `nk/t`; the two products by `ad = t` that replace that
+///   division add one rounding, and where `ad = 1` they are exact).
 /// - `Ns` is a difference: the errors of its two parts (≤ 5.75u of `Ds = |w|² + c² + 2cA`)
 ///   are relative to `Ns = R_s Ds`, and `R_s = |c − w|²/|c + w|²` falls from 1 at grazing to
 ///   `F0 = ((n − 1)² + k²)/((n + 1)² + k²)` at normal incidence, monotonically.
@@ -228,7 +230,7 @@ pub fn metal_form_bound(n: f64, k: f64) -> f64 {
     match metal_form_range(n, k) {
         Some((e2r, mag_min, f0)) => {
             let rho = (2.0 * e2r.abs() + 1.0) / mag_min;
-            5.75 / f0 + 24.0 + rho * (1.0 / f0.sqrt() + 3.0)
+            5.75 / f0 + 25.0 + rho * (1.0 / f0.sqrt() + 3.0)
         }
         None => f64::INFINITY,
     }
@@ -253,8 +255,8 @@ fn metal_form_range(n: f64, k: f64) -> Option<(f64, f64, f64)> {
     in_range.then_some((e2r, mag_min, f0))
 }
 
-/// The kernel's metal form (`conductor_f_metal`, glsl/terms.glsl) — the same values as
-/// [`f_lane_metal`] from the f32 material `n`, `k`, `Re(η²) − 1` and the frame's `c` — has,
+/// The kernel's metal form (`conductor_f_metal`, glsl/terms.glsl) — the quantities of
+/// [`f_lane_metal`], with A divided out as `nk/t` (two divisions a channel), from the f32 material `n`, `k`, `Re(η²) − 1` and the frame's `c` — has,
 /// under the precisions the Vulkan specification allows rather than those a device happens
 /// to have, a worst-case relative error in units of u = 2⁻²⁴ of (to first order, `c` as the
 /// frame gives it):
@@ -265,7 +267,7 @@ fn metal_form_range(n: f64, k: f64) -> Option<(f64, f64, f64)> {
 /// correctly rounded (≤ u), `x/y` within 2.5 ULP (≤ 5u), `inversesqrt` within 2 ULP (4u)
 /// and `sqrt` inherited from `1/inversesqrt` (≤ 9u); a contracted `a·b + c` only removes a
 /// rounding, so each bound holds with and without contraction. The count, value by value
-/// (the CPU's in [`metal_form_bound`]: 5.75/F0 + 24 with one rounding a root or quotient):
+/// (the CPU's in [`metal_form_bound`]: 5.75/F0 + 25 with one rounding a root or quotient):
 /// - `sin²θ = (1 − c)(1 + c)` is formed in the kernel: 3u; `n k` from f32 `n`, `k`: 3u.
 /// - `Re(η² − sin²θ) = (Re η² − 1) + 1 − sin²θ`: `Re η² − 1` rounded once on the host
 ///   (u|n² − k² − 1|), the `+ 1`, the difference and sin²θ's 3u: at most
@@ -307,7 +309,10 @@ pub fn metal_form_legal(n: f64, k: f64) -> bool {
 /// `R_p = R_s (|w|²c² + sin⁴θ − 2cA sin²θ)/(|w|²c² + sin⁴θ + 2cA sin²θ)`, so that
 /// `F = (R_s + R_p)/2 = R_s (|w|²c² + sin⁴θ)/(|w|²c² + sin⁴θ + 2cA sin²θ)` — over one
 /// division, with no B and about half [`f_lane`]'s arithmetic. Its one difference, `R_s`'s
-/// numerator, cancels as F0 → 0, which is what the legality rule bounds.
+/// numerator, cancels as F0 → 0, which is what the legality rule bounds. Where A is a
+/// quotient `nk/t` (metals), the numerator and the denominator are multiplied through by
+/// `t²` instead of dividing: one division a channel, not two (the divider is what a lane
+/// waits on).
 #[inline(always)]
 pub fn f_lane_metal<A: MulAdd, T: Real>(c: T, s2: T, p: &LaneConstants, ch: usize) -> T {
     let c2 = c * c;
@@ -318,12 +323,16 @@ pub fn f_lane_metal<A: MulAdd, T: Real>(c: T, s2: T, p: &LaneConstants, ch: usiz
     // direct √((|w|² + Re)/2) cancels there: metals have Re(η²) < 0). `t ≥ √(mag/2)`, which
     // the range of `metal_form_bound` keeps ≥ 7e-3.
     let t = ((mag + re.abs()) * 0.5).sqrt();
-    let q = c.splat_as(p.e2ih[ch]) / t;
-    // A select, not a branch (see `Real::select`).
-    let a = T::select(re.ge_scalar(0.0), t, q);
-    let ca2 = c * 2.0 * a;
-    let bs = mag + c2;
-    let bp = A::mul_add(mag, c2, s2 * s2);
+    // A = an/ad: t/1, or nk/t (selects, not branches: see `Real::select`). With ad = 1
+    // every product by it below is exact, so that case keeps the single-quotient bits.
+    let larger = re.ge_scalar(0.0);
+    let an = T::select(larger, t, c.splat_as(p.e2ih[ch]));
+    let ad = T::select(larger, c.splat_as(1.0), t);
+    // 2cA ad, (|w|² + c²) ad and (|w|²c² + sin⁴θ) ad: F's numerator and denominator
+    // times ad².
+    let ca2 = c * 2.0 * an;
+    let bs = (mag + c2) * ad;
+    let bp = A::mul_add(mag, c2, s2 * s2) * ad;
     (bs - ca2) * bp / ((bs + ca2) * A::mul_add(ca2, s2, bp))
 }
 
@@ -367,8 +376,8 @@ mod tests {
             (1.37, 1.77),
             (1.35, 7.5),
             (5.0, 0.0),
-            (4.5, 0.5),
-            (1.0, 1.3),
+            (4.7, 0.5),
+            (1.0, 1.35),
             (1.3, 1.5),
             (0.2, 0.9),
             (0.02, 0.7),
