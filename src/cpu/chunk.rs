@@ -300,6 +300,7 @@ fn run_registers<S: RegisterIo, const G: u8, const F: u8>(
         ..Tally::default()
     };
     let (plan64, mut deferred) = (plan.f64_frame(), Deferred::new());
+    let (plan_general, mut deferred_general) = (plan.general_frame_only(), Deferred::new());
     // The tail's rows, the last repeated (its extra lanes are computed and dropped), and
     // its outputs.
     let mut tail_rows = [0f32; COLUMNS_LOCAL * 2 * LANES];
@@ -326,7 +327,7 @@ fn run_registers<S: RegisterIo, const G: u8, const F: u8>(
             [r(ax, bx), r(ay, by), r(az, bz)],
             [r(au, bu), r(av, bv), r(aw, bw)],
         );
-        let ([br, bg, bb], rescue_lanes, slow) = register::ggx_local::<_, G, F>(p, l, v);
+        let ([br, bg, bb], flagged) = register::ggx_local::<_, G, F>(p, l, v);
         let (lo, hi) = (
             [br.0.get(), bg.0.get(), bb.0.get()],
             [br.1.get(), bg.1.get(), bb.1.get()],
@@ -344,21 +345,30 @@ fn run_registers<S: RegisterIo, const G: u8, const F: u8>(
         let valid = u32::MAX >> (32 - n);
         let bits =
             |m: Pair<register::RegMask<S>>| simd.bits(m.0.get()) | (simd.bits(m.1.get()) << half);
-        let (rb, sb) = (bits(rescue_lanes) & valid, bits(slow) & valid);
-        for k in lanes_of(rb) {
+        for k in lanes_of(bits(flagged.rescue) & valid) {
             rescue(batch, m, row0 + k, j + k, w, &mut counts);
             tally.rescued += 1;
         }
-        for k in lanes_of(sb) {
-            let r = &data[(row0 + k) * COLUMNS_LOCAL..(row0 + k + 1) * COLUMNS_LOCAL];
-            let x = [r[0], r[1], r[2], r[3], r[4], r[5], 0.0, 0.0, 1.0];
-            if deferred.push_lane(x, j + k, row0 + k) {
-                deferred.run::<S, Fused>(simd, &plan64, true, batch, m, w, &mut counts, &mut tally);
+        for (lanes, queue, plan) in [
+            (flagged.slow, &mut deferred, &plan64),
+            (flagged.general, &mut deferred_general, &plan_general),
+        ] {
+            for k in lanes_of(bits(lanes) & valid) {
+                let r = &data[(row0 + k) * COLUMNS_LOCAL..(row0 + k + 1) * COLUMNS_LOCAL];
+                let x = [r[0], r[1], r[2], r[3], r[4], r[5], 0.0, 0.0, 1.0];
+                if queue.push_lane(x, j + k, row0 + k) {
+                    queue.run::<S, Fused>(simd, plan, true, batch, m, w, &mut counts, &mut tally);
+                }
             }
         }
         j += n;
     }
-    deferred.run::<S, Fused>(simd, &plan64, true, batch, m, w, &mut counts, &mut tally);
+    for (queue, plan) in [
+        (&mut deferred, &plan64),
+        (&mut deferred_general, &plan_general),
+    ] {
+        queue.run::<S, Fused>(simd, plan, true, batch, m, w, &mut counts, &mut tally);
+    }
     (counts, tally)
 }
 

@@ -105,6 +105,10 @@ pub struct Params {
     /// caller ([`Outputs::slow`]), which gathers them from many blocks into blocks of the
     /// f64 frame, instead of running the f64 frame over its whole block for them.
     pub defer_slow: bool,
+    /// Whether GGX's lanes with N = +z take the general f32 frame ([`frame`]) rather than
+    /// the local one (`frame_local32`): what the register path's refused lanes are
+    /// gathered into (`Plan::general_frame_only`).
+    pub general_frame_only: bool,
     /// Whether the material may take the f32 frame (see [`microfacet_block`]): m ≥
     /// [`FAST_MIN_ROUGHNESS`] and a Fresnel term other than the dielectric (whose f64
     /// evaluation near total internal reflection wants the f64 `c`).
@@ -370,17 +374,27 @@ pub fn microfacet_block<A: MulAdd, const D: u8, const G: u8, const F: u8, const 
         } else {
             std::array::from_fn(|k| inp.v[6][k] == 0.0 && inp.v[7][k] == 0.0 && inp.v[8][k] == 1.0)
         };
-        let mode = if !ggx || !any(&z) {
+        let mode = if !ggx || !any(&z) || p.general_frame_only {
             FRAME_GENERAL
         } else if !z.contains(&false) {
             FRAME_LOCAL
         } else {
             FRAME_EACH
         };
+        let mut general = [false; LANES];
         match mode {
-            FRAME_LOCAL => frames::<A, Z, FRAME_LOCAL>(p, inp, &z, &mut fs, &mut ok, &mut slow),
-            FRAME_EACH => frames::<A, Z, FRAME_EACH>(p, inp, &z, &mut fs, &mut ok, &mut slow),
-            _ => frames::<A, Z, FRAME_GENERAL>(p, inp, &z, &mut fs, &mut ok, &mut slow),
+            FRAME_LOCAL => {
+                frames::<A, Z, FRAME_LOCAL>(p, inp, &z, &mut fs, &mut ok, &mut slow, &mut general)
+            }
+            FRAME_EACH => {
+                frames::<A, Z, FRAME_EACH>(p, inp, &z, &mut fs, &mut ok, &mut slow, &mut general)
+            }
+            _ => {
+                frames::<A, Z, FRAME_GENERAL>(p, inp, &z, &mut fs, &mut ok, &mut slow, &mut general)
+            }
+        }
+        if any(&general) {
+            general_frames::<A, Z>(inp, &general, &mut fs, &mut ok, &mut slow);
         }
         // Two loops, so that the one without terms divides nothing out; a conductor whose
         // every channel is legal for it takes F's metal form (`conductor::f_lane_metal`,
@@ -454,11 +468,12 @@ const FRAME_GENERAL: u8 = 0;
 const FRAME_LOCAL: u8 = 1;
 const FRAME_EACH: u8 = 2;
 
-/// The f32 frames of a block into `fs` (structure of arrays) and `ok`, and the lanes that
-/// must take the f64 frame into `slow`: `MODE` [`FRAME_GENERAL`] takes [`frame`] in every
+/// The f32 frames of a block into `fs` (structure of arrays) and `ok`, the lanes that
+/// must take the f64 frame into `slow`, and the lanes of the local frame that its
+/// certificate refused into `general`: `MODE` [`FRAME_GENERAL`] takes [`frame`] in every
 /// lane, [`FRAME_LOCAL`] [`frame_local32`] (GGX lanes with N = +z, each certified by D's
-/// test `ggx::local_frame_ok` or sent to the f64 frame), [`FRAME_EACH`] whichever of the
-/// two the lane's N asks for (`z`: N is exactly (0, 0, 1), `-0` components included).
+/// test `ggx::local_frame_ok`, else left to [`general_frames`]), [`FRAME_EACH`] whichever of
+/// the two the lane's N asks for (`z`: N is exactly (0, 0, 1), `-0` components included).
 #[inline(always)]
 fn frames<A: MulAdd, const Z: bool, const MODE: u8>(
     p: &Params,
@@ -467,6 +482,7 @@ fn frames<A: MulAdd, const Z: bool, const MODE: u8>(
     fs: &mut [[f32; LANES]; 8],
     ok: &mut [bool; LANES],
     slow: &mut [bool; LANES],
+    general: &mut [bool; LANES],
 ) {
     for k in 0..LANES {
         let x = lane_inputs(inp, k);
@@ -481,7 +497,8 @@ fn frames<A: MulAdd, const Z: bool, const MODE: u8>(
         };
         let certified =
             !local || ggx::local_frame_ok(fr.cos_h, fr.sin2_h, fr.c, p.m2_f, p.ggx_local_guard);
-        slow[k] = fr.ok && (fr.c < FAST_MIN_C || !certified);
+        slow[k] = fr.ok && fr.c < FAST_MIN_C;
+        general[k] = fr.ok && !slow[k] && !certified;
         let v = [
             fr.cos_i, fr.cos_o, fr.cos_h, fr.c, fr.sin2_h, fr.sin2_i, fr.sin2_o, fr.s2,
         ];
@@ -489,6 +506,33 @@ fn frames<A: MulAdd, const Z: bool, const MODE: u8>(
             fs[j][k] = v[j];
         }
         ok[k] = fr.ok;
+    }
+}
+
+/// The general f32 frame ([`frame`], l, v and h formed in f64) in the lanes of `general`
+/// — those whose local f32 frame D's certificate refused: its bound holds on every lane of
+/// a material that may take the f32 frame (docs/CPU_ENGINE.md, "The f32 frame's error
+/// bound") — with their `ok` and, where its `c` is below [`FAST_MIN_C`], `slow`.
+#[inline(always)]
+fn general_frames<A: MulAdd, const Z: bool>(
+    inp: &Inputs,
+    general: &[bool; LANES],
+    fs: &mut [[f32; LANES]; 8],
+    ok: &mut [bool; LANES],
+    slow: &mut [bool; LANES],
+) {
+    for k in 0..LANES {
+        let fr = frame::<A, Z>(&lane_inputs(inp, k));
+        let v = [
+            fr.cos_i, fr.cos_o, fr.cos_h, fr.c, fr.sin2_h, fr.sin2_i, fr.sin2_o, fr.s2,
+        ];
+        if general[k] {
+            for j in 0..8 {
+                fs[j][k] = v[j];
+            }
+            ok[k] = fr.ok;
+            slow[k] = fr.ok && fr.c < FAST_MIN_C;
+        }
     }
 }
 

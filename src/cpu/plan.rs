@@ -161,6 +161,17 @@ impl Plan {
         self
     }
 
+    /// The plan with the general f32 frame in every lane of the f32 frame, and no lane left
+    /// to the caller: what a lane whose local f32 frame D's certificate refused takes
+    /// (`kernel::Params::general_frame_only`).
+    pub fn general_frame_only(mut self) -> Plan {
+        if let Plan::Microfacet { p, .. } = &mut self {
+            p.general_frame_only = true;
+            p.defer_slow = false;
+        }
+        self
+    }
+
     /// The plan with the f64 frame in every lane: what a deferred lane takes.
     pub fn f64_frame(mut self) -> Plan {
         if let Plan::Microfacet { p, .. } = &mut self {

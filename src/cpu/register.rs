@@ -214,17 +214,18 @@ pub(super) fn serves(
 
 /// One register of the local form's lanes (`l`, `v` as read, N = +z) of a group
 /// [`serves`] takes, geometry `G` and Fresnel `F` (the kernel's codes): the BRDF's
-/// channels, the lanes to re-evaluate with the reference and the lanes left to the f64
-/// frame — the values and flags `kernel::microfacet_block` gives the same lanes.
+/// channels and which lanes they are not for — [`Flagged`] — as
+/// `kernel::microfacet_block` decides for the same lanes.
 #[inline(always)]
 pub(super) fn ggx_local<T: Real, const G: u8, const F: u8>(
     p: &Params,
     l: [T; 3],
     v: [T; 3],
-) -> ([T; 3], T::Mask, T::Mask) {
+) -> ([T; 3], Flagged<T::Mask>) {
     let fr = frame_local32::<Fused, T>(l, v);
     let certified = ggx::local_frame_ok(fr.cos_h, fr.sin2_h, fr.c, p.m2_f, p.ggx_local_guard);
-    let slow = fr.ok & (fr.c.lt_scalar(FAST_MIN_C) | !certified);
+    let slow = fr.ok & fr.c.lt_scalar(FAST_MIN_C);
+    let general = fr.ok & !slow & !certified;
     let (cos_i, cos_o, one) = (fr.cos_i, fr.cos_o, fr.c.splat_as(1.0));
     let d = ggx::d_ratio32::<Fused, _>(fr.cos_h, fr.sin2_h, p.m2_f, p.d_norm_f);
     let m2 = p.m2 as f32;
@@ -251,9 +252,28 @@ pub(super) fn ggx_local<T: Real, const G: u8, const F: u8>(
     };
     let (brdf, bad) = kernel::brdf_of::<Fused, _>(p, d, g, f, cos_i, cos_o);
     // As a block flags them: the frame's failures and the outputs' to the reference,
-    // except on the lanes the f64 frame takes, which decide their own.
-    let rescue = (!fr.ok | bad) & !slow;
-    (brdf, rescue, slow)
+    // except on the lanes another frame takes, which decide their own.
+    let rescue = (!fr.ok | bad) & !(slow | general);
+    (
+        brdf,
+        Flagged {
+            rescue,
+            slow,
+            general,
+        },
+    )
+}
+
+/// The lanes of a register whose outputs [`ggx_local`] did not make.
+#[derive(Clone, Copy)]
+pub(super) struct Flagged<M> {
+    /// Lanes for the reference (invalid, below the horizon, grazing, an output out of
+    /// range).
+    pub(super) rescue: M,
+    /// Lanes for the f64 frame (`c` below `FAST_MIN_C`).
+    pub(super) slow: M,
+    /// Lanes for the general f32 frame (D's certificate refused the local one).
+    pub(super) general: M,
 }
 
 /// Work on the register path, for the instruction sets that have one
