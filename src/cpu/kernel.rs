@@ -788,7 +788,7 @@ fn finish_lane<A: MulAdd, const F: u8, const T: bool, const M: bool>(
             FresnelKind::Conductor => conductor::f_lane(c, s2_f, &p.conductor, ch),
         };
     }
-    let (brdf, too_large) = brdf_of::<A, f32>(p, d, g, f, cos_i, cos_o);
+    let (brdf, too_large) = brdf_of::<A, f32>(p, d, g, |ch| f[ch], cos_i, cos_o);
     for ch in 0..3 {
         out.brdf[ch][k] = brdf[ch];
     }
@@ -802,15 +802,17 @@ fn finish_lane<A: MulAdd, const F: u8, const T: bool, const M: bool>(
 }
 
 /// The BRDF's channels of a lane, or of a register of lanes (`cpu::register`), from D and
-/// G as quotients, F per channel and the cosines (FORMULAS.md §5–§6): D·G·K over one
-/// division (the divider is what a block waits on); and whether an output may be
-/// non-finite or above [`OUTPUT_LIMIT`] (the lane then goes to the reference).
+/// G as quotients, F of each channel (`f(ch)`, called once a channel after D·G·K, so that
+/// a register path holds one channel's values at a time) and the cosines (FORMULAS.md
+/// §5–§6): D·G·K over one division (the divider is what a block waits on); and whether an
+/// output may be non-finite or above [`OUTPUT_LIMIT`] (the lane then goes to the
+/// reference).
 #[inline(always)]
 pub(super) fn brdf_of<A: MulAdd, T: Real>(
     p: &Params,
     d: (T, T),
     g: (T, T),
-    f: [T; 3],
+    f: impl Fn(usize) -> T,
     cos_i: T,
     cos_o: T,
 ) -> ([T; 3], T::Mask) {
@@ -825,15 +827,12 @@ pub(super) fn brdf_of<A: MulAdd, T: Real>(
     // took 45. The quotients' parts stand for the terms (each term is finite when they
     // are), so the test, and with it the BRDF, is the same with and without terms.
     let mut size = d.0.abs() + d.1 + g.0.abs() + g.1 + dgk.abs();
-    let mut brdf = f;
+    let mut brdf = [dgk; 3];
     for ch in 0..3 {
-        let b = A::mul_add(
-            dgk.splat_as(p.spec[ch]),
-            dgk * f[ch],
-            dgk.splat_as(p.diffuse[ch]),
-        );
+        let f = f(ch);
+        let b = A::mul_add(dgk.splat_as(p.spec[ch]), dgk * f, dgk.splat_as(p.diffuse[ch]));
         brdf[ch] = b;
-        size = size + (b.abs() + f[ch].abs());
+        size = size + (b.abs() + f.abs());
     }
     // `≤` is false for NaN: one comparison catches both.
     (brdf, !size.le_scalar(OUTPUT_LIMIT))

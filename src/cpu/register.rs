@@ -237,18 +237,13 @@ pub(super) fn ggx_local<T: Real, const G: u8, const F: u8>(
         Geometry::CookTorrance => (cook_torrance::g_lane(fr.cos_h, cos_i, cos_o, fr.c), one),
         _ => (one, one),
     };
-    let f: [T; 3] = match const { FresnelKind::from_code(F) } {
-        FresnelKind::Schlick => {
-            // 1 − c = sin²/(1 + c), which does not cancel (as `kernel::Lane` forms it).
-            let one_minus_c = fr.s2 / (fr.c + 1.0);
-            let f = |ch: usize| schlick::f_lane(one_minus_c, p.f0[ch]);
-            [f(0), f(1), f(2)]
-        }
-        FresnelKind::Conductor => {
-            let f = |ch: usize| conductor::f_lane_metal::<Fused, _>(fr.c, fr.s2, &p.conductor, ch);
-            [f(0), f(1), f(2)]
-        }
-        _ => [one; 3],
+    // 1 − c = sin²/(1 + c), which does not cancel (as `kernel::Lane` forms it).
+    let schlick = matches!(const { FresnelKind::from_code(F) }, FresnelKind::Schlick);
+    let one_minus_c = if schlick { fr.s2 / (fr.c + 1.0) } else { one };
+    let f = |ch: usize| match const { FresnelKind::from_code(F) } {
+        FresnelKind::Schlick => schlick::f_lane(one_minus_c, p.f0[ch]),
+        FresnelKind::Conductor => conductor::f_lane_metal::<Fused, _>(fr.c, fr.s2, &p.conductor, ch),
+        _ => one,
     };
     let (brdf, bad) = kernel::brdf_of::<Fused, _>(p, d, g, f, cos_i, cos_o);
     // As a block flags them: the frame's failures and the outputs' to the reference,
