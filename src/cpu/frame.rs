@@ -183,20 +183,25 @@ pub(super) fn frame_local32<A: MulAdd, T: Real>(l: [T; 3], v: [T; 3]) -> Frame<T
         A::mul_add(lz, lz, A::mul_add(lx, lx, ly * ly)),
         A::mul_add(vz, vz, A::mul_add(vx, vx, vy * vy)),
     );
+    // Each value as soon as its operands are there, so that a register path holds few at
+    // once (the lane loops' bits do not depend on the order).
+    let lengths_ok = length2_ok(ll) & length2_ok(vv);
     let (il, iv) = (rsqrt(ll), rsqrt(vv));
     let (lx, ly, lz) = (lx * il, ly * il, lz * il);
     let (vx, vy, vz) = (vx * iv, vy * iv, vz * iv);
+    let sin2_i = A::mul_add(lx, lx, ly * ly);
+    let sin2_o = A::mul_add(vx, vx, vy * vy);
+    let (dx, dy, dz) = (lx - vx, ly - vy, lz - vz);
+    let s2 = A::mul_add(dz, dz, A::mul_add(dx, dx, dy * dy)) * 0.25;
     let (hx, hy, hz) = (lx + vx, ly + vy, lz + vz);
     let hh = A::mul_add(hz, hz, A::mul_add(hx, hx, hy * hy));
     let ih = rsqrt(hh);
     let c = hh * ih * 0.5;
-    let (dx, dy, dz) = (lx - vx, ly - vy, lz - vz);
-    let s2 = A::mul_add(dz, dz, A::mul_add(dx, dx, dy * dy)) * 0.25;
     let (cos_i, cos_o, cos_h) = (lz, vz, hz * ih);
+    let sin2_h = A::mul_add(hx, hx, hy * hy) * (ih * ih);
     let g = GRAZING as f32;
     // `≥` is false for NaN: lanes that went non-finite are rescued too.
-    let ok = length2_ok(ll)
-        & length2_ok(vv)
+    let ok = lengths_ok
         & cos_i.ge_scalar(g)
         & cos_o.ge_scalar(g)
         & cos_h.ge_scalar(g)
@@ -207,9 +212,9 @@ pub(super) fn frame_local32<A: MulAdd, T: Real>(l: [T; 3], v: [T; 3]) -> Frame<T
         cos_h,
         c,
         s2,
-        sin2_h: A::mul_add(hx, hx, hy * hy) * (ih * ih),
-        sin2_i: A::mul_add(lx, lx, ly * ly),
-        sin2_o: A::mul_add(vx, vx, vy * vy),
+        sin2_h,
+        sin2_i,
+        sin2_o,
         ok,
     }
 }
