@@ -9,7 +9,7 @@
 use super::dispatch::block;
 use super::kernel::{self, Inputs, Outputs, LANES};
 use super::plan::Plan;
-use super::register::{self, Pair, Reg, RegisterIo, RegisterOp, Registers};
+use super::register::{self, Reg, RegisterIo, RegisterOp, Registers};
 use super::{measured, slice_tuples, transpose};
 use crate::backend::{Counts, TERM_COLUMNS};
 use crate::batch::columns::{Column, ColumnBatch};
@@ -273,7 +273,7 @@ impl<S: RegisterIo, const G: u8, const F: u8> pulp::NullaryFnOnce for RegistersF
 }
 
 /// The register path's loop over a chunk of the local form: a register of rows at a time
-/// read, evaluated (`register::ggx_local`) and written, the lanes it flags sent to the
+/// read, evaluated (`register::ggx_local_dgk` and `ggx_local_finish`) and written, the lanes it flags sent to the
 /// reference or gathered for the f64 frame as [`run_blocks`] does with a block's.
 #[inline(always)]
 fn run_registers<S: RegisterIo, const G: u8, const F: u8>(
@@ -289,7 +289,7 @@ fn run_registers<S: RegisterIo, const G: u8, const F: u8>(
     let Plan::Microfacet { p, .. } = plan else {
         unreachable!("the register path serves microfacet groups (`register::serves`)")
     };
-    // Two registers a step (`register::Pair`).
+    // Two registers a step, staged (`register::ggx_local_dgk`).
     let width = 2 * S::WIDTH;
     let len = w.brdf.len() / 3;
     let data = batch.data();
@@ -322,15 +322,16 @@ fn run_registers<S: RegisterIo, const G: u8, const F: u8>(
         let half = S::WIDTH;
         let [ax, ay, az, au, av, aw] = simd.local_columns(&rows[..half * COLUMNS_LOCAL]);
         let [bx, by, bz, bu, bv, bw] = simd.local_columns(&rows[half * COLUMNS_LOCAL..]);
-        let r = |x, y| Pair(Reg::new(simd, x), Reg::new(simd, y));
-        let (l, v) = (
-            [r(ax, bx), r(ay, by), r(az, bz)],
-            [r(au, bu), r(av, bv), r(aw, bw)],
-        );
-        let ([br, bg, bb], flagged) = register::ggx_local::<_, G, F>(p, l, v);
+        let r = |x| Reg::new(simd, x);
+        let (la, va) = ([r(ax), r(ay), r(az)], [r(au), r(av), r(aw)]);
+        let (lb, vb) = ([r(bx), r(by), r(bz)], [r(bu), r(bv), r(bw)]);
+        let sa = register::ggx_local_dgk::<_, G, F>(p, la, va);
+        let sb = register::ggx_local_dgk::<_, G, F>(p, lb, vb);
+        let ([ra, ga, ba], fa) = register::ggx_local_finish::<_, F>(p, sa);
+        let ([rb, gb, bb], fb) = register::ggx_local_finish::<_, F>(p, sb);
         let (lo, hi) = (
-            [br.0.get(), bg.0.get(), bb.0.get()],
-            [br.1.get(), bg.1.get(), bb.1.get()],
+            [ra.get(), ga.get(), ba.get()],
+            [rb.get(), gb.get(), bb.get()],
         );
         let out: &mut [f32] = if n == width {
             &mut w.brdf[j * 3..(j + width) * 3]
@@ -343,17 +344,22 @@ fn run_registers<S: RegisterIo, const G: u8, const F: u8>(
             w.brdf[j * 3..(j + n) * 3].copy_from_slice(&tail_out[..n * 3]);
         }
         let valid = u32::MAX >> (32 - n);
-        let bits =
-            |m: Pair<register::RegMask<S>>| simd.bits(m.0.get()) | (simd.bits(m.1.get()) << half);
-        for k in lanes_of(bits(flagged.rescue) & valid) {
+        let bits = |a: register::RegMask<S>, b: register::RegMask<S>| {
+            (simd.bits(a.get()) | (simd.bits(b.get()) << half)) & valid
+        };
+        for k in lanes_of(bits(fa.rescue, fb.rescue)) {
             rescue(batch, m, row0 + k, j + k, w, &mut counts);
             tally.rescued += 1;
         }
         for (lanes, queue, plan) in [
-            (flagged.slow, &mut deferred, &plan64),
-            (flagged.general, &mut deferred_general, &plan_general),
+            (bits(fa.slow, fb.slow), &mut deferred, &plan64),
+            (
+                bits(fa.general, fb.general),
+                &mut deferred_general,
+                &plan_general,
+            ),
         ] {
-            for k in lanes_of(bits(lanes) & valid) {
+            for k in lanes_of(lanes) {
                 let r = &data[(row0 + k) * COLUMNS_LOCAL..(row0 + k + 1) * COLUMNS_LOCAL];
                 let x = [r[0], r[1], r[2], r[3], r[4], r[5], 0.0, 0.0, 1.0];
                 if queue.push_lane(x, j + k, row0 + k) {

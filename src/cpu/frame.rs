@@ -201,11 +201,8 @@ pub(super) fn frame_local32<A: MulAdd, T: Real>(l: [T; 3], v: [T; 3]) -> Frame<T
     let sin2_h = A::mul_add(hx, hx, hy * hy) * (ih * ih);
     let g = GRAZING as f32;
     // `≥` is false for NaN: lanes that went non-finite are rescued too.
-    let ok = lengths_ok
-        & cos_i.ge_scalar(g)
-        & cos_o.ge_scalar(g)
-        & cos_h.ge_scalar(g)
-        & c.ge_scalar(g);
+    let ok =
+        lengths_ok & cos_i.ge_scalar(g) & cos_o.ge_scalar(g) & cos_h.ge_scalar(g) & c.ge_scalar(g);
     Frame {
         cos_i,
         cos_o,

@@ -788,7 +788,7 @@ fn finish_lane<A: MulAdd, const F: u8, const T: bool, const M: bool>(
             FresnelKind::Conductor => conductor::f_lane(c, s2_f, &p.conductor, ch),
         };
     }
-    let (brdf, too_large) = brdf_of::<A, f32>(p, d, g, |ch| f[ch], cos_i, cos_o);
+    let (brdf, too_large) = brdf_of::<A, f32>(p, d, g, f, cos_i, cos_o);
     for ch in 0..3 {
         out.brdf[ch][k] = brdf[ch];
     }
@@ -812,10 +812,32 @@ pub(super) fn brdf_of<A: MulAdd, T: Real>(
     p: &Params,
     d: (T, T),
     g: (T, T),
-    f: impl Fn(usize) -> T,
+    f: impl FresnelOf<T>,
     cos_i: T,
     cos_o: T,
 ) -> ([T; 3], T::Mask) {
+    let (dgk, size) = dgk_of(p, d, g, cos_i, cos_o);
+    channels_of::<A, T>(p, dgk, size, f)
+}
+
+/// F of a lane's (or a register's) channels, formed when [`channels_of`] asks — a trait
+/// with an inlined method rather than a closure, which LLVM left out of line on the
+/// register path (and every intrinsic in it became a call).
+pub(super) trait FresnelOf<T> {
+    /// F of channel `ch`.
+    fn channel(&self, ch: usize) -> T;
+}
+
+impl<T: Copy> FresnelOf<T> for [T; 3] {
+    #[inline(always)]
+    fn channel(&self, ch: usize) -> T {
+        self[ch]
+    }
+}
+
+/// [`brdf_of`]'s first half: D·G·K and the sum of magnitudes its test starts from.
+#[inline(always)]
+pub(super) fn dgk_of<T: Real>(p: &Params, d: (T, T), g: (T, T), cos_i: T, cos_o: T) -> (T, T) {
     // K (FORMULAS.md §5) as a quotient. Each denominator is ≥ 1e-20 and the product of
     // the three ≤ 1e24 on the lanes' cosines (≥ 1e-4), so the one division neither
     // overflows nor loses the quotient to underflow.
@@ -826,11 +848,25 @@ pub(super) fn brdf_of<A: MulAdd, T: Real>(
     // reference needlessly, never the other way) — 18 operations where a test a value
     // took 45. The quotients' parts stand for the terms (each term is finite when they
     // are), so the test, and with it the BRDF, is the same with and without terms.
-    let mut size = d.0.abs() + d.1 + g.0.abs() + g.1 + dgk.abs();
+    (dgk, d.0.abs() + d.1 + g.0.abs() + g.1 + dgk.abs())
+}
+
+/// [`brdf_of`]'s second half: the channels from D·G·K and F, and the test.
+#[inline(always)]
+pub(super) fn channels_of<A: MulAdd, T: Real>(
+    p: &Params,
+    dgk: T,
+    mut size: T,
+    f: impl FresnelOf<T>,
+) -> ([T; 3], T::Mask) {
     let mut brdf = [dgk; 3];
     for ch in 0..3 {
-        let f = f(ch);
-        let b = A::mul_add(dgk.splat_as(p.spec[ch]), dgk * f, dgk.splat_as(p.diffuse[ch]));
+        let f = f.channel(ch);
+        let b = A::mul_add(
+            dgk.splat_as(p.spec[ch]),
+            dgk * f,
+            dgk.splat_as(p.diffuse[ch]),
+        );
         brdf[ch] = b;
         size = size + (b.abs() + f.abs());
     }

@@ -212,16 +212,19 @@ pub(super) fn serves(
         && !p.terms
 }
 
-/// One register of the local form's lanes (`l`, `v` as read, N = +z) of a group
-/// [`serves`] takes, geometry `G` and Fresnel `F` (the kernel's codes): the BRDF's
-/// channels and which lanes they are not for — [`Flagged`] — as
-/// `kernel::microfacet_block` decides for the same lanes.
+/// The first of two stages of one register of the local form's lanes (`l`, `v` as read,
+/// N = +z) of a group [`serves`] takes, geometry `G` and Fresnel `F` (the kernel's codes):
+/// the frame, the flags and D·G·K, handed to [`ggx_local_finish`] as a few values
+/// ([`Staged`]), so that a step runs this stage on one register, then on a second, while
+/// the first one's square roots and divisions are still in flight, without holding both
+/// registers' frames. Together the stages give the BRDF's channels and which lanes they
+/// are not for ([`Flagged`]), as `kernel::microfacet_block` decides for the same lanes.
 #[inline(always)]
-pub(super) fn ggx_local<T: Real, const G: u8, const F: u8>(
+pub(super) fn ggx_local_dgk<T: Real, const G: u8, const F: u8>(
     p: &Params,
     l: [T; 3],
     v: [T; 3],
-) -> ([T; 3], Flagged<T::Mask>) {
+) -> Staged<T> {
     let fr = frame_local32::<Fused, T>(l, v);
     let certified = ggx::local_frame_ok(fr.cos_h, fr.sin2_h, fr.c, p.m2_f, p.ggx_local_guard);
     let slow = fr.ok & fr.c.lt_scalar(FAST_MIN_C);
@@ -237,29 +240,78 @@ pub(super) fn ggx_local<T: Real, const G: u8, const F: u8>(
         Geometry::CookTorrance => (cook_torrance::g_lane(fr.cos_h, cos_i, cos_o, fr.c), one),
         _ => (one, one),
     };
+    let (dgk, size) = kernel::dgk_of(p, d, g, cos_i, cos_o);
     // 1 − c = sin²/(1 + c), which does not cancel (as `kernel::Lane` forms it).
     let schlick = matches!(const { FresnelKind::from_code(F) }, FresnelKind::Schlick);
     let one_minus_c = if schlick { fr.s2 / (fr.c + 1.0) } else { one };
-    let f = |ch: usize| match const { FresnelKind::from_code(F) } {
-        FresnelKind::Schlick => schlick::f_lane(one_minus_c, p.f0[ch]),
-        FresnelKind::Conductor => conductor::f_lane_metal::<Fused, _>(fr.c, fr.s2, &p.conductor, ch),
-        _ => one,
-    };
-    let (brdf, bad) = kernel::brdf_of::<Fused, _>(p, d, g, f, cos_i, cos_o);
+    Staged {
+        c: fr.c,
+        s2: fr.s2,
+        one_minus_c,
+        dgk,
+        size,
+        ok: fr.ok,
+        slow,
+        general,
+    }
+}
+
+/// What [`ggx_local_dgk`] hands to [`ggx_local_finish`].
+#[derive(Clone, Copy)]
+pub(super) struct Staged<T: Real> {
+    c: T,
+    s2: T,
+    one_minus_c: T,
+    dgk: T,
+    size: T,
+    ok: T::Mask,
+    slow: T::Mask,
+    general: T::Mask,
+}
+
+/// F (`F`, the kernel's code) of a staged register's channels.
+struct Fresnel<'a, T: Real, const F: u8> {
+    p: &'a Params,
+    st: Staged<T>,
+}
+
+impl<T: Real, const F: u8> kernel::FresnelOf<T> for Fresnel<'_, T, F> {
+    #[inline(always)]
+    fn channel(&self, ch: usize) -> T {
+        let (p, st) = (self.p, &self.st);
+        match const { FresnelKind::from_code(F) } {
+            FresnelKind::Schlick => schlick::f_lane(st.one_minus_c, p.f0[ch]),
+            FresnelKind::Conductor => {
+                conductor::f_lane_metal::<Fused, _>(st.c, st.s2, &p.conductor, ch)
+            }
+            _ => st.c.splat_as(1.0),
+        }
+    }
+}
+
+/// The second stage (after [`ggx_local_dgk`]): F, the channels, the output test and the
+/// flags.
+#[inline(always)]
+pub(super) fn ggx_local_finish<T: Real, const F: u8>(
+    p: &Params,
+    st: Staged<T>,
+) -> ([T; 3], Flagged<T::Mask>) {
+    let f = Fresnel::<T, F> { p, st };
+    let (brdf, bad) = kernel::channels_of::<Fused, _>(p, st.dgk, st.size, f);
     // As a block flags them: the frame's failures and the outputs' to the reference,
     // except on the lanes another frame takes, which decide their own.
-    let rescue = (!fr.ok | bad) & !(slow | general);
+    let rescue = (!st.ok | bad) & !(st.slow | st.general);
     (
         brdf,
         Flagged {
             rescue,
-            slow,
-            general,
+            slow: st.slow,
+            general: st.general,
         },
     )
 }
 
-/// The lanes of a register whose outputs [`ggx_local`] did not make.
+/// The lanes of a register whose outputs [`ggx_local_finish`] did not make.
 #[derive(Clone, Copy)]
 pub(super) struct Flagged<M> {
     /// Lanes for the reference (invalid, below the horizon, grazing, an output out of
@@ -344,103 +396,5 @@ impl Registers for pulp::x86::V4 {
     #[inline(always)]
     fn serve<O: RegisterOp>(self, _op: O) -> Option<O::Output> {
         None
-    }
-}
-
-/// Two registers evaluated side by side: every operation twice, on independent values, so
-/// that the core overlaps their dependency chains (a register's frame and terms are a
-/// chain of square roots and divisions longer than the out-of-order window can hide
-/// behind the next register's).
-#[derive(Clone, Copy)]
-pub(super) struct Pair<T>(pub(super) T, pub(super) T);
-
-macro_rules! pair_binary {
-    ($tr:ident, $f:ident) => {
-        impl<T: Real> $tr for Pair<T> {
-            type Output = Pair<T>;
-            #[inline(always)]
-            fn $f(self, o: Pair<T>) -> Pair<T> {
-                Pair(self.0.$f(o.0), self.1.$f(o.1))
-            }
-        }
-
-        impl<T: Real> $tr<f32> for Pair<T> {
-            type Output = Pair<T>;
-            #[inline(always)]
-            fn $f(self, o: f32) -> Pair<T> {
-                Pair(self.0.$f(o), self.1.$f(o))
-            }
-        }
-    };
-}
-
-pair_binary!(Add, add);
-pair_binary!(Sub, sub);
-pair_binary!(Mul, mul);
-pair_binary!(Div, div);
-
-impl<M: BitAnd<Output = M>> BitAnd for Pair<M> {
-    type Output = Pair<M>;
-    #[inline(always)]
-    fn bitand(self, o: Pair<M>) -> Pair<M> {
-        Pair(self.0 & o.0, self.1 & o.1)
-    }
-}
-
-impl<M: BitOr<Output = M>> BitOr for Pair<M> {
-    type Output = Pair<M>;
-    #[inline(always)]
-    fn bitor(self, o: Pair<M>) -> Pair<M> {
-        Pair(self.0 | o.0, self.1 | o.1)
-    }
-}
-
-impl<M: Not<Output = M>> Not for Pair<M> {
-    type Output = Pair<M>;
-    #[inline(always)]
-    fn not(self) -> Pair<M> {
-        Pair(!self.0, !self.1)
-    }
-}
-
-impl<T: Real> Real for Pair<T> {
-    type Mask = Pair<T::Mask>;
-
-    #[inline(always)]
-    fn splat_as(self, x: f32) -> Pair<T> {
-        Pair(self.0.splat_as(x), self.1.splat_as(x))
-    }
-
-    #[inline(always)]
-    fn sqrt(self) -> Pair<T> {
-        Pair(self.0.sqrt(), self.1.sqrt())
-    }
-
-    #[inline(always)]
-    fn abs(self) -> Pair<T> {
-        Pair(self.0.abs(), self.1.abs())
-    }
-
-    #[inline(always)]
-    fn fused_mul_add(self, b: Pair<T>, c: Pair<T>) -> Pair<T> {
-        Pair(
-            self.0.fused_mul_add(b.0, c.0),
-            self.1.fused_mul_add(b.1, c.1),
-        )
-    }
-
-    #[inline(always)]
-    fn lt(self, o: Pair<T>) -> Pair<T::Mask> {
-        Pair(self.0.lt(o.0), self.1.lt(o.1))
-    }
-
-    #[inline(always)]
-    fn le(self, o: Pair<T>) -> Pair<T::Mask> {
-        Pair(self.0.le(o.0), self.1.le(o.1))
-    }
-
-    #[inline(always)]
-    fn select(m: Pair<T::Mask>, a: Pair<T>, b: Pair<T>) -> Pair<T> {
-        Pair(T::select(m.0, a.0, b.0), T::select(m.1, a.1, b.1))
     }
 }
