@@ -105,7 +105,7 @@ pub struct Params {
     /// caller ([`Outputs::slow`]), which gathers them from many blocks into blocks of the
     /// f64 frame, instead of running the f64 frame over its whole block for them.
     pub defer_slow: bool,
-    /// Whether GGX's lanes with N = +z take the general f32 frame ([`frame`]) rather than
+    /// Whether GGX's lanes with N = +z take the general f32 frame (`frame::frame`) rather than
     /// the local one (`frame_local32`): what the register path's refused lanes are
     /// gathered into (`Plan::general_frame_only`).
     pub general_frame_only: bool,

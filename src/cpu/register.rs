@@ -1,15 +1,15 @@
-//! The register path: the local form's GGX lanes on the f32 frame, one register of tuples
-//! at a time from rows to outputs, every value in a register of the instruction set
-//! (`pulp`'s `f32s`) instead of a block's arrays. The lane loops (`kernel::microfacet_block`)
-//! pass each quantity of a 16-tuple block through memory between their loops and left LLVM
-//! to spill the rest; here the frame, the terms and the output test of 8 tuples (AVX2) are
-//! one straight run of instructions.
+//! The register path: the local form's GGX lanes on the f32 frame from rows to outputs,
+//! every value in a register of the instruction set (`pulp`'s `f32s`) instead of a block's
+//! arrays — two registers a step, in two stages ([`ggx_local_dgk`], [`ggx_local_finish`]).
+//! The lane loops (`kernel::microfacet_block`) pass each quantity of a 16-tuple block
+//! through memory between their loops and left LLVM to spill the rest.
 //!
 //! The arithmetic is the lane loops' own: the frame (`frame::frame_local32`), the terms'
-//! lane forms and [`kernel::brdf_of`] are generic over [`Real`], instantiated here with
-//! [`Reg`], so a lane's result is the same bits on either path (a test compares them). A
-//! lane the f32 frame cannot serve is left to the caller's f64 frame, and a lane the lanes
-//! cannot vouch for to the reference, exactly as a block of the lane loops flags them.
+//! lane forms and `kernel::dgk_of`/`channels_of` are generic over [`Real`], instantiated
+//! here with [`Reg`], so a lane's result is the same bits on either path (a test compares
+//! them). A lane the local frame cannot serve is left to the caller's general f32 or f64
+//! frame, and a lane the lanes cannot vouch for to the reference, exactly as a block of
+//! the lane loops flags them.
 
 use super::frame::frame_local32;
 use super::kernel::{self, Params, FAST_MIN_C};
