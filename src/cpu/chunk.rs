@@ -492,6 +492,7 @@ fn run_blocks<S: pulp::Simd, T: transpose::Transpose, A: MulAdd, const R: usize>
     let mut idx = [[0usize; LANES]; R];
     let z = batch.normal_is_z();
     let (plan64, mut deferred) = (plan.f64_frame(), Deferred::new());
+    let (plan_general, mut deferred_general) = (plan.general_frame_only(), Deferred::new());
     let mut j0 = 0;
     while j0 < len {
         // Fill up to `R` blocks, run their lanes, then write them out.
@@ -550,10 +551,23 @@ fn run_blocks<S: pulp::Simd, T: transpose::Transpose, A: MulAdd, const R: usize>
                     }
                 }
             }
+            if out[b].any_general() {
+                for k in lanes_of(kernel::bits(&out[b].general) & valid) {
+                    let (q, plan) = (&mut deferred_general, &plan_general);
+                    if q.push(&inp[b], k, j + k, row(k)) {
+                        q.run::<S, A>(simd, plan, z, batch, m, w, &mut counts, &mut tally);
+                    }
+                }
+            }
         }
         j0 += (blocks * LANES).min(len - j0);
     }
-    deferred.run::<S, A>(simd, &plan64, z, batch, m, w, &mut counts, &mut tally);
+    for (queue, plan) in [
+        (&mut deferred, &plan64),
+        (&mut deferred_general, &plan_general),
+    ] {
+        queue.run::<S, A>(simd, plan, z, batch, m, w, &mut counts, &mut tally);
+    }
     (counts, tally)
 }
 

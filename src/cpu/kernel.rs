@@ -150,6 +150,9 @@ pub struct Outputs {
     /// Lanes left to the f64 frame by a block of a plan that defers them
     /// ([`Params::defer_slow`]): their other outputs are not the lane's.
     pub slow: [bool; LANES],
+    /// Lanes left to the general f32 frame by such a block (the local frame's certificate
+    /// refused them): their other outputs are not the lane's.
+    pub general: [bool; LANES],
 }
 
 impl Outputs {
@@ -163,6 +166,12 @@ impl Outputs {
     #[inline(always)]
     pub fn any_slow(&self) -> bool {
         any(&self.slow)
+    }
+
+    /// Whether any lane was left to the general f32 frame ([`Outputs::general`], [`any`]).
+    #[inline(always)]
+    pub fn any_general(&self) -> bool {
+        any(&self.general)
     }
 }
 
@@ -189,6 +198,7 @@ impl Default for Outputs {
             terms: [[0.0; LANES]; TERM_COLUMNS],
             rescue: [false; LANES],
             slow: [false; LANES],
+            general: [false; LANES],
         }
     }
 }
@@ -358,6 +368,8 @@ pub fn microfacet_block<A: MulAdd, const D: u8, const G: u8, const F: u8, const 
     // (`Params::fast_frame`). Only the fused groups (`fused`) are compiled here: the
     // dielectric and the other distributions take `dg_block64`.
     let mut slow = [true; LANES];
+    // Lanes of the local frame its certificate refused, for the general f32 frame.
+    let mut general = [false; LANES];
     if p.fast_frame {
         // The block's f32 frames as structure of arrays (an array of `Frame`s kept LLVM
         // from vectorising either loop: 4× slower).
@@ -381,7 +393,6 @@ pub fn microfacet_block<A: MulAdd, const D: u8, const G: u8, const F: u8, const 
         } else {
             FRAME_EACH
         };
-        let mut general = [false; LANES];
         match mode {
             FRAME_LOCAL => {
                 frames::<A, Z, FRAME_LOCAL>(p, inp, &z, &mut fs, &mut ok, &mut slow, &mut general)
@@ -393,8 +404,11 @@ pub fn microfacet_block<A: MulAdd, const D: u8, const G: u8, const F: u8, const 
                 frames::<A, Z, FRAME_GENERAL>(p, inp, &z, &mut fs, &mut ok, &mut slow, &mut general)
             }
         }
-        if any(&general) {
+        // In the block, unless the caller gathers them (as it does the f64 frame's lanes):
+        // computed here, they made every block with one run both frames.
+        if any(&general) && !p.defer_slow {
             general_frames::<A, Z>(inp, &general, &mut fs, &mut ok, &mut slow);
+            general = [false; LANES];
         }
         // Two loops, so that the one without terms divides nothing out; a conductor whose
         // every channel is legal for it takes F's metal form (`conductor::f_lane_metal`,
@@ -409,15 +423,18 @@ pub fn microfacet_block<A: MulAdd, const D: u8, const G: u8, const F: u8, const 
         }
     }
     if p.defer_slow && p.fast_frame {
-        // The caller runs these lanes on the f64 frame (with the other blocks' ones).
+        // The caller runs these lanes on the f64 frame and the general f32 frame (with the
+        // other blocks' ones).
         out.slow = slow;
+        out.general = general;
         for k in 0..LANES {
-            out.rescue[k] &= !slow[k];
+            out.rescue[k] &= !(slow[k] | general[k]);
         }
         return;
     }
     // Every lane of a material without the f32 frame is "slow": none is left to a caller.
     out.slow = [false; LANES];
+    out.general = [false; LANES];
     if any(&slow) {
         // The lanes the f32 frame cannot serve take the f64 frame's results, lane by lane:
         // what a lane gets must not depend on its neighbours in the block, or the output
@@ -495,10 +512,15 @@ fn frames<A: MulAdd, const Z: bool, const MODE: u8>(
             }
             _ => (frame::<A, Z>(&x), false),
         };
-        let certified =
-            !local || ggx::local_frame_ok(fr.cos_h, fr.sin2_h, fr.c, p.m2_f, p.ggx_local_guard);
-        slow[k] = fr.ok && fr.c < FAST_MIN_C;
-        general[k] = fr.ok && !slow[k] && !certified;
+        // `&` and `|`, not `&&` and `||`: the short-circuits kept this loop from
+        // vectorising (a scalar frame a lane: 160 instructions an evaluation, not 70).
+        let below = fr.ok & (fr.c < FAST_MIN_C);
+        slow[k] = below;
+        if MODE != FRAME_GENERAL {
+            let certified =
+                !local | ggx::local_frame_ok(fr.cos_h, fr.sin2_h, fr.c, p.m2_f, p.ggx_local_guard);
+            general[k] = fr.ok & !below & !certified;
+        }
         let v = [
             fr.cos_i, fr.cos_o, fr.cos_h, fr.c, fr.sin2_h, fr.sin2_i, fr.sin2_o, fr.s2,
         ];
@@ -802,8 +824,8 @@ fn finish_lane<A: MulAdd, const F: u8, const T: bool, const M: bool>(
 }
 
 /// The BRDF's channels of a lane, or of a register of lanes (`cpu::register`), from D and
-/// G as quotients, F of each channel (`f(ch)`, called once a channel after D·G·K, so that
-/// a register path holds one channel's values at a time) and the cosines (FORMULAS.md
+/// G as quotients, F of each channel (asked for once a channel after D·G·K, so that a
+/// register path holds one channel's values at a time) and the cosines (FORMULAS.md
 /// §5–§6): D·G·K over one division (the divider is what a block waits on); and whether an
 /// output may be non-finite or above [`OUTPUT_LIMIT`] (the lane then goes to the
 /// reference).
