@@ -224,15 +224,18 @@ impl RegisterOp for LocalRegisters<'_, '_> {
     fn run<S: RegisterIo>(self, simd: S) -> (Counts, Tally) {
         use crate::terms::{FresnelKind as F, Geometry as G};
         use kernel::{F_CONDUCTOR, F_NONE, F_SCHLICK, G_CT, G_NONE, G_SMITH, G_SMITH_CORRELATED};
-        let Plan::Microfacet { g, f, .. } = self.plan else {
+        let Plan::Microfacet { g, f, p, .. } = self.plan else {
             unreachable!("the register path serves microfacet groups (`register::serves`)")
         };
+        // A conductor whose every channel has Re η² < 0 skips the metal form's selects.
+        let quotient = p.conductor.metal_quotient;
         macro_rules! by_f {
             ($g:expr) => {
                 match f {
-                    F::None => registers_apart::<S, $g, F_NONE>(simd, self),
-                    F::Schlick => registers_apart::<S, $g, F_SCHLICK>(simd, self),
-                    _ => registers_apart::<S, $g, F_CONDUCTOR>(simd, self),
+                    F::None => registers_apart::<S, $g, F_NONE, false>(simd, self),
+                    F::Schlick => registers_apart::<S, $g, F_SCHLICK, false>(simd, self),
+                    _ if quotient => registers_apart::<S, $g, F_CONDUCTOR, true>(simd, self),
+                    _ => registers_apart::<S, $g, F_CONDUCTOR, false>(simd, self),
                 }
             };
         }
@@ -248,27 +251,29 @@ impl RegisterOp for LocalRegisters<'_, '_> {
 /// [`run_registers`] as a function of its own compiled for `simd` (as each group's lanes
 /// are, `dispatch::apart`).
 #[inline(never)]
-fn registers_apart<S: RegisterIo, const G: u8, const F: u8>(
+fn registers_apart<S: RegisterIo, const G: u8, const F: u8, const Q: bool>(
     simd: S,
     op: LocalRegisters,
 ) -> (Counts, Tally) {
-    simd.vectorize(RegistersFn::<S, G, F> { simd, op })
+    simd.vectorize(RegistersFn::<S, G, F, Q> { simd, op })
 }
 
 /// [`run_registers`] as pulp calls it inside the instruction set's features (a struct,
 /// not a closure: LLVM left the closure out of line, and with it every intrinsic became a
 /// call).
-struct RegistersFn<'a, 'b, S, const G: u8, const F: u8> {
+struct RegistersFn<'a, 'b, S, const G: u8, const F: u8, const Q: bool> {
     simd: S,
     op: LocalRegisters<'a, 'b>,
 }
 
-impl<S: RegisterIo, const G: u8, const F: u8> pulp::NullaryFnOnce for RegistersFn<'_, '_, S, G, F> {
+impl<S: RegisterIo, const G: u8, const F: u8, const Q: bool> pulp::NullaryFnOnce
+    for RegistersFn<'_, '_, S, G, F, Q>
+{
     type Output = (Counts, Tally);
 
     #[inline(always)]
     fn call(self) -> (Counts, Tally) {
-        run_registers::<S, G, F>(self.simd, self.op)
+        run_registers::<S, G, F, Q>(self.simd, self.op)
     }
 }
 
@@ -276,7 +281,7 @@ impl<S: RegisterIo, const G: u8, const F: u8> pulp::NullaryFnOnce for RegistersF
 /// read, evaluated (`register::ggx_local_dgk` and `ggx_local_finish`) and written, the lanes it flags sent to the
 /// reference or gathered for the f64 frame as [`run_blocks`] does with a block's.
 #[inline(always)]
-fn run_registers<S: RegisterIo, const G: u8, const F: u8>(
+fn run_registers<S: RegisterIo, const G: u8, const F: u8, const Q: bool>(
     simd: S,
     op: LocalRegisters,
 ) -> (Counts, Tally) {
@@ -327,8 +332,8 @@ fn run_registers<S: RegisterIo, const G: u8, const F: u8>(
         let (lb, vb) = ([r(bx), r(by), r(bz)], [r(bu), r(bv), r(bw)]);
         let sa = register::ggx_local_dgk::<_, G, F>(p, la, va);
         let sb = register::ggx_local_dgk::<_, G, F>(p, lb, vb);
-        let ([ra, ga, ba], fa) = register::ggx_local_finish::<_, F>(p, sa);
-        let ([rb, gb, bb], fb) = register::ggx_local_finish::<_, F>(p, sb);
+        let ([ra, ga, ba], fa) = register::ggx_local_finish::<_, F, Q>(p, sa);
+        let ([rb, gb, bb], fb) = register::ggx_local_finish::<_, F, Q>(p, sb);
         let (lo, hi) = (
             [ra.get(), ga.get(), ba.get()],
             [rb.get(), gb.get(), bb.get()],

@@ -270,17 +270,20 @@ pub(super) struct Staged<T: Real> {
 }
 
 /// F (`F`, the kernel's code) of a staged register's channels.
-struct Fresnel<'a, T: Real, const F: u8> {
+struct Fresnel<'a, T: Real, const F: u8, const Q: bool> {
     p: &'a Params,
     st: Staged<T>,
 }
 
-impl<T: Real, const F: u8> kernel::FresnelOf<T> for Fresnel<'_, T, F> {
+impl<T: Real, const F: u8, const Q: bool> kernel::FresnelOf<T> for Fresnel<'_, T, F, Q> {
     #[inline(always)]
     fn channel(&self, ch: usize) -> T {
         let (p, st) = (self.p, &self.st);
         match const { FresnelKind::from_code(F) } {
             FresnelKind::Schlick => schlick::f_lane(st.one_minus_c, p.f0[ch]),
+            FresnelKind::Conductor if Q => {
+                conductor::f_lane_metal_quotient::<Fused, _>(st.c, st.s2, &p.conductor, ch)
+            }
             FresnelKind::Conductor => {
                 conductor::f_lane_metal::<Fused, _>(st.c, st.s2, &p.conductor, ch)
             }
@@ -292,11 +295,11 @@ impl<T: Real, const F: u8> kernel::FresnelOf<T> for Fresnel<'_, T, F> {
 /// The second stage (after [`ggx_local_dgk`]): F, the channels, the output test and the
 /// flags.
 #[inline(always)]
-pub(super) fn ggx_local_finish<T: Real, const F: u8>(
+pub(super) fn ggx_local_finish<T: Real, const F: u8, const Q: bool>(
     p: &Params,
     st: Staged<T>,
 ) -> ([T; 3], Flagged<T::Mask>) {
-    let f = Fresnel::<T, F> { p, st };
+    let f = Fresnel::<T, F, Q> { p, st };
     let (brdf, bad) = kernel::channels_of::<Fused, _>(p, st.dgk, st.size, f);
     // As a block flags them: the frame's failures and the outputs' to the reference,
     // except on the lanes another frame takes, which decide their own.

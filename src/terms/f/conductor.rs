@@ -106,6 +106,9 @@ pub struct LaneConstants {
     pub e2ih: [f32; 3],
     /// Whether every channel may take [`f_lane_metal`] ([`metal_form_legal`]).
     pub metal: bool,
+    /// Whether, besides, every channel's `Re(η²)` is negative (k > n, most metals), so that
+    /// [`f_lane_metal_quotient`] gives [`f_lane_metal`]'s bits without its selects.
+    pub metal_quotient: bool,
 }
 
 impl LaneConstants {
@@ -129,6 +132,10 @@ impl LaneConstants {
             e2i2: r(e2i.map(|x| x * x)),
             e2ih: r(e2i.map(|x| 0.5 * x)),
             metal: (0..3).all(|c| metal_form_legal(n[c], k[c])),
+            metal_quotient: (0..3).all(|c| metal_form_legal(n[c], k[c]))
+                && r(std::array::from_fn(|c| n[c] * n[c] - k[c] * k[c]))
+                    .iter()
+                    .all(|&x| x < 0.0),
         }
     }
 }
@@ -336,6 +343,24 @@ pub fn f_lane_metal<A: MulAdd, T: Real>(c: T, s2: T, p: &LaneConstants, ch: usiz
     (bs - ca2) * bp / ((bs + ca2) * A::mul_add(ca2, s2, bp))
 }
 
+/// [`f_lane_metal`] for a channel whose `Re(η²)` (`p.e2r[ch]`, as rounded) is negative:
+/// then `Re(η² − sin²θ) = Re η² − sin²θ < 0` for every `sin²θ ≥ 0`, A is the quotient
+/// `nk/t` on every lane, and these are the operations of [`f_lane_metal`]'s selected side
+/// (`|re| = −re`, `ad = t`) — the same bits, without the test, the two selects and the
+/// absolute value (a lane `sin²θ` that is NaN gives NaN in both). For a register path
+/// whose material has [`LaneConstants::metal_quotient`].
+#[inline(always)]
+pub fn f_lane_metal_quotient<A: MulAdd, T: Real>(c: T, s2: T, p: &LaneConstants, ch: usize) -> T {
+    let c2 = c * c;
+    let re = c.splat_as(p.e2r[ch]) - s2;
+    let mag = A::mul_add(re, re, c.splat_as(p.e2i2[ch])).sqrt();
+    let t = ((mag - re) * 0.5).sqrt();
+    let ca2 = c * 2.0 * c.splat_as(p.e2ih[ch]);
+    let bs = (mag + c2) * t;
+    let bp = A::mul_add(mag, c2, s2 * s2) * t;
+    (bs - ca2) * bp / ((bs + ca2) * A::mul_add(ca2, s2, bp))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -434,5 +459,41 @@ mod tests {
                 assert_eq!(f_lane(c as f32, s2, &p, ch), 0.0, "c = {c}");
             }
         }
+    }
+
+    /// The quotient form gives the metal form's bits wherever it is taken (Re η² < 0 in
+    /// every channel), on both MulAdd kinds, over c from grazing to normal incidence with
+    /// sin²θ as a frame rounds it, and at sin²θ = 0, 1 and NaN; and it is taken only there.
+    #[test]
+    fn the_quotient_form_is_the_metal_forms_bits_where_re_eta2_is_negative() {
+        // Copper, gold, the bench's metal, and n just below k.
+        let metals = [
+            ([0.27, 0.68, 1.22], [3.61, 2.62, 2.24]),
+            ([0.18, 0.42, 1.37], [3.42, 2.35, 1.77]),
+            ([0.2, 0.92, 1.1], [3.9, 2.45, 2.14]),
+            ([2.9, 2.9, 2.6], [3.1, 2.9001, 2.8]),
+        ];
+        for (n, k) in metals {
+            let p = LaneConstants::new(n, k);
+            assert!(p.metal_quotient, "{n:?} {k:?}");
+            for i in 0..=20_000 {
+                let c = (1e-4 + (1.0 - 1e-4) * f64::from(i) / 20_000.0) as f32;
+                let s2 = (1.0 - f64::from(c) * f64::from(c)) as f32;
+                for s2 in [s2, 0.0, 1.0] {
+                    for ch in 0..3 {
+                        let a = f_lane_metal::<Fused, f32>(c, s2, &p, ch);
+                        let b = f_lane_metal_quotient::<Fused, f32>(c, s2, &p, ch);
+                        assert_eq!(a.to_bits(), b.to_bits(), "c = {c}, s2 = {s2}");
+                        let a = f_lane_metal::<Rounded, f32>(c, s2, &p, ch);
+                        let b = f_lane_metal_quotient::<Rounded, f32>(c, s2, &p, ch);
+                        assert_eq!(a.to_bits(), b.to_bits(), "c = {c}, s2 = {s2}");
+                    }
+                }
+            }
+            assert!(f_lane_metal_quotient::<Fused, f32>(0.5, f32::NAN, &p, 0).is_nan());
+        }
+        // Re η² ≥ 0 in one channel (n > k there), or a material the metal form refuses.
+        assert!(!LaneConstants::new([0.27, 0.68, 2.5], [3.61, 2.62, 2.24]).metal_quotient);
+        assert!(!LaneConstants::new([1.5; 3], [0.0; 3]).metal_quotient);
     }
 }
