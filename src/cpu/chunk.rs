@@ -330,10 +330,13 @@ fn run_registers<S: RegisterIo, const G: u8, const F: u8, const Q: bool>(
         let r = |x| Reg::new(simd, x);
         let (la, va) = ([r(ax), r(ay), r(az)], [r(au), r(av), r(aw)]);
         let (lb, vb) = ([r(bx), r(by), r(bz)], [r(bu), r(bv), r(bw)]);
+        // Each register's flags leave its registers as bits after the first stage.
         let sa = register::ggx_local_dgk::<_, G, F>(p, la, va);
+        let fa = sa.flags();
         let sb = register::ggx_local_dgk::<_, G, F>(p, lb, vb);
-        let ([ra, ga, ba], fa) = register::ggx_local_finish::<_, F, Q>(p, sa);
-        let ([rb, gb, bb], fb) = register::ggx_local_finish::<_, F, Q>(p, sb);
+        let fb = sb.flags();
+        let ([ra, ga, ba], bad_a) = register::ggx_local_finish::<_, F, Q>(p, sa);
+        let ([rb, gb, bb], bad_b) = register::ggx_local_finish::<_, F, Q>(p, sb);
         let (lo, hi) = (
             [ra.get(), ga.get(), ba.get()],
             [rb.get(), gb.get(), bb.get()],
@@ -349,17 +352,16 @@ fn run_registers<S: RegisterIo, const G: u8, const F: u8, const Q: bool>(
             w.brdf[j * 3..(j + n) * 3].copy_from_slice(&tail_out[..n * 3]);
         }
         let valid = u32::MAX >> (32 - n);
-        let bits = |a: register::RegMask<S>, b: register::RegMask<S>| {
-            (simd.bits(a.get()) | (simd.bits(b.get()) << half)) & valid
-        };
-        for k in lanes_of(bits(fa.rescue, fb.rescue)) {
+        let both = |a: u32, b: u32| (a | (b << half)) & valid;
+        let (bad_a, bad_b) = (simd.bits(bad_a.get()), simd.bits(bad_b.get()));
+        for k in lanes_of(both(fa.rescue(bad_a), fb.rescue(bad_b))) {
             rescue(batch, m, row0 + k, j + k, w, &mut counts);
             tally.rescued += 1;
         }
         for (lanes, queue, plan) in [
-            (bits(fa.slow, fb.slow), &mut deferred, &plan64),
+            (both(fa.slow, fb.slow), &mut deferred, &plan64),
             (
-                bits(fa.general, fb.general),
+                both(fa.general, fb.general),
                 &mut deferred_general,
                 &plan_general,
             ),

@@ -218,7 +218,7 @@ pub(super) fn serves(
 /// ([`Staged`]), so that a step runs this stage on one register, then on a second, while
 /// the first one's square roots and divisions are still in flight, without holding both
 /// registers' frames. Together the stages give the BRDF's channels and which lanes they
-/// are not for ([`Flagged`]), as `kernel::microfacet_block` decides for the same lanes.
+/// are not for ([`Flags`], [`Flags::rescue`]), as `kernel::microfacet_block` decides for the same lanes.
 #[inline(always)]
 pub(super) fn ggx_local_dgk<T: Real, const G: u8, const F: u8>(
     p: &Params,
@@ -292,38 +292,57 @@ impl<T: Real, const F: u8, const Q: bool> kernel::FresnelOf<T> for Fresnel<'_, T
     }
 }
 
-/// The second stage (after [`ggx_local_dgk`]): F, the channels, the output test and the
-/// flags.
+/// The second stage (after [`ggx_local_dgk`]): F, the channels, and the lanes whose output
+/// may be non-finite or out of range (`kernel::channels_of`'s test). Which lanes the
+/// reference or another frame takes follows from these and [`Staged::flags`], which the
+/// caller reads as bits after the first stage (masks held across the second stage's
+/// arithmetic were spilled).
 #[inline(always)]
 pub(super) fn ggx_local_finish<T: Real, const F: u8, const Q: bool>(
     p: &Params,
     st: Staged<T>,
-) -> ([T; 3], Flagged<T::Mask>) {
+) -> ([T; 3], T::Mask) {
     let f = Fresnel::<T, F, Q> { p, st };
-    let (brdf, bad) = kernel::channels_of::<Fused, _>(p, st.dgk, st.size, f);
-    // As a block flags them: the frame's failures and the outputs' to the reference,
-    // except on the lanes another frame takes, which decide their own.
-    let rescue = (!st.ok | bad) & !(st.slow | st.general);
-    (
-        brdf,
-        Flagged {
-            rescue,
-            slow: st.slow,
-            general: st.general,
-        },
-    )
+    kernel::channels_of::<Fused, _>(p, st.dgk, st.size, f)
 }
 
-/// The lanes of a register whose outputs [`ggx_local_finish`] did not make.
+/// The lanes of a register as the first stage flags them, as bits (lane k is bit k).
 #[derive(Clone, Copy)]
-pub(super) struct Flagged<M> {
-    /// Lanes for the reference (invalid, below the horizon, grazing, an output out of
-    /// range).
-    pub(super) rescue: M,
+pub(super) struct Flags {
+    /// Lanes whose frame failed (invalid, below the horizon, grazing) and that no other
+    /// frame takes: the reference's.
+    pub(super) failed: u32,
+    /// Lanes another frame takes (`slow | general`): the output test does not decide them.
+    pub(super) elsewhere: u32,
     /// Lanes for the f64 frame (`c` below `FAST_MIN_C`).
-    pub(super) slow: M,
+    pub(super) slow: u32,
     /// Lanes for the general f32 frame (D's certificate refused the local one).
-    pub(super) general: M,
+    pub(super) general: u32,
+}
+
+impl Flags {
+    /// The lanes for the reference once the outputs' test (`bad`, as bits) is known: the
+    /// frame's failures and the outputs', except on the lanes another frame takes — as a
+    /// block flags them.
+    #[inline(always)]
+    pub(super) fn rescue(&self, bad: u32) -> u32 {
+        self.failed | (bad & !self.elsewhere)
+    }
+}
+
+impl<S: RegisterIo> Staged<Reg<S>> {
+    /// The first stage's flags as bits ([`Flags`]).
+    #[inline(always)]
+    pub(super) fn flags(&self) -> Flags {
+        let s = self.c.s;
+        let elsewhere = self.slow | self.general;
+        Flags {
+            failed: s.bits((!self.ok & !elsewhere).get()),
+            elsewhere: s.bits(elsewhere.get()),
+            slow: s.bits(self.slow.get()),
+            general: s.bits(self.general.get()),
+        }
+    }
 }
 
 /// Work on the register path, for the instruction sets that have one
