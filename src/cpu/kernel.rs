@@ -869,8 +869,11 @@ pub(super) fn dgk_of<T: Real>(p: &Params, d: (T, T), g: (T, T), cos_i: T, cos_o:
     // OUTPUT_LIMIT if any is (a sum that only rounds up past it sends a lane to the
     // reference needlessly, never the other way) — 18 operations where a test a value
     // took 45. The quotients' parts stand for the terms (each term is finite when they
-    // are), so the test, and with it the BRDF, is the same with and without terms.
-    (dgk, d.0.abs() + d.1 + g.0.abs() + g.1 + dgk.abs())
+    // are), so the test, and with it the BRDF, is the same with and without terms. Every
+    // part is ≥ 0 (or NaN) on the lanes the test decides — those whose frame passed its
+    // tests, cosines ≥ GRAZING; the others go to the reference whatever it says — so the
+    // sum of the values is the sum of their magnitudes, without an `abs` a value.
+    (dgk, d.0 + d.1 + g.0 + g.1 + dgk)
 }
 
 /// [`brdf_of`]'s second half: the channels from D·G·K and F, and the test.
@@ -890,7 +893,10 @@ pub(super) fn channels_of<A: MulAdd, T: Real>(
             dgk.splat_as(p.diffuse[ch]),
         );
         brdf[ch] = b;
-        size = size + (b.abs() + f.abs());
+        // b and F are ≥ 0 (or NaN) on the lanes the test decides, as in `dgk_of` (F is a
+        // reflectance; Schlick's may come out −1e-35 at c a rounding above 1, which moves
+        // no test).
+        size = size + (b + f);
     }
     // `≤` is false for NaN: one comparison catches both.
     (brdf, !size.le_scalar(OUTPUT_LIMIT))
