@@ -304,8 +304,14 @@ fn run_registers<S: RegisterIo, const G: u8, const F: u8, const Q: bool>(
         registers: len as u64,
         ..Tally::default()
     };
-    let (plan64, mut deferred) = (plan.f64_frame(), Deferred::new());
-    let (plan_general, mut deferred_general) = (plan.general_frame_only(), Deferred::new());
+    let mut later = Flagged {
+        steps: [FlaggedStep::default(); FLAGGED_STEPS],
+        n: 0,
+        plan64: plan.f64_frame(),
+        plan_general: plan.general_frame_only(),
+        deferred: Deferred::new(),
+        deferred_general: Deferred::new(),
+    };
     // The tail's rows, the last repeated (its extra lanes are computed and dropped), and
     // its outputs.
     let mut tail_rows = [0f32; COLUMNS_LOCAL * 2 * LANES];
@@ -354,35 +360,92 @@ fn run_registers<S: RegisterIo, const G: u8, const F: u8, const Q: bool>(
         let valid = u32::MAX >> (32 - n);
         let both = |a: u32, b: u32| (a | (b << half)) & valid;
         let (bad_a, bad_b) = (simd.bits(bad_a.get()), simd.bits(bad_b.get()));
-        for k in lanes_of(both(fa.rescue(bad_a), fb.rescue(bad_b))) {
-            rescue(batch, m, row0 + k, j + k, w, &mut counts);
-            tally.rescued += 1;
-        }
-        for (lanes, queue, plan) in [
-            (both(fa.slow, fb.slow), &mut deferred, &plan64),
-            (
-                both(fa.general, fb.general),
-                &mut deferred_general,
-                &plan_general,
-            ),
-        ] {
-            for k in lanes_of(lanes) {
-                let r = &data[(row0 + k) * COLUMNS_LOCAL..(row0 + k + 1) * COLUMNS_LOCAL];
-                let x = [r[0], r[1], r[2], r[3], r[4], r[5], 0.0, 0.0, 1.0];
-                if queue.push_lane(x, j + k, row0 + k) {
-                    queue.run::<S, Fused>(simd, plan, true, batch, m, w, &mut counts, &mut tally);
-                }
-            }
+        let step = FlaggedStep {
+            j,
+            row0,
+            rescue: both(fa.rescue(bad_a), fb.rescue(bad_b)),
+            slow: both(fa.slow, fb.slow),
+            general: both(fa.general, fb.general),
+        };
+        // No branch on the flags: which lanes they name is data (a step in three has one
+        // at m = 0.3), and a branch a step on them, mispredicted, cost more than the
+        // flagged lanes' own work. The slot is kept when a flag is set.
+        later.steps[later.n % FLAGGED_STEPS] = step;
+        later.n += usize::from(step.rescue | step.slow | step.general != 0);
+        if later.n == FLAGGED_STEPS {
+            later.handle::<S>(simd, batch, m, w, &mut counts, &mut tally);
         }
         j += n;
     }
+    later.handle::<S>(simd, batch, m, w, &mut counts, &mut tally);
     for (queue, plan) in [
-        (&mut deferred, &plan64),
-        (&mut deferred_general, &plan_general),
+        (&mut later.deferred, &later.plan64),
+        (&mut later.deferred_general, &later.plan_general),
     ] {
         queue.run::<S, Fused>(simd, plan, true, batch, m, w, &mut counts, &mut tally);
     }
     (counts, tally)
+}
+
+/// A register step's flagged lanes (bits over its rows, lane k is row `row0 + k`, output
+/// `j + k`), for [`Flagged::handle`].
+#[derive(Clone, Copy, Default)]
+struct FlaggedStep {
+    j: usize,
+    row0: usize,
+    rescue: u32,
+    slow: u32,
+    general: u32,
+}
+
+/// Steps the register path keeps before it handles their flagged lanes.
+const FLAGGED_STEPS: usize = 64;
+
+/// The register path's flagged steps and the queues of the lanes other frames take.
+struct Flagged {
+    steps: [FlaggedStep; FLAGGED_STEPS],
+    n: usize,
+    plan64: Plan,
+    plan_general: Plan,
+    deferred: Deferred,
+    deferred_general: Deferred,
+}
+
+impl Flagged {
+    /// The kept steps' lanes: to the reference (written now), or gathered for the f64
+    /// frame or the general f32 frame (run a block at a time). Their outputs overwrite
+    /// what the register path wrote for them.
+    fn handle<S: pulp::Simd>(
+        &mut self,
+        simd: S,
+        batch: Source,
+        m: &Material,
+        w: &mut Work,
+        counts: &mut Counts,
+        tally: &mut Tally,
+    ) {
+        let data = batch.data();
+        for step in &self.steps[..self.n] {
+            let (j, row0) = (step.j, step.row0);
+            for k in lanes_of(step.rescue) {
+                rescue(batch, m, row0 + k, j + k, w, counts);
+                tally.rescued += 1;
+            }
+            for (lanes, queue, plan) in [
+                (step.slow, &mut self.deferred, &self.plan64),
+                (step.general, &mut self.deferred_general, &self.plan_general),
+            ] {
+                for k in lanes_of(lanes) {
+                    let r = &data[(row0 + k) * COLUMNS_LOCAL..(row0 + k + 1) * COLUMNS_LOCAL];
+                    let x = [r[0], r[1], r[2], r[3], r[4], r[5], 0.0, 0.0, 1.0];
+                    if queue.push_lane(x, j + k, row0 + k) {
+                        queue.run::<S, Fused>(simd, plan, true, batch, m, w, counts, tally);
+                    }
+                }
+            }
+        }
+        self.n = 0;
+    }
 }
 
 /// Writes the f64 reference's result for batch row `row` at position `j` of the chunk and
