@@ -1,0 +1,150 @@
+//! The lanes a chunk's fast paths leave to others: the reference ([`rescue`]) and the
+//! blocks gathered for another frame ([`Deferred`]), each written into the lane's place.
+
+use super::work::{Source, Tally, Work};
+use crate::backend::{Counts, TERM_COLUMNS};
+use crate::cpu::dispatch::block;
+use crate::cpu::kernel::{self, Inputs, Outputs, LANES};
+use crate::cpu::plan::Plan;
+use crate::material::Material;
+use crate::reference::{evaluate_tuple, to_output_f32, Status};
+use crate::terms::math::MulAdd;
+
+/// Writes the f64 reference's result for batch row `row` at position `j` of the chunk and
+/// counts its status.
+pub(super) fn rescue(
+    batch: Source,
+    m: &Material,
+    row: usize,
+    j: usize,
+    w: &mut Work,
+    counts: &mut Counts,
+) {
+    let e = evaluate_tuple(&batch.tuple(row), m);
+    match e.status {
+        Status::Invalid => {
+            counts.invalid += 1;
+            counts.first_invalid = Some(
+                counts
+                    .first_invalid
+                    .map_or(row as u64, |f| f.min(row as u64)),
+            );
+        }
+        Status::BelowHorizon => counts.below_horizon += 1,
+        Status::Valid => counts.saturated += u64::from(e.saturated()),
+    }
+    for (ch, x) in e.brdf.into_iter().enumerate() {
+        w.brdf[j * 3 + ch] = to_output_f32(x);
+    }
+    if let Some(t) = w.terms.as_deref_mut() {
+        for (c, x) in e.terms().into_iter().enumerate() {
+            t[j * TERM_COLUMNS + c] = to_output_f32(x);
+        }
+    }
+}
+
+/// The lanes whose bits are set in `bits`, lowest first.
+#[inline(always)]
+pub(super) fn lanes_of(mut bits: u32) -> impl Iterator<Item = usize> {
+    std::iter::from_fn(move || {
+        (bits != 0).then(|| {
+            let k = bits.trailing_zeros() as usize;
+            bits &= bits - 1;
+            k
+        })
+    })
+}
+
+/// The lanes a chunk's blocks left to the f64 frame ([`kernel::Params::defer_slow`]),
+/// gathered into one block: a few lanes in a hundred cost a few blocks in a hundred, where
+/// running the f64 frame over each block that had one cost a third of the blocks. Each
+/// lane's result depends on its own tuple alone, so where it is evaluated does not change
+/// it.
+pub(super) struct Deferred {
+    inp: Inputs,
+    /// Each lane's output position in the chunk and its batch row.
+    at: [(usize, usize); LANES],
+    n: usize,
+}
+
+impl Deferred {
+    pub(super) fn new() -> Deferred {
+        Deferred {
+            inp: Inputs::default(),
+            at: [(0, 0); LANES],
+            n: 0,
+        }
+    }
+
+    /// Lane `k` of `inp` (output position `j`, batch row `row`); whether the block is full.
+    #[inline(always)]
+    pub(super) fn push(&mut self, inp: &Inputs, k: usize, j: usize, row: usize) -> bool {
+        self.push_lane(kernel::lane_inputs(inp, k % LANES), j, row)
+    }
+
+    /// A lane's L, V, N `x` (output position `j`, batch row `row`); whether the block is
+    /// full.
+    #[inline(always)]
+    pub(super) fn push_lane(&mut self, x: [f32; 9], j: usize, row: usize) -> bool {
+        // `n < LANES` always (a full block is run before the next push); the mask says so
+        // to the compiler, which then drops the bounds checks.
+        let n = self.n % LANES;
+        for c in 0..9 {
+            self.inp.v[c][n] = x[c];
+        }
+        self.at[n] = (j, row);
+        self.n = n + 1;
+        self.n == LANES
+    }
+
+    /// The gathered lanes on `plan64` (the group's f64 frame), into their places in `w`,
+    /// rescued where the lanes say so.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn run<S: pulp::Simd, A: MulAdd>(
+        &mut self,
+        simd: S,
+        plan64: &Plan,
+        z: bool,
+        batch: Source,
+        m: &Material,
+        w: &mut Work,
+        counts: &mut Counts,
+        tally: &mut Tally,
+    ) {
+        let n = self.n;
+        if n == 0 {
+            return;
+        }
+        // The unused lanes repeat the first (computed and dropped).
+        for k in n..LANES {
+            for c in 0..9 {
+                self.inp.v[c][k] = self.inp.v[c][0];
+            }
+        }
+        let mut out = [Outputs::default()];
+        block::<S, A>(simd, plan64, std::slice::from_ref(&self.inp), &mut out, z);
+        tally.deferred += n as u64;
+        for (k, &(j, row)) in self.at[..n].iter().enumerate() {
+            if out[0].rescue[k] {
+                rescue(batch, m, row, j, w, counts);
+                tally.rescued += 1;
+            } else {
+                write_lane(&out[0], k, j, w);
+            }
+        }
+        self.n = 0;
+    }
+}
+
+/// Lane `k` of `out` into output position `j`.
+#[inline(always)]
+pub(super) fn write_lane(out: &Outputs, k: usize, j: usize, w: &mut Work) {
+    for ch in 0..3 {
+        w.brdf[j * 3 + ch] = out.brdf[ch][k];
+    }
+    if let Some(t) = w.terms.as_deref_mut() {
+        for c in 0..TERM_COLUMNS {
+            t[j * TERM_COLUMNS + c] = out.terms[c][k];
+        }
+    }
+}

@@ -1,0 +1,253 @@
+//! The register path's loop over a chunk of the local form (`cpu::register`): 16 rows a
+//! step read into two registers, evaluated in two stages and written back, and the lanes
+//! it flags handled after a run of steps — sent to the reference or gathered, as
+//! [`super::run_blocks`] gathers a block's, for the f64 frame or the general f32 frame.
+
+use super::deferred::{lanes_of, rescue, Deferred};
+use super::work::{Source, Tally, Work};
+use crate::backend::Counts;
+use crate::batch::COLUMNS_LOCAL;
+use crate::cpu::kernel::{self, LANES};
+use crate::cpu::plan::Plan;
+use crate::cpu::register::{self, Reg, RegisterIo, RegisterOp};
+use crate::material::Material;
+use crate::terms::math::Fused;
+
+/// A chunk of the local form on the register path ([`register::serves`]).
+pub(super) struct LocalRegisters<'a, 'b> {
+    pub(super) plan: &'a Plan,
+    pub(super) batch: Source<'a>,
+    pub(super) work: &'a mut Work<'b>,
+    pub(super) material: &'a Material,
+}
+
+impl RegisterOp for LocalRegisters<'_, '_> {
+    type Output = (Counts, Tally);
+
+    #[inline(always)]
+    fn run<S: RegisterIo>(self, simd: S) -> (Counts, Tally) {
+        use crate::terms::{FresnelKind as F, Geometry as G};
+        use kernel::{F_CONDUCTOR, F_NONE, F_SCHLICK, G_CT, G_NONE, G_SMITH, G_SMITH_CORRELATED};
+        let Plan::Microfacet { g, f, p, .. } = self.plan else {
+            unreachable!("the register path serves microfacet groups (`register::serves`)")
+        };
+        // A conductor whose every channel has Re η² < 0 skips the metal form's selects.
+        let quotient = p.conductor.metal_quotient;
+        macro_rules! by_f {
+            ($g:expr) => {
+                match f {
+                    F::None => registers_apart::<S, $g, F_NONE, false>(simd, self),
+                    F::Schlick => registers_apart::<S, $g, F_SCHLICK, false>(simd, self),
+                    _ if quotient => registers_apart::<S, $g, F_CONDUCTOR, true>(simd, self),
+                    _ => registers_apart::<S, $g, F_CONDUCTOR, false>(simd, self),
+                }
+            };
+        }
+        match g {
+            G::None => by_f!(G_NONE),
+            G::CookTorrance => by_f!(G_CT),
+            G::Smith => by_f!(G_SMITH),
+            _ => by_f!(G_SMITH_CORRELATED),
+        }
+    }
+}
+
+/// [`run_registers`] as a function of its own compiled for `simd` (as each group's lanes
+/// are, `dispatch::apart`).
+#[inline(never)]
+fn registers_apart<S: RegisterIo, const G: u8, const F: u8, const Q: bool>(
+    simd: S,
+    op: LocalRegisters,
+) -> (Counts, Tally) {
+    simd.vectorize(RegistersFn::<S, G, F, Q> { simd, op })
+}
+
+/// [`run_registers`] as pulp calls it inside the instruction set's features (a struct,
+/// not a closure: LLVM left the closure out of line, and with it every intrinsic became a
+/// call).
+struct RegistersFn<'a, 'b, S, const G: u8, const F: u8, const Q: bool> {
+    simd: S,
+    op: LocalRegisters<'a, 'b>,
+}
+
+impl<S: RegisterIo, const G: u8, const F: u8, const Q: bool> pulp::NullaryFnOnce
+    for RegistersFn<'_, '_, S, G, F, Q>
+{
+    type Output = (Counts, Tally);
+
+    #[inline(always)]
+    fn call(self) -> (Counts, Tally) {
+        run_registers::<S, G, F, Q>(self.simd, self.op)
+    }
+}
+
+/// The register path's loop over a chunk of the local form: a register of rows at a time
+/// read, evaluated (`register::ggx_local_dgk` and `ggx_local_finish`) and written, the lanes it flags sent to the
+/// reference or gathered for the f64 frame as [`run_blocks`] does with a block's.
+#[inline(always)]
+fn run_registers<S: RegisterIo, const G: u8, const F: u8, const Q: bool>(
+    simd: S,
+    op: LocalRegisters,
+) -> (Counts, Tally) {
+    let LocalRegisters {
+        plan,
+        batch,
+        work: w,
+        material: m,
+    } = op;
+    let Plan::Microfacet { p, .. } = plan else {
+        unreachable!("the register path serves microfacet groups (`register::serves`)")
+    };
+    // Two registers a step, staged (`register::ggx_local_dgk`).
+    let width = 2 * S::WIDTH;
+    let len = w.brdf.len() / 3;
+    let data = batch.data();
+    let mut counts = Counts::default();
+    let mut tally = Tally {
+        lanes: len as u64,
+        registers: len as u64,
+        ..Tally::default()
+    };
+    let mut later = Flagged {
+        steps: [FlaggedStep::default(); FLAGGED_STEPS],
+        n: 0,
+        plan64: plan.f64_frame(),
+        plan_general: plan.general_frame_only(),
+        deferred: Deferred::new(),
+        deferred_general: Deferred::new(),
+    };
+    // The tail's rows, the last repeated (its extra lanes are computed and dropped), and
+    // its outputs.
+    let mut tail_rows = [0f32; COLUMNS_LOCAL * 2 * LANES];
+    let mut tail_out = [0f32; 3 * 2 * LANES];
+    let mut j = 0;
+    while j < len {
+        let n = width.min(len - j);
+        let row0 = w.start + j;
+        let rows = if n == width {
+            &data[row0 * COLUMNS_LOCAL..(row0 + width) * COLUMNS_LOCAL]
+        } else {
+            for k in 0..width {
+                let r = row0 + k.min(n - 1);
+                tail_rows[k * COLUMNS_LOCAL..(k + 1) * COLUMNS_LOCAL]
+                    .copy_from_slice(&data[r * COLUMNS_LOCAL..(r + 1) * COLUMNS_LOCAL]);
+            }
+            &tail_rows[..width * COLUMNS_LOCAL]
+        };
+        let half = S::WIDTH;
+        let [ax, ay, az, au, av, aw] = simd.local_columns(&rows[..half * COLUMNS_LOCAL]);
+        let [bx, by, bz, bu, bv, bw] = simd.local_columns(&rows[half * COLUMNS_LOCAL..]);
+        let r = |x| Reg::new(simd, x);
+        let (la, va) = ([r(ax), r(ay), r(az)], [r(au), r(av), r(aw)]);
+        let (lb, vb) = ([r(bx), r(by), r(bz)], [r(bu), r(bv), r(bw)]);
+        // Each register's flags leave its registers as bits after the first stage.
+        let sa = register::ggx_local_dgk::<_, G, F>(p, la, va);
+        let fa = sa.flags();
+        let sb = register::ggx_local_dgk::<_, G, F>(p, lb, vb);
+        let fb = sb.flags();
+        let ([ra, ga, ba], bad_a) = register::ggx_local_finish::<_, F, Q>(p, sa);
+        let ([rb, gb, bb], bad_b) = register::ggx_local_finish::<_, F, Q>(p, sb);
+        let (lo, hi) = (
+            [ra.get(), ga.get(), ba.get()],
+            [rb.get(), gb.get(), bb.get()],
+        );
+        let out: &mut [f32] = if n == width {
+            &mut w.brdf[j * 3..(j + width) * 3]
+        } else {
+            &mut tail_out[..width * 3]
+        };
+        simd.rgb_rows(lo, &mut out[..half * 3]);
+        simd.rgb_rows(hi, &mut out[half * 3..]);
+        if n < width {
+            w.brdf[j * 3..(j + n) * 3].copy_from_slice(&tail_out[..n * 3]);
+        }
+        let valid = u32::MAX >> (32 - n);
+        let both = |a: u32, b: u32| (a | (b << half)) & valid;
+        let (bad_a, bad_b) = (simd.bits(bad_a.get()), simd.bits(bad_b.get()));
+        let step = FlaggedStep {
+            j,
+            row0,
+            rescue: both(fa.rescue(bad_a), fb.rescue(bad_b)),
+            slow: both(fa.slow, fb.slow),
+            general: both(fa.general, fb.general),
+        };
+        // No branch on the flags: which lanes they name is data (a step in three has one
+        // at m = 0.3), and a branch a step on them, mispredicted, cost more than the
+        // flagged lanes' own work. The slot is kept when a flag is set.
+        later.steps[later.n % FLAGGED_STEPS] = step;
+        later.n += usize::from(step.rescue | step.slow | step.general != 0);
+        if later.n == FLAGGED_STEPS {
+            later.handle::<S>(simd, batch, m, w, &mut counts, &mut tally);
+        }
+        j += n;
+    }
+    later.handle::<S>(simd, batch, m, w, &mut counts, &mut tally);
+    for (queue, plan) in [
+        (&mut later.deferred, &later.plan64),
+        (&mut later.deferred_general, &later.plan_general),
+    ] {
+        queue.run::<S, Fused>(simd, plan, true, batch, m, w, &mut counts, &mut tally);
+    }
+    (counts, tally)
+}
+
+/// A register step's flagged lanes (bits over its rows, lane k is row `row0 + k`, output
+/// `j + k`), for [`Flagged::handle`].
+#[derive(Clone, Copy, Default)]
+struct FlaggedStep {
+    j: usize,
+    row0: usize,
+    rescue: u32,
+    slow: u32,
+    general: u32,
+}
+
+/// Steps the register path keeps before it handles their flagged lanes.
+const FLAGGED_STEPS: usize = 64;
+
+/// The register path's flagged steps and the queues of the lanes other frames take.
+struct Flagged {
+    steps: [FlaggedStep; FLAGGED_STEPS],
+    n: usize,
+    plan64: Plan,
+    plan_general: Plan,
+    deferred: Deferred,
+    deferred_general: Deferred,
+}
+
+impl Flagged {
+    /// The kept steps' lanes: to the reference (written now), or gathered for the f64
+    /// frame or the general f32 frame (run a block at a time). Their outputs overwrite
+    /// what the register path wrote for them.
+    fn handle<S: pulp::Simd>(
+        &mut self,
+        simd: S,
+        batch: Source,
+        m: &Material,
+        w: &mut Work,
+        counts: &mut Counts,
+        tally: &mut Tally,
+    ) {
+        let data = batch.data();
+        for step in &self.steps[..self.n] {
+            let (j, row0) = (step.j, step.row0);
+            for k in lanes_of(step.rescue) {
+                rescue(batch, m, row0 + k, j + k, w, counts);
+                tally.rescued += 1;
+            }
+            for (lanes, queue, plan) in [
+                (step.slow, &mut self.deferred, &self.plan64),
+                (step.general, &mut self.deferred_general, &self.plan_general),
+            ] {
+                for k in lanes_of(lanes) {
+                    let r = &data[(row0 + k) * COLUMNS_LOCAL..(row0 + k + 1) * COLUMNS_LOCAL];
+                    let x = [r[0], r[1], r[2], r[3], r[4], r[5], 0.0, 0.0, 1.0];
+                    if queue.push_lane(x, j + k, row0 + k) {
+                        queue.run::<S, Fused>(simd, plan, true, batch, m, w, counts, tally);
+                    }
+                }
+            }
+        }
+        self.n = 0;
+    }
+}
