@@ -47,7 +47,13 @@ fn main() {
     let (z, m) = ([0.0f32, 0.0, 1.0], [batch.material() as f32]);
     let cols =
         ColumnBatch::new([&l, &v, &z], None, &m, n, &s.materials, Path::new("c")).expect("columns");
-    let mut engine = CpuEngine::with_threads(1);
+    // As the CLI does: a VKBRDF_CPU_ISA this CPU cannot run is an error, not the best
+    // variant in its place (benches/cpu_count_check.sh skips such rows by this exit).
+    let isa = vkbrdf::cpu::Isa::from_env().unwrap_or_else(|e| {
+        eprintln!("error: {e}");
+        std::process::exit(2);
+    });
+    let mut engine = CpuEngine::with_isa(1, isa);
     let mut out = Output::default();
     for _ in 0..reps {
         if columns {

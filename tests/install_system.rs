@@ -26,6 +26,7 @@ const PACKAGES: &[&str] = &[
     "glslc",
     "python3",
     "python3-venv",
+    "valgrind",
 ];
 
 /// A fixture system: bookworm's os-release, the given apt files (path under `etc/apt`,
