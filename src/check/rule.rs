@@ -84,7 +84,7 @@ pub fn f32_sensitivity(t: &Tuple, m: &Material) -> [f64; 9] {
     s
 }
 
-/// The values of one tuple in [`COLUMNS`] order.
+/// The values of one tuple in [`COLUMNS`](super::COLUMNS) order.
 pub(super) fn columns_of(e: &reference::Evaluation) -> [f64; 9] {
     let t = e.terms();
     [

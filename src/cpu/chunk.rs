@@ -375,7 +375,7 @@ fn fill_block<T: transpose::Transpose>(
     }
 }
 
-/// One column of a [`ColumnBatch`] into lanes `base..base + 3`: a vector for every row
+/// One column of a [`ColumnBatch`](crate::batch::columns::ColumnBatch) into lanes `base..base + 3`: a vector for every row
 /// splatted, else the rows `first..first + LANES` (a whole block) or `idx`'s.
 #[inline(always)]
 fn column_lanes<T: transpose::Transpose>(

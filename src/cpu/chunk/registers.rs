@@ -83,7 +83,7 @@ impl<S: RegisterIo, const G: u8, const F: u8, const Q: bool> pulp::NullaryFnOnce
 
 /// The register path's loop over a chunk of the local form: a register of rows at a time
 /// read, evaluated (`register::ggx_local_dgk` and `ggx_local_finish`) and written, the lanes it flags sent to the
-/// reference or gathered for the f64 frame as [`run_blocks`] does with a block's.
+/// reference or gathered for the f64 frame as [`super::run_blocks`] does with a block's.
 #[inline(always)]
 fn run_registers<S: RegisterIo, const G: u8, const F: u8, const Q: bool>(
     simd: S,

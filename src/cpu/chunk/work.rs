@@ -113,6 +113,6 @@ pub(crate) struct Work<'a> {
     pub(crate) start: usize,
     /// RGB outputs, 3 a row.
     pub(crate) brdf: &'a mut [f32],
-    /// Term outputs, [`TERM_COLUMNS`] a row, when asked for.
+    /// Term outputs, [`TERM_COLUMNS`](crate::backend::TERM_COLUMNS) a row, when asked for.
     pub(crate) terms: Option<&'a mut [f32]>,
 }
