@@ -18,17 +18,17 @@ use crate::backend::TERM_COLUMNS;
 use crate::terms::d::{beckmann, blinn, charlie, gaussian, ggx};
 use crate::terms::f::{conductor, dielectric, schlick};
 use crate::terms::g::{cook_torrance, neubelt, schlick_smith, smith, smith_correlated, smith_fast};
-use crate::terms::k::LaneK;
 use crate::terms::math::MulAdd;
-use crate::terms::real::Real;
 use crate::terms::{DistributionKind, FresnelKind, Geometry};
+
+mod channels;
+mod params;
+pub use channels::OUTPUT_LIMIT;
+pub(super) use channels::{brdf_of, channels_of, dgk_of, FresnelOf};
+pub use params::Params;
 
 /// Tuples per block: 16 f32 lanes fill one AVX-512 register (two AVX2 registers).
 pub const LANES: usize = 16;
-
-/// Outputs above this go to the reference, which decides saturation (FORMULAS.md §1): an
-/// f32 result this large may be a rounded value of an exact one above `f32::MAX`.
-pub const OUTPUT_LIMIT: f32 = 1e37;
 
 // The lanes' const parameters: each family's codes, from its list (`crate::terms`).
 /// Distribution: GGX.
@@ -63,64 +63,6 @@ pub const F_SCHLICK: u8 = FresnelKind::Schlick.code();
 pub const F_DIELECTRIC: u8 = FresnelKind::Dielectric.code();
 /// Fresnel: exact conductor.
 pub const F_CONDUCTOR: u8 = FresnelKind::Conductor.code();
-
-/// The constants of one material, prepared once per batch (in f64 where the lanes use
-/// f64, then rounded once).
-#[derive(Debug, Clone, Copy, Default)]
-pub struct Params {
-    /// `d · c_diff / π` (Lambert: `c_diff / π`).
-    pub diffuse: [f32; 3],
-    /// `s · c_spec`.
-    pub spec: [f32; 3],
-    /// `m²`.
-    pub m2: f64,
-    /// `1/m²`.
-    pub inv_m2: f64,
-    /// The D normalisation: `1/(k m²)` for Beckmann, `m²/π` for GGX.
-    pub d_norm: f64,
-    /// `m²`, `1/m²` and the D normalisation rounded to f32, for the f32 frame's D.
-    pub m2_f: f32,
-    /// See `m2_f`.
-    pub inv_m2_f: f32,
-    /// m rounded to f32 (smith-fast's `a = cos/(m sin)`).
-    pub m_f: f32,
-    /// See `m2_f`.
-    pub d_norm_f: f32,
-    /// GGX's test of the local form's f32 frame (`ggx::local_frame_guard`).
-    pub ggx_local_guard: f32,
-    /// K (the convention's lane form).
-    pub k: LaneK,
-    /// Schlick's F0.
-    pub f0: [f32; 3],
-    /// Dielectric μ.
-    pub ior: [f64; 3],
-    /// Dielectric `μ² − 1`, as `(μ − 1)(μ + 1)`.
-    pub mu2m1: [f64; 3],
-    /// The conductor's constants.
-    pub conductor: conductor::LaneConstants,
-    /// Whether the caller asked for the terms (D, G, F, K): without them the lanes form
-    /// D·G·K over one division and never divide out the terms (see `finish_lane`).
-    pub terms: bool,
-    /// Whether [`microfacet_block`] leaves the lanes its f32 frame cannot serve to the
-    /// caller ([`Outputs::slow`]), which gathers them from many blocks into blocks of the
-    /// f64 frame, instead of running the f64 frame over its whole block for them.
-    pub defer_slow: bool,
-    /// Whether GGX's lanes with N = +z take the general f32 frame (`frame::frame`) rather than
-    /// the local one (`frame_local32`): what the register path's refused lanes are
-    /// gathered into (`Plan::general_frame_only`).
-    pub general_frame_only: bool,
-    /// Whether the material may take the f32 frame (see [`microfacet_block`]): m ≥
-    /// [`FAST_MIN_ROUGHNESS`] and a Fresnel term other than the dielectric (whose f64
-    /// evaluation near total internal reflection wants the f64 `c`).
-    pub fast_frame: bool,
-    /// The exponent of a `cos^e` lobe: Blinn's and the empirical models' `e`, Charlie's
-    /// `1/m`.
-    pub exponent: f32,
-    /// Schlick–Smith's k (Karis 2013: `m/2` GGX, `m √(2/π)` Beckmann).
-    pub schlick_k: f32,
-    /// Anisotropic roughness `[1/mx², 1/my², mx², my²]`.
-    pub aniso: [f64; 4],
-}
 
 /// One block's inputs as structure of arrays (f32, as read from the rows).
 #[derive(Clone, Copy)]
@@ -821,85 +763,6 @@ fn finish_lane<A: MulAdd, const F: u8, const T: bool, const M: bool>(
         }
     }
     out.rescue[k] = !fr.ok || too_large;
-}
-
-/// The BRDF's channels of a lane, or of a register of lanes (`cpu::register`), from D and
-/// G as quotients, F of each channel (asked for once a channel after D·G·K, so that a
-/// register path holds one channel's values at a time) and the cosines (FORMULAS.md
-/// §5–§6): D·G·K over one division (the divider is what a block waits on); and whether an
-/// output may be non-finite or above [`OUTPUT_LIMIT`] (the lane then goes to the
-/// reference).
-#[inline(always)]
-pub(super) fn brdf_of<A: MulAdd, T: Real>(
-    p: &Params,
-    d: (T, T),
-    g: (T, T),
-    f: impl FresnelOf<T>,
-    cos_i: T,
-    cos_o: T,
-) -> ([T; 3], T::Mask) {
-    let (dgk, size) = dgk_of(p, d, g, cos_i, cos_o);
-    channels_of::<A, T>(p, dgk, size, f)
-}
-
-/// F of a lane's (or a register's) channels, formed when [`channels_of`] asks — a trait
-/// with an inlined method rather than a closure, which LLVM left out of line on the
-/// register path (and every intrinsic in it became a call).
-pub(super) trait FresnelOf<T> {
-    /// F of channel `ch`.
-    fn channel(&self, ch: usize) -> T;
-}
-
-impl<T: Copy> FresnelOf<T> for [T; 3] {
-    #[inline(always)]
-    fn channel(&self, ch: usize) -> T {
-        self[ch]
-    }
-}
-
-/// [`brdf_of`]'s first half: D·G·K and the sum of magnitudes its test starts from.
-#[inline(always)]
-pub(super) fn dgk_of<T: Real>(p: &Params, d: (T, T), g: (T, T), cos_i: T, cos_o: T) -> (T, T) {
-    // K (FORMULAS.md §5) as a quotient. Each denominator is ≥ 1e-20 and the product of
-    // the three ≤ 1e24 on the lanes' cosines (≥ 1e-4), so the one division neither
-    // overflows nor loses the quotient to underflow.
-    let (kn, kd) = p.k.ratio(cos_i, cos_o);
-    let dgk = (d.0 * g.0 * kn) / (d.1 * g.1 * kd);
-    // One test for every output: a sum of magnitudes is NaN if any is, and above
-    // OUTPUT_LIMIT if any is (a sum that only rounds up past it sends a lane to the
-    // reference needlessly, never the other way) — 18 operations where a test a value
-    // took 45. The quotients' parts stand for the terms (each term is finite when they
-    // are), so the test, and with it the BRDF, is the same with and without terms. Every
-    // part is ≥ 0 (or NaN) on the lanes the test decides — those whose frame passed its
-    // tests, cosines ≥ GRAZING; the others go to the reference whatever it says — so the
-    // sum of the values is the sum of their magnitudes, without an `abs` a value.
-    (dgk, d.0 + d.1 + g.0 + g.1 + dgk)
-}
-
-/// [`brdf_of`]'s second half: the channels from D·G·K and F, and the test.
-#[inline(always)]
-pub(super) fn channels_of<A: MulAdd, T: Real>(
-    p: &Params,
-    dgk: T,
-    mut size: T,
-    f: impl FresnelOf<T>,
-) -> ([T; 3], T::Mask) {
-    let mut brdf = [dgk; 3];
-    for ch in 0..3 {
-        let f = f.channel(ch);
-        let b = A::mul_add(
-            dgk.splat_as(p.spec[ch]),
-            dgk * f,
-            dgk.splat_as(p.diffuse[ch]),
-        );
-        brdf[ch] = b;
-        // b and F are ≥ 0 (or NaN) on the lanes the test decides, as in `dgk_of` (F is a
-        // reflectance; Schlick's may come out −1e-35 at c a rounding above 1, which moves
-        // no test).
-        size = size + (b + f);
-    }
-    // `≤` is false for NaN: one comparison catches both.
-    (brdf, !size.le_scalar(OUTPUT_LIMIT))
 }
 
 #[cfg(test)]

@@ -4,7 +4,7 @@
 use super::work::{Source, Tally, Work};
 use crate::backend::{Counts, TERM_COLUMNS};
 use crate::cpu::dispatch::block;
-use crate::cpu::kernel::{self, Inputs, Outputs, LANES};
+use crate::cpu::kernel::{Inputs, Outputs, LANES};
 use crate::cpu::plan::Plan;
 use crate::material::Material;
 use crate::reference::{evaluate_tuple, to_output_f32, Status};
@@ -55,7 +55,7 @@ pub(super) fn lanes_of(mut bits: u32) -> impl Iterator<Item = usize> {
     })
 }
 
-/// The lanes a chunk's blocks left to the f64 frame ([`kernel::Params::defer_slow`]),
+/// The lanes a chunk's blocks left to the f64 frame ([`Params::defer_slow`](crate::cpu::kernel::Params::defer_slow)),
 /// gathered into one block: a few lanes in a hundred cost a few blocks in a hundred, where
 /// running the f64 frame over each block that had one cost a third of the blocks. Each
 /// lane's result depends on its own tuple alone, so where it is evaluated does not change
@@ -74,12 +74,6 @@ impl Deferred {
             at: [(0, 0); LANES],
             n: 0,
         }
-    }
-
-    /// Lane `k` of `inp` (output position `j`, batch row `row`); whether the block is full.
-    #[inline(always)]
-    pub(super) fn push(&mut self, inp: &Inputs, k: usize, j: usize, row: usize) -> bool {
-        self.push_lane(kernel::lane_inputs(inp, k % LANES), j, row)
     }
 
     /// A lane's L, V, N `x` (output position `j`, batch row `row`); whether the block is
@@ -145,6 +139,70 @@ pub(super) fn write_lane(out: &Outputs, k: usize, j: usize, w: &mut Work) {
     if let Some(t) = w.terms.as_deref_mut() {
         for c in 0..TERM_COLUMNS {
             t[j * TERM_COLUMNS + c] = out.terms[c][k];
+        }
+    }
+}
+
+/// Where a chunk's fast paths send the lanes they cannot serve: the f64 frame (`c` below
+/// `FAST_MIN_C`) and the general f32 frame (the local frame's certificate refused them),
+/// each a [`Deferred`] queue with its group's plan for that frame.
+pub(super) struct Elsewhere {
+    queues: [(Plan, Deferred); 2],
+}
+
+/// [`Elsewhere`]'s queue for the f64 frame.
+pub(super) const F64_FRAME: usize = 0;
+/// [`Elsewhere`]'s queue for the general f32 frame.
+pub(super) const GENERAL_FRAME: usize = 1;
+
+impl Elsewhere {
+    /// The queues of `plan`'s group.
+    pub(super) fn new(plan: &Plan) -> Elsewhere {
+        Elsewhere {
+            queues: [
+                (plan.f64_frame(), Deferred::new()),
+                (plan.general_frame_only(), Deferred::new()),
+            ],
+        }
+    }
+
+    /// A lane's L, V, N `x` (output position `j`, batch row `row`) into queue `to`
+    /// ([`F64_FRAME`] or [`GENERAL_FRAME`]), which runs when full.
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn push<S: pulp::Simd, A: MulAdd>(
+        &mut self,
+        to: usize,
+        x: [f32; 9],
+        (j, row): (usize, usize),
+        simd: S,
+        z: bool,
+        batch: Source,
+        m: &Material,
+        w: &mut Work,
+        counts: &mut Counts,
+        tally: &mut Tally,
+    ) {
+        let (plan, queue) = &mut self.queues[to];
+        if queue.push_lane(x, j, row) {
+            queue.run::<S, A>(simd, plan, z, batch, m, w, counts, tally);
+        }
+    }
+
+    /// Runs what both queues still hold (at the end of a chunk).
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn finish<S: pulp::Simd, A: MulAdd>(
+        &mut self,
+        simd: S,
+        z: bool,
+        batch: Source,
+        m: &Material,
+        w: &mut Work,
+        counts: &mut Counts,
+        tally: &mut Tally,
+    ) {
+        for (plan, queue) in &mut self.queues {
+            queue.run::<S, A>(simd, plan, z, batch, m, w, counts, tally);
         }
     }
 }

@@ -3,7 +3,7 @@
 //! it flags handled after a run of steps — sent to the reference or gathered, as
 //! [`super::run_blocks`] gathers a block's, for the f64 frame or the general f32 frame.
 
-use super::deferred::{lanes_of, rescue, Deferred};
+use super::deferred::{lanes_of, rescue, Elsewhere, F64_FRAME, GENERAL_FRAME};
 use super::work::{Source, Tally, Work};
 use crate::backend::Counts;
 use crate::batch::COLUMNS_LOCAL;
@@ -111,10 +111,7 @@ fn run_registers<S: RegisterIo, const G: u8, const F: u8, const Q: bool>(
     let mut later = Flagged {
         steps: [FlaggedStep::default(); FLAGGED_STEPS],
         n: 0,
-        plan64: plan.f64_frame(),
-        plan_general: plan.general_frame_only(),
-        deferred: Deferred::new(),
-        deferred_general: Deferred::new(),
+        elsewhere: Elsewhere::new(plan),
     };
     // The tail's rows, the last repeated (its extra lanes are computed and dropped), and
     // its outputs.
@@ -182,12 +179,7 @@ fn run_registers<S: RegisterIo, const G: u8, const F: u8, const Q: bool>(
         j += n;
     }
     later.handle::<S>(simd, batch, m, w, &mut counts, &mut tally);
-    for (queue, plan) in [
-        (&mut later.deferred, &later.plan64),
-        (&mut later.deferred_general, &later.plan_general),
-    ] {
-        queue.run::<S, Fused>(simd, plan, true, batch, m, w, &mut counts, &mut tally);
-    }
+    (later.elsewhere).finish::<S, Fused>(simd, true, batch, m, w, &mut counts, &mut tally);
     (counts, tally)
 }
 
@@ -209,10 +201,7 @@ const FLAGGED_STEPS: usize = 64;
 struct Flagged {
     steps: [FlaggedStep; FLAGGED_STEPS],
     n: usize,
-    plan64: Plan,
-    plan_general: Plan,
-    deferred: Deferred,
-    deferred_general: Deferred,
+    elsewhere: Elsewhere,
 }
 
 impl Flagged {
@@ -235,16 +224,13 @@ impl Flagged {
                 rescue(batch, m, row0 + k, j + k, w, counts);
                 tally.rescued += 1;
             }
-            for (lanes, queue, plan) in [
-                (step.slow, &mut self.deferred, &self.plan64),
-                (step.general, &mut self.deferred_general, &self.plan_general),
-            ] {
+            for (lanes, to) in [(step.slow, F64_FRAME), (step.general, GENERAL_FRAME)] {
                 for k in lanes_of(lanes) {
                     let r = &data[(row0 + k) * COLUMNS_LOCAL..(row0 + k + 1) * COLUMNS_LOCAL];
                     let x = [r[0], r[1], r[2], r[3], r[4], r[5], 0.0, 0.0, 1.0];
-                    if queue.push_lane(x, j + k, row0 + k) {
-                        queue.run::<S, Fused>(simd, plan, true, batch, m, w, counts, tally);
-                    }
+                    let at = (j + k, row0 + k);
+                    let e = &mut self.elsewhere;
+                    e.push::<S, Fused>(to, x, at, simd, true, batch, m, w, counts, tally);
                 }
             }
         }
