@@ -1,4 +1,4 @@
-//! The CPU engine's register path (`cpu::register`: the local form's GGX groups on AVX2,
+//! The CPU engine's register path (`cpu::register`: the local form's GGX and Beckmann groups on AVX2,
 //! two registers of tuples at a time) against the lane loops it stands in for: the same
 //! outputs bit for bit and the same counts, for every group it serves, on the tuples where
 //! each term is hardest — D's steepest slope at every c down to the f32 frame's threshold,
@@ -28,8 +28,10 @@ fn polar(theta: f64, phi: f64) -> [f64; 3] {
 /// The local rows (`Lx Ly Lz Vx Vy Vz`) of the hard tuples for roughness `m`.
 fn hard_rows(m: f64) -> Vec<f32> {
     let mut pairs: Vec<([f64; 3], [f64; 3])> = Vec::new();
-    // D steepest in h (tan θ_h = m/2, m, 2m), c from 0.05 (below FAST_MIN_C) to 1.
+    // D steepest in h (GGX: tan θ_h = m/2, m, 2m; Beckmann: out to its exp's cut-off),
+    // c from 0.05 (below FAST_MIN_C) to 1.
     pairs.extend(common::steepest::ggx_pairs(m, 0.05));
+    pairs.extend(common::steepest::beckmann_pairs(m, 0.05));
     // The specular peak: v the mirror of l turned by a fraction of m, at every elevation.
     for th in [0.0f64, 0.01, 0.3, 0.8, 1.2, 1.5, 1.565] {
         for d in [0.0f64, 1e-4, 0.02 * m, 0.3 * m, m] {
@@ -109,13 +111,23 @@ fn as_rows(local: &[f32]) -> Batch<'static> {
     Batch::new(rows, 10, 1, &memory_source()).expect("rows")
 }
 
-/// GGX with every geometry and Fresnel term the register path serves (and a conductor it
-/// does not: small n and k, which the metal form's rule refuses), each convention, at
-/// roughness `m`.
+/// GGX and Beckmann with every geometry and Fresnel term the register path serves (and
+/// some it does not: a conductor with small n and k, which the metal form's rule refuses;
+/// Beckmann's Smith forms), each convention, at roughness `m`.
 fn materials(m: f64) -> Vec<(Material, bool)> {
     let mut out = Vec::new();
-    for g in ["none", "cook-torrance", "smith", "smith-correlated"] {
-        for (f, served) in [
+    let groups = [
+        ("ggx", "none", true),
+        ("ggx", "cook-torrance", true),
+        ("ggx", "smith", true),
+        ("ggx", "smith-correlated", true),
+        ("beckmann", "none", true),
+        ("beckmann", "cook-torrance", true),
+        ("beckmann", "smith-fast", true),
+        ("beckmann", "smith", false),
+    ];
+    for (d, g, g_served) in groups {
+        for (f, f_served) in [
             ("fresnel = \"none\"", true),
             ("fresnel = \"schlick\"\nf0 = [0.04, 0.5, 0.95]", true),
             (
@@ -130,11 +142,11 @@ fn materials(m: f64) -> Vec<(Material, bool)> {
             for conv in ["modern", "seed", "cook-torrance-1982"] {
                 let toml = format!(
                     "[[material]]\nname = \"m\"\nmodel = \"cook-torrance\"\n\
-                     distribution = \"ggx\"\ngeometry = \"{g}\"\n{f}\nroughness = {m}\n\
+                     distribution = \"{d}\"\ngeometry = \"{g}\"\n{f}\nroughness = {m}\n\
                      convention = \"{conv}\"\ndiffuse_weight = 0.3\nspecular_weight = 0.9\n"
                 );
                 let mut mats = parse_materials(&toml, "test").expect("material");
-                out.push((mats.remove(0), served));
+                out.push((mats.remove(0), g_served && f_served));
             }
         }
     }
@@ -162,7 +174,7 @@ fn the_register_path_gives_the_lane_loops_bits_on_every_group_it_serves() {
                     engine
                         .evaluate_local_into(&lb, &mats, &request, &mut got)
                         .expect("local");
-                    let what = format!("{} m = {m}, {isa}, terms {terms}", mats[0].name);
+                    let what = format!("{:?} m = {m}, {isa}, terms {terms}", mats[0]);
                     assert_eq!(got.counts, want.counts, "{what}");
                     for (i, (a, b)) in got.brdf.iter().zip(&want.brdf).enumerate() {
                         assert_eq!(a.to_bits(), b.to_bits(), "{what}: row {}", i / 3);

@@ -10,7 +10,7 @@
 pub const GRAZING: f64 = 1e-4;
 
 use crate::terms::math::MulAdd;
-use crate::terms::real::Real;
+use crate::terms::real::{Real, Wide};
 
 /// The frame of one lane (FORMULAS.md §1), or of a register of lanes
 /// (`cpu::register`), and whether the lanes may take it.
@@ -40,12 +40,6 @@ pub(super) fn length2_ok<T: Real>(q: T) -> T::Mask {
     q.ge_scalar(LENGTH2_MIN) & q.le_scalar(LENGTH2_MAX)
 }
 
-/// [`length2_ok`] of a squared length formed in f64 (false for NaN).
-#[inline(always)]
-fn length2_ok64(q: f64) -> bool {
-    (f64::from(LENGTH2_MIN)..=f64::from(LENGTH2_MAX)).contains(&q)
-}
-
 /// `1/√x`, correctly rounded square root then division: within 1 ulp, and exactly 1 for
 /// x = 1 (the local form's N must come out exactly (0, 0, 1), see [`frame`]).
 #[inline(always)]
@@ -73,19 +67,22 @@ pub(super) fn rsqrt<T: Real>(x: T) -> T {
 /// the unrounded l, v and l + v), never `1 − cos²`.
 #[inline(always)]
 pub(super) fn frame<A: MulAdd, const Z: bool>(x: &[f32; 9]) -> Frame {
+    if Z {
+        return frame_local64::<A, f32>([x[0], x[1], x[2]], [x[3], x[4], x[5]]);
+    }
     // l, v and h in f64, each rounded once to f32 (see the bound above): |L|² and |V|²
     // are exact in f64 (squares of f32 values), 1/|x| by `rsqrt64_fast` (~1e-14 relative).
     let w = |i: usize| f64::from(x[i]);
-    // `a·b + c` as the instruction set forms it (`A`); the N = +z forms below keep the
-    // general ones' order, so that both give the same bits.
+    // `a·b + c` as the instruction set forms it (`A`); [`frame_local64`], the N = +z form,
+    // keeps the general one's order, so that both give the same bits.
     let sq3 = |a: [f64; 3]| A::mul_add64(a[2], a[2], A::mul_add64(a[0], a[0], a[1] * a[1]));
     let (l64, v64) = ([w(0), w(1), w(2)], [w(3), w(4), w(5)]);
     let (ll, vv) = (sq3(l64), sq3(v64));
-    let (il, iv) = (rsqrt64_fast::<A>(ll), rsqrt64_fast::<A>(vv));
+    let (il, iv) = (rsqrt64_fast::<A, f64>(ll), rsqrt64_fast::<A, f64>(vv));
     let (l64, v64) = (l64.map(|q| q * il), v64.map(|q| q * iv));
     let h64: [f64; 3] = std::array::from_fn(|j| l64[j] + v64[j]);
     let hh = sq3(h64);
-    let ih = rsqrt64_fast::<A>(hh);
+    let ih = rsqrt64_fast::<A, f64>(hh);
     let c = (0.5 * (hh * ih)) as f32;
     let [lx, ly, lz] = l64.map(|q| q as f32);
     let [vx, vy, vz] = v64.map(|q| q as f32);
@@ -94,62 +91,49 @@ pub(super) fn frame<A: MulAdd, const Z: bool>(x: &[f32; 9]) -> Frame {
     // error, a few u, enters F no more than c's.)
     let (dx, dy, dz) = (lx - vx, ly - vy, lz - vz);
     let s2 = 0.25 * (dx * dx + dy * dy + dz * dz);
-    let hz = (h64[2] * ih) as f32;
-    let (cos_i, cos_o, cos_h, sin2_h, sin2_i, sin2_o, n_ok);
-    if Z {
-        // N = (0, 0, 1): |N|² = 1, `rsqrt(1)` = 1, each `n · w` is `0·wx + 0·wy + 1·wz =
-        // wz` (a zero's sign aside, and a zero cosine is rescued either way) and each
-        // `|n × w|²` is `(−wy)² + wx² + 0 = wy·wy + wx·wx`.
-        (cos_i, cos_o, cos_h) = (lz, vz, hz);
-        let side2 = |a: [f64; 3]| A::mul_add64(a[1], a[1], a[0] * a[0]);
-        sin2_h = (side2(h64) * (ih * ih)) as f32;
-        sin2_i = side2(l64) as f32;
-        sin2_o = side2(v64) as f32;
-        n_ok = true;
-    } else {
-        let (nx, ny, nz) = (x[6], x[7], x[8]);
-        let nn = nx * nx + ny * ny + nz * nz;
-        let inn = rsqrt(nn);
-        // n · l and n · v from the raw inputs in f64 (the products are exact there): an
-        // f32 dot product of unit vectors has an absolute error of ~2 ulp, which a grazing
-        // cosine turns into a relative error of K of 1e-3; this one is a few ulp relative
-        // at any angle. (N · L)/|L| is rounded once, then scaled by 1/|N|: with N = (0, 0, 1)
-        // the dot product is Lz exactly and `inn` is 1, so these are the local form's `lz`
-        // and `vz`.
-        let raw_dot =
-            |a: usize| A::mul_add64(w(8), w(a + 2), A::mul_add64(w(6), w(a), w(7) * w(a + 1)));
-        let (nl, nv) = (raw_dot(0) * il, raw_dot(3) * iv);
-        cos_i = nl as f32 * inn;
-        cos_o = nv as f32 * inn;
-        // n · h = (n · l + n · v)/|l + v|: a sum of two cosines, which above the horizon
-        // does not cancel; with N = (0, 0, 1) it is the local form's `hz`.
-        cos_h = ((nl + nv) * ih) as f32 * inn;
-        // |N × w|² in f64 from the raw N and the f64 w (before w's rounding), scaled by
-        // 1/|N|² as the cosines are: near n (h at the peak, l or v near the normal) an f32
-        // cross product of unit vectors keeps only an absolute error of ~u, a relative
-        // error of u/sin θ that G's and D's 1/sin-like factors pass on whole. With
-        // N = (0, 0, 1) these are the local form's sums (the third term is +0 and `inn`
-        // is 1).
-        let n64 = [w(6), w(7), w(8)];
-        let cross2 = |a: [f64; 3]| {
-            let c = [
-                A::mul_add64(n64[1], a[2], -(n64[2] * a[1])),
-                A::mul_add64(n64[2], a[0], -(n64[0] * a[2])),
-                A::mul_add64(n64[0], a[1], -(n64[1] * a[0])),
-            ];
-            sq3(c)
-        };
-        let i2 = inn * inn;
-        sin2_h = (cross2(h64) * (ih * ih)) as f32 * i2;
-        sin2_i = cross2(l64) as f32 * i2;
-        sin2_o = cross2(v64) as f32 * i2;
-        n_ok = length2_ok(nn);
-    }
+    let (nx, ny, nz) = (x[6], x[7], x[8]);
+    let nn = nx * nx + ny * ny + nz * nz;
+    let inn = rsqrt(nn);
+    // n · l and n · v from the raw inputs in f64 (the products are exact there): an
+    // f32 dot product of unit vectors has an absolute error of ~2 ulp, which a grazing
+    // cosine turns into a relative error of K of 1e-3; this one is a few ulp relative
+    // at any angle. (N · L)/|L| is rounded once, then scaled by 1/|N|: with N = (0, 0, 1)
+    // the dot product is Lz exactly and `inn` is 1, so these are the local form's `lz`
+    // and `vz`.
+    let raw_dot =
+        |a: usize| A::mul_add64(w(8), w(a + 2), A::mul_add64(w(6), w(a), w(7) * w(a + 1)));
+    let (nl, nv) = (raw_dot(0) * il, raw_dot(3) * iv);
+    let cos_i = nl as f32 * inn;
+    let cos_o = nv as f32 * inn;
+    // n · h = (n · l + n · v)/|l + v|: a sum of two cosines, which above the horizon
+    // does not cancel; with N = (0, 0, 1) it is the local form's `hz`.
+    let cos_h = ((nl + nv) * ih) as f32 * inn;
+    // |N × w|² in f64 from the raw N and the f64 w (before w's rounding), scaled by
+    // 1/|N|² as the cosines are: near n (h at the peak, l or v near the normal) an f32
+    // cross product of unit vectors keeps only an absolute error of ~u, a relative
+    // error of u/sin θ that G's and D's 1/sin-like factors pass on whole. With
+    // N = (0, 0, 1) these are the local form's sums (the third term is +0 and `inn`
+    // is 1).
+    let n64 = [w(6), w(7), w(8)];
+    let cross2 = |a: [f64; 3]| {
+        let c = [
+            A::mul_add64(n64[1], a[2], -(n64[2] * a[1])),
+            A::mul_add64(n64[2], a[0], -(n64[0] * a[2])),
+            A::mul_add64(n64[0], a[1], -(n64[1] * a[0])),
+        ];
+        sq3(c)
+    };
+    let i2 = inn * inn;
+    let sin2_h = (cross2(h64) * (ih * ih)) as f32 * i2;
+    let sin2_i = cross2(l64) as f32 * i2;
+    let sin2_o = cross2(v64) as f32 * i2;
     let g = GRAZING as f32;
     // `>=` is false for NaN: lanes that went non-finite above are rescued too.
-    let ok = length2_ok64(ll)
-        && length2_ok64(vv)
-        && n_ok
+    // The squared lengths' test on their f32 roundings (which `rsqrt64_fast` forms): the
+    // same as in f64 but for a length that rounds onto a limit, which either side serves.
+    let ok = length2_ok(ll as f32)
+        && length2_ok(vv as f32)
+        && length2_ok(nn)
         && cos_i >= g
         && cos_o >= g
         && cos_h >= g
@@ -165,6 +149,113 @@ pub(super) fn frame<A: MulAdd, const Z: bool>(x: &[f32; 9]) -> Frame {
         sin2_o,
         ok,
     }
+}
+
+/// [`frame`] with N = (0, 0, 1) (the local form), in one lane or a register of lanes
+/// ([`FrameLanes`]): each `n · w` is `0·wx + 0·wy + 1·wz = wz` (a zero's sign aside, and a
+/// zero cosine is rescued either way), each `|n × w|²` is `(−wy)² + wx² + 0 = wy·wy + wx·wx`,
+/// `|N|² = 1` and its `rsqrt` 1 — the same operations on the same values as the general
+/// frame with that N, so both give the same bits, and so does a register of lanes
+/// (`cpu::register`). Its bound is the general frame's: h turns by its components' last
+/// rounding only.
+#[inline(always)]
+pub(super) fn frame_local64<A: MulAdd, T: FrameLanes>(l: [T; 3], v: [T; 3]) -> Frame<T> {
+    let w = T::wide_parts::<A>(l, v);
+    let ([lx, ly, lz], [vx, vy, vz]) = (w.l, w.v);
+    // sin² of c from |l − v|/2 = sin θ_d, as in [`frame`].
+    let (dx, dy, dz) = (lx - vx, ly - vy, lz - vz);
+    let s2 = (dx * dx + dy * dy + dz * dz) * 0.25;
+    let g = GRAZING as f32;
+    // `≥` is false for NaN: lanes that went non-finite above are rescued too.
+    let ok =
+        w.lengths_ok & lz.ge_scalar(g) & vz.ge_scalar(g) & w.cos_h.ge_scalar(g) & w.c.ge_scalar(g);
+    Frame {
+        cos_i: lz,
+        cos_o: vz,
+        cos_h: w.cos_h,
+        c: w.c,
+        s2,
+        sin2_h: w.sin2_h,
+        sin2_i: w.sin2_i,
+        sin2_o: w.sin2_o,
+        ok,
+    }
+}
+
+/// What [`frame_local64`] forms in f64 ([`wide_parts`]), each value rounded once to f32.
+#[derive(Clone, Copy)]
+pub(super) struct WideParts<T: Real> {
+    /// l = L/|L|.
+    pub(super) l: [T; 3],
+    /// v = V/|V|.
+    pub(super) v: [T; 3],
+    pub(super) sin2_i: T,
+    pub(super) sin2_o: T,
+    pub(super) c: T,
+    pub(super) cos_h: T,
+    pub(super) sin2_h: T,
+    /// `|L|²` and `|V|²` (rounded to f32) inside [`LENGTH2_MIN`, `LENGTH2_MAX`].
+    pub(super) lengths_ok: T::Mask,
+}
+
+/// Lanes whose [`frame_local64`] can be formed: one f32 (its f64 part in one f64), or a
+/// register (`cpu::register`, its f64 part half a register at a time).
+pub(super) trait FrameLanes: Real {
+    /// [`wide_parts`] of these lanes.
+    fn wide_parts<A: MulAdd>(l: [Self; 3], v: [Self; 3]) -> WideParts<Self>;
+}
+
+impl FrameLanes for f32 {
+    #[inline(always)]
+    fn wide_parts<A: MulAdd>(l: [f32; 3], v: [f32; 3]) -> WideParts<f32> {
+        let (l, v) = (l.map(f64::from), v.map(f64::from));
+        wide_parts::<A, f64>(l, v)
+    }
+}
+
+/// The f64 part of [`frame_local64`] from L and V in f64 lanes: l, v and h = l + v
+/// unrounded, each scale `1/|x|` by [`rsqrt64_fast`], every result rounded once. Each
+/// vector's values as soon as they can be made, so that a register path holds few f64
+/// registers at once (the lanes' bits do not depend on the order); no closure or `map`,
+/// which the register path left out of line (its intrinsics then calls).
+#[inline(always)]
+pub(super) fn wide_parts<A: MulAdd, W: Wide>(l: [W; 3], v: [W; 3]) -> WideParts<W::Narrow> {
+    let ll = sq3_wide::<A, W>(l);
+    let il = rsqrt64_fast::<A, W>(ll);
+    let l = [l[0] * il, l[1] * il, l[2] * il];
+    let (lx, ly, lz) = (l[0].narrow(), l[1].narrow(), l[2].narrow());
+    let sin2_i = side2_wide::<A, W>(l).narrow();
+    let vv = sq3_wide::<A, W>(v);
+    let iv = rsqrt64_fast::<A, W>(vv);
+    let v = [v[0] * iv, v[1] * iv, v[2] * iv];
+    let (vx, vy, vz) = (v[0].narrow(), v[1].narrow(), v[2].narrow());
+    let sin2_o = side2_wide::<A, W>(v).narrow();
+    let h = [l[0] + v[0], l[1] + v[1], l[2] + v[2]];
+    let hh = sq3_wide::<A, W>(h);
+    let ih = rsqrt64_fast::<A, W>(hh);
+    WideParts {
+        l: [lx, ly, lz],
+        v: [vx, vy, vz],
+        sin2_i,
+        sin2_o,
+        c: (hh * ih * 0.5).narrow(),
+        cos_h: (h[2] * ih).narrow(),
+        sin2_h: (side2_wide::<A, W>(h) * (ih * ih)).narrow(),
+        // On the f32 roundings, as [`frame`] tests them.
+        lengths_ok: length2_ok(ll.narrow()) & length2_ok(vv.narrow()),
+    }
+}
+
+/// `|a|²` of f64 lanes in [`frame`]'s order: `a₂² + (a₀² + a₁²)`.
+#[inline(always)]
+fn sq3_wide<A: MulAdd, W: Wide>(a: [W; 3]) -> W {
+    A::mul_add_wide(a[2], a[2], A::mul_add_wide(a[0], a[0], a[1] * a[1]))
+}
+
+/// `a₀² + a₁²` of f64 lanes in [`frame`]'s order for N = +z: `|n × a|²`.
+#[inline(always)]
+fn side2_wide<A: MulAdd, W: Wide>(a: [W; 3]) -> W {
+    A::mul_add_wide(a[1], a[1], a[0] * a[0])
 }
 
 /// The local form's frame (N = +z) in f32 alone, for the GGX lanes whose D
@@ -260,9 +351,10 @@ pub(super) fn rsqrt64(x: f64) -> f64 {
 /// f32 and needs only that l and v be scaled alike to far better than u = 6e-8 (see
 /// [`frame`]). Outside f32's range the result is 0, ∞ or NaN and the frame's tests fail.
 #[inline(always)]
-fn rsqrt64_fast<A: MulAdd>(x: f64) -> f64 {
-    let y0 = f64::from(1.0 / (x as f32).sqrt());
-    y0 * A::mul_add64(-0.5 * x * y0, y0, 1.5)
+fn rsqrt64_fast<A: MulAdd, W: Wide>(x: W) -> W {
+    let xf = x.narrow();
+    let y0 = x.widen_like(xf.splat_as(1.0) / xf.sqrt());
+    y0 * A::mul_add_wide(x * -0.5 * y0, y0, y0.splat_as(1.5))
 }
 
 /// One lane's L, V, N in f64 with their squared lengths, and whether all three are lengths

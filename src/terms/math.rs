@@ -3,7 +3,7 @@
 //! f64), written so that a loop over lanes vectorises — no calls into libm, no
 //! data-dependent branches; and the f64 power of a cosine the `cos^e` lobes share.
 
-use super::real::Real;
+use super::real::{Real, Wide};
 
 /// How the lanes form `a·b + c`: [`Fused`] with one rounding where their instruction set
 /// has a fused multiply–add, [`Rounded`] with two where it has none (`f32::mul_add` is a
@@ -14,6 +14,8 @@ pub trait MulAdd {
     fn mul_add<T: Real>(a: T, b: T, c: T) -> T;
     /// `a·b + c` in f64.
     fn mul_add64(a: f64, b: f64, c: f64) -> f64;
+    /// `a·b + c` in f64 lanes ([`Wide`]).
+    fn mul_add_wide<W: Wide>(a: W, b: W, c: W) -> W;
 }
 
 /// `a·b + c` rounded once (FMA): the AVX2+FMA and AVX-512 lanes'.
@@ -32,6 +34,11 @@ impl MulAdd for Fused {
     fn mul_add64(a: f64, b: f64, c: f64) -> f64 {
         a.mul_add(b, c)
     }
+
+    #[inline(always)]
+    fn mul_add_wide<W: Wide>(a: W, b: W, c: W) -> W {
+        a.fused_mul_add(b, c)
+    }
 }
 
 impl MulAdd for Rounded {
@@ -42,6 +49,11 @@ impl MulAdd for Rounded {
 
     #[inline(always)]
     fn mul_add64(a: f64, b: f64, c: f64) -> f64 {
+        a * b + c
+    }
+
+    #[inline(always)]
+    fn mul_add_wide<W: Wide>(a: W, b: W, c: W) -> W {
         a * b + c
     }
 }
@@ -80,28 +92,30 @@ const ROUND_MAGIC: f32 = 12_582_912.0;
 /// result is 0: 2^k would leave the normal range there, and the bit pattern would not be
 /// a power of two.
 #[inline(always)]
-pub fn exp_neg(x: f32) -> f32 {
-    let xc = if x < -87.0 { -87.0 } else { x };
+pub fn exp_neg<T: Real>(x: T) -> T {
+    let below = x.lt_scalar(-87.0);
+    let xc = T::select(below, x.splat_as(-87.0), x);
     // k = round(x log₂e) in the low bits of `t` (ROUND_MAGIC's ulp is 1), taken from them
     // as an integer: `k as i32` on the float is a saturating cast, which LLVM does not
     // vectorise (it made every lane of a block a scalar conversion and compare, a third of
-    // Beckmann's block).
+    // Beckmann's block). 2^k's bits are `(k + 127) << 23`, i.e. `t`'s bits shifted, plus
+    // `(127 − ROUND_MAGIC's bits) << 23`, wrapping.
     let t = xc * std::f32::consts::LOG2_E + ROUND_MAGIC;
     let k = t - ROUND_MAGIC;
-    let ki = t.to_bits() as i32 - ROUND_MAGIC.to_bits() as i32;
     let r = (xc - k * LN2_HI) - k * LN2_LO;
-    let p = 1.0
-        + r * (1.0
-            + r * (1.0 / 2.0
-                + r * (1.0 / 6.0
-                    + r * (1.0 / 24.0
-                        + r * (1.0 / 120.0 + r * (1.0 / 720.0 + r * (1.0 / 5040.0)))))));
-    let scale = f32::from_bits(((ki + 127) as u32) << 23);
-    if x < -87.0 {
-        0.0
-    } else {
-        p * scale
-    }
+    // Estrin's scheme: the same polynomial at depth 4 instead of Horner's 7, so that a
+    // register path, which has few lanes in flight, does not wait on one long chain.
+    let r2 = r * r;
+    let r4 = r2 * r2;
+    let (p01, p23) = (r + 1.0, r * (1.0 / 6.0) + 1.0 / 2.0);
+    let (p45, p67) = (
+        r * (1.0 / 120.0) + 1.0 / 24.0,
+        r * (1.0 / 5040.0) + 1.0 / 720.0,
+    );
+    let p = (p23 * r2 + p01) + (p67 * r2 + p45) * r4;
+    const BIAS: u32 = 127u32.wrapping_sub(ROUND_MAGIC.to_bits()) << 23;
+    let scale = t.exponent_bits(BIAS);
+    T::select(below, x.splat_as(0.0), p * scale)
 }
 
 /// erfc(z) for z ≥ 0 (Numerical Recipes' `erfcc`, a Chebyshev fit with fractional error

@@ -45,6 +45,10 @@ pub trait Real:
     fn le(self, o: Self) -> Self::Mask;
     /// `a` where `m`, else `b`.
     fn select(m: Self::Mask, a: Self, b: Self) -> Self;
+    /// The lanes' bits shifted left by 23 (into an f32's exponent field) plus `bias`,
+    /// wrapping, as f32s: `exp`'s scaling by 2^k from the bits of `k + 1.5·2^23`
+    /// (`math::exp_neg`).
+    fn exponent_bits(self, bias: u32) -> Self;
 
     /// `self ≥ x` for a scalar `x` (false for NaN).
     #[inline(always)]
@@ -105,5 +109,53 @@ impl Real for f32 {
     fn select(m: bool, a: f32, b: f32) -> f32 {
         let keep = u32::from(m).wrapping_neg();
         f32::from_bits((a.to_bits() & keep) | (b.to_bits() & !keep))
+    }
+
+    #[inline(always)]
+    fn exponent_bits(self, bias: u32) -> f32 {
+        f32::from_bits((self.to_bits() << 23).wrapping_add(bias))
+    }
+}
+
+/// f64 lanes beside f32 lanes ([`Wide::Narrow`]), with the operations the f32 frame's
+/// f64 part uses (`cpu::frame`), each the IEEE operation lane by lane: one f64 beside one
+/// f32 (the lane loops), a register of four f64 beside half of AVX2's register of eight
+/// f32 (the register path, `cpu::register`).
+pub trait Wide:
+    Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self> + Mul<f64, Output = Self>
+{
+    /// The f32 lanes these stand beside.
+    type Narrow: Real;
+    /// `self · b + c` rounded once.
+    fn fused_mul_add(self, b: Self, c: Self) -> Self;
+    /// `x` in every lane, as a value of `self`'s kind.
+    fn splat_as(self, x: f64) -> Self;
+    /// Each lane rounded to the nearest f32 (as `x as f32`).
+    fn narrow(self) -> Self::Narrow;
+    /// The lanes of `x` that `self`'s stand beside, exactly in f64.
+    fn widen_like(self, x: Self::Narrow) -> Self;
+}
+
+impl Wide for f64 {
+    type Narrow = f32;
+
+    #[inline(always)]
+    fn fused_mul_add(self, b: f64, c: f64) -> f64 {
+        f64::mul_add(self, b, c)
+    }
+
+    #[inline(always)]
+    fn splat_as(self, x: f64) -> f64 {
+        x
+    }
+
+    #[inline(always)]
+    fn narrow(self) -> f32 {
+        self as f32
+    }
+
+    #[inline(always)]
+    fn widen_like(self, x: f32) -> f64 {
+        f64::from(x)
     }
 }

@@ -1,13 +1,26 @@
 //! Tuples where GGX's D is steepest in h, for the tests of the f32 local frames (the CPU
 //! engine's `frame_local32`, the kernel's `frame_scalars_local32`): their error is D's
-//! slope times the frame's turn of h, largest at tan θ_h = m and small c.
+//! slope times the frame's turn of h, largest at tan θ_h = m and small c; and where
+//! Beckmann's is, in its tails.
 
 /// Unit `(l, v)` pairs about N = +z whose half vector sits at tan θ_h = m/2, m and 2m
 /// (three azimuths each), with c = l·h from `c_min` to 1 in 40 steps and three planes of
 /// l − v each; pairs with a cosine below 1e-3 are left out.
 pub fn ggx_pairs(m: f64, c_min: f64) -> Vec<([f64; 3], [f64; 3])> {
+    pairs_at(&[0.5 * m, m, 2.0 * m], c_min)
+}
+
+/// [`ggx_pairs`] for Beckmann, whose D's slope `2 tan θ_h (1/(m² cos² θ_h) − 2)` grows
+/// without bound: h at tan θ_h = m, 3m and 9m, and either side of tan²θ_h/m² = 174 (13.19m),
+/// where the lanes' `exp(−x/2)` reaches its cut-off at −87 and D goes to 0.
+pub fn beckmann_pairs(m: f64, c_min: f64) -> Vec<([f64; 3], [f64; 3])> {
+    pairs_at(&[m, 3.0 * m, 9.0 * m, 13.18 * m, 13.2 * m], c_min)
+}
+
+/// The pairs of [`ggx_pairs`] with h at each of `tans` (tan θ_h).
+fn pairs_at(tans: &[f64], c_min: f64) -> Vec<([f64; 3], [f64; 3])> {
     let mut pairs = Vec::new();
-    for t in [0.5 * m, m, 2.0 * m] {
+    for &t in tans {
         let th = t.atan();
         for phi in [0.3f64, 1.9, 4.0] {
             let h = [th.sin() * phi.cos(), th.sin() * phi.sin(), th.cos()];

@@ -26,28 +26,32 @@ impl RegisterOp for LocalRegisters<'_, '_> {
 
     #[inline(always)]
     fn run<S: RegisterIo>(self, simd: S) -> (Counts, Tally) {
-        use crate::terms::{FresnelKind as F, Geometry as G};
-        use kernel::{F_CONDUCTOR, F_NONE, F_SCHLICK, G_CT, G_NONE, G_SMITH, G_SMITH_CORRELATED};
-        let Plan::Microfacet { g, f, p, .. } = self.plan else {
+        use crate::terms::{DistributionKind as D, FresnelKind as F, Geometry as G};
+        use kernel::{D_BECKMANN, D_GGX, F_CONDUCTOR, F_NONE, F_SCHLICK};
+        use kernel::{G_CT, G_NONE, G_SMITH, G_SMITH_CORRELATED, G_SMITH_FAST};
+        let Plan::Microfacet { d, g, f, p, .. } = self.plan else {
             unreachable!("the register path serves microfacet groups (`register::serves`)")
         };
         // A conductor whose every channel has Re η² < 0 skips the metal form's selects.
         let quotient = p.conductor.metal_quotient;
         macro_rules! by_f {
-            ($g:expr) => {
+            ($d:expr, $g:expr) => {
                 match f {
-                    F::None => registers_apart::<S, $g, F_NONE, false>(simd, self),
-                    F::Schlick => registers_apart::<S, $g, F_SCHLICK, false>(simd, self),
-                    _ if quotient => registers_apart::<S, $g, F_CONDUCTOR, true>(simd, self),
-                    _ => registers_apart::<S, $g, F_CONDUCTOR, false>(simd, self),
+                    F::None => registers_apart::<S, $d, $g, F_NONE, false>(simd, self),
+                    F::Schlick => registers_apart::<S, $d, $g, F_SCHLICK, false>(simd, self),
+                    _ if quotient => registers_apart::<S, $d, $g, F_CONDUCTOR, true>(simd, self),
+                    _ => registers_apart::<S, $d, $g, F_CONDUCTOR, false>(simd, self),
                 }
             };
         }
-        match g {
-            G::None => by_f!(G_NONE),
-            G::CookTorrance => by_f!(G_CT),
-            G::Smith => by_f!(G_SMITH),
-            _ => by_f!(G_SMITH_CORRELATED),
+        match (d, g) {
+            (D::Beckmann, G::None) => by_f!(D_BECKMANN, G_NONE),
+            (D::Beckmann, G::CookTorrance) => by_f!(D_BECKMANN, G_CT),
+            (D::Beckmann, _) => by_f!(D_BECKMANN, G_SMITH_FAST),
+            (_, G::None) => by_f!(D_GGX, G_NONE),
+            (_, G::CookTorrance) => by_f!(D_GGX, G_CT),
+            (_, G::Smith) => by_f!(D_GGX, G_SMITH),
+            _ => by_f!(D_GGX, G_SMITH_CORRELATED),
         }
     }
 }
@@ -55,37 +59,38 @@ impl RegisterOp for LocalRegisters<'_, '_> {
 /// [`run_registers`] as a function of its own compiled for `simd` (as each group's lanes
 /// are, `dispatch::apart`).
 #[inline(never)]
-fn registers_apart<S: RegisterIo, const G: u8, const F: u8, const Q: bool>(
+fn registers_apart<S: RegisterIo, const D: u8, const G: u8, const F: u8, const Q: bool>(
     simd: S,
     op: LocalRegisters,
 ) -> (Counts, Tally) {
-    simd.vectorize(RegistersFn::<S, G, F, Q> { simd, op })
+    simd.vectorize(RegistersFn::<S, D, G, F, Q> { simd, op })
 }
 
 /// [`run_registers`] as pulp calls it inside the instruction set's features (a struct,
 /// not a closure: LLVM left the closure out of line, and with it every intrinsic became a
 /// call).
-struct RegistersFn<'a, 'b, S, const G: u8, const F: u8, const Q: bool> {
+struct RegistersFn<'a, 'b, S, const D: u8, const G: u8, const F: u8, const Q: bool> {
     simd: S,
     op: LocalRegisters<'a, 'b>,
 }
 
-impl<S: RegisterIo, const G: u8, const F: u8, const Q: bool> pulp::NullaryFnOnce
-    for RegistersFn<'_, '_, S, G, F, Q>
+impl<S: RegisterIo, const D: u8, const G: u8, const F: u8, const Q: bool> pulp::NullaryFnOnce
+    for RegistersFn<'_, '_, S, D, G, F, Q>
 {
     type Output = (Counts, Tally);
 
     #[inline(always)]
     fn call(self) -> (Counts, Tally) {
-        run_registers::<S, G, F, Q>(self.simd, self.op)
+        run_registers::<S, D, G, F, Q>(self.simd, self.op)
     }
 }
 
 /// The register path's loop over a chunk of the local form: a register of rows at a time
-/// read, evaluated (`register::ggx_local_dgk` and `ggx_local_finish`) and written, the lanes it flags sent to the
-/// reference or gathered for the f64 frame as [`super::run_blocks`] does with a block's.
+/// read, evaluated (`register::ggx_local_dgk` or `beckmann_local_dgk` by `D`, then
+/// `local_finish`) and written, the lanes it flags sent to the reference or gathered for
+/// the f64 frame as [`super::run_blocks`] does with a block's.
 #[inline(always)]
-fn run_registers<S: RegisterIo, const G: u8, const F: u8, const Q: bool>(
+fn run_registers<S: RegisterIo, const D: u8, const G: u8, const F: u8, const Q: bool>(
     simd: S,
     op: LocalRegisters,
 ) -> (Counts, Tally) {
@@ -138,12 +143,12 @@ fn run_registers<S: RegisterIo, const G: u8, const F: u8, const Q: bool>(
         let (la, va) = ([r(ax), r(ay), r(az)], [r(au), r(av), r(aw)]);
         let (lb, vb) = ([r(bx), r(by), r(bz)], [r(bu), r(bv), r(bw)]);
         // Each register's flags leave its registers as bits after the first stage.
-        let sa = register::ggx_local_dgk::<_, G, F>(p, la, va);
+        let sa = register::local_dgk::<_, D, G, F>(p, la, va);
         let fa = sa.flags();
-        let sb = register::ggx_local_dgk::<_, G, F>(p, lb, vb);
+        let sb = register::local_dgk::<_, D, G, F>(p, lb, vb);
         let fb = sb.flags();
-        let ([ra, ga, ba], bad_a) = register::ggx_local_finish::<_, F, Q>(p, sa);
-        let ([rb, gb, bb], bad_b) = register::ggx_local_finish::<_, F, Q>(p, sb);
+        let ([ra, ga, ba], bad_a) = register::local_finish::<_, F, Q>(p, sa);
+        let ([rb, gb, bb], bad_b) = register::local_finish::<_, F, Q>(p, sb);
         let (lo, hi) = (
             [ra.get(), ga.get(), ba.get()],
             [rb.get(), gb.get(), bb.get()],

@@ -4,6 +4,7 @@
 //! (π mx my hz⁴)`; and its Smith Λ (Walter et al. 2007, eq. 25 via Heitz 2014).
 
 use crate::terms::math::{erfc, exp_neg};
+use crate::terms::real::Real;
 use crate::terms::k::Convention;
 use std::f64::consts::PI;
 
@@ -66,12 +67,12 @@ pub fn lambda(a2_inv: f64) -> f64 {
 /// every quantity inside f32's normal range (1/cos²_h ≤ 1e8, the norm ≤ 5.7e17).
 /// `exp(−x)·norm` as `(e·norm)·e` with `e = exp(−x/2)`, as [`d_lane64`].
 #[inline(always)]
-pub fn d_lane32(cos_h: f32, sin2_h: f32, inv_m2: f32, norm: f32) -> f32 {
+pub fn d_lane32<T: Real>(cos_h: T, sin2_h: T, inv_m2: f32, norm: f32) -> T {
     let cos_h2 = cos_h * cos_h;
-    let ic = 1.0 / cos_h2;
+    let ic = cos_h2.splat_as(1.0) / cos_h2;
     let half_x = sin2_h * ic * inv_m2 * 0.5;
-    let e = exp_neg(-half_x);
-    e * (norm * ic * ic) * e
+    let e = exp_neg(half_x * -1.0);
+    e * (ic * norm * ic) * e
 }
 
 /// D in a lane of the f64 frame: `exp(−tan²/m²)/(k m² cos⁴)` as `(e·norm)·e` with

@@ -3,6 +3,7 @@
 //! : 1` with `a = 1/(m tan θ)`. Beckmann only.
 
 use crate::terms::d::DistributionKind;
+use crate::terms::real::Real;
 
 /// The spelling in a materials file.
 pub const NAME: &str = "smith-fast";
@@ -35,20 +36,29 @@ pub fn g1(a2_inv: f64) -> f64 {
 /// past the fit's 1.6 and G1 = 1 either way; that floor keeps `m sin_i sin_o` ≥ 1e-31 for
 /// m ≥ 1e-7. An `a` past 1.6 (or non-finite) takes the fit's 1 as `1/1`.
 #[inline(always)]
-pub fn g_ratio(cos_i: f32, sin2_i: f32, cos_o: f32, sin2_o: f32, m: f32) -> (f32, f32) {
-    let (s_i, s_o) = (sin2_i.sqrt().max(1e-12), sin2_o.sqrt().max(1e-12));
-    let inv = 1.0 / (m * s_i * s_o);
-    let fit = |a: f32| {
-        let (n, d) = (3.535 * a + 2.181 * a * a, 1.0 + 2.276 * a + 2.577 * a * a);
-        if a < 1.6 {
-            (n, d)
-        } else {
-            (1.0, 1.0)
-        }
-    };
-    let (n_i, d_i) = fit(cos_i * s_o * inv);
-    let (n_o, d_o) = fit(cos_o * s_i * inv);
+pub fn g_ratio<T: Real>(cos_i: T, sin2_i: T, cos_o: T, sin2_o: T, m: f32) -> (T, T) {
+    let (s_i, s_o) = (sine_floor(sin2_i.sqrt()), sine_floor(sin2_o.sqrt()));
+    let den = s_i * m * s_o;
+    let inv = den.splat_as(1.0) / den;
+    let (n_i, d_i) = fit_ratio(cos_i * s_o * inv);
+    let (n_o, d_o) = fit_ratio(cos_o * s_i * inv);
     (n_i * n_o, d_i * d_o)
+}
+
+/// `s < 1e-12 ? 1e-12 : s` (a NaN sine stays NaN: its lane failed the frame's tests).
+/// Functions, not closures, here and in [`fit_ratio`]: a closure in a lane form was left
+/// out of line on the register path, where its intrinsics then became calls.
+#[inline(always)]
+fn sine_floor<T: Real>(s: T) -> T {
+    T::select(s.lt_scalar(1e-12), s.splat_as(1e-12), s)
+}
+
+/// The fit of G1 at `a` as `(num, den)`, `(1, 1)` from 1.6 on (and for NaN).
+#[inline(always)]
+fn fit_ratio<T: Real>(a: T) -> (T, T) {
+    let (n, d) = (a * 3.535 + a * 2.181 * a, a * 2.276 + 1.0 + a * 2.577 * a);
+    let (past, one) = (!a.lt_scalar(1.6), a.splat_as(1.0));
+    (T::select(past, one, n), T::select(past, one, d))
 }
 
 /// G1 in a lane (f32), given `q2 = m² tan²θ`.

@@ -1,0 +1,103 @@
+//! Which instruction sets have a register path ([`Registers`]) and each one's own reads,
+//! writes and conversions ([`RegisterIo`]): AVX2's.
+
+use pulp::Simd;
+
+/// Work on the register path, for the instruction sets that have one
+/// ([`Registers::serve`]).
+pub(crate) trait RegisterOp {
+    /// What the work returns.
+    type Output;
+    /// The work in `simd`'s registers.
+    fn run<S: RegisterIo>(self, simd: S) -> Self::Output;
+}
+
+/// The instruction sets the engine's lanes run with FMA, and whether they have a register
+/// path.
+pub(crate) trait Registers: Simd {
+    /// `op` on this instruction set's register path, or `None` where it has none.
+    fn serve<O: RegisterOp>(self, op: O) -> Option<O::Output>;
+}
+
+/// An instruction set's register path: the width of a register and its own ways to read
+/// the local form's rows into registers and write RGB back.
+pub(crate) trait RegisterIo: Simd {
+    /// Tuples a register.
+    const WIDTH: usize = Self::F32_LANES;
+
+    /// The 6 columns of [`Self::WIDTH`] rows of the local form.
+    fn local_columns(self, rows: &[f32]) -> [Self::f32s; 6];
+
+    /// 3 columns (RGB) into [`Self::WIDTH`] rows of 3.
+    fn rgb_rows(self, rgb: [Self::f32s; 3], rows: &mut [f32]);
+
+    /// The mask's lanes as bits (lane k is bit k).
+    fn bits(self, m: Self::m32s) -> u32;
+
+    /// A register's lanes exactly in f64: the low half's, the high half's.
+    fn widen(self, x: Self::f32s) -> [Self::f64s; 2];
+
+    /// Two halves of f64 lanes ([`Self::widen`]'s order) rounded to the nearest f32.
+    fn narrow(self, w: [Self::f64s; 2]) -> Self::f32s;
+}
+
+/// AVX2: the register path, 8 tuples a register.
+#[cfg(target_arch = "x86_64")]
+impl Registers for pulp::x86::V3 {
+    #[inline(always)]
+    fn serve<O: RegisterOp>(self, op: O) -> Option<O::Output> {
+        Some(op.run(self))
+    }
+}
+
+/// AVX2's reads and writes: the transposes of `transpose::avx2`, `vmovmskps`.
+#[cfg(target_arch = "x86_64")]
+impl RegisterIo for pulp::x86::V3 {
+    #[inline(always)]
+    fn local_columns(self, rows: &[f32]) -> [Self::f32s; 6] {
+        let rows: &[f32; 48] = rows[..48].try_into().expect("8 rows of 6");
+        let [a, b, c, d, e, f] = crate::cpu::transpose::avx2::local_columns(self, rows);
+        let r = bytemuck::cast;
+        [r(a), r(b), r(c), r(d), r(e), r(f)]
+    }
+
+    #[inline(always)]
+    fn rgb_rows(self, rgb: [Self::f32s; 3], rows: &mut [f32]) {
+        let rows: &mut [f32; 24] = (&mut rows[..24]).try_into().expect("8 rows of 3");
+        let [x, y, z] = rgb;
+        let r = bytemuck::cast;
+        crate::cpu::transpose::avx2::rgb_rows(self, [r(x), r(y), r(z)], rows)
+    }
+
+    #[inline(always)]
+    fn bits(self, m: Self::m32s) -> u32 {
+        self.avx._mm256_movemask_ps(bytemuck::cast(m)) as u32
+    }
+
+    #[inline(always)]
+    fn widen(self, x: Self::f32s) -> [Self::f64s; 2] {
+        let x = bytemuck::cast(x);
+        let lo = self.avx._mm256_cvtps_pd(self.avx._mm256_castps256_ps128(x));
+        let hi = self
+            .avx
+            ._mm256_cvtps_pd(self.avx._mm256_extractf128_ps::<1>(x));
+        [bytemuck::cast(lo), bytemuck::cast(hi)]
+    }
+
+    #[inline(always)]
+    fn narrow(self, w: [Self::f64s; 2]) -> Self::f32s {
+        let lo = self.avx._mm256_cvtpd_ps(bytemuck::cast(w[0]));
+        let hi = self.avx._mm256_cvtpd_ps(bytemuck::cast(w[1]));
+        bytemuck::cast(self.avx._mm256_set_m128(hi, lo))
+    }
+}
+
+/// AVX-512: no register path yet — it would be measured and tested only on a machine
+/// with AVX-512, and this one has none — so its groups take the lane loops.
+#[cfg(target_arch = "x86_64")]
+impl Registers for pulp::x86::V4 {
+    #[inline(always)]
+    fn serve<O: RegisterOp>(self, _op: O) -> Option<O::Output> {
+        None
+    }
+}
