@@ -685,7 +685,9 @@ fn microfacet_dg<A: MulAdd, const D: u8, const G: u8, const FAST: bool>(
         Geometry::SmithCorrelated if ggx => {
             smith_correlated::g_ratio_ggx::<A, f32>(cos_i, fr.sin2_i, cos_o, fr.sin2_o, m2)
         }
-        Geometry::SmithFast => smith_fast::g_ratio(cos_i, fr.sin2_i, cos_o, fr.sin2_o, p.m_f),
+        Geometry::SmithFast => {
+            smith_fast::g_ratio::<A, f32>(cos_i, fr.sin2_i, cos_o, fr.sin2_o, p.m_f)
+        }
         _ => {
             // q2 = m² tan²θ = m² |n × w|² / cos²θ: products and quotients of positive
             // numbers, which f32 carries to a few ulp (the cancelling parts, |n × w|² and

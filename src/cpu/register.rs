@@ -128,7 +128,9 @@ pub(super) fn beckmann_local_dgk<T: FrameLanes, const G: u8, const F: u8>(
         one,
     );
     let g = match const { Geometry::from_code(G) } {
-        Geometry::SmithFast => smith_fast::g_ratio(cos_i, fr.sin2_i, cos_o, fr.sin2_o, p.m_f),
+        Geometry::SmithFast => {
+            smith_fast::g_ratio::<Fused, _>(cos_i, fr.sin2_i, cos_o, fr.sin2_o, p.m_f)
+        }
         Geometry::CookTorrance => (cook_torrance::g_lane(fr.cos_h, cos_i, cos_o, fr.c), one),
         _ => (one, one),
     };
