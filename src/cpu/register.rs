@@ -14,7 +14,7 @@
 //! reference, exactly as a block of the lane loops flags them. Which instruction sets have
 //! the path, and their reads and writes: `io.rs`.
 
-use super::frame::{frame_local32, frame_local64, FrameLanes};
+use super::frame::{frame_local32, frame_local64, Frame, FrameLanes};
 use super::kernel::{self, Params, FAST_MIN_C};
 use crate::terms::d::{beckmann, ggx};
 use crate::terms::f::{conductor, schlick};
@@ -90,20 +90,7 @@ pub(super) fn ggx_local_dgk<T: Real, const G: u8, const F: u8>(
         Geometry::CookTorrance => (cook_torrance::g_lane(fr.cos_h, cos_i, cos_o, fr.c), one),
         _ => (one, one),
     };
-    let (dgk, size) = kernel::dgk_of(p, d, g, cos_i, cos_o);
-    // 1 − c = sin²/(1 + c), which does not cancel (as `kernel::Lane` forms it).
-    let schlick = matches!(const { FresnelKind::from_code(F) }, FresnelKind::Schlick);
-    let one_minus_c = if schlick { fr.s2 / (fr.c + 1.0) } else { one };
-    Staged {
-        c: fr.c,
-        s2: fr.s2,
-        one_minus_c,
-        dgk,
-        size,
-        ok: fr.ok,
-        slow,
-        general,
-    }
+    staged::<T, F>(p, &fr, d, g, slow, general)
 }
 
 /// [`ggx_local_dgk`] for Beckmann: the general f32 frame's local form
@@ -134,9 +121,28 @@ pub(super) fn beckmann_local_dgk<T: FrameLanes, const G: u8, const F: u8>(
         Geometry::CookTorrance => (cook_torrance::g_lane(fr.cos_h, cos_i, cos_o, fr.c), one),
         _ => (one, one),
     };
-    let (dgk, size) = kernel::dgk_of(p, d, g, cos_i, cos_o);
+    staged::<T, F>(p, &fr, d, g, slow, general)
+}
+
+/// The first stage's common end, from the frame, D and G (each a quotient) and the lanes
+/// another frame takes: D·G·K and its output test's sum, and `1 − c` for Schlick.
+#[inline(always)]
+fn staged<T: Real, const F: u8>(
+    p: &Params,
+    fr: &Frame<T>,
+    d: (T, T),
+    g: (T, T),
+    slow: T::Mask,
+    general: T::Mask,
+) -> Staged<T> {
+    let (dgk, size) = kernel::dgk_of(p, d, g, fr.cos_i, fr.cos_o);
+    // 1 − c = sin²/(1 + c), which does not cancel (as `kernel::Lane` forms it).
     let schlick = matches!(const { FresnelKind::from_code(F) }, FresnelKind::Schlick);
-    let one_minus_c = if schlick { fr.s2 / (fr.c + 1.0) } else { one };
+    let one_minus_c = if schlick {
+        fr.s2 / (fr.c + 1.0)
+    } else {
+        fr.c.splat_as(1.0)
+    };
     Staged {
         c: fr.c,
         s2: fr.s2,
