@@ -20,7 +20,7 @@ use crate::batch::columns::Column;
 use crate::batch::{COLUMNS_LOCAL, COLUMNS_PLAIN, COLUMNS_TANGENT};
 use crate::material::{Material, Model};
 use crate::terms::math::{Fused, MulAdd, Rounded};
-use deferred::{lanes_of, rescue, write_lane, Elsewhere, F64_FRAME, GENERAL_FRAME};
+use deferred::{lanes_of, rescue, write_lane, Chunk, Elsewhere, F64_FRAME, GENERAL_FRAME};
 use registers::LocalRegisters;
 pub use work::Tally;
 pub(super) use work::{Source, Work};
@@ -191,7 +191,8 @@ fn run_blocks<S: pulp::Simd, T: transpose::Transpose, A: MulAdd, const R: usize>
     }
     let mut idx = [[0usize; LANES]; R];
     let z = batch.normal_is_z();
-    let mut elsewhere = Elsewhere::new(plan);
+    let cx = Chunk { simd, z, batch, m };
+    let mut elsewhere = Elsewhere::new(plan, cx);
     let mut j0 = 0;
     while j0 < len {
         // Fill up to `R` blocks, run their lanes, then write them out.
@@ -240,19 +241,19 @@ fn run_blocks<S: pulp::Simd, T: transpose::Transpose, A: MulAdd, const R: usize>
             if o.any_slow() {
                 for k in lanes_of(kernel::bits(&o.slow) & valid) {
                     let (x, at) = (kernel::lane_inputs(&inp[b], k), (j + k, row(k)));
-                    elsewhere.push::<S, A>(F64_FRAME, x, at, simd, z, batch, m, w, c, t);
+                    elsewhere.push::<A>(F64_FRAME, x, at, w, c, t);
                 }
             }
             if o.any_general() {
                 for k in lanes_of(kernel::bits(&o.general) & valid) {
                     let (x, at) = (kernel::lane_inputs(&inp[b], k), (j + k, row(k)));
-                    elsewhere.push::<S, A>(GENERAL_FRAME, x, at, simd, z, batch, m, w, c, t);
+                    elsewhere.push::<A>(GENERAL_FRAME, x, at, w, c, t);
                 }
             }
         }
         j0 += (blocks * LANES).min(len - j0);
     }
-    elsewhere.finish::<S, A>(simd, z, batch, m, w, &mut counts, &mut tally);
+    elsewhere.finish::<A>(w, &mut counts, &mut tally);
     (counts, tally)
 }
 

@@ -108,6 +108,7 @@ pub(super) fn beckmann_local_dgk<T: FrameLanes, const G: u8, const F: u8>(
 ) -> Staged<T> {
     let fr = frame_local64::<Fused, T>(l, v);
     let slow = fr.ok & fr.c.lt_scalar(FAST_MIN_C);
+    // No lane for the general frame: this is it (an all-false mask of the lanes' kind).
     let general = slow & !slow;
     let (cos_i, cos_o, one) = (fr.cos_i, fr.cos_o, fr.c.splat_as(1.0));
     let d = (

@@ -121,9 +121,7 @@ impl Real for f32 {
 /// f64 part uses (`cpu::frame`), each the IEEE operation lane by lane: one f64 beside one
 /// f32 (the lane loops), a register of four f64 beside half of AVX2's register of eight
 /// f32 (the register path, `cpu::register`).
-pub trait Wide:
-    Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self> + Mul<f64, Output = Self>
-{
+pub trait Wide: Copy + Add<Output = Self> + Mul<Output = Self> + Mul<f64, Output = Self> {
     /// The f32 lanes these stand beside.
     type Narrow: Real;
     /// `self · b + c` rounded once.

@@ -91,20 +91,17 @@ impl Deferred {
         self.n == LANES
     }
 
-    /// The gathered lanes on `plan64` (the group's f64 frame), into their places in `w`,
-    /// rescued where the lanes say so.
-    #[allow(clippy::too_many_arguments)]
+    /// The gathered lanes on `plan64` (the group's f64 frame, or its general f32 frame),
+    /// into their places in `w`, rescued where the lanes say so.
     pub(super) fn run<S: pulp::Simd, A: MulAdd>(
         &mut self,
-        simd: S,
+        cx: Chunk<S>,
         plan64: &Plan,
-        z: bool,
-        batch: Source,
-        m: &Material,
         w: &mut Work,
         counts: &mut Counts,
         tally: &mut Tally,
     ) {
+        let Chunk { simd, z, batch, m } = cx;
         let n = self.n;
         if n == 0 {
             return;
@@ -143,10 +140,21 @@ pub(super) fn write_lane(out: &Outputs, k: usize, j: usize, w: &mut Work) {
     }
 }
 
+/// What every lane a chunk leaves to another frame is evaluated with: the instruction
+/// set, whether the rows' N is +z (the local form), the batch and its material.
+#[derive(Clone, Copy)]
+pub(super) struct Chunk<'a, S> {
+    pub(super) simd: S,
+    pub(super) z: bool,
+    pub(super) batch: Source<'a>,
+    pub(super) m: &'a Material,
+}
+
 /// Where a chunk's fast paths send the lanes they cannot serve: the f64 frame (`c` below
 /// `FAST_MIN_C`) and the general f32 frame (the local frame's certificate refused them),
 /// each a [`Deferred`] queue with its group's plan for that frame.
-pub(super) struct Elsewhere {
+pub(super) struct Elsewhere<'a, S> {
+    cx: Chunk<'a, S>,
     queues: [(Plan, Deferred); 2],
 }
 
@@ -155,10 +163,10 @@ pub(super) const F64_FRAME: usize = 0;
 /// [`Elsewhere`]'s queue for the general f32 frame.
 pub(super) const GENERAL_FRAME: usize = 1;
 
-impl Elsewhere {
-    /// The queues of `plan`'s group.
-    pub(super) fn new(plan: &Plan) -> Elsewhere {
+impl<'a, S: pulp::Simd> Elsewhere<'a, S> {
+    pub(super) fn new(plan: &Plan, cx: Chunk<'a, S>) -> Elsewhere<'a, S> {
         Elsewhere {
+            cx,
             queues: [
                 (plan.f64_frame(), Deferred::new()),
                 (plan.general_frame_only(), Deferred::new()),
@@ -166,43 +174,38 @@ impl Elsewhere {
         }
     }
 
+    /// What the queues' lanes are evaluated with.
+    pub(super) fn chunk(&self) -> Chunk<'a, S> {
+        self.cx
+    }
+
     /// A lane's L, V, N `x` (output position `j`, batch row `row`) into queue `to`
     /// ([`F64_FRAME`] or [`GENERAL_FRAME`]), which runs when full.
     #[inline(always)]
-    #[allow(clippy::too_many_arguments)]
-    pub(super) fn push<S: pulp::Simd, A: MulAdd>(
+    pub(super) fn push<A: MulAdd>(
         &mut self,
         to: usize,
         x: [f32; 9],
         (j, row): (usize, usize),
-        simd: S,
-        z: bool,
-        batch: Source,
-        m: &Material,
         w: &mut Work,
         counts: &mut Counts,
         tally: &mut Tally,
     ) {
         let (plan, queue) = &mut self.queues[to];
         if queue.push_lane(x, j, row) {
-            queue.run::<S, A>(simd, plan, z, batch, m, w, counts, tally);
+            queue.run::<S, A>(self.cx, plan, w, counts, tally);
         }
     }
 
     /// Runs what both queues still hold (at the end of a chunk).
-    #[allow(clippy::too_many_arguments)]
-    pub(super) fn finish<S: pulp::Simd, A: MulAdd>(
+    pub(super) fn finish<A: MulAdd>(
         &mut self,
-        simd: S,
-        z: bool,
-        batch: Source,
-        m: &Material,
         w: &mut Work,
         counts: &mut Counts,
         tally: &mut Tally,
     ) {
         for (plan, queue) in &mut self.queues {
-            queue.run::<S, A>(simd, plan, z, batch, m, w, counts, tally);
+            queue.run::<S, A>(self.cx, plan, w, counts, tally);
         }
     }
 }

@@ -3,7 +3,7 @@
 //! it flags handled after a run of steps — sent to the reference or gathered, as
 //! [`super::run_blocks`] gathers a block's, for the f64 frame or the general f32 frame.
 
-use super::deferred::{lanes_of, rescue, Elsewhere, F64_FRAME, GENERAL_FRAME};
+use super::deferred::{lanes_of, rescue, Chunk, Elsewhere, F64_FRAME, GENERAL_FRAME};
 use super::work::{Source, Tally, Work};
 use crate::backend::Counts;
 use crate::batch::COLUMNS_LOCAL;
@@ -116,7 +116,15 @@ fn run_registers<S: RegisterIo, const D: u8, const G: u8, const F: u8, const Q: 
     let mut later = Flagged {
         steps: [FlaggedStep::default(); FLAGGED_STEPS],
         n: 0,
-        elsewhere: Elsewhere::new(plan),
+        elsewhere: Elsewhere::new(
+            plan,
+            Chunk {
+                simd,
+                z: true,
+                batch,
+                m,
+            },
+        ),
     };
     // The tail's rows, the last repeated (its extra lanes are computed and dropped), and
     // its outputs.
@@ -179,12 +187,12 @@ fn run_registers<S: RegisterIo, const D: u8, const G: u8, const F: u8, const Q: 
         later.steps[later.n % FLAGGED_STEPS] = step;
         later.n += usize::from(step.rescue | step.slow | step.general != 0);
         if later.n == FLAGGED_STEPS {
-            later.handle::<S>(simd, batch, m, w, &mut counts, &mut tally);
+            later.handle(w, &mut counts, &mut tally);
         }
         j += n;
     }
-    later.handle::<S>(simd, batch, m, w, &mut counts, &mut tally);
-    (later.elsewhere).finish::<S, Fused>(simd, true, batch, m, w, &mut counts, &mut tally);
+    later.handle(w, &mut counts, &mut tally);
+    (later.elsewhere).finish::<Fused>(w, &mut counts, &mut tally);
     (counts, tally)
 }
 
@@ -203,25 +211,18 @@ struct FlaggedStep {
 const FLAGGED_STEPS: usize = 64;
 
 /// The register path's flagged steps and the queues of the lanes other frames take.
-struct Flagged {
+struct Flagged<'a, S> {
     steps: [FlaggedStep; FLAGGED_STEPS],
     n: usize,
-    elsewhere: Elsewhere,
+    elsewhere: Elsewhere<'a, S>,
 }
 
-impl Flagged {
+impl<S: pulp::Simd> Flagged<'_, S> {
     /// The kept steps' lanes: to the reference (written now), or gathered for the f64
     /// frame or the general f32 frame (run a block at a time). Their outputs overwrite
     /// what the register path wrote for them.
-    fn handle<S: pulp::Simd>(
-        &mut self,
-        simd: S,
-        batch: Source,
-        m: &Material,
-        w: &mut Work,
-        counts: &mut Counts,
-        tally: &mut Tally,
-    ) {
+    fn handle(&mut self, w: &mut Work, counts: &mut Counts, tally: &mut Tally) {
+        let Chunk { batch, m, .. } = self.elsewhere.chunk();
         let data = batch.data();
         for step in &self.steps[..self.n] {
             let (j, row0) = (step.j, step.row0);
@@ -234,8 +235,7 @@ impl Flagged {
                     let r = &data[(row0 + k) * COLUMNS_LOCAL..(row0 + k + 1) * COLUMNS_LOCAL];
                     let x = [r[0], r[1], r[2], r[3], r[4], r[5], 0.0, 0.0, 1.0];
                     let at = (j + k, row0 + k);
-                    let e = &mut self.elsewhere;
-                    e.push::<S, Fused>(to, x, at, simd, true, batch, m, w, counts, tally);
+                    self.elsewhere.push::<Fused>(to, x, at, w, counts, tally);
                 }
             }
         }

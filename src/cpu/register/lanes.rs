@@ -214,7 +214,6 @@ macro_rules! wide_binary {
 }
 
 wide_binary!(Add, add, add_f64s);
-wide_binary!(Sub, sub, sub_f64s);
 wide_binary!(Mul, mul, mul_f64s);
 
 impl<S: RegisterIo> Mul<f64> for WideReg<S> {
