@@ -12,6 +12,7 @@
 #include "frame64.glsl"
 #include "frame32.glsl"
 #include "frame_local32.glsl"
+#include "frame_local_h64.glsl"
 
 // Builds the frame of FORMULAS.md §1 and classifies the tuple. The invalid test comes first.
 uint make_frame(Row r, GpuMaterial m, out Frame f) {
@@ -80,11 +81,12 @@ uint make_frame(Row r, GpuMaterial m, out Frame f) {
 #endif
     // Rows with N exactly +z (the local shading frame, and the rows the slices and tables
     // generate) take a local frame: GGX's lanes the f32 one where D's slope certifies it
-    // (frame_local32.glsl), else, with f64, the f64 frame without N's normalisation and
+    // (frame_local32.glsl), Beckmann's, with f64, the one with h in f64 and l, v in f32
+    // (frame_local_h64.glsl), else, with f64, the f64 frame without N's normalisation and
     // the products with n (frame_scalars_f64_local): the same values, faster
     // (docs/VULKAN.md, "The local frames"). Anisotropic materials keep the general frame,
-    // whose tangent frame needs n. NO_LOCAL_FRAME and NO_LOCAL32_FRAME (kernel_time
-    // variants) turn them off.
+    // whose tangent frame needs n. NO_LOCAL_FRAME, NO_LOCAL32_FRAME and NO_LOCAL_H64_FRAME
+    // (kernel_time variants) turn them off.
     bool local = r.n_bits == LOCAL_N_BITS;
 #if defined(HAS_ANISOTROPIC)
     local = local && !is_anisotropic(m);
@@ -93,6 +95,14 @@ uint make_frame(Row r, GpuMaterial m, out Frame f) {
     if (local && local32_material(m)) {
         uint status = frame_scalars_local32(r, m, f);
         if (status != STATUS_UNCERTIFIED) {
+            return status;
+        }
+    }
+#endif
+#if defined(HAS_LOCAL_H64_FRAME)
+    if (local && local_h64_material(m)) {
+        uint status = frame_scalars_local_h64(r, m, f);
+        if (status != STATUS_NOT_LOCAL_H64) {
             return status;
         }
     }

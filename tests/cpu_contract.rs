@@ -301,3 +301,97 @@ fn ggx_local_frame_within_the_rule_where_ds_slope_is_steepest() {
         }
     }
 }
+
+/// Beckmann's local frame (`frame_local_h64`: h and its scale from f64, l and v in f32,
+/// no certificate) where D is steepest, out to its `exp`'s cut-off (tan θ_h = m, 3m, 9m,
+/// 13.2m), at m = `FAST_MIN_ROUGHNESS` … 1.5 with c from `FAST_MIN_C` to 1 and
+/// unnormalised inputs, as rows whose N is +z in every other row (tilted in the others):
+/// within the rule on every instruction set, its largest relative error inside the rule's
+/// relative part alone (no credit from `S_in`: measured 2.8–3.0e-6; with GGX's f32 local
+/// frame in its place, uncertified, 2.4e-5), and the +z rows' bits the local form's.
+#[test]
+fn beckmann_local_frame_within_the_rule_where_ds_slope_is_steepest() {
+    use vkbrdf::batch::LocalBatch;
+    let mut toml = String::new();
+    let m_all = [FAST_MIN_ROUGHNESS, 0.1, 0.3, 0.7, 1.5];
+    let kinds = [
+        (
+            "smith-fast",
+            "fresnel = \"conductor\"\nior = [0.2, 0.9, 1.5]\nextinction = [3.0, 2.4, 1.9]",
+        ),
+        (
+            "cook-torrance",
+            "fresnel = \"schlick\"\nf0 = [0.04, 0.5, 0.9]",
+        ),
+        ("none", "fresnel = \"none\""),
+    ];
+    for m in m_all {
+        for (geometry, fresnel) in kinds {
+            toml.push_str(&format!(
+                "[[material]]\nname = \"m{m}-{geometry}\"\nmodel = \"cook-torrance\"\n\
+                 distribution = \"beckmann\"\ngeometry = \"{geometry}\"\nroughness = {m}\n{fresnel}\n"
+            ));
+        }
+    }
+    let mats = parse_materials(&toml, "beckmann-local").expect("materials");
+    let (mut local, mut rows) = (Vec::new(), Vec::new());
+    let mut i = 0usize;
+    for (mi, m) in m_all.into_iter().enumerate() {
+        for (l, v) in common::steepest::beckmann_pairs(m, f64::from(FAST_MIN_C)) {
+            // Unnormalised inputs: the frame's lengths are part of its error.
+            let (sl, sv) = (1.0 + 0.37 * (i % 7) as f64, 0.6 + 0.29 * (i % 5) as f64);
+            i += 1;
+            let lv: Vec<f32> = l
+                .iter()
+                .map(|x| (x * sl) as f32)
+                .chain(v.iter().map(|x| (x * sv) as f32))
+                .collect();
+            for g in 0..kinds.len() {
+                let material = kinds.len() * mi + g;
+                local.push((lv.clone(), material));
+                rows.extend_from_slice(&lv);
+                // N = +z in every other row, tilted (and not unit) in the others.
+                if rows.len() / 10 % 2 == 0 {
+                    rows.extend([0.0f32, 0.0, 1.0]);
+                } else {
+                    rows.extend([0.03f32, -0.02, 1.7]);
+                }
+                rows.push(material as f32);
+            }
+        }
+    }
+    let batch = Batch::new(rows, 10, mats.len(), &memory_source()).expect("batch");
+    let request = Request { terms: true };
+    let reference = CpuReference::new()
+        .evaluate(&batch, &mats, &request)
+        .expect("reference");
+    for isa in Isa::available_all() {
+        let mut engine = CpuEngine::with_isa(1, isa);
+        let out = engine.evaluate(&batch, &mats, &request).expect("rows");
+        let worst = judge(&format!("rows on {isa}"), &batch, &mats, &out, &reference);
+        eprintln!("{isa}: largest relative error {worst:.2e}");
+        assert!(
+            worst <= 1e-5,
+            "{isa}: largest relative error {worst:.2e} beyond the rule's relative part"
+        );
+        // Each material's lanes in the local form: the +z rows' bits.
+        for mi in 0..mats.len() {
+            let picked: Vec<usize> = (0..local.len()).filter(|&r| local[r].1 == mi).collect();
+            let data: Vec<f32> = picked.iter().flat_map(|&r| local[r].0.clone()).collect();
+            let lb = LocalBatch::new(data, mi, &mats, &memory_source()).expect("local");
+            let mut got = Output::default();
+            engine
+                .evaluate_local_into(&lb, &mats, &request, &mut got)
+                .expect("local");
+            for (q, &r) in picked.iter().enumerate() {
+                if r % 2 == 0 {
+                    assert_eq!(
+                        got.brdf[3 * q..3 * q + 3],
+                        out.brdf[3 * r..3 * r + 3],
+                        "{isa}: material {mi}, row {r}: the local form's bits"
+                    );
+                }
+            }
+        }
+    }
+}

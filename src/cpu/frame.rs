@@ -68,7 +68,7 @@ pub(super) fn rsqrt<T: Real>(x: T) -> T {
 #[inline(always)]
 pub(super) fn frame<A: MulAdd, const Z: bool>(x: &[f32; 9]) -> Frame {
     if Z {
-        return frame_local64::<A, f32>([x[0], x[1], x[2]], [x[3], x[4], x[5]]);
+        return frame_local64::<A>([x[0], x[1], x[2]], [x[3], x[4], x[5]]);
     }
     // l, v and h in f64, each rounded once to f32 (see the bound above): |L|² and |V|²
     // are exact in f64 (squares of f32 values), 1/|x| by `rsqrt64_fast` (~1e-14 relative).
@@ -151,16 +151,15 @@ pub(super) fn frame<A: MulAdd, const Z: bool>(x: &[f32; 9]) -> Frame {
     }
 }
 
-/// [`frame`] with N = (0, 0, 1) (the local form), in one lane or a register of lanes
-/// ([`FrameLanes`]): each `n · w` is `0·wx + 0·wy + 1·wz = wz` (a zero's sign aside, and a
+/// [`frame`] with N = (0, 0, 1) (the rows whose N is +z in a block that has only such
+/// rows): each `n · w` is `0·wx + 0·wy + 1·wz = wz` (a zero's sign aside, and a
 /// zero cosine is rescued either way), each `|n × w|²` is `(−wy)² + wx² + 0 = wy·wy + wx·wx`,
 /// `|N|² = 1` and its `rsqrt` 1 — the same operations on the same values as the general
-/// frame with that N, so both give the same bits, and so does a register of lanes
-/// (`cpu::register`). Its bound is the general frame's: h turns by its components' last
-/// rounding only.
+/// frame with that N, so both give the same bits. Its bound is the general frame's: h
+/// turns by its components' last rounding only.
 #[inline(always)]
-pub(super) fn frame_local64<A: MulAdd, T: FrameLanes>(l: [T; 3], v: [T; 3]) -> Frame<T> {
-    let w = T::wide_parts::<A>(l, v);
+pub(super) fn frame_local64<A: MulAdd>(l: [f32; 3], v: [f32; 3]) -> Frame {
+    let w = wide_parts::<A, f64>(l.map(f64::from), v.map(f64::from));
     let ([lx, ly, lz], [vx, vy, vz]) = (w.l, w.v);
     // sin² of c from |l − v|/2 = sin θ_d, as in [`frame`].
     let (dx, dy, dz) = (lx - vx, ly - vy, lz - vz);
@@ -184,7 +183,7 @@ pub(super) fn frame_local64<A: MulAdd, T: FrameLanes>(l: [T; 3], v: [T; 3]) -> F
 
 /// What [`frame_local64`] forms in f64 ([`wide_parts`]), each value rounded once to f32.
 #[derive(Clone, Copy)]
-pub(super) struct WideParts<T: Real> {
+struct WideParts<T: Real> {
     /// l = L/|L|.
     pub(super) l: [T; 3],
     /// v = V/|V|.
@@ -198,18 +197,97 @@ pub(super) struct WideParts<T: Real> {
     pub(super) lengths_ok: T::Mask,
 }
 
-/// Lanes whose [`frame_local64`] can be formed: one f32 (its f64 part in one f64), or a
+/// Lanes whose [`frame_local_h64`] can be formed: one f32 (its f64 part in one f64), or a
 /// register (`cpu::register`, its f64 part half a register at a time).
 pub(super) trait FrameLanes: Real {
-    /// [`wide_parts`] of these lanes.
-    fn wide_parts<A: MulAdd>(l: [Self; 3], v: [Self; 3]) -> WideParts<Self>;
+    /// [`half_parts`] of these lanes.
+    fn half_parts<A: MulAdd>(l: [Self; 3], v: [Self; 3]) -> HalfParts<Self>;
 }
 
 impl FrameLanes for f32 {
     #[inline(always)]
-    fn wide_parts<A: MulAdd>(l: [f32; 3], v: [f32; 3]) -> WideParts<f32> {
+    fn half_parts<A: MulAdd>(l: [f32; 3], v: [f32; 3]) -> HalfParts<f32> {
         let (l, v) = (l.map(f64::from), v.map(f64::from));
-        wide_parts::<A, f64>(l, v)
+        half_parts::<A, f64>(l, v)
+    }
+}
+
+/// The local form's frame (N = +z) for Beckmann's lanes: h = L·s_l + V·s_v formed in f64
+/// from the exact squared lengths and each component rounded once — so h turns by those
+/// roundings only (tan θ_h within u, θ_h within u/2), as on the general f32 frame — and
+/// the rest in f32: h's scale (cos_h within 3.5u, `|n × h|²` within 7u, their ratio tan²θ_h
+/// within 4u, c within 4.5u), l = L·s_l and v = V·s_v with the scales rounded once (cos_i,
+/// cos_o within u; `|n × l|²`, `|n × v|²` within 3u). D reads h's direction, which no
+/// slope of D can magnify beyond the general frame's, so the bound holds on every lane
+/// without a certificate (docs/CPU_ENGINE.md, "The local form's h64 frame"); what the
+/// f32 scales add is ~21u of the rule's 1e-5. Five f64 values rounded (two scales, h's
+/// three components) where [`frame_local64`] rounds eleven.
+#[inline(always)]
+pub(super) fn frame_local_h64<A: MulAdd, T: FrameLanes>(l: [T; 3], v: [T; 3]) -> Frame<T> {
+    let w = T::half_parts::<A>(l, v);
+    let (lx, ly, lz) = (l[0] * w.il, l[1] * w.il, l[2] * w.il);
+    let (vx, vy, vz) = (v[0] * w.iv, v[1] * w.iv, v[2] * w.iv);
+    let sin2_i = A::mul_add(lx, lx, ly * ly);
+    let sin2_o = A::mul_add(vx, vx, vy * vy);
+    // sin² of c from |l − v|/2 = sin θ_d, as in [`frame`].
+    let (dx, dy, dz) = (lx - vx, ly - vy, lz - vz);
+    let s2 = A::mul_add(dz, dz, A::mul_add(dx, dx, dy * dy)) * 0.25;
+    let g = GRAZING as f32;
+    // `≥` is false for NaN: lanes that went non-finite above are rescued too.
+    let ok =
+        w.lengths_ok & lz.ge_scalar(g) & vz.ge_scalar(g) & w.cos_h.ge_scalar(g) & w.c.ge_scalar(g);
+    Frame {
+        cos_i: lz,
+        cos_o: vz,
+        cos_h: w.cos_h,
+        c: w.c,
+        s2,
+        sin2_h: w.sin2_h,
+        sin2_i,
+        sin2_o,
+        ok,
+    }
+}
+
+/// What [`frame_local_h64`] forms in f64 ([`half_parts`]) rounded once to f32, and h's
+/// scale, cos_h, c and `|n × h|²` from h's rounded components.
+#[derive(Clone, Copy)]
+pub(super) struct HalfParts<T: Real> {
+    /// `1/|L|`.
+    il: T,
+    /// `1/|V|`.
+    iv: T,
+    c: T,
+    cos_h: T,
+    sin2_h: T,
+    /// `|L|²` and `|V|²` (rounded to f32) inside [`LENGTH2_MIN`, `LENGTH2_MAX`].
+    lengths_ok: T::Mask,
+}
+
+/// The f64 part of [`frame_local_h64`] from L and V in f64 lanes: each scale `1/|x|` by
+/// [`rsqrt64_fast`] and h = L·s_l + V·s_v, each rounded once; then h's scale in f32.
+#[inline(always)]
+pub(super) fn half_parts<A: MulAdd, W: Wide>(l: [W; 3], v: [W; 3]) -> HalfParts<W::Narrow> {
+    let ll = sq3_wide::<A, W>(l);
+    let il = rsqrt64_fast::<A, W>(ll);
+    let vv = sq3_wide::<A, W>(v);
+    let iv = rsqrt64_fast::<A, W>(vv);
+    let h = [
+        A::mul_add_wide(l[0], il, v[0] * iv),
+        A::mul_add_wide(l[1], il, v[1] * iv),
+        A::mul_add_wide(l[2], il, v[2] * iv),
+    ];
+    let (hx, hy, hz) = (h[0].narrow(), h[1].narrow(), h[2].narrow());
+    let hh = A::mul_add(hz, hz, A::mul_add(hx, hx, hy * hy));
+    let ih = rsqrt(hh);
+    HalfParts {
+        il: il.narrow(),
+        iv: iv.narrow(),
+        c: hh * ih * 0.5,
+        cos_h: hz * ih,
+        sin2_h: A::mul_add(hx, hx, hy * hy) * (ih * ih),
+        // On the f32 roundings, as [`frame`] tests them.
+        lengths_ok: length2_ok(ll.narrow()) & length2_ok(vv.narrow()),
     }
 }
 
@@ -219,7 +297,7 @@ impl FrameLanes for f32 {
 /// registers at once (the lanes' bits do not depend on the order); no closure or `map`,
 /// which the register path left out of line (its intrinsics then calls).
 #[inline(always)]
-pub(super) fn wide_parts<A: MulAdd, W: Wide>(l: [W; 3], v: [W; 3]) -> WideParts<W::Narrow> {
+fn wide_parts<A: MulAdd, W: Wide>(l: [W; 3], v: [W; 3]) -> WideParts<W::Narrow> {
     let ll = sq3_wide::<A, W>(l);
     let il = rsqrt64_fast::<A, W>(ll);
     let l = [l[0] * il, l[1] * il, l[2] * il];

@@ -13,7 +13,9 @@
 // forms would hide that the loops are the vectorised dimension.
 #![allow(clippy::needless_range_loop)]
 
-use super::frame::{frame, frame64, frame_local32, length2_ok, rsqrt, Frame, Frame64, GRAZING};
+use super::frame::{
+    frame, frame64, frame_local32, frame_local_h64, length2_ok, rsqrt, Frame, Frame64, GRAZING,
+};
 use crate::backend::TERM_COLUMNS;
 use crate::terms::d::{beckmann, blinn, charlie, gaussian, ggx};
 use crate::terms::f::{conductor, dielectric, schlick};
@@ -293,7 +295,8 @@ pub const FAST_MIN_ROUGHNESS: f64 = 0.075;
 /// Fresnel term, and (`Z`) to N = (0, 0, 1) for the local form.
 ///
 /// The frame is f32 (`frame`; for GGX's lanes with N = +z `frame_local32`, where D's
-/// test `ggx::local_frame_ok` certifies it) when the material allows it
+/// test `ggx::local_frame_ok` certifies it, for Beckmann's `frame_local_h64`) when the
+/// material allows it
 /// ([`Params::fast_frame`]) and the lane does (`c` ≥ [`FAST_MIN_C`]); the other lanes take
 /// the f64 frame (`frame64`), which a block computes only when it has such a lane — or,
 /// for a plan that defers them ([`Params::defer_slow`]), leaves to the caller, which
@@ -318,17 +321,23 @@ pub fn microfacet_block<A: MulAdd, const D: u8, const G: u8, const F: u8, const 
         let mut fs = [[0.0f32; LANES]; 8];
         let mut ok = [false; LANES];
         // GGX's lanes with N = +z take the f32 local frame where D's test certifies it
-        // (`frame_local32`): the local form's lanes always, the rows' where N is exactly
+        // (`frame_local32`), Beckmann's the one with h in f64 (`frame_local_h64`, no
+        // certificate): the local form's lanes always, the rows' where N is exactly
         // (0, 0, 1) (so that both forms keep giving the same bits); a block computes only
         // the frames its lanes take.
-        let ggx = const { matches!(DistributionKind::from_code(D), DistributionKind::Ggx) };
+        let local_d = const {
+            matches!(
+                DistributionKind::from_code(D),
+                DistributionKind::Ggx | DistributionKind::Beckmann
+            )
+        };
         // Which lanes have N = +z (every lane of the local form).
-        let z: [bool; LANES] = if Z || !ggx {
+        let z: [bool; LANES] = if Z || !local_d {
             [Z; LANES]
         } else {
             std::array::from_fn(|k| inp.v[6][k] == 0.0 && inp.v[7][k] == 0.0 && inp.v[8][k] == 1.0)
         };
-        let mode = if !ggx || !any(&z) || p.general_frame_only {
+        let mode = if !local_d || !any(&z) || p.general_frame_only {
             FRAME_GENERAL
         } else if !z.contains(&false) {
             FRAME_LOCAL
@@ -336,15 +345,27 @@ pub fn microfacet_block<A: MulAdd, const D: u8, const G: u8, const F: u8, const 
             FRAME_EACH
         };
         match mode {
-            FRAME_LOCAL => {
-                frames::<A, Z, FRAME_LOCAL>(p, inp, &z, &mut fs, &mut ok, &mut slow, &mut general)
-            }
+            FRAME_LOCAL => frames::<A, D, Z, FRAME_LOCAL>(
+                p,
+                inp,
+                &z,
+                &mut fs,
+                &mut ok,
+                &mut slow,
+                &mut general,
+            ),
             FRAME_EACH => {
-                frames::<A, Z, FRAME_EACH>(p, inp, &z, &mut fs, &mut ok, &mut slow, &mut general)
+                frames::<A, D, Z, FRAME_EACH>(p, inp, &z, &mut fs, &mut ok, &mut slow, &mut general)
             }
-            _ => {
-                frames::<A, Z, FRAME_GENERAL>(p, inp, &z, &mut fs, &mut ok, &mut slow, &mut general)
-            }
+            _ => frames::<A, D, Z, FRAME_GENERAL>(
+                p,
+                inp,
+                &z,
+                &mut fs,
+                &mut ok,
+                &mut slow,
+                &mut general,
+            ),
         }
         // In the block, unless the caller gathers them (as it does the f64 frame's lanes):
         // computed here, they made every block with one run both frames.
@@ -430,11 +451,12 @@ const FRAME_EACH: u8 = 2;
 /// The f32 frames of a block into `fs` (structure of arrays) and `ok`, the lanes that
 /// must take the f64 frame into `slow`, and the lanes of the local frame that its
 /// certificate refused into `general`: `MODE` [`FRAME_GENERAL`] takes [`frame`] in every
-/// lane, [`FRAME_LOCAL`] [`frame_local32`] (GGX lanes with N = +z, each certified by D's
-/// test `ggx::local_frame_ok`, else left to [`general_frames`]), [`FRAME_EACH`] whichever of
-/// the two the lane's N asks for (`z`: N is exactly (0, 0, 1), `-0` components included).
+/// lane, [`FRAME_LOCAL`] the local frame of distribution `D` ([`local_frame`]: GGX's lanes
+/// with N = +z each certified by D's test `ggx::local_frame_ok`, else left to
+/// [`general_frames`]; Beckmann's without a test), [`FRAME_EACH`] whichever of the two the
+/// lane's N asks for (`z`: N is exactly (0, 0, 1), `-0` components included).
 #[inline(always)]
-fn frames<A: MulAdd, const Z: bool, const MODE: u8>(
+fn frames<A: MulAdd, const D: u8, const Z: bool, const MODE: u8>(
     p: &Params,
     inp: &Inputs,
     z: &[bool; LANES],
@@ -447,9 +469,9 @@ fn frames<A: MulAdd, const Z: bool, const MODE: u8>(
         let x = lane_inputs(inp, k);
         let (xl, xv) = ([x[0], x[1], x[2]], [x[3], x[4], x[5]]);
         let (fr, local) = match MODE {
-            FRAME_LOCAL => (frame_local32::<A, f32>(xl, xv), true),
+            FRAME_LOCAL => (local_frame::<A, D>(xl, xv), true),
             FRAME_EACH => {
-                let (a, b) = (frame_local32::<A, f32>(xl, xv), frame::<A, Z>(&x));
+                let (a, b) = (local_frame::<A, D>(xl, xv), frame::<A, Z>(&x));
                 (if z[k] { a } else { b }, z[k])
             }
             _ => (frame::<A, Z>(&x), false),
@@ -459,8 +481,10 @@ fn frames<A: MulAdd, const Z: bool, const MODE: u8>(
         let below = fr.ok & (fr.c < FAST_MIN_C);
         slow[k] = below;
         if MODE != FRAME_GENERAL {
-            let certified =
-                !local | ggx::local_frame_ok(fr.cos_h, fr.sin2_h, fr.c, p.m2_f, p.ggx_local_guard);
+            let ggx = const { matches!(DistributionKind::from_code(D), DistributionKind::Ggx) };
+            let certified = !local
+                | !ggx
+                | ggx::local_frame_ok(fr.cos_h, fr.sin2_h, fr.c, p.m2_f, p.ggx_local_guard);
             general[k] = fr.ok & !below & !certified;
         }
         let v = [
@@ -470,6 +494,17 @@ fn frames<A: MulAdd, const Z: bool, const MODE: u8>(
             fs[j][k] = v[j];
         }
         ok[k] = fr.ok;
+    }
+}
+
+/// The local form's f32 frame of distribution `D` (N = +z): GGX's `frame_local32`, whose
+/// lanes D's certificate then tests, or Beckmann's `frame_local_h64`, whose bound holds on
+/// every lane (docs/CPU_ENGINE.md).
+#[inline(always)]
+fn local_frame<A: MulAdd, const D: u8>(l: [f32; 3], v: [f32; 3]) -> Frame {
+    match const { DistributionKind::from_code(D) } {
+        DistributionKind::Beckmann => frame_local_h64::<A, f32>(l, v),
+        _ => frame_local32::<A, f32>(l, v),
     }
 }
 

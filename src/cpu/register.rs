@@ -6,7 +6,7 @@
 //! the rest.
 //!
 //! The arithmetic is the lane loops' own: the frames (`frame::frame_local32`, GGX's, and
-//! `frame::frame_local64`, the general f32 frame with N = +z, Beckmann's), the terms' lane
+//! `frame::frame_local_h64`, Beckmann's, its half vector from f64), the terms' lane
 //! forms and `kernel::dgk_of`/`channels_of` are generic over [`Real`], instantiated here
 //! with [`Reg`] (`lanes.rs`, with the f64 lanes beside it), so a lane's result is the same
 //! bits on either path (a test compares them). A lane the local frame cannot serve is left
@@ -14,7 +14,7 @@
 //! reference, exactly as a block of the lane loops flags them. Which instruction sets have
 //! the path, and their reads and writes: `io.rs`.
 
-use super::frame::{frame_local32, frame_local64, Frame, FrameLanes};
+use super::frame::{frame_local32, frame_local_h64, Frame, FrameLanes};
 use super::kernel::{self, Params, FAST_MIN_C};
 use crate::terms::d::{beckmann, ggx};
 use crate::terms::f::{conductor, schlick};
@@ -93,20 +93,19 @@ pub(super) fn ggx_local_dgk<T: Real, const G: u8, const F: u8>(
     staged::<T, F>(p, &fr, d, g, slow, general)
 }
 
-/// [`ggx_local_dgk`] for Beckmann: the general f32 frame's local form
-/// (`frame::frame_local64`: l, v and h formed in f64 registers, each rounded once), whose
-/// bound holds on every lane of a material allowed the f32 frame — Beckmann's D has no
-/// certificate to pass (its slope grows without bound away from the peak, docs/CPU_ENGINE.md)
-/// and needs none on this frame — so no lane is left to the general frame; `c` below
-/// `FAST_MIN_C` still takes the f64 frame. D, G (none, the V-cavity, smith-fast) and K are
-/// the lane loops' forms.
+/// [`ggx_local_dgk`] for Beckmann: its local frame (`frame::frame_local_h64`: the scales
+/// and h formed in f64 registers, each rounded once, the rest in f32), whose bound holds on
+/// every lane of a material allowed the f32 frame — Beckmann's D has no certificate to pass
+/// (its slope grows without bound away from the peak, docs/CPU_ENGINE.md) and needs none on
+/// this frame — so no lane is left to the general frame; `c` below `FAST_MIN_C` still takes
+/// the f64 frame. D, G (none, the V-cavity, smith-fast) and K are the lane loops' forms.
 #[inline(always)]
 pub(super) fn beckmann_local_dgk<T: FrameLanes, const G: u8, const F: u8>(
     p: &Params,
     l: [T; 3],
     v: [T; 3],
 ) -> Staged<T> {
-    let fr = frame_local64::<Fused, T>(l, v);
+    let fr = frame_local_h64::<Fused, T>(l, v);
     let slow = fr.ok & fr.c.lt_scalar(FAST_MIN_C);
     // No lane for the general frame: this is it (an all-false mask of the lanes' kind).
     let general = slow & !slow;

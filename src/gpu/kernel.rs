@@ -60,6 +60,10 @@ pub const SOURCES: &[(&str, &str)] = &[
         include_str!("../../glsl/frame_local32.glsl"),
     ),
     (
+        "frame_local_h64.glsl",
+        include_str!("../../glsl/frame_local_h64.glsl"),
+    ),
+    (
         "integrators.glsl",
         include_str!("../../glsl/integrators.glsl"),
     ),

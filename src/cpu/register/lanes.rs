@@ -1,10 +1,10 @@
 //! A register of lanes as the terms' lane forms compute with it: [`Reg`] (pulp's `f32s`
 //! with its instruction set's token) as `terms::real::Real`, and the f64 lanes beside it
-//! ([`WideReg`], `terms::real::Wide`) through which the register path forms the general
-//! f32 frame's f64 part (`frame::frame_local64`).
+//! ([`WideReg`], `terms::real::Wide`) through which the register path forms the f64 part
+//! of Beckmann's local frame (`frame::frame_local_h64`).
 
 use super::io::RegisterIo;
-use crate::cpu::frame::{self, FrameLanes, WideParts};
+use crate::cpu::frame::{self, FrameLanes, HalfParts};
 use crate::terms::math::MulAdd;
 use crate::terms::real::{Real, Wide};
 use pulp::Simd;
@@ -269,8 +269,8 @@ fn widen<S: RegisterIo>(x: Reg<S>) -> WideReg<S> {
 
 impl<S: RegisterIo> FrameLanes for Reg<S> {
     #[inline(always)]
-    fn wide_parts<A: MulAdd>(l: [Reg<S>; 3], v: [Reg<S>; 3]) -> WideParts<Reg<S>> {
-        frame::wide_parts::<A, WideReg<S>>(
+    fn half_parts<A: MulAdd>(l: [Reg<S>; 3], v: [Reg<S>; 3]) -> HalfParts<Reg<S>> {
+        frame::half_parts::<A, WideReg<S>>(
             [widen(l[0]), widen(l[1]), widen(l[2])],
             [widen(v[0]), widen(v[1]), widen(v[2])],
         )
