@@ -1,4 +1,4 @@
-//! The CPU engine's register path (`cpu::register`: the local form's GGX and Beckmann groups on AVX2,
+//! The CPU engine's register path (`cpu::register`: the local form's GGX and Beckmann groups on AVX2 and AVX-512,
 //! two registers of tuples at a time) against the lane loops it stands in for: the same
 //! outputs bit for bit and the same counts, for every group it serves, on the tuples where
 //! each term is hardest — D's steepest slope at every c down to the f32 frame's threshold,
@@ -6,7 +6,7 @@
 //! of the rescue threshold, c on either side of `FAST_MIN_C`, lengths at the frame's
 //! limits, invalid and below-horizon tuples — and on uniform directions. The lane loops
 //! are what the 10-column rows with N = (0, 0, 1) take, so the test compares the local
-//! form with those rows on every instruction set (the register path runs only on AVX2;
+//! form with those rows on every instruction set (the register path runs on AVX2 and AVX-512;
 //! the others must agree with their own rows as before).
 
 mod common;
@@ -155,7 +155,9 @@ fn materials(m: f64) -> Vec<(Material, bool)> {
 
 #[test]
 fn the_register_path_gives_the_lane_loops_bits_on_every_group_it_serves() {
-    let avx2 = Isa::available_all().contains(&Isa::Avx2Fma);
+    let registers = Isa::available_all()
+        .iter()
+        .any(|i| matches!(i, Isa::Avx2Fma | Isa::Avx512));
     let (mut deferred, mut rescued) = (0, 0);
     for m in [0.075, 0.0751, 0.3, 1.0] {
         let local = hard_rows(m);
@@ -182,8 +184,9 @@ fn the_register_path_gives_the_lane_loops_bits_on_every_group_it_serves() {
                     assert_eq!(got.terms, want.terms, "{what}");
                     let tally = engine.last_tally();
                     // The register path takes exactly the local form's served groups
-                    // without terms, on AVX2.
-                    let on_registers = isa == Isa::Avx2Fma && served && !terms;
+                    // without terms, on AVX2 and AVX-512.
+                    let on_registers =
+                        matches!(isa, Isa::Avx2Fma | Isa::Avx512) && served && !terms;
                     assert_eq!(tally.registers > 0, on_registers, "{what}: {tally:?}");
                     if on_registers {
                         assert_eq!(tally.registers, n as u64, "{what}");
@@ -195,7 +198,7 @@ fn the_register_path_gives_the_lane_loops_bits_on_every_group_it_serves() {
         }
     }
     // The tuples reached the register path's f64-frame and reference hand-offs.
-    if avx2 {
+    if registers {
         assert!(
             deferred > 0 && rescued > 0,
             "{deferred} deferred, {rescued} rescued"

@@ -142,6 +142,20 @@ fn permutes<const C: usize, const K: usize>(
     t: &Tables,
     lanes: &mut [[f32; LANES]],
 ) {
+    let cols = columns::<C, K>(simd, rows, t);
+    for (lane, col) in lanes.iter_mut().zip(cols) {
+        *lane = bytemuck::cast(col);
+    }
+}
+
+/// [`permutes`]' columns as registers (the register path's read, [`avx512::local_columns`]).
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn columns<const C: usize, const K: usize>(
+    simd: pulp::x86::V4,
+    rows: &[f32],
+    t: &Tables,
+) -> [core::arch::x86_64::__m512; K] {
     use core::arch::x86_64::{__m512, __m512i};
     let f = simd.avx512f;
     // Whole-register loads (bytemuck's casts: pulp's x86-v4 makes __m512 Pod).
@@ -152,14 +166,81 @@ fn permutes<const C: usize, const K: usize>(
             .expect("a whole register");
         *reg = bytemuck::cast(a);
     }
-    for c in 0..K {
-        let idx = |p: usize| -> __m512i { bytemuck::cast(t.indices[c][p]) };
-        let mut col = f._mm512_permutex2var_ps(r[0], idx(0), r[1]);
+    // A plain loop, no closure: LLVM left `array::from_fn`'s closure out of line on the
+    // register path, and every permute in it became a call (3.6x slower).
+    let mut cols = [r[0]; K];
+    for (c, col) in cols.iter_mut().enumerate() {
+        let idx0: __m512i = bytemuck::cast(t.indices[c][0]);
+        *col = f._mm512_permutex2var_ps(r[0], idx0, r[1]);
         for p in 1..C.div_ceil(2) {
-            let q = f._mm512_permutex2var_ps(r[2 * p], idx(p), r[2 * p + 1]);
-            col = f._mm512_mask_blend_ps(t.masks[c][p], col, q);
+            let idx: __m512i = bytemuck::cast(t.indices[c][p]);
+            let q = f._mm512_permutex2var_ps(r[2 * p], idx, r[2 * p + 1]);
+            *col = f._mm512_mask_blend_ps(t.masks[c][p], *col, q);
         }
-        lanes[c] = bytemuck::cast(col);
+    }
+    cols
+}
+
+/// AVX-512's register-path transposes: the local form's 16 rows into 6 registers and 3
+/// registers of RGB back into 16 rows, by two-source permutes.
+#[cfg(target_arch = "x86_64")]
+pub(super) mod avx512 {
+    use super::{columns, LANES, LOCAL};
+    use core::arch::x86_64::{__m512, __m512i};
+
+    /// The local form's 6 columns of its 16 rows `block` (18 permutes, 12 blends).
+    #[inline(always)]
+    pub(crate) fn local_columns(simd: pulp::x86::V4, block: &[f32; 96]) -> [__m512; 6] {
+        columns::<6, 6>(simd, block, &LOCAL)
+    }
+
+    /// For output register j (floats 16j … 16j + 15 of 16 rows of RGB), lane k: the
+    /// source lane (the row, `(16j + k)/3`) in R's and G's pair (G's lanes from 16), in B,
+    /// and which lanes come from B (`(16j + k) mod 3 = 2`).
+    struct RgbTables {
+        rg: [[i32; LANES]; 3],
+        b: [[i32; LANES]; 3],
+        from_b: [u16; 3],
+    }
+
+    const RGB: RgbTables = {
+        let mut t = RgbTables {
+            rg: [[0; LANES]; 3],
+            b: [[0; LANES]; 3],
+            from_b: [0; 3],
+        };
+        let mut j = 0;
+        while j < 3 {
+            let mut k = 0;
+            while k < LANES {
+                let flat = LANES * j + k;
+                let (row, col) = ((flat / 3) as i32, flat % 3);
+                match col {
+                    0 => t.rg[j][k] = row,
+                    1 => t.rg[j][k] = LANES as i32 + row,
+                    _ => {
+                        t.b[j][k] = row;
+                        t.from_b[j] |= 1 << k;
+                    }
+                }
+                k += 1;
+            }
+            j += 1;
+        }
+        t
+    };
+
+    /// 3 columns of 16 lanes (RGB) into 16 rows of 3 (6 permutes, 3 blends).
+    #[inline(always)]
+    pub(crate) fn rgb_rows(simd: pulp::x86::V4, rgb: [__m512; 3], rows: &mut [f32; 48]) {
+        let f = simd.avx512f;
+        let [r, g, b] = rgb;
+        for j in 0..3 {
+            let rg = f._mm512_permutex2var_ps(r, bytemuck::cast::<_, __m512i>(RGB.rg[j]), g);
+            let bb = f._mm512_permutexvar_ps(bytemuck::cast::<_, __m512i>(RGB.b[j]), b);
+            let out: [f32; LANES] = bytemuck::cast(f._mm512_mask_blend_ps(RGB.from_b[j], rg, bb));
+            rows[LANES * j..LANES * (j + 1)].copy_from_slice(&out);
+        }
     }
 }
 
@@ -489,6 +570,29 @@ mod tests {
             let mut rows = [-1.0; BLOCK_XYZ];
             v3.rgb(&lanes, &mut rows);
             assert_eq!(rows, want, "avx2");
+        }
+        #[cfg(target_arch = "x86_64")]
+        if let Some(v4) = pulp::x86::V4::try_new() {
+            let mut rows = [-1.0; BLOCK_XYZ];
+            let regs = lanes.map(bytemuck::cast);
+            avx512::rgb_rows(v4, regs, &mut rows);
+            assert_eq!(rows, want, "avx512 registers");
+        }
+    }
+
+    /// The register path's AVX-512 read puts row k's column c in lane k of register c.
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn the_avx512_register_read_puts_each_value_in_its_lane() {
+        let Some(v4) = pulp::x86::V4::try_new() else {
+            return;
+        };
+        let block: [f32; BLOCK] = std::array::from_fn(|i| i as f32);
+        let cols = avx512::local_columns(v4, &block);
+        for (c, col) in cols.into_iter().enumerate() {
+            let lanes: [f32; LANES] = bytemuck::cast(col);
+            let want: [f32; LANES] = std::array::from_fn(|k| (COLUMNS_LOCAL * k + c) as f32);
+            assert_eq!(lanes, want, "column {c}");
         }
     }
 }

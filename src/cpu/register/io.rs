@@ -1,5 +1,5 @@
 //! Which instruction sets have a register path ([`Registers`]) and each one's own reads,
-//! writes and conversions ([`RegisterIo`]): AVX2's.
+//! writes and conversions ([`RegisterIo`]): AVX2's and AVX-512's.
 
 use pulp::Simd;
 
@@ -92,12 +92,57 @@ impl RegisterIo for pulp::x86::V3 {
     }
 }
 
-/// AVX-512: no register path yet — it would be measured and tested only on a machine
-/// with AVX-512, and this one has none — so its groups take the lane loops.
+/// AVX-512: the register path, 16 tuples a register.
 #[cfg(target_arch = "x86_64")]
 impl Registers for pulp::x86::V4 {
     #[inline(always)]
-    fn serve<O: RegisterOp>(self, _op: O) -> Option<O::Output> {
-        None
+    fn serve<O: RegisterOp>(self, op: O) -> Option<O::Output> {
+        Some(op.run(self))
+    }
+}
+
+/// AVX-512's reads and writes: the permutes of `transpose::avx512`, the mask registers'
+/// bits as they are.
+#[cfg(target_arch = "x86_64")]
+impl RegisterIo for pulp::x86::V4 {
+    #[inline(always)]
+    fn local_columns(self, rows: &[f32]) -> [Self::f32s; 6] {
+        let rows: &[f32; 96] = rows[..96].try_into().expect("16 rows of 6");
+        let [a, b, c, d, e, f] = crate::cpu::transpose::avx512::local_columns(self, rows);
+        let r = bytemuck::cast;
+        [r(a), r(b), r(c), r(d), r(e), r(f)]
+    }
+
+    #[inline(always)]
+    fn rgb_rows(self, rgb: [Self::f32s; 3], rows: &mut [f32]) {
+        let rows: &mut [f32; 48] = (&mut rows[..48]).try_into().expect("16 rows of 3");
+        let [x, y, z] = rgb;
+        let r = bytemuck::cast;
+        crate::cpu::transpose::avx512::rgb_rows(self, [r(x), r(y), r(z)], rows)
+    }
+
+    #[inline(always)]
+    fn bits(self, m: Self::m32s) -> u32 {
+        u32::from(m.0)
+    }
+
+    #[inline(always)]
+    fn widen(self, x: Self::f32s) -> [Self::f64s; 2] {
+        let x = bytemuck::cast(x);
+        let f = self.avx512f;
+        let lo = f._mm512_cvtps_pd(f._mm512_castps512_ps256(x));
+        let hi = f._mm512_cvtps_pd(self.avx512dq._mm512_extractf32x8_ps::<1>(x));
+        [bytemuck::cast(lo), bytemuck::cast(hi)]
+    }
+
+    #[inline(always)]
+    fn narrow(self, w: [Self::f64s; 2]) -> Self::f32s {
+        let f = self.avx512f;
+        let lo = f._mm512_cvtpd_ps(bytemuck::cast(w[0]));
+        let hi = f._mm512_cvtpd_ps(bytemuck::cast(w[1]));
+        bytemuck::cast(
+            self.avx512dq
+                ._mm512_insertf32x8::<1>(f._mm512_castps256_ps512(lo), hi),
+        )
     }
 }
