@@ -185,7 +185,9 @@ fn columns<const C: usize, const K: usize>(
 /// registers of RGB back into 16 rows, by two-source permutes.
 #[cfg(target_arch = "x86_64")]
 pub(super) mod avx512 {
-    use super::{columns, LANES, LOCAL};
+    // By the crate's paths: the layering test reads `super` as the parent file.
+    use crate::cpu::kernel::LANES;
+    use crate::cpu::transpose::{columns, LOCAL};
     use core::arch::x86_64::{__m512, __m512i};
 
     /// The local form's 6 columns of its 16 rows `block` (18 permutes, 12 blends).
