@@ -24,6 +24,37 @@ fn judge(what: &str, batch: &Batch, mats: &[Material], out: &Output, reference: 
     common::rule::assert_within_rule(what, batch, mats, out, reference)
 }
 
+/// Each material's rows of `local` (the local form's `Lx Ly Lz Vx Vy Vz` and the row's
+/// material, row r of the 10-column batch that gave `out`) evaluated in the local form on
+/// `engine`: the bits of `out`'s rows whose N is +z (the even ones).
+fn assert_local_form_bits(
+    engine: &mut CpuEngine,
+    isa: Isa,
+    mats: &[Material],
+    local: &[(Vec<f32>, usize)],
+    out: &Output,
+) {
+    use vkbrdf::batch::LocalBatch;
+    for mi in 0..mats.len() {
+        let picked: Vec<usize> = (0..local.len()).filter(|&r| local[r].1 == mi).collect();
+        let data: Vec<f32> = picked.iter().flat_map(|&r| local[r].0.clone()).collect();
+        let lb = LocalBatch::new(data, mi, mats, &memory_source()).expect("local");
+        let mut got = Output::default();
+        engine
+            .evaluate_local_into(&lb, mats, &Request { terms: true }, &mut got)
+            .expect("local");
+        for (q, &r) in picked.iter().enumerate() {
+            if r % 2 == 0 {
+                assert_eq!(
+                    got.brdf[3 * q..3 * q + 3],
+                    out.brdf[3 * r..3 * r + 3],
+                    "{isa}: material {mi}, row {r}: the local form's bits"
+                );
+            }
+        }
+    }
+}
+
 fn evaluate(isa: Isa, batch: &Batch, mats: &[Material]) -> Output {
     CpuEngine::with_isa(1, isa)
         .evaluate(batch, mats, &Request { terms: true })
@@ -204,24 +235,16 @@ fn every_instruction_set_gives_results_within_the_rule_of_each_other_and_can_be_
 /// both the certified f32 lanes and the deferred f64 ones ran.
 #[test]
 fn ggx_local_frame_within_the_rule_where_ds_slope_is_steepest() {
-    use vkbrdf::batch::LocalBatch;
-    let mut toml = String::new();
     let m_all = [FAST_MIN_ROUGHNESS, 0.1, 0.3, 0.7, 1.5];
-    for m in m_all {
-        for (geometry, fresnel) in [
-            (
-                "smith-correlated",
-                "fresnel = \"conductor\"\nior = [0.2, 0.9, 1.5]\nextinction = [3.0, 2.4, 1.9]",
-            ),
-            ("smith", "fresnel = \"schlick\"\nf0 = [0.04, 0.5, 0.9]"),
-            ("none", "fresnel = \"none\""),
-        ] {
-            toml.push_str(&format!(
-                "[[material]]\nname = \"m{m}-{geometry}\"\nmodel = \"cook-torrance\"\n\
-                 distribution = \"ggx\"\ngeometry = \"{geometry}\"\nroughness = {m}\n{fresnel}\n"
-            ));
-        }
-    }
+    let kinds = [
+        (
+            "smith-correlated",
+            "fresnel = \"conductor\"\nior = [0.2, 0.9, 1.5]\nextinction = [3.0, 2.4, 1.9]",
+        ),
+        ("smith", "fresnel = \"schlick\"\nf0 = [0.04, 0.5, 0.9]"),
+        ("none", "fresnel = \"none\""),
+    ];
+    let toml = common::steepest::materials_toml("ggx", &m_all, &kinds);
     let mats = parse_materials(&toml, "ggx-local").expect("materials");
     let mut local = Vec::new();
     let mut rows = Vec::new();
@@ -281,24 +304,7 @@ fn ggx_local_frame_within_the_rule_where_ds_slope_is_steepest() {
             "{isa}: largest relative error {worst:.2e} above {bound:.2e}"
         );
         // Each material's lanes in the local form: the +z rows' bits.
-        for mi in 0..mats.len() {
-            let picked: Vec<usize> = (0..local.len()).filter(|&r| local[r].1 == mi).collect();
-            let data: Vec<f32> = picked.iter().flat_map(|&r| local[r].0.clone()).collect();
-            let lb = LocalBatch::new(data, mi, &mats, &memory_source()).expect("local");
-            let mut got = Output::default();
-            engine
-                .evaluate_local_into(&lb, &mats, &request, &mut got)
-                .expect("local");
-            for (q, &r) in picked.iter().enumerate() {
-                if r % 2 == 0 {
-                    assert_eq!(
-                        got.brdf[3 * q..3 * q + 3],
-                        out.brdf[3 * r..3 * r + 3],
-                        "{isa}: material {mi}, row {r}: the local form's bits"
-                    );
-                }
-            }
-        }
+        assert_local_form_bits(&mut engine, isa, &mats, &local, &out);
     }
 }
 
@@ -311,8 +317,6 @@ fn ggx_local_frame_within_the_rule_where_ds_slope_is_steepest() {
 /// frame in its place, uncertified, 2.4e-5), and the +z rows' bits the local form's.
 #[test]
 fn beckmann_local_frame_within_the_rule_where_ds_slope_is_steepest() {
-    use vkbrdf::batch::LocalBatch;
-    let mut toml = String::new();
     let m_all = [FAST_MIN_ROUGHNESS, 0.1, 0.3, 0.7, 1.5];
     let kinds = [
         (
@@ -325,14 +329,7 @@ fn beckmann_local_frame_within_the_rule_where_ds_slope_is_steepest() {
         ),
         ("none", "fresnel = \"none\""),
     ];
-    for m in m_all {
-        for (geometry, fresnel) in kinds {
-            toml.push_str(&format!(
-                "[[material]]\nname = \"m{m}-{geometry}\"\nmodel = \"cook-torrance\"\n\
-                 distribution = \"beckmann\"\ngeometry = \"{geometry}\"\nroughness = {m}\n{fresnel}\n"
-            ));
-        }
-    }
+    let toml = common::steepest::materials_toml("beckmann", &m_all, &kinds);
     let mats = parse_materials(&toml, "beckmann-local").expect("materials");
     let (mut local, mut rows) = (Vec::new(), Vec::new());
     let mut i = 0usize;
@@ -375,23 +372,6 @@ fn beckmann_local_frame_within_the_rule_where_ds_slope_is_steepest() {
             "{isa}: largest relative error {worst:.2e} beyond the rule's relative part"
         );
         // Each material's lanes in the local form: the +z rows' bits.
-        for mi in 0..mats.len() {
-            let picked: Vec<usize> = (0..local.len()).filter(|&r| local[r].1 == mi).collect();
-            let data: Vec<f32> = picked.iter().flat_map(|&r| local[r].0.clone()).collect();
-            let lb = LocalBatch::new(data, mi, &mats, &memory_source()).expect("local");
-            let mut got = Output::default();
-            engine
-                .evaluate_local_into(&lb, &mats, &request, &mut got)
-                .expect("local");
-            for (q, &r) in picked.iter().enumerate() {
-                if r % 2 == 0 {
-                    assert_eq!(
-                        got.brdf[3 * q..3 * q + 3],
-                        out.brdf[3 * r..3 * r + 3],
-                        "{isa}: material {mi}, row {r}: the local form's bits"
-                    );
-                }
-            }
-        }
+        assert_local_form_bits(&mut engine, isa, &mats, &local, &out);
     }
 }

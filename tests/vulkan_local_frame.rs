@@ -12,27 +12,6 @@ use vkbrdf::gpu::VulkanOptions;
 use vkbrdf::material::{parse_materials, Material};
 use vkbrdf::reference::CpuReference;
 
-/// Rows of N = +z where GGX's D is steepest (`common::steepest`), c from 0.02 (below
-/// `LOCAL32_MIN_C`) to 1, with unnormalised L and V, for `per_m` materials of each
-/// roughness of `m_all` (material `per_m · i + g` has roughness `m_all[i]`).
-fn steepest_rows(m_all: &[f64], per_m: usize) -> Vec<f32> {
-    let mut rows = Vec::new();
-    let mut i = 0usize;
-    for (mi, &m) in m_all.iter().enumerate() {
-        for (l, v) in common::steepest::ggx_pairs(m, 0.02) {
-            // Unnormalised inputs: the frame's lengths are part of its error.
-            let (sl, sv) = (1.0 + 0.37 * (i % 7) as f64, 0.6 + 0.29 * (i % 5) as f64);
-            i += 1;
-            for g in 0..per_m {
-                rows.extend(l.iter().map(|x| (x * sl) as f32));
-                rows.extend(v.iter().map(|x| (x * sv) as f32));
-                rows.extend([0.0f32, 0.0, 1.0, (per_m * mi + g) as f32]);
-            }
-        }
-    }
-    rows
-}
-
 /// The materials of the test: GGX at every roughness of `m_all`, with each G and F that
 /// reads c or the cosines, `KINDS` materials a roughness.
 const KINDS: [(&str, &str); 4] = [
@@ -92,18 +71,11 @@ fn check_frame(frame: &str, float64: bool, batch: &Batch, mats: &[Material], ref
 #[test]
 fn ggx_local_f32_frame_within_its_bound_where_ds_slope_is_steepest() {
     let m_all = [0.01, 0.05, 0.1, 0.3, 0.7, 1.5];
-    let mut toml = String::new();
-    for m in m_all {
-        for (geometry, fresnel) in KINDS {
-            toml.push_str(&format!(
-                "[[material]]\nname = \"m{m}-{geometry}\"\nmodel = \"cook-torrance\"\n\
-                 distribution = \"ggx\"\ngeometry = \"{geometry}\"\nroughness = {m}\n{fresnel}\n"
-            ));
-        }
-    }
+    let toml = common::steepest::materials_toml("ggx", &m_all, &KINDS);
     let mats = parse_materials(&toml, "ggx-local32").expect("materials");
     let batch = Batch::new(
-        steepest_rows(&m_all, KINDS.len()),
+        // c from 0.02, below `LOCAL32_MIN_C`.
+        common::steepest::rows_z(common::steepest::ggx_pairs, 0.02, &m_all, KINDS.len()),
         10,
         mats.len(),
         &memory_source(),

@@ -38,30 +38,11 @@ fn beckmann_local_h64_frame_within_the_rule_where_ds_slope_is_steepest() {
         return;
     }
     let m_all = [0.01, 0.05, 0.1, 0.3, 0.7, 1.5];
-    let mut toml = String::new();
-    for m in m_all {
-        for (geometry, fresnel) in KINDS {
-            toml.push_str(&format!(
-                "[[material]]\nname = \"m{m}-{geometry}\"\nmodel = \"cook-torrance\"\n\
-                 distribution = \"beckmann\"\ngeometry = \"{geometry}\"\nroughness = {m}\n{fresnel}\n"
-            ));
-        }
-    }
+    let toml = common::steepest::materials_toml("beckmann", &m_all, &KINDS);
     let mats = parse_materials(&toml, "beckmann-local-h64").expect("materials");
-    let mut rows = Vec::new();
-    let mut i = 0usize;
-    for (mi, &m) in m_all.iter().enumerate() {
-        for (l, v) in common::steepest::beckmann_pairs(m, 0.02) {
-            // Unnormalised inputs: the frame's lengths are part of its error.
-            let (sl, sv) = (1.0 + 0.37 * (i % 7) as f64, 0.6 + 0.29 * (i % 5) as f64);
-            i += 1;
-            for g in 0..KINDS.len() {
-                rows.extend(l.iter().map(|x| (x * sl) as f32));
-                rows.extend(v.iter().map(|x| (x * sv) as f32));
-                rows.extend([0.0f32, 0.0, 1.0, (KINDS.len() * mi + g) as f32]);
-            }
-        }
-    }
+    // c from 0.02, below `LOCAL_H64_MIN_C`.
+    let rows =
+        common::steepest::rows_z(common::steepest::beckmann_pairs, 0.02, &m_all, KINDS.len());
     let batch = Batch::new(rows, 10, mats.len(), &memory_source()).expect("batch");
     let request = Request { terms: true };
     let reference = CpuReference::new()

@@ -159,9 +159,14 @@ pub(super) fn frame<A: MulAdd, const Z: bool>(x: &[f32; 9]) -> Frame {
 /// turns by its components' last rounding only.
 #[inline(always)]
 pub(super) fn frame_local64<A: MulAdd>(l: [f32; 3], v: [f32; 3]) -> Frame {
-    let w = wide_parts::<A, f64>(l.map(f64::from), v.map(f64::from));
+    local_frame_of(wide_parts::<A, f64>(l.map(f64::from), v.map(f64::from)))
+}
+
+/// A local form's frame (N = +z) from the values it is made of: `1 − c²` from |l − v|/2
+/// = sin θ_d, as in [`frame`], and the horizon and grazing tests on the cosines.
+#[inline(always)]
+fn local_frame_of<T: Real>(w: LocalParts<T>) -> Frame<T> {
     let ([lx, ly, lz], [vx, vy, vz]) = (w.l, w.v);
-    // sin² of c from |l − v|/2 = sin θ_d, as in [`frame`].
     let (dx, dy, dz) = (lx - vx, ly - vy, lz - vz);
     let s2 = (dx * dx + dy * dy + dz * dz) * 0.25;
     let g = GRAZING as f32;
@@ -181,9 +186,10 @@ pub(super) fn frame_local64<A: MulAdd>(l: [f32; 3], v: [f32; 3]) -> Frame {
     }
 }
 
-/// What [`frame_local64`] forms in f64 ([`wide_parts`]), each value rounded once to f32.
+/// The values a local form's frame is made of ([`local_frame_of`]): what [`frame_local64`]
+/// forms in f64 ([`wide_parts`]), each rounded once to f32, or [`frame_local_h64`] its way.
 #[derive(Clone, Copy)]
-struct WideParts<T: Real> {
+struct LocalParts<T: Real> {
     /// l = L/|L|.
     pub(super) l: [T; 3],
     /// v = V/|V|.
@@ -227,26 +233,16 @@ pub(super) fn frame_local_h64<A: MulAdd, T: FrameLanes>(l: [T; 3], v: [T; 3]) ->
     let w = T::half_parts::<A>(l, v);
     let (lx, ly, lz) = (l[0] * w.il, l[1] * w.il, l[2] * w.il);
     let (vx, vy, vz) = (v[0] * w.iv, v[1] * w.iv, v[2] * w.iv);
-    let sin2_i = A::mul_add(lx, lx, ly * ly);
-    let sin2_o = A::mul_add(vx, vx, vy * vy);
-    // sin² of c from |l − v|/2 = sin θ_d, as in [`frame`].
-    let (dx, dy, dz) = (lx - vx, ly - vy, lz - vz);
-    let s2 = A::mul_add(dz, dz, A::mul_add(dx, dx, dy * dy)) * 0.25;
-    let g = GRAZING as f32;
-    // `≥` is false for NaN: lanes that went non-finite above are rescued too.
-    let ok =
-        w.lengths_ok & lz.ge_scalar(g) & vz.ge_scalar(g) & w.cos_h.ge_scalar(g) & w.c.ge_scalar(g);
-    Frame {
-        cos_i: lz,
-        cos_o: vz,
-        cos_h: w.cos_h,
+    local_frame_of(LocalParts {
+        l: [lx, ly, lz],
+        v: [vx, vy, vz],
+        sin2_i: A::mul_add(lx, lx, ly * ly),
+        sin2_o: A::mul_add(vx, vx, vy * vy),
         c: w.c,
-        s2,
+        cos_h: w.cos_h,
         sin2_h: w.sin2_h,
-        sin2_i,
-        sin2_o,
-        ok,
-    }
+        lengths_ok: w.lengths_ok,
+    })
 }
 
 /// What [`frame_local_h64`] forms in f64 ([`half_parts`]) rounded once to f32, and h's
@@ -297,7 +293,7 @@ pub(super) fn half_parts<A: MulAdd, W: Wide>(l: [W; 3], v: [W; 3]) -> HalfParts<
 /// registers at once (the lanes' bits do not depend on the order); no closure or `map`,
 /// which the register path left out of line (its intrinsics then calls).
 #[inline(always)]
-fn wide_parts<A: MulAdd, W: Wide>(l: [W; 3], v: [W; 3]) -> WideParts<W::Narrow> {
+fn wide_parts<A: MulAdd, W: Wide>(l: [W; 3], v: [W; 3]) -> LocalParts<W::Narrow> {
     let ll = sq3_wide::<A, W>(l);
     let il = rsqrt64_fast::<A, W>(ll);
     let l = [l[0] * il, l[1] * il, l[2] * il];
@@ -311,7 +307,7 @@ fn wide_parts<A: MulAdd, W: Wide>(l: [W; 3], v: [W; 3]) -> WideParts<W::Narrow> 
     let h = [l[0] + v[0], l[1] + v[1], l[2] + v[2]];
     let hh = sq3_wide::<A, W>(h);
     let ih = rsqrt64_fast::<A, W>(hh);
-    WideParts {
+    LocalParts {
         l: [lx, ly, lz],
         v: [vx, vy, vz],
         sin2_i,

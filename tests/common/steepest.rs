@@ -47,3 +47,48 @@ fn pairs_at(tans: &[f64], c_min: f64) -> Vec<([f64; 3], [f64; 3])> {
     }
     pairs
 }
+
+/// TOML for Cook–Torrance materials of `distribution` at each roughness of `m_all`, one for
+/// each `(geometry, Fresnel TOML)` of `kinds`: material `kinds.len() · i + g` has roughness
+/// `m_all[i]` and kind `g`.
+pub fn materials_toml(distribution: &str, m_all: &[f64], kinds: &[(&str, &str)]) -> String {
+    let mut toml = String::new();
+    for m in m_all {
+        for (geometry, fresnel) in kinds {
+            toml.push_str(&format!(
+                "[[material]]\nname = \"m{m}-{geometry}\"\nmodel = \"cook-torrance\"\n\
+                 distribution = \"{distribution}\"\ngeometry = \"{geometry}\"\n\
+                 roughness = {m}\n{fresnel}\n"
+            ));
+        }
+    }
+    toml
+}
+
+/// Unit `(l, v)` pairs about N = +z.
+pub type Pairs = Vec<([f64; 3], [f64; 3])>;
+
+/// 10-column rows with N = +z of `pairs(m, c_min)` for each roughness of `m_all`, with
+/// unnormalised L and V (the frame's lengths are part of its error), each pair once for
+/// each of `per_m` materials (row material `per_m · i + g`, as [`materials_toml`] numbers them).
+pub fn rows_z(
+    pairs: fn(f64, f64) -> Pairs,
+    c_min: f64,
+    m_all: &[f64],
+    per_m: usize,
+) -> Vec<f32> {
+    let mut rows = Vec::new();
+    let mut i = 0usize;
+    for (mi, &m) in m_all.iter().enumerate() {
+        for (l, v) in pairs(m, c_min) {
+            let (sl, sv) = (1.0 + 0.37 * (i % 7) as f64, 0.6 + 0.29 * (i % 5) as f64);
+            i += 1;
+            for g in 0..per_m {
+                rows.extend(l.iter().map(|x| (x * sl) as f32));
+                rows.extend(v.iter().map(|x| (x * sv) as f32));
+                rows.extend([0.0f32, 0.0, 1.0, (per_m * mi + g) as f32]);
+            }
+        }
+    }
+    rows
+}
