@@ -71,12 +71,7 @@ pub type Pairs = Vec<([f64; 3], [f64; 3])>;
 /// 10-column rows with N = +z of `pairs(m, c_min)` for each roughness of `m_all`, with
 /// unnormalised L and V (the frame's lengths are part of its error), each pair once for
 /// each of `per_m` materials (row material `per_m · i + g`, as [`materials_toml`] numbers them).
-pub fn rows_z(
-    pairs: fn(f64, f64) -> Pairs,
-    c_min: f64,
-    m_all: &[f64],
-    per_m: usize,
-) -> Vec<f32> {
+pub fn rows_z(pairs: fn(f64, f64) -> Pairs, c_min: f64, m_all: &[f64], per_m: usize) -> Vec<f32> {
     let mut rows = Vec::new();
     let mut i = 0usize;
     for (mi, &m) in m_all.iter().enumerate() {
