@@ -253,5 +253,53 @@ pub fn table(rows: &[EqualBytesRow]) -> String {
                 .map_or(String::new(), |w| format!("  (peer skipped: {w})")),
         );
     }
+    // A variant forced by VKBRDF_CPU_ISA is not the peer's: Dr.Jit compiles for the host.
+    let best = crate::cpu::Isa::best().to_string();
+    if let Some(r) = rows.iter().find(|r| r.instruction_set != best) {
+        s += &format!(
+            "(the engine ran `{}` as VKBRDF_CPU_ISA asked; Mitsuba compiles for this CPU's \
+             best instruction set, `{best}`)\n",
+            r.instruction_set
+        );
+    }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row_on(isa: &str) -> EqualBytesRow {
+        EqualBytesRow {
+            scenario: "mitsuba-ggx".into(),
+            peer: "mitsuba".into(),
+            tuples: 16,
+            bytes_per_tuple: 36,
+            instruction_set: isa.into(),
+            threads: 1,
+            cpu_evals_per_s: 1e6,
+            cpu_cycles_per_eval: None,
+            cpu_max_rel_err: 0.0,
+            peer_evals_per_s: None,
+            peer_cycles_per_eval: None,
+            peer_max_rel_err: None,
+            ratio: None,
+            skipped: None,
+        }
+    }
+
+    /// The table says when the engine ran a variant other than the host's best, which the
+    /// peer's JIT does not follow, and only then.
+    #[test]
+    fn the_table_names_a_forced_instruction_set() {
+        let best = crate::cpu::Isa::best().to_string();
+        assert!(!table(&[row_on(&best)]).contains("VKBRDF_CPU_ISA"));
+        if best != "scalar" {
+            let t = table(&[row_on("scalar")]);
+            assert!(
+                t.contains("ran `scalar`") && t.contains(&format!("`{best}`")),
+                "{t}"
+            );
+        }
+    }
 }
