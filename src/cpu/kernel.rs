@@ -344,28 +344,16 @@ pub fn microfacet_block<A: MulAdd, const D: u8, const G: u8, const F: u8, const 
         } else {
             FRAME_EACH
         };
+        // One call a mode (a const parameter each), the same arguments.
+        macro_rules! frames_in {
+            ($mode:expr) => {
+                frames::<A, D, Z, { $mode }>(p, inp, &z, &mut fs, &mut ok, &mut slow, &mut general)
+            };
+        }
         match mode {
-            FRAME_LOCAL => frames::<A, D, Z, FRAME_LOCAL>(
-                p,
-                inp,
-                &z,
-                &mut fs,
-                &mut ok,
-                &mut slow,
-                &mut general,
-            ),
-            FRAME_EACH => {
-                frames::<A, D, Z, FRAME_EACH>(p, inp, &z, &mut fs, &mut ok, &mut slow, &mut general)
-            }
-            _ => frames::<A, D, Z, FRAME_GENERAL>(
-                p,
-                inp,
-                &z,
-                &mut fs,
-                &mut ok,
-                &mut slow,
-                &mut general,
-            ),
+            FRAME_LOCAL => frames_in!(FRAME_LOCAL),
+            FRAME_EACH => frames_in!(FRAME_EACH),
+            _ => frames_in!(FRAME_GENERAL),
         }
         // In the block, unless the caller gathers them (as it does the f64 frame's lanes):
         // computed here, they made every block with one run both frames.
