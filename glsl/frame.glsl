@@ -102,7 +102,7 @@ uint make_frame(Row r, GpuMaterial m, out Frame f) {
 #if defined(HAS_LOCAL_H64_FRAME)
     if (local && local_h64_material(m)) {
         uint status = frame_scalars_local_h64(r, m, f);
-        if (status != STATUS_NOT_LOCAL_H64) {
+        if (status != STATUS_UNCERTIFIED) {
             return status;
         }
     }

@@ -15,14 +15,11 @@
 #include "input.glsl"
 #include "terms.glsl"
 
-#if defined(HAS_COOK_TORRANCE) && defined(HAS_D_GGX) && !defined(NO_LOCAL_FRAME) \
-    && !defined(NO_LOCAL32_FRAME)
-#define HAS_LOCAL32_FRAME
-
-// frame_scalars_local32's answer for a lane it does not certify.
+// A local frame's answer for a lane it leaves to the device's accurate frame (this
+// file's, uncertified; frame_local_h64.glsl's, outside its limits).
 const uint STATUS_UNCERTIFIED = 3u;
 
-// Below this c the lane leaves the local f32 frame: its c is within about u (5 + 1/c)
+// Below this c a lane leaves the local frames: the f32 one's c is within about u (5 + 1/c)
 // (docs/VULKAN.md), at most 21u here, which Cook-Torrance's G and the Fresnel terms read
 // with a log-slope of about 1.
 const float LOCAL32_MIN_C = 0.0625;
@@ -30,6 +27,33 @@ const float LOCAL32_MIN_C = 0.0625;
 // where the models' 1/cos factors stay far inside f32's range and the TINY_COS branches,
 // which read the exact cosines, are never taken.
 const float LOCAL32_MIN_COS = 1e-4;
+
+// The fields a local frame (this one or frame_local_h64.glsl's) shares from its unit f32
+// l and v, with cos_h and c already in f: the cosines, the sines as sums of squares of
+// components, and the exact fields the models read only below TINY_COS (never on these
+// frames' lanes).
+void local_frame_cosines(vec3 l, vec3 v, inout Frame f) {
+    f.cos_i = l.z;
+    f.cos_o = v.z;
+    f.sin2_i = dot(l.xy, l.xy);
+    f.sin2_o = dot(v.xy, v.xy);
+#if defined(HAS_FLOAT64)
+    f.cos_i_exact = double(l.z);
+    f.cos_o_exact = double(v.z);
+    f.cos_h_exact = double(f.cos_h);
+    f.c_exact = double(f.c);
+#else
+    f.cos_i_xf = xf(l.z);
+    f.cos_o_xf = xf(v.z);
+    f.cos_h_xf = xf(f.cos_h);
+    f.c_xf = xf(f.c);
+    f.c_exact = vec2(f.c, 0.0);
+#endif
+}
+
+#if defined(HAS_COOK_TORRANCE) && defined(HAS_D_GGX) && !defined(NO_LOCAL_FRAME) \
+    && !defined(NO_LOCAL32_FRAME)
+#define HAS_LOCAL32_FRAME
 
 #if defined(HAS_FLOAT64)
 // 1/sqrt(q), q = x.x the squared length of an f32 vector (or of l + v), to within
@@ -45,8 +69,7 @@ float inv_length_local32(vec3 x, out float length2) {
     if (!(q >= 1e-20 && q <= 1e20)) {
         return 0.0;
     }
-    double y = double(inversesqrt(float(q)));
-    return float(y * (1.5 - 0.5 * q * y * y));
+    return float(rsqrt64_once(q));
 }
 #else
 // x.x as a pair (hi, lo) to ~2^-36 relative, without f64: each square exact as three
@@ -112,22 +135,7 @@ uint frame_scalars_local32(Row r, GpuMaterial m, inout Frame f) {
         return STATUS_UNCERTIFIED;
     }
     f.h = h * inv_len;
-    f.cos_i = l.z;
-    f.cos_o = v.z;
-    f.sin2_i = dot(l.xy, l.xy);
-    f.sin2_o = dot(v.xy, v.xy);
-#if defined(HAS_FLOAT64)
-    f.cos_i_exact = double(l.z);
-    f.cos_o_exact = double(v.z);
-    f.cos_h_exact = double(f.cos_h);
-    f.c_exact = double(f.c);
-#else
-    f.cos_i_xf = xf(l.z);
-    f.cos_o_xf = xf(v.z);
-    f.cos_h_xf = xf(f.cos_h);
-    f.c_xf = xf(f.c);
-    f.c_exact = vec2(f.c, 0.0);
-#endif
+    local_frame_cosines(l, v, f);
     return STATUS_VALID;
 }
 #endif

@@ -38,6 +38,16 @@ float saturate_output(float x, inout bool saturated) {
 float float_or_inf(double x) {
     return x > double(FLT_MAX) ? uintBitsToFloat(0x7f800000u) : float(x);
 }
+
+// 1/sqrt(q) for f64 q whose float32 rounding is normal (the callers test a range inside
+// [1e-20, 1e20]): float32's inversesqrt of q's rounding (within 2 ulp, the Vulkan
+// precision table, plus the argument's rounding: e <= 5u) and one Newton step in f64,
+// which takes e to 1.5 e^2 < 2e-13 — enough for a value rounded once to f32 (the local
+// frames); frame64.glsl's rsqrt64 takes a second step for f64's last bits.
+double rsqrt64_once(double q) {
+    double y = double(inversesqrt(float(q)));
+    return y * (1.5 - 0.5 * q * y * y);
+}
 #endif
 
 // ---------------------------------------------------------------- finiteness and normalise

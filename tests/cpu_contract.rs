@@ -312,9 +312,9 @@ fn ggx_local_frame_within_the_rule_where_ds_slope_is_steepest() {
 /// no certificate) where D is steepest, out to its `exp`'s cut-off (tan θ_h = m, 3m, 9m,
 /// 13.2m), at m = `FAST_MIN_ROUGHNESS` … 1.5 with c from `FAST_MIN_C` to 1 and
 /// unnormalised inputs, as rows whose N is +z in every other row (tilted in the others):
-/// within the rule on every instruction set, its largest relative error inside the rule's
-/// relative part alone (no credit from `S_in`: measured 2.8–3.0e-6; with GGX's f32 local
-/// frame in its place, uncertified, 2.4e-5), and the +z rows' bits the local form's.
+/// within the rule on every instruction set, its largest relative error inside the frame's
+/// written bound, 6.5e-6, with no credit from `S_in` (measured 2.97e-6; with GGX's f32
+/// local frame in its place, uncertified, 2.4e-5), and the +z rows' bits the local form's.
 #[test]
 fn beckmann_local_frame_within_the_rule_where_ds_slope_is_steepest() {
     let m_all = [FAST_MIN_ROUGHNESS, 0.1, 0.3, 0.7, 1.5];
@@ -367,9 +367,13 @@ fn beckmann_local_frame_within_the_rule_where_ds_slope_is_steepest() {
         let out = engine.evaluate(&batch, &mats, &request).expect("rows");
         let worst = judge(&format!("rows on {isa}"), &batch, &mats, &out, &reference);
         eprintln!("{isa}: largest relative error {worst:.2e}");
+        // The bound the frame is built on (docs/CPU_ENGINE.md, "The local form's h64
+        // frame"): the general f32 frame's ~5e-6 of D's, G's and K's arithmetic and the
+        // metal form's 48u, and ~21u of its own f32 scales: 5e-6 + 25u, without S_in.
+        let bound = 5e-6 + 25.0 * f64::from(f32::EPSILON) / 2.0;
         assert!(
-            worst <= 1e-5,
-            "{isa}: largest relative error {worst:.2e} beyond the rule's relative part"
+            worst <= bound,
+            "{isa}: largest relative error {worst:.2e} above {bound:.2e}"
         );
         // Each material's lanes in the local form: the +z rows' bits.
         assert_local_form_bits(&mut engine, isa, &mats, &local, &out);

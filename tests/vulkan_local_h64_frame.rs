@@ -2,7 +2,7 @@
 //! `frame_scalars_local_h64`): Beckmann Cook–Torrance lanes with N = +z on a device with
 //! f64, h in f64 and l, v in f32, with no certificate. Tested where Beckmann's D is
 //! steepest (tan θ_h = m, 3m, 9m and either side of `exp`'s cut-off), c from 0.02 (below
-//! `LOCAL_H64_MIN_C`) to 1, unnormalised inputs, for every geometry and the Fresnel terms
+//! `LOCAL32_MIN_C`) to 1, unnormalised inputs, for every geometry and the Fresnel terms
 //! that read c and the cosines: within FORMULAS.md §1's rule, and the frame taken.
 
 mod common;
@@ -40,7 +40,7 @@ fn beckmann_local_h64_frame_within_the_rule_where_ds_slope_is_steepest() {
     let m_all = [0.01, 0.05, 0.1, 0.3, 0.7, 1.5];
     let toml = common::steepest::materials_toml("beckmann", &m_all, &KINDS);
     let mats = parse_materials(&toml, "beckmann-local-h64").expect("materials");
-    // c from 0.02, below `LOCAL_H64_MIN_C`.
+    // c from 0.02, below `LOCAL32_MIN_C`.
     let rows =
         common::steepest::rows_z(common::steepest::beckmann_pairs, 0.02, &m_all, KINDS.len());
     let batch = Batch::new(rows, 10, mats.len(), &memory_source()).expect("batch");
@@ -52,7 +52,7 @@ fn beckmann_local_h64_frame_within_the_rule_where_ds_slope_is_steepest() {
     let worst =
         common::rule::assert_within_rule("the local h64 frame", &batch, &mats, &out, &reference);
     // The frame ran: without it (the f64 local frame in every lane) some rows' bits change
-    // — l and v are f32 products here — and others' do not (c below LOCAL_H64_MIN_C, and
+    // — l and v are f32 products here — and others' do not (c below LOCAL32_MIN_C, and
     // D at exp's cut-off, 0 either way).
     let mut without = common::vulkan_with(VulkanOptions {
         extra_defines: vec![("NO_LOCAL_H64_FRAME".into(), "1".into())],
@@ -63,8 +63,9 @@ fn beckmann_local_h64_frame_within_the_rule_where_ds_slope_is_steepest() {
     let worst_plain =
         common::rule::assert_within_rule("the f64 local frame", &batch, &mats, &plain, &reference);
     // As accurate as the f64 local frame (whose h it shares to ~1e-12): l and v in f32
-    // add at most a few u to the cosines (docs/VULKAN.md, "The local frames").
-    let bound = worst_plain + 1e-6;
+    // add at most a few u to the cosines and sines, K and G (docs/VULKAN.md, "The local
+    // frames"): 10u allowed beyond the f64 local frame's worst.
+    let bound = worst_plain + 10.0 * f64::from(f32::EPSILON) / 2.0;
     assert!(
         worst <= bound,
         "largest relative error {worst:.2e}, the f64 local frame's {worst_plain:.2e}"

@@ -9,7 +9,7 @@
 use super::dispatch::block;
 use super::kernel::{self, Inputs, Outputs, LANES};
 use super::plan::Plan;
-use super::register::{self, Registers};
+use super::register::{self, RegisterIo};
 use super::{measured, transpose};
 
 mod deferred;
@@ -76,7 +76,7 @@ impl pulp::WithSimd for ChunkOp<'_, '_> {
 /// shuffles (`transpose`), `a·b + c` fused.
 impl super::isa::WithFma for ChunkOp<'_, '_> {
     #[inline(always)]
-    fn with_fma<S: transpose::Transpose + Registers>(self, simd: S) -> (Counts, Tally) {
+    fn with_fma<S: transpose::Transpose + RegisterIo>(self, simd: S) -> (Counts, Tally) {
         if let (Source::Local(_), None, Plan::Microfacet { d, aniso, g, f, p }) =
             (self.batch, self.order, self.plan)
         {
@@ -87,9 +87,7 @@ impl super::isa::WithFma for ChunkOp<'_, '_> {
                     work: &mut *self.work,
                     material: self.material,
                 };
-                if let Some(r) = simd.serve(op) {
-                    return r;
-                }
+                return op.run(simd);
             }
         }
         run_chunk::<S, S, Fused>(

@@ -159,7 +159,7 @@ pub(super) fn frame<A: MulAdd, const Z: bool>(x: &[f32; 9]) -> Frame {
 /// turns by its components' last rounding only.
 #[inline(always)]
 pub(super) fn frame_local64<A: MulAdd>(l: [f32; 3], v: [f32; 3]) -> Frame {
-    local_frame_of(wide_parts::<A, f64>(l.map(f64::from), v.map(f64::from)))
+    local_frame_of(wide_parts::<A>(l.map(f64::from), v.map(f64::from)))
 }
 
 /// A local form's frame (N = +z) from the values it is made of: `1 − c²` from |l − v|/2
@@ -191,16 +191,16 @@ fn local_frame_of<T: Real>(w: LocalParts<T>) -> Frame<T> {
 #[derive(Clone, Copy)]
 struct LocalParts<T: Real> {
     /// l = L/|L|.
-    pub(super) l: [T; 3],
+    l: [T; 3],
     /// v = V/|V|.
-    pub(super) v: [T; 3],
-    pub(super) sin2_i: T,
-    pub(super) sin2_o: T,
-    pub(super) c: T,
-    pub(super) cos_h: T,
-    pub(super) sin2_h: T,
+    v: [T; 3],
+    sin2_i: T,
+    sin2_o: T,
+    c: T,
+    cos_h: T,
+    sin2_h: T,
     /// `|L|²` and `|V|²` (rounded to f32) inside [`LENGTH2_MIN`, `LENGTH2_MAX`].
-    pub(super) lengths_ok: T::Mask,
+    lengths_ok: T::Mask,
 }
 
 /// Lanes whose [`frame_local_h64`] can be formed: one f32 (its f64 part in one f64), or a
@@ -287,26 +287,23 @@ pub(super) fn half_parts<A: MulAdd, W: Wide>(l: [W; 3], v: [W; 3]) -> HalfParts<
     }
 }
 
-/// The f64 part of [`frame_local64`] from L and V in f64 lanes: l, v and h = l + v
-/// unrounded, each scale `1/|x|` by [`rsqrt64_fast`], every result rounded once. Each
-/// vector's values as soon as they can be made, so that a register path holds few f64
-/// registers at once (the lanes' bits do not depend on the order); no closure or `map`,
-/// which the register path left out of line (its intrinsics then calls).
+/// The f64 part of [`frame_local64`] from L and V in f64: l, v and h = l + v unrounded,
+/// each scale `1/|x|` by [`rsqrt64_fast`], every result rounded once.
 #[inline(always)]
-fn wide_parts<A: MulAdd, W: Wide>(l: [W; 3], v: [W; 3]) -> LocalParts<W::Narrow> {
-    let ll = sq3_wide::<A, W>(l);
-    let il = rsqrt64_fast::<A, W>(ll);
+fn wide_parts<A: MulAdd>(l: [f64; 3], v: [f64; 3]) -> LocalParts<f32> {
+    let ll = sq3_wide::<A, f64>(l);
+    let il = rsqrt64_fast::<A, f64>(ll);
     let l = [l[0] * il, l[1] * il, l[2] * il];
     let (lx, ly, lz) = (l[0].narrow(), l[1].narrow(), l[2].narrow());
-    let sin2_i = side2_wide::<A, W>(l).narrow();
-    let vv = sq3_wide::<A, W>(v);
-    let iv = rsqrt64_fast::<A, W>(vv);
+    let sin2_i = side2_wide::<A, f64>(l).narrow();
+    let vv = sq3_wide::<A, f64>(v);
+    let iv = rsqrt64_fast::<A, f64>(vv);
     let v = [v[0] * iv, v[1] * iv, v[2] * iv];
     let (vx, vy, vz) = (v[0].narrow(), v[1].narrow(), v[2].narrow());
-    let sin2_o = side2_wide::<A, W>(v).narrow();
+    let sin2_o = side2_wide::<A, f64>(v).narrow();
     let h = [l[0] + v[0], l[1] + v[1], l[2] + v[2]];
-    let hh = sq3_wide::<A, W>(h);
-    let ih = rsqrt64_fast::<A, W>(hh);
+    let hh = sq3_wide::<A, f64>(h);
+    let ih = rsqrt64_fast::<A, f64>(hh);
     LocalParts {
         l: [lx, ly, lz],
         v: [vx, vy, vz],
@@ -314,7 +311,7 @@ fn wide_parts<A: MulAdd, W: Wide>(l: [W; 3], v: [W; 3]) -> LocalParts<W::Narrow>
         sin2_o,
         c: (hh * ih * 0.5).narrow(),
         cos_h: (h[2] * ih).narrow(),
-        sin2_h: (side2_wide::<A, W>(h) * (ih * ih)).narrow(),
+        sin2_h: (side2_wide::<A, f64>(h) * (ih * ih)).narrow(),
         // On the f32 roundings, as [`frame`] tests them.
         lengths_ok: length2_ok(ll.narrow()) & length2_ok(vv.narrow()),
     }

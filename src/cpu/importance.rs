@@ -136,7 +136,7 @@ impl ItemOp<'_> {
 /// [`ItemOp`] on AVX-512 and AVX2, `a·b + c` fused (as the chunks run them).
 impl super::isa::WithFma for ItemOp<'_> {
     #[inline(always)]
-    fn with_fma<S: super::transpose::Transpose + super::register::Registers>(self, simd: S) {
+    fn with_fma<S: super::transpose::Transpose + super::register::RegisterIo>(self, simd: S) {
         self.sums::<S, Fused>(simd);
     }
 }

@@ -112,7 +112,7 @@ impl std::fmt::Display for Isa {
 /// which both have FMA and the AVX transposes.
 pub(super) trait WithFma: pulp::WithSimd {
     /// The work in `simd`'s lanes, with FMA.
-    fn with_fma<S: super::transpose::Transpose + super::register::Registers>(
+    fn with_fma<S: super::transpose::Transpose + super::register::RegisterIo>(
         self,
         simd: S,
     ) -> Self::Output;
@@ -138,7 +138,7 @@ struct Fma<S, O> {
 }
 
 #[cfg(target_arch = "x86_64")]
-impl<S: super::transpose::Transpose + super::register::Registers, O: WithFma> pulp::NullaryFnOnce
+impl<S: super::transpose::Transpose + super::register::RegisterIo, O: WithFma> pulp::NullaryFnOnce
     for Fma<S, O>
 {
     type Output = O::Output;

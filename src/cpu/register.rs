@@ -26,7 +26,7 @@ use crate::terms::{FresnelKind, Geometry};
 mod io;
 mod lanes;
 
-pub(super) use io::{RegisterIo, RegisterOp, Registers};
+pub(super) use io::RegisterIo;
 pub(super) use lanes::Reg;
 
 /// Whether a material group runs on the register path: GGX or Beckmann, isotropic, with

@@ -9,7 +9,7 @@ use crate::backend::Counts;
 use crate::batch::COLUMNS_LOCAL;
 use crate::cpu::kernel::{self, LANES};
 use crate::cpu::plan::Plan;
-use crate::cpu::register::{self, Reg, RegisterIo, RegisterOp};
+use crate::cpu::register::{self, Reg, RegisterIo};
 use crate::material::Material;
 use crate::terms::math::Fused;
 
@@ -21,11 +21,11 @@ pub(super) struct LocalRegisters<'a, 'b> {
     pub(super) material: &'a Material,
 }
 
-impl RegisterOp for LocalRegisters<'_, '_> {
-    type Output = (Counts, Tally);
-
+impl LocalRegisters<'_, '_> {
+    /// The chunk in `simd`'s registers, by the group's distribution, geometry and Fresnel
+    /// term.
     #[inline(always)]
-    fn run<S: RegisterIo>(self, simd: S) -> (Counts, Tally) {
+    pub(super) fn run<S: RegisterIo>(self, simd: S) -> (Counts, Tally) {
         use crate::terms::{DistributionKind as D, FresnelKind as F, Geometry as G};
         use kernel::{D_BECKMANN, D_GGX, F_CONDUCTOR, F_NONE, F_SCHLICK};
         use kernel::{G_CT, G_NONE, G_SMITH, G_SMITH_CORRELATED, G_SMITH_FAST};

@@ -1,23 +1,8 @@
-//! Which instruction sets have a register path ([`Registers`]) and each one's own reads,
-//! writes and conversions ([`RegisterIo`]): AVX2's and AVX-512's.
+//! Each instruction set's reads, writes and conversions on the register path
+//! ([`RegisterIo`]): AVX2's and AVX-512's, the engine's variants with FMA, both of which
+//! have the path.
 
 use pulp::Simd;
-
-/// Work on the register path, for the instruction sets that have one
-/// ([`Registers::serve`]).
-pub(crate) trait RegisterOp {
-    /// What the work returns.
-    type Output;
-    /// The work in `simd`'s registers.
-    fn run<S: RegisterIo>(self, simd: S) -> Self::Output;
-}
-
-/// The instruction sets the engine's lanes run with FMA, and whether they have a register
-/// path.
-pub(crate) trait Registers: Simd {
-    /// `op` on this instruction set's register path, or `None` where it has none.
-    fn serve<O: RegisterOp>(self, op: O) -> Option<O::Output>;
-}
 
 /// An instruction set's register path: the width of a register and its own ways to read
 /// the local form's rows into registers and write RGB back.
@@ -41,16 +26,8 @@ pub(crate) trait RegisterIo: Simd {
     fn narrow(self, w: [Self::f64s; 2]) -> Self::f32s;
 }
 
-/// AVX2: the register path, 8 tuples a register.
-#[cfg(target_arch = "x86_64")]
-impl Registers for pulp::x86::V3 {
-    #[inline(always)]
-    fn serve<O: RegisterOp>(self, op: O) -> Option<O::Output> {
-        Some(op.run(self))
-    }
-}
-
-/// AVX2's reads and writes: the transposes of `transpose::avx2`, `vmovmskps`.
+/// AVX2's reads and writes, 8 tuples a register: the transposes of `transpose::avx2`,
+/// `vmovmskps`.
 #[cfg(target_arch = "x86_64")]
 impl RegisterIo for pulp::x86::V3 {
     #[inline(always)]
@@ -92,17 +69,8 @@ impl RegisterIo for pulp::x86::V3 {
     }
 }
 
-/// AVX-512: the register path, 16 tuples a register.
-#[cfg(target_arch = "x86_64")]
-impl Registers for pulp::x86::V4 {
-    #[inline(always)]
-    fn serve<O: RegisterOp>(self, op: O) -> Option<O::Output> {
-        Some(op.run(self))
-    }
-}
-
-/// AVX-512's reads and writes: the permutes of `transpose::avx512`, the mask registers'
-/// bits as they are.
+/// AVX-512's reads and writes, 16 tuples a register: the permutes of `transpose::avx512`,
+/// the mask registers' bits as they are.
 #[cfg(target_arch = "x86_64")]
 impl RegisterIo for pulp::x86::V4 {
     #[inline(always)]
