@@ -363,14 +363,23 @@ pub fn microfacet_block<A: MulAdd, const D: u8, const G: u8, const F: u8, const 
         }
         // Two loops, so that the one without terms divides nothing out; a conductor whose
         // every channel is legal for it takes F's metal form (`conductor::f_lane_metal`,
-        // half the arithmetic), while the f64 frame's lanes keep the scaled form, as the
-        // other Fresnel terms keep theirs.
-        let metal = F == F_CONDUCTOR && p.conductor.metal;
-        match (p.terms, metal) {
-            (true, false) => terms32::<A, D, G, F, true, false>(p, &fs, &ok, out),
-            (false, false) => terms32::<A, D, G, F, false, false>(p, &fs, &ok, out),
-            (true, true) => terms32::<A, D, G, F, true, true>(p, &fs, &ok, out),
-            (false, true) => terms32::<A, D, G, F, false, true>(p, &fs, &ok, out),
+        // half the arithmetic) or, where the plan fitted one, its polynomial in c (valid
+        // for c ≥ FAST_MIN_C: these lanes), while the f64 frame's lanes keep the scaled
+        // form, as the other Fresnel terms keep theirs.
+        use conductor::{FORM_METAL as METAL, FORM_POLY as POLY, FORM_SCALED as SCALED};
+        // The quotient form is the metal form's bits: the lane loops keep one of the two.
+        let form = match p.conductor_form() {
+            _ if F != F_CONDUCTOR => SCALED,
+            conductor::FORM_QUOTIENT => METAL,
+            form => form,
+        };
+        match (p.terms, form) {
+            (true, SCALED) => terms32::<A, D, G, F, true, SCALED>(p, &fs, &ok, out),
+            (false, SCALED) => terms32::<A, D, G, F, false, SCALED>(p, &fs, &ok, out),
+            (true, METAL) => terms32::<A, D, G, F, true, METAL>(p, &fs, &ok, out),
+            (false, METAL) => terms32::<A, D, G, F, false, METAL>(p, &fs, &ok, out),
+            (true, _) => terms32::<A, D, G, F, true, POLY>(p, &fs, &ok, out),
+            (false, _) => terms32::<A, D, G, F, false, POLY>(p, &fs, &ok, out),
         }
     }
     if p.defer_slow && p.fast_frame {
@@ -409,7 +418,7 @@ pub fn microfacet_block<A: MulAdd, const D: u8, const G: u8, const F: u8, const 
 /// The terms and the BRDF of a block's lanes on their f32 frames (`fs`, `ok` from
 /// [`frames`]); `T` and `M` as [`finish_lane`] takes them.
 #[inline(always)]
-fn terms32<A: MulAdd, const D: u8, const G: u8, const F: u8, const T: bool, const M: bool>(
+fn terms32<A: MulAdd, const D: u8, const G: u8, const F: u8, const T: bool, const M: u8>(
     p: &Params,
     fs: &[[f32; LANES]; 8],
     ok: &[bool; LANES],
@@ -534,7 +543,12 @@ fn microfacet_block64<A: MulAdd, const D: u8, const G: u8, const F: u8>(
 ) {
     for k in 0..LANES {
         let fr = frame64(&lane_inputs(inp, k));
-        microfacet_lane::<A, D, G, F, false, true, false>(p, &Lane::from64(&fr), out, k);
+        microfacet_lane::<A, D, G, F, false, true, { conductor::FORM_SCALED }>(
+            p,
+            &Lane::from64(&fr),
+            out,
+            k,
+        );
     }
 }
 
@@ -640,12 +654,19 @@ pub fn f_block<A: MulAdd, const F: u8>(p: &Params, st: &Stage, out: &mut Outputs
             s2_64: st.s2_64[k],
             ok: st.ok[k],
         };
-        finish_lane::<A, F, true, false>(p, &fr, (st.d[k], 1.0), (st.g[k], 1.0), out, k);
+        finish_lane::<A, F, true, { conductor::FORM_SCALED }>(
+            p,
+            &fr,
+            (st.d[k], 1.0),
+            (st.g[k], 1.0),
+            out,
+            k,
+        );
     }
 }
 
 /// The terms and the BRDF of lane `k` from its frame (`FAST`: the f32 frame's, see D;
-/// `T`: the terms are wanted; `M`: the conductor's metal form, see [`finish_lane`]).
+/// `T`: the terms are wanted; `M`: the conductor's lane form, see [`finish_lane`]).
 #[inline(always)]
 fn microfacet_lane<
     A: MulAdd,
@@ -654,7 +675,7 @@ fn microfacet_lane<
     const F: u8,
     const FAST: bool,
     const T: bool,
-    const M: bool,
+    const M: u8,
 >(
     p: &Params,
     fr: &Lane,
@@ -749,10 +770,12 @@ pub(super) fn geometry<const D: u8, const G: u8>(
 /// F, K and the outputs of lane `k` given its D and G as quotients (FORMULAS.md §4–§6):
 /// D·G·K takes one division (the divider is what a block waits on); the terms themselves
 /// are divided out only when wanted (`T`), after the BRDF, whose bits do not depend on
-/// `T`. `M`: the conductor takes its metal form (`conductor::f_lane_metal`), which the
-/// caller chooses only for a material legal for it.
+/// `T`. `M`: the conductor's lane form (`conductor::FORM_*`): the metal form
+/// (`conductor::f_lane_metal`) or the polynomial (`conductor::poly::f_lanes_poly`, the f32 frame's
+/// lanes only), which the caller chooses only for a material legal for it, else the scaled
+/// form.
 #[inline(always)]
-fn finish_lane<A: MulAdd, const F: u8, const T: bool, const M: bool>(
+fn finish_lane<A: MulAdd, const F: u8, const T: bool, const M: u8>(
     p: &Params,
     fr: &Lane,
     d: (f32, f32),
@@ -766,12 +789,17 @@ fn finish_lane<A: MulAdd, const F: u8, const T: bool, const M: bool>(
     // A loop, not `array::from_fn`: LLVM declined to inline from_fn's closure around
     // the conductor, which made every lane a call and nothing vectorised.
     let mut f = [1.0f32; 3];
+    let poly = F == F_CONDUCTOR && M == conductor::FORM_POLY;
+    if poly {
+        f = conductor::poly::f_lanes_poly::<A, f32>(c, p.conductor_poly());
+    }
     for ch in 0..3 {
         f[ch] = match const { FresnelKind::from_code(F) } {
+            _ if poly => f[ch],
             FresnelKind::None => 1.0,
             FresnelKind::Schlick => schlick::f_lane(one_minus_c, p.f0[ch]),
             FresnelKind::Dielectric => dielectric::f_lane(fr.c64, fr.s2_64, p.ior[ch], p.mu2m1[ch]),
-            FresnelKind::Conductor if M => {
+            FresnelKind::Conductor if M == conductor::FORM_METAL => {
                 conductor::f_lane_metal::<A, f32>(c, s2_f, &p.conductor, ch)
             }
             FresnelKind::Conductor => conductor::f_lane(c, s2_f, &p.conductor, ch),

@@ -257,6 +257,7 @@ impl CpuEngine {
             .iter()
             .map(|m| {
                 Plan::for_material(m)
+                    .with_conductor_poly(m, self.isa)
                     .with_terms(request.terms)
                     .with_deferred_slow()
             })

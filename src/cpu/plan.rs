@@ -2,13 +2,16 @@
 //! constants, prepared once per batch from the material (in f64 where the lanes use f64,
 //! then rounded once). Below the engine's dispatch (`cpu::block`), above the lanes.
 
+use super::isa::Isa;
 use super::kernel::{Params, FAST_MIN_ROUGHNESS};
 use crate::material::{Distribution, Fresnel, Material, Model, Roughness};
 use crate::terms::d::{blinn, charlie};
 use crate::terms::f::{conductor, dielectric};
 use crate::terms::g::schlick_smith;
 use crate::terms::{DistributionKind, FresnelKind, Geometry};
+use std::collections::BTreeMap;
 use std::f64::consts::PI;
+use std::sync::Mutex;
 
 /// How a material group is evaluated.
 #[derive(Debug, Clone, Copy)]
@@ -50,6 +53,32 @@ pub enum Plan {
     Measured,
     /// Every tuple through the f64 reference.
     Reference,
+}
+
+/// The conductor's polynomial ([`conductor::poly::Polynomial::fit`], ~30 µs), once a process per
+/// η: the engine makes its plans on every call (every chunk of a stream), and a fitting
+/// run evaluates the same η many times. The cache is cleared when it holds 65,536 fits.
+fn conductor_fit(
+    constants: &conductor::LaneConstants,
+    ior: [f64; 3],
+    extinction: [f64; 3],
+) -> Option<conductor::poly::Polynomial> {
+    type Fits = BTreeMap<[u64; 6], Option<conductor::poly::Polynomial>>;
+    static FITS: Mutex<Fits> = Mutex::new(BTreeMap::new());
+    let key = [ior, extinction].concat();
+    let key: [u64; 6] = std::array::from_fn(|i| key[i].to_bits());
+    // A poisoned lock only means another thread panicked while inserting: the map holds
+    // whole entries either way.
+    if let Some(fit) = FITS.lock().unwrap_or_else(|e| e.into_inner()).get(&key) {
+        return *fit;
+    }
+    let fit = conductor::poly::Polynomial::fit(constants, ior, extinction);
+    let mut fits = FITS.lock().unwrap_or_else(|e| e.into_inner());
+    if fits.len() >= 1 << 16 {
+        fits.clear();
+    }
+    fits.insert(key, fit);
+    fit
 }
 
 fn f32x3(a: [f64; 3]) -> [f32; 3] {
@@ -157,6 +186,23 @@ impl Plan {
     pub fn with_deferred_slow(mut self) -> Plan {
         if let Plan::Microfacet { p, .. } = &mut self {
             p.defer_slow = true;
+        }
+        self
+    }
+
+    /// The plan with the conductor's F as its fitted polynomial on the f32 frames' lanes
+    /// (`conductor::poly`), where material `m` (this plan's) has one within the metal
+    /// form's budget and the engine runs on `isa` = AVX-512: there its FMAs read the
+    /// coefficients as broadcast operands and the polynomial is 11–16 % faster than the
+    /// metal form; on AVX2 it was as fast for GGX and 13 % slower for Beckmann
+    /// (docs/CPU_ENGINE.md), so the other instruction sets keep the metal form.
+    pub fn with_conductor_poly(mut self, m: &Material, isa: Isa) -> Plan {
+        if let (Plan::Microfacet { p, .. }, Model::CookTorrance(ct)) = (&mut self, &m.model) {
+            if let Fresnel::Conductor { ior, extinction } = ct.fresnel {
+                if isa == Isa::Avx512 && p.fast_frame && p.conductor.metal {
+                    p.conductor_poly = conductor_fit(&p.conductor, ior, extinction);
+                }
+            }
         }
         self
     }

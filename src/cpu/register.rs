@@ -17,6 +17,7 @@
 use super::frame::{frame_local32, frame_local_h64, Frame, FrameLanes};
 use super::kernel::{self, Params, FAST_MIN_C};
 use crate::terms::d::{beckmann, ggx};
+use crate::terms::f::conductor::poly::Polynomial;
 use crate::terms::f::{conductor, schlick};
 use crate::terms::g::{cook_torrance, smith, smith_correlated, smith_fast};
 use crate::terms::math::Fused;
@@ -184,18 +185,20 @@ pub(super) struct Staged<T: Real> {
 }
 
 /// F (`F`, the kernel's code) of a staged register's channels.
-struct Fresnel<'a, T: Real, const F: u8, const Q: bool> {
+/// `Q`: the conductor's lane form (`conductor::FORM_*`: the metal form or its quotient;
+/// [`local_finish`] forms the polynomial's three channels at once).
+struct Fresnel<'a, T: Real, const F: u8, const Q: u8> {
     p: &'a Params,
     st: Staged<T>,
 }
 
-impl<T: Real, const F: u8, const Q: bool> kernel::FresnelOf<T> for Fresnel<'_, T, F, Q> {
+impl<T: Real, const F: u8, const Q: u8> kernel::FresnelOf<T> for Fresnel<'_, T, F, Q> {
     #[inline(always)]
     fn channel(&self, ch: usize) -> T {
         let (p, st) = (self.p, &self.st);
         match const { FresnelKind::from_code(F) } {
             FresnelKind::Schlick => schlick::f_lane(st.one_minus_c, p.f0[ch]),
-            FresnelKind::Conductor if Q => {
+            FresnelKind::Conductor if Q == conductor::FORM_QUOTIENT => {
                 conductor::f_lane_metal_quotient::<Fused, _>(st.c, st.s2, &p.conductor, ch)
             }
             FresnelKind::Conductor => {
@@ -206,16 +209,23 @@ impl<T: Real, const F: u8, const Q: bool> kernel::FresnelOf<T> for Fresnel<'_, T
     }
 }
 
-/// The second stage (after [`ggx_local_dgk`]): F, the channels, and the lanes whose output
+/// The second stage (after [`ggx_local_dgk`]): F (`poly`: the material's polynomial, as
+/// the caller reads it, [`Params::conductor_poly`]), the channels, and the lanes whose output
 /// may be non-finite or out of range (`kernel::channels_of`'s test). Which lanes the
 /// reference or another frame takes follows from these and [`Staged::flags`], which the
 /// caller reads as bits after the first stage (masks held across the second stage's
 /// arithmetic were spilled).
 #[inline(always)]
-pub(super) fn local_finish<T: Real, const F: u8, const Q: bool>(
+pub(super) fn local_finish<T: Real, const F: u8, const Q: u8>(
     p: &Params,
+    poly: &Polynomial,
     st: Staged<T>,
 ) -> ([T; 3], T::Mask) {
+    if F == kernel::F_CONDUCTOR && Q == conductor::FORM_POLY {
+        // The three channels' polynomials at once (their Horner chains interleaved).
+        let f = conductor::poly::f_lanes_poly::<Fused, _>(st.c, poly);
+        return kernel::channels_of::<Fused, _>(p, st.dgk, st.size, f);
+    }
     let f = Fresnel::<T, F, Q> { p, st };
     kernel::channels_of::<Fused, _>(p, st.dgk, st.size, f)
 }

@@ -11,6 +11,7 @@ use crate::cpu::kernel::{self, LANES};
 use crate::cpu::plan::Plan;
 use crate::cpu::register::{self, Reg, RegisterIo};
 use crate::material::Material;
+use crate::terms::f::conductor;
 use crate::terms::math::Fused;
 
 /// A chunk of the local form on the register path ([`register::serves`]).
@@ -32,15 +33,22 @@ impl LocalRegisters<'_, '_> {
         let Plan::Microfacet { d, g, f, p, .. } = self.plan else {
             unreachable!("the register path serves microfacet groups (`register::serves`)")
         };
-        // A conductor whose every channel has Re η² < 0 skips the metal form's selects.
-        let quotient = p.conductor.metal_quotient;
+        // The conductor's lane form: its polynomial where the plan fitted one, else the
+        // metal form (without its selects where every channel has Re η² < 0).
+        use conductor::{FORM_METAL as METAL, FORM_POLY as POLY, FORM_QUOTIENT as QUOTIENT};
+        let form = p.conductor_form();
         macro_rules! by_f {
             ($d:expr, $g:expr) => {
                 match f {
-                    F::None => registers_apart::<S, $d, $g, F_NONE, false>(simd, self),
-                    F::Schlick => registers_apart::<S, $d, $g, F_SCHLICK, false>(simd, self),
-                    _ if quotient => registers_apart::<S, $d, $g, F_CONDUCTOR, true>(simd, self),
-                    _ => registers_apart::<S, $d, $g, F_CONDUCTOR, false>(simd, self),
+                    F::None => registers_apart::<S, $d, $g, F_NONE, METAL>(simd, self),
+                    F::Schlick => registers_apart::<S, $d, $g, F_SCHLICK, METAL>(simd, self),
+                    _ if form == POLY => {
+                        registers_apart::<S, $d, $g, F_CONDUCTOR, POLY>(simd, self)
+                    }
+                    _ if form == QUOTIENT => {
+                        registers_apart::<S, $d, $g, F_CONDUCTOR, QUOTIENT>(simd, self)
+                    }
+                    _ => registers_apart::<S, $d, $g, F_CONDUCTOR, METAL>(simd, self),
                 }
             };
         }
@@ -59,7 +67,7 @@ impl LocalRegisters<'_, '_> {
 /// [`run_registers`] as a function of its own compiled for `simd` (as each group's lanes
 /// are, `dispatch::apart`).
 #[inline(never)]
-fn registers_apart<S: RegisterIo, const D: u8, const G: u8, const F: u8, const Q: bool>(
+fn registers_apart<S: RegisterIo, const D: u8, const G: u8, const F: u8, const Q: u8>(
     simd: S,
     op: LocalRegisters,
 ) -> (Counts, Tally) {
@@ -69,12 +77,12 @@ fn registers_apart<S: RegisterIo, const D: u8, const G: u8, const F: u8, const Q
 /// [`run_registers`] as pulp calls it inside the instruction set's features (a struct,
 /// not a closure: LLVM left the closure out of line, and with it every intrinsic became a
 /// call).
-struct RegistersFn<'a, 'b, S, const D: u8, const G: u8, const F: u8, const Q: bool> {
+struct RegistersFn<'a, 'b, S, const D: u8, const G: u8, const F: u8, const Q: u8> {
     simd: S,
     op: LocalRegisters<'a, 'b>,
 }
 
-impl<S: RegisterIo, const D: u8, const G: u8, const F: u8, const Q: bool> pulp::NullaryFnOnce
+impl<S: RegisterIo, const D: u8, const G: u8, const F: u8, const Q: u8> pulp::NullaryFnOnce
     for RegistersFn<'_, '_, S, D, G, F, Q>
 {
     type Output = (Counts, Tally);
@@ -90,7 +98,7 @@ impl<S: RegisterIo, const D: u8, const G: u8, const F: u8, const Q: bool> pulp::
 /// `local_finish`) and written, the lanes it flags sent to the reference or gathered for
 /// the f64 frame as [`super::run_blocks`] does with a block's.
 #[inline(always)]
-fn run_registers<S: RegisterIo, const D: u8, const G: u8, const F: u8, const Q: bool>(
+fn run_registers<S: RegisterIo, const D: u8, const G: u8, const F: u8, const Q: u8>(
     simd: S,
     op: LocalRegisters,
 ) -> (Counts, Tally) {
@@ -155,8 +163,21 @@ fn run_registers<S: RegisterIo, const D: u8, const G: u8, const F: u8, const Q: 
         let fa = sa.flags();
         let sb = register::local_dgk::<_, D, G, F>(p, lb, vb);
         let fb = sb.flags();
-        let ([ra, ga, ba], bad_a) = register::local_finish::<_, F, Q>(p, sa);
-        let ([rb, gb, bb], bad_b) = register::local_finish::<_, F, Q>(p, sb);
+        // The conductor's polynomial, on AVX-512 through an opaque reference: LLVM
+        // otherwise hoists its 45 broadcast coefficients out of the loop and spills them,
+        // which cost more than the metal form's roots save; read each step, they fold
+        // into the FMAs as broadcast operands (`RegisterIo::BROADCAST_OPERANDS`).
+        // Each register's own: one reference for both let LLVM read the coefficients
+        // for the second while it held the first's.
+        let poly = || {
+            if S::BROADCAST_OPERANDS {
+                std::hint::black_box(p.conductor_poly())
+            } else {
+                p.conductor_poly()
+            }
+        };
+        let ([ra, ga, ba], bad_a) = register::local_finish::<_, F, Q>(p, poly(), sa);
+        let ([rb, gb, bb], bad_b) = register::local_finish::<_, F, Q>(p, poly(), sb);
         let (lo, hi) = (
             [ra.get(), ga.get(), ba.get()],
             [rb.get(), gb.get(), bb.get()],

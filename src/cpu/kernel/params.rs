@@ -37,6 +37,9 @@ pub struct Params {
     pub mu2m1: [f64; 3],
     /// The conductor's constants.
     pub conductor: conductor::LaneConstants,
+    /// The conductor's fitted polynomial, where the f32 lanes take it
+    /// ([`conductor::poly::Polynomial::fit`]; `None` for every other material).
+    pub conductor_poly: Option<conductor::poly::Polynomial>,
     /// Whether the caller asked for the terms (D, G, F, K): without them the lanes form
     /// D·G·K over one division and never divide out the terms (see `finish_lane`).
     pub terms: bool,
@@ -59,4 +62,30 @@ pub struct Params {
     pub schlick_k: f32,
     /// Anisotropic roughness `[1/mx², 1/my², mx², my²]`.
     pub aniso: [f64; 4],
+}
+
+impl Params {
+    /// The lane form of the conductor's F on the f32 frames' lanes (`conductor::FORM_*`):
+    /// the polynomial where the plan fitted one, else the metal form (as its quotient where
+    /// every channel's `Re η²` is negative), else the scaled form.
+    pub fn conductor_form(&self) -> u8 {
+        if self.conductor_poly.is_some() {
+            conductor::FORM_POLY
+        } else if self.conductor.metal_quotient {
+            conductor::FORM_QUOTIENT
+        } else if self.conductor.metal {
+            conductor::FORM_METAL
+        } else {
+            conductor::FORM_SCALED
+        }
+    }
+
+    /// The conductor's polynomial ([`Params::conductor_poly`]), or zeros where there is
+    /// none (a lane form asks for it only where there is one).
+    #[inline(always)]
+    pub fn conductor_poly(&self) -> &conductor::poly::Polynomial {
+        self.conductor_poly
+            .as_ref()
+            .unwrap_or(&conductor::poly::Polynomial::NONE)
+    }
 }

@@ -10,6 +10,13 @@ pub(crate) trait RegisterIo: Simd {
     /// Tuples a register.
     const WIDTH: usize = Self::F32_LANES;
 
+    /// Whether an FMA reads a broadcast scalar from memory as an operand (AVX-512's
+    /// `{1to16}`): a step's loop-invariant constants (the conductor's polynomial) are then
+    /// better read where they are used than hoisted into registers, which spill. AVX2 has
+    /// no such operand (a broadcast is an instruction of its own), and there the hoisted
+    /// constants' spill slots fold into the FMAs instead.
+    const BROADCAST_OPERANDS: bool;
+
     /// The 6 columns of [`Self::WIDTH`] rows of the local form.
     fn local_columns(self, rows: &[f32]) -> [Self::f32s; 6];
 
@@ -30,6 +37,8 @@ pub(crate) trait RegisterIo: Simd {
 /// `vmovmskps`.
 #[cfg(target_arch = "x86_64")]
 impl RegisterIo for pulp::x86::V3 {
+    const BROADCAST_OPERANDS: bool = false;
+
     #[inline(always)]
     fn local_columns(self, rows: &[f32]) -> [Self::f32s; 6] {
         let rows: &[f32; 48] = rows[..48].try_into().expect("8 rows of 6");
@@ -73,6 +82,8 @@ impl RegisterIo for pulp::x86::V3 {
 /// the mask registers' bits as they are.
 #[cfg(target_arch = "x86_64")]
 impl RegisterIo for pulp::x86::V4 {
+    const BROADCAST_OPERANDS: bool = true;
+
     #[inline(always)]
     fn local_columns(self, rows: &[f32]) -> [Self::f32s; 6] {
         let rows: &[f32; 96] = rows[..96].try_into().expect("16 rows of 6");

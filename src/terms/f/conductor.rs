@@ -5,6 +5,20 @@ use crate::terms::math::MulAdd;
 use crate::terms::real::Real;
 use num_complex::Complex64;
 
+pub mod poly;
+
+/// The lane forms of F a material's f32 lanes may take (a const parameter of the lane loops
+/// and the register path): [`f_lane`], the form for every η.
+pub const FORM_SCALED: u8 = 0;
+/// [`f_lane_metal`]: a material whose every channel is [`metal_form_legal`].
+pub const FORM_METAL: u8 = 1;
+/// [`f_lane_metal_quotient`]: [`f_lane_metal`]'s bits where every channel's `Re(η²)` is
+/// negative ([`LaneConstants::metal_quotient`]).
+pub const FORM_QUOTIENT: u8 = 2;
+/// [`poly::f_lanes_poly`]: a metal whose fitted polynomial is within the metal form's
+/// budget ([`poly::Polynomial::fit`]).
+pub const FORM_POLY: u8 = 3;
+
 /// The spelling in a materials file.
 pub const NAME: &str = "conductor";
 /// The work the formula comes from.

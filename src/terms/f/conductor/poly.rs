@@ -1,0 +1,273 @@
+//! The conductor's F on the f32 frames' lanes as a polynomial in `c`, fitted per material
+//! (Trefethen 2013, "Approximation Theory and Approximation Practice", ch. 3–4 and 8: the
+//! Chebyshev interpolant of an analytic function and the decay of its coefficients).
+//!
+//! On the lanes of the f32 frames `c` lies in [`FAST_MIN_C`, 1] (smaller `c` takes the
+//! f64 frame), where a conductor's F is analytic and smooth: η² − sin²θ stays away from 0
+//! for every material the metal form takes, so F's nearest singularity is a fixed distance
+//! off the interval and its Chebyshev coefficients fall geometrically. Degree [`DEGREE`]
+//! then gives F to a fraction of the metal form's budget, in [`DEGREE`] fused multiply-adds
+//! a channel instead of two square roots and a division (the divider is what the lanes
+//! wait on). A material whose fit cannot be shown inside the budget keeps the metal form.
+//!
+//! [`FAST_MIN_C`]: crate::cpu::kernel::FAST_MIN_C
+
+use super::{f, LaneConstants, METAL_FORM_BUDGET};
+use crate::terms::math::MulAdd;
+use crate::terms::real::Real;
+
+/// The polynomial's degree (15 coefficients a channel).
+pub const DEGREE: usize = 14;
+
+/// The centre of the fitted interval: the lanes take `t = c − CENTRE`, which is exact for
+/// `c` in [CENTRE/2, 2·CENTRE] (Sterbenz) and otherwise rounded once, relative to `t`.
+/// 35/64, exactly an f32.
+pub const CENTRE: f32 = 0.546875;
+
+/// The fitted interval's half-width in `c`: [0.091875, 1.001875] holds every `c` of the f32
+/// frames' lanes (≥ `FAST_MIN_C` = 0.1, ≤ 1 plus the frame's few ulp).
+const HALF_WIDTH: f64 = 0.455;
+
+/// Chebyshev points of the interpolant whose upper coefficients measure the truncation.
+const NODES: usize = 33;
+
+/// A conductor's F per channel as `Σ bᵢ tⁱ` in `t = c − CENTRE` (coefficients `b[ch][i]`,
+/// rounded once to f32), and the bound it was admitted under.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Polynomial {
+    /// The coefficients of each channel, constant term first.
+    pub b: [[f32; DEGREE + 1]; 3],
+    /// The worst channel's error bound in units of u = 2⁻²⁴ relative to F ([`bound`]).
+    pub bound_u: f64,
+}
+
+/// One channel's fit: the f64 coefficients of `t`'s powers and the truncation's bound
+/// (absolute), or `None` when the Chebyshev coefficients do not fall far enough by the
+/// interpolant's last ones to trust the bound.
+fn fit_channel(n: f64, k: f64) -> Option<([f64; DEGREE + 1], f64)> {
+    let centre = f64::from(CENTRE);
+    // F at the Chebyshev points of the first kind on [centre − h, centre + h].
+    let x: Vec<f64> = (0..NODES)
+        .map(|j| (std::f64::consts::PI * (j as f64 + 0.5) / NODES as f64).cos())
+        .collect();
+    let fx: Vec<f64> = x.iter().map(|&x| f(centre + HALF_WIDTH * x, n, k)).collect();
+    if fx.iter().any(|v| !v.is_finite()) {
+        return None;
+    }
+    // Chebyshev coefficients of the degree-32 interpolant (a discrete cosine transform).
+    let mut a = vec![0.0; NODES];
+    for (m, am) in a.iter_mut().enumerate() {
+        let s: f64 = (0..NODES)
+            .map(|j| fx[j] * (std::f64::consts::PI * m as f64 * (j as f64 + 0.5) / NODES as f64).cos())
+            .sum();
+        *am = s * 2.0 / NODES as f64 * if m == 0 { 0.5 } else { 1.0 };
+    }
+    // The coefficients beyond the interpolant's (and their aliases in it) are bounded by
+    // its last ones where these have fallen far below u (6e-8): a function analytic in a
+    // Bernstein ellipse has |aₘ| ≤ 2Mρ⁻ᵐ, so the tail past 32 is below the last few.
+    // Where they have not, F is near a singularity and the bound is not trusted.
+    let last: f64 = a[NODES - 4..].iter().map(|c| c.abs()).sum();
+    if last > 1e-10 {
+        return None;
+    }
+    // Truncation to DEGREE: the dropped coefficients, the aliasing of the computed ones
+    // and the tail, each at most the sum of the dropped magnitudes plus the last ones.
+    let truncation = 2.0 * a[DEGREE + 1..].iter().map(|c| c.abs()).sum::<f64>() + 3.0 * last;
+    // Σ aₘ Tₘ(x) to powers of x (Tₘ₊₁ = 2x Tₘ − Tₘ₋₁), then x = t/h to powers of t.
+    let mut pow = [0.0; DEGREE + 1];
+    let (mut tm1, mut tm) = ([0.0; DEGREE + 1], [0.0; DEGREE + 1]);
+    tm1[0] = 1.0; // T₀
+    tm[1] = 1.0; // T₁
+    pow[0] += a[0];
+    for i in 0..=DEGREE {
+        pow[i] += a[1] * tm[i];
+    }
+    for am in &a[2..=DEGREE] {
+        let mut next = [0.0; DEGREE + 1];
+        for i in 0..=DEGREE {
+            next[i] = if i > 0 { 2.0 * tm[i - 1] } else { 0.0 } - tm1[i];
+        }
+        for i in 0..=DEGREE {
+            pow[i] += am * next[i];
+        }
+        (tm1, tm) = (tm, next);
+    }
+    let mut scale = 1.0;
+    for p in &mut pow {
+        *p /= scale;
+        scale *= HALF_WIDTH;
+    }
+    Some((pow, truncation))
+}
+
+/// The relative error bound, in u, of [`f_lanes_poly`] for one channel with coefficients
+/// `b` (as rounded to f32) whose f64 polynomial is within `truncation` of F on the
+/// interval, over every `c` in it and either MulAdd kind:
+///
+/// `(truncation/u + max_t Σ (2i + 3)|bᵢ||t|ⁱ) / F_min`.
+///
+/// - Horner's running error (Higham 2002, §5.1): a step `rᵢ = rᵢ₊₁ t + bᵢ` rounds once
+///   with FMA and twice without, each rounding relative to a value at most
+///   `Σⱼ≥ᵢ |bⱼ||t|ʲ⁻ⁱ`, carried to the result by `|t|ⁱ`: in all ≤ `2u Σ (i + 1)|bᵢ||t|ⁱ`.
+/// - The coefficients' rounding to f32: `u Σ |bᵢ||t|ⁱ`.
+/// - `t = c − CENTRE` rounded (c outside Sterbenz's range): `t(1 + δ)`, `|δ| ≤ u`, moves
+///   the value by ≤ `u Σ i|bᵢ||t|ⁱ`.
+///
+/// The maximum is taken on a grid of 4,097 points in t (the sum grows with |t|, so its
+/// maximum is at an end) and F_min is the least f64 polynomial value on the same grid
+/// less the truncation and the largest change between neighbouring points.
+fn bound(b: &[f64; DEGREE + 1], truncation: f64) -> f64 {
+    let u = f64::from(f32::EPSILON) / 2.0;
+    let h = HALF_WIDTH;
+    let at = |t: f64| b.iter().rev().fold(0.0, |acc, &bi| acc * t + bi);
+    let slope: f64 = (1..=DEGREE)
+        .map(|i| i as f64 * b[i].abs() * h.powi(i as i32 - 1))
+        .sum();
+    let grid = 4096;
+    let step = 2.0 * h / grid as f64;
+    let fmin = (0..=grid)
+        .map(|j| at(-h + step * j as f64))
+        .fold(f64::INFINITY, f64::min)
+        - truncation
+        - slope * step;
+    if fmin.is_nan() || fmin <= 0.0 {
+        return f64::INFINITY;
+    }
+    let rounding: f64 = (0..=DEGREE)
+        .map(|i| (2 * i + 3) as f64 * b[i].abs() * h.powi(i as i32))
+        .sum();
+    (truncation / u + rounding) / fmin
+}
+
+impl Polynomial {
+    /// No polynomial: zero coefficients, an infinite bound.
+    pub const NONE: Polynomial = Polynomial {
+        b: [[0.0; DEGREE + 1]; 3],
+        bound_u: f64::INFINITY,
+    };
+
+    /// The fit of `η = ior + i·extinction` per channel, when every channel's bound
+    /// ([`bound`]) is within [`METAL_FORM_BUDGET`] and the material may take the metal form
+    /// (`constants.metal`); else `None` (the lanes keep the metal form).
+    pub fn fit(constants: &LaneConstants, ior: [f64; 3], extinction: [f64; 3]) -> Option<Polynomial> {
+        if !constants.metal {
+            return None;
+        }
+        let mut out = Polynomial {
+            b: [[0.0; DEGREE + 1]; 3],
+            bound_u: 0.0,
+        };
+        for ch in 0..3 {
+            let (pow, truncation) = fit_channel(ior[ch], extinction[ch])?;
+            let rounded = pow.map(|x| x as f32);
+            let bound_u = bound(&rounded.map(f64::from), truncation);
+            if bound_u > METAL_FORM_BUDGET {
+                return None;
+            }
+            out.b[ch] = rounded;
+            out.bound_u = out.bound_u.max(bound_u);
+        }
+        Some(out)
+    }
+}
+
+/// F of the three channels from the material's polynomial, by Horner's rule in
+/// `t = c − CENTRE` (valid for `c` in [`FAST_MIN_C`, 1]: the f32 frames' lanes; elsewhere
+/// finite and meaningless, and those lanes take another frame) — the channels' steps
+/// interleaved, so that three independent multiply-adds are in flight where one channel's
+/// chain of 14 would wait on each one's latency.
+///
+/// [`FAST_MIN_C`]: crate::cpu::kernel::FAST_MIN_C
+#[inline(always)]
+pub fn f_lanes_poly<A: MulAdd, T: Real>(c: T, p: &Polynomial) -> [T; 3] {
+    let t = c - c.splat_as(CENTRE);
+    let mut r = [c; 3];
+    for (r, b) in r.iter_mut().zip(&p.b) {
+        *r = c.splat_as(b[DEGREE]);
+    }
+    for i in (0..DEGREE).rev() {
+        for (r, b) in r.iter_mut().zip(&p.b) {
+            *r = A::mul_add(*r, t, c.splat_as(b[i]));
+        }
+    }
+    r
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::terms::math::{Fused, Rounded};
+
+    /// Metals of the bench and the tests: the Mitsuba scenarios' metal, copper, gold,
+    /// silver-like and iron-like η.
+    const METALS: [([f64; 3], [f64; 3]); 5] = [
+        ([0.2, 0.92, 1.1], [3.9, 2.45, 2.14]),
+        ([0.27, 0.68, 1.22], [3.61, 2.62, 2.24]),
+        ([0.18, 0.42, 1.37], [3.42, 2.35, 1.77]),
+        ([0.05, 0.06, 0.05], [4.2, 3.6, 2.5]),
+        ([2.9, 2.9, 2.6], [3.1, 2.9, 2.8]),
+    ];
+
+    /// The polynomial's largest relative error in u against the f64 F over every `c` an
+    /// f32 lane may bring (a dense sweep from `FAST_MIN_C` to 1 and the f32 numbers next
+    /// to both ends), on both MulAdd kinds.
+    fn measured(p: &Polynomial, ior: [f64; 3], ext: [f64; 3]) -> f64 {
+        let u = f64::from(f32::EPSILON) / 2.0;
+        let mut cs: Vec<f32> = (0..=200_000)
+            .map(|i| (0.1 + 0.9 * f64::from(i) / 200_000.0) as f32)
+            .collect();
+        let mut c = 0.1f32;
+        for _ in 0..64 {
+            cs.push(c);
+            c = f32::from_bits(c.to_bits() + 1);
+        }
+        cs.extend([1.0f32, f32::from_bits(1.0f32.to_bits() - 1), 1.0 + f32::EPSILON]);
+        let mut worst = 0f64;
+        for &c in &cs {
+            for ch in 0..3 {
+                let want = f(f64::from(c), ior[ch], ext[ch]);
+                for got in [
+                    f_lanes_poly::<Fused, f32>(c, p)[ch],
+                    f_lanes_poly::<Rounded, f32>(c, p)[ch],
+                ] {
+                    worst = worst.max((f64::from(got) - want).abs() / want / u);
+                }
+            }
+        }
+        worst
+    }
+
+    #[test]
+    fn metals_fit_inside_their_bound_and_the_budget() {
+        for (ior, ext) in METALS {
+            let constants = LaneConstants::new(ior, ext);
+            let p = Polynomial::fit(&constants, ior, ext)
+                .unwrap_or_else(|| panic!("{ior:?} {ext:?} should fit"));
+            let err = measured(&p, ior, ext);
+            assert!(p.bound_u <= METAL_FORM_BUDGET, "{ior:?}: {}", p.bound_u);
+            assert!(err <= p.bound_u, "{ior:?}: measured {err}u > bound {}u", p.bound_u);
+        }
+    }
+
+    /// A material the metal form refuses gets no polynomial, and a material whose
+    /// coefficients fall slowly (aluminium-like η, whose |η| is large; n ≫ k) is refused
+    /// by the bound rather than admitted with a fit that misses; a fit admitted near the
+    /// metal form's limits holds its bound.
+    #[test]
+    fn materials_without_a_trustworthy_fit_are_refused() {
+        let dielectric = LaneConstants::new([1.5; 3], [0.0; 3]);
+        assert!(Polynomial::fit(&dielectric, [1.5; 3], [0.0; 3]).is_none());
+        let mut refused = 0;
+        for (n, k) in [(0.02, 0.7), (0.2, 0.9), (1.0, 1.35), (1.3, 1.5), (5.0, 0.0), (1.35, 7.5)] {
+            let constants = LaneConstants::new([n; 3], [k; 3]);
+            match Polynomial::fit(&constants, [n; 3], [k; 3]) {
+                None => refused += 1,
+                Some(p) => {
+                    let err = measured(&p, [n; 3], [k; 3]);
+                    assert!(err <= p.bound_u, "η = {n} + {k}i: {err}u > {}u", p.bound_u);
+                }
+            }
+        }
+        assert!(refused >= 2, "aluminium-like η and n ≫ k should be refused ({refused})");
+    }
+}
