@@ -428,7 +428,9 @@ fn the_conductors_polynomial_holds_fs_budget_across_its_interval() {
     for mi in 0..mats.len() {
         for &c in &cs {
             let s = (1.0 - c * c).max(0.0).sqrt();
-            rows.extend([s as f32, 0.0, c as f32, -s as f32, 0.0, c as f32, 0.0, 0.0, 1.0]);
+            rows.extend([
+                s as f32, 0.0, c as f32, -s as f32, 0.0, c as f32, 0.0, 0.0, 1.0,
+            ]);
             rows.push(mi as f32);
         }
     }
@@ -439,8 +441,17 @@ fn the_conductors_polynomial_holds_fs_budget_across_its_interval() {
     let u = f64::from(f32::EPSILON) / 2.0;
     for isa in Isa::available_all() {
         let out = evaluate(isa, &batch, &mats);
-        judge(&format!("conductor poly on {isa}"), &batch, &mats, &out, &reference);
-        let (want, got) = (reference.terms.as_ref().unwrap(), out.terms.as_ref().unwrap());
+        judge(
+            &format!("conductor poly on {isa}"),
+            &batch,
+            &mats,
+            &out,
+            &reference,
+        );
+        let (want, got) = (
+            reference.terms.as_ref().unwrap(),
+            out.terms.as_ref().unwrap(),
+        );
         let mut worst = 0f64;
         for r in 0..batch.len() {
             for col in 2..5 {
