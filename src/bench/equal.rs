@@ -44,8 +44,11 @@ pub struct EqualBytesRow {
     pub peer_cycles_per_eval: Option<f64>,
     /// The peer's max relative error against the f64 reference, when it returns values.
     pub peer_max_rel_err: Option<f64>,
-    /// Engine over peer.
+    /// Engine over peer (with several pairs, the median of the pairs' ratios).
     pub ratio: Option<f64>,
+    /// Each engine/peer pair's ratio, in the order run (`--pairs`; one pair: empty).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub pair_ratios: Vec<f64>,
     /// Why the peer did not run.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub skipped: Option<String>,
@@ -84,16 +87,21 @@ pub fn time_local(
 }
 
 /// The equal-bytes rows: each Mitsuba scenario at each of `sizes` against the peer (run
-/// with `script` unless `no_peers`), the engine timed before and after the peer (the
-/// median of both runs: the machine may be shared); then 1 → 2 threads on the smallest
-/// size of `mitsuba-ggx`, and Lambert against the copy ceiling at the largest size.
+/// with `script` unless `no_peers`) in `pairs` interleaved engine/peer pairs, the engine
+/// timed before and after each peer run (the median of both: the machine may be shared),
+/// each rate the median over the pairs and the ratio the median of the pairs' ratios
+/// (Dr.Jit's rate swings 2× between runs on a shared machine); then 1 → 2 threads on the
+/// smallest size of `mitsuba-ggx`, and Lambert against the copy ceiling at the largest
+/// size.
 pub fn rows(
     script: &Path,
     sizes: &[usize],
     repeats: usize,
     no_peers: bool,
+    pairs: usize,
     progress: &mut dyn FnMut(&str),
 ) -> Result<Vec<EqualBytesRow>> {
+    let pairs = pairs.max(1);
     let hz = tsc_hz();
     let cyc = |evals_per_s: f64| hz.map(|h| h / evals_per_s);
     let isa = crate::cpu::instruction_set().to_string();
@@ -115,6 +123,7 @@ pub fn rows(
             peer_cycles_per_eval: None,
             peer_max_rel_err: None,
             ratio: None,
+            pair_ratios: Vec::new(),
             skipped: None,
         }
     };
@@ -124,30 +133,47 @@ pub fn rows(
         for &n in sizes {
             let rows_batch = scenarios::batch(&sc, n, 42);
             let local = scenarios::local_batch(&sc, n, 42).expect("one material, no tangents");
-            progress(&format!("equal bytes: cpu {name} on {n} tuples"));
-            let (before, o) = time_local(&mut engine, &local, &sc.materials, repeats)?;
-            let err = max_rel_err(&rows_batch, &sc.materials, &o.brdf, 20_000);
-            let peer = if no_peers {
-                None
-            } else {
-                progress(&format!("equal bytes: mitsuba {ps} on {n} tuples"));
-                Some(peers::run(script, "mitsuba", ps, &rows_batch, repeats))
-            };
-            let (after, _) = time_local(&mut engine, &local, &sc.materials, repeats)?;
-            let secs = median(vec![before, after]);
-            let mut r = row(name, "mitsuba", n, threads, n as f64 / secs, 0.0);
-            r.cpu_max_rel_err = err;
+            let (mut engine_rates, mut peer_rates, mut ratios) = (vec![], vec![], vec![]);
+            let (mut err, mut peer) = (0.0, None);
+            for pair in 1..=pairs {
+                let of = if pairs > 1 {
+                    format!(" (pair {pair} of {pairs})")
+                } else {
+                    String::new()
+                };
+                progress(&format!("equal bytes: cpu {name} on {n} tuples{of}"));
+                let (before, o) = time_local(&mut engine, &local, &sc.materials, repeats)?;
+                err = max_rel_err(&rows_batch, &sc.materials, &o.brdf, 20_000);
+                if !no_peers {
+                    progress(&format!("equal bytes: mitsuba {ps} on {n} tuples{of}"));
+                    peer = Some(peers::run(script, "mitsuba", ps, &rows_batch, repeats));
+                }
+                let (after, _) = time_local(&mut engine, &local, &sc.materials, repeats)?;
+                let rate = n as f64 / median(vec![before, after]);
+                engine_rates.push(rate);
+                if let Some(v) = peer.as_ref().and_then(|p| p.evals_per_s) {
+                    peer_rates.push(v);
+                    ratios.push(rate / v);
+                }
+            }
+            let mut r = row(name, "mitsuba", n, threads, median(engine_rates), err);
             match peer {
                 None => r.skipped = Some("--no-peers".into()),
                 Some(p) => {
                     r.skipped = p.skipped.clone();
-                    r.peer_evals_per_s = p.evals_per_s;
-                    r.peer_cycles_per_eval = p.evals_per_s.and_then(cyc);
+                    if !peer_rates.is_empty() {
+                        let v = median(peer_rates);
+                        r.peer_evals_per_s = Some(v);
+                        r.peer_cycles_per_eval = cyc(v);
+                        r.ratio = Some(median(ratios.clone()));
+                    }
                     r.peer_max_rel_err = p
                         .brdf
                         .as_ref()
                         .map(|f| max_rel_err(&rows_batch, &sc.materials, f, 20_000));
-                    r.ratio = p.evals_per_s.map(|v| r.cpu_evals_per_s / v);
+                    if pairs > 1 {
+                        r.pair_ratios = ratios;
+                    }
                 }
             }
             out.push(r);
@@ -252,6 +278,17 @@ pub fn table(rows: &[EqualBytesRow]) -> String {
                 .as_ref()
                 .map_or(String::new(), |w| format!("  (peer skipped: {w})")),
         );
+        if !r.pair_ratios.is_empty() {
+            let each: Vec<String> = r.pair_ratios.iter().map(|x| format!("{x:.2}")).collect();
+            s += &format!(
+                "{:<17} {:<13} {:>9} ratio the median of {} pairs: {}\n",
+                "",
+                "",
+                "",
+                r.pair_ratios.len(),
+                each.join(", ")
+            );
+        }
     }
     // A variant forced by VKBRDF_CPU_ISA is not the peer's: Dr.Jit compiles for the host.
     let best = crate::cpu::Isa::best().to_string();
@@ -284,8 +321,24 @@ mod tests {
             peer_cycles_per_eval: None,
             peer_max_rel_err: None,
             ratio: None,
+            pair_ratios: Vec::new(),
             skipped: None,
         }
+    }
+
+    /// With several pairs the table prints each pair's ratio under the row's median, in
+    /// the order run; with one pair, no such line.
+    #[test]
+    fn the_table_lists_the_pairs_ratios_under_their_median() {
+        let mut r = row_on(&crate::cpu::Isa::best().to_string());
+        assert!(!table(&[r.clone()]).contains("pairs"));
+        r.ratio = Some(0.7);
+        r.pair_ratios = vec![0.71, 0.5, 0.7];
+        let t = table(&[r]);
+        assert!(
+            t.contains("ratio the median of 3 pairs: 0.71, 0.50, 0.70"),
+            "{t}"
+        );
     }
 
     /// The table says when the engine ran a variant other than the host's best, which the

@@ -77,6 +77,11 @@ pub struct Args {
     /// 262,144 tuples; 1 → 2 threads; Lambert against a copy of its bytes).
     #[arg(long)]
     pub equal_bytes_only: bool,
+    /// Interleaved engine/Mitsuba pairs per equal-bytes point, 1 to 50: each rate is the
+    /// median over the pairs and the ratio the median of the pairs' ratios (the issue's
+    /// protocol is 5: Dr.Jit's rate swings 2× between runs on a shared machine); default 1
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u16).range(1..=50))]
+    pub pairs: u16,
     #[command(flatten)]
     pub device: DeviceArgs,
 }
@@ -125,9 +130,15 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         [1 << 22, 1 << 18]
     };
     if args.equal_bytes_only {
-        let rows = bench::equal::rows(&script, &equal_sizes, repeats, args.no_peers, &mut |m| {
-            eprintln!("{m} …")
-        })?;
+        let pairs = usize::from(args.pairs);
+        let rows = bench::equal::rows(
+            &script,
+            &equal_sizes,
+            repeats,
+            args.no_peers,
+            pairs,
+            &mut |m| eprintln!("{m} …"),
+        )?;
         outln!("{}", bench::equal::table(&rows));
         if let Some(path) = &args.json {
             let doc = serde_json::json!({
@@ -278,9 +289,14 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
     let equal_bytes = if args.no_cpu {
         Vec::new()
     } else {
-        bench::equal::rows(&script, &equal_sizes, repeats, args.no_peers, &mut |m| {
-            eprintln!("{m} …")
-        })?
+        bench::equal::rows(
+            &script,
+            &equal_sizes,
+            repeats,
+            args.no_peers,
+            usize::from(args.pairs),
+            &mut |m| eprintln!("{m} …"),
+        )?
     };
     print_report(&results, &peer_rows, &list);
     print_bandwidth(&bandwidth, &peer_rows);
