@@ -37,7 +37,8 @@ const NODES: usize = 33;
 pub struct Polynomial {
     /// The coefficients of each channel, constant term first.
     pub b: [[f32; DEGREE + 1]; 3],
-    /// The worst channel's error bound in units of u = 2⁻²⁴ relative to F ([`bound`]).
+    /// The worst channel's error bound in units of u = 2⁻²⁴ relative to F (see
+    /// [`Polynomial::fit`]).
     pub bound_u: f64,
 }
 
@@ -57,9 +58,8 @@ fn fit_channel(n: f64, k: f64) -> Option<([f64; DEGREE + 1], f64)> {
     // Chebyshev coefficients of the degree-32 interpolant (a discrete cosine transform).
     let mut a = vec![0.0; NODES];
     for (m, am) in a.iter_mut().enumerate() {
-        let s: f64 = (0..NODES)
-            .map(|j| fx[j] * (std::f64::consts::PI * m as f64 * (j as f64 + 0.5) / NODES as f64).cos())
-            .sum();
+        let angle = |j: usize| std::f64::consts::PI * m as f64 * (j as f64 + 0.5) / NODES as f64;
+        let s: f64 = (0..NODES).map(|j| fx[j] * angle(j).cos()).sum();
         *am = s * 2.0 / NODES as f64 * if m == 0 { 0.5 } else { 1.0 };
     }
     // The coefficients beyond the interpolant's (and their aliases in it) are bounded by
@@ -147,9 +147,15 @@ impl Polynomial {
     };
 
     /// The fit of `η = ior + i·extinction` per channel, when every channel's bound
-    /// ([`bound`]) is within [`METAL_FORM_BUDGET`] and the material may take the metal form
-    /// (`constants.metal`); else `None` (the lanes keep the metal form).
-    pub fn fit(constants: &LaneConstants, ior: [f64; 3], extinction: [f64; 3]) -> Option<Polynomial> {
+    /// (`(truncation/u + max_t Σ (2i + 3)|bᵢ||t|ⁱ)/F_min`: Horner's running error with or
+    /// without FMA, the coefficients' and `t`'s rounding and the fit's truncation,
+    /// docs/CPU_ENGINE.md) is within [`METAL_FORM_BUDGET`] and the material may take the
+    /// metal form (`constants.metal`); else `None` (the lanes keep the metal form).
+    pub fn fit(
+        constants: &LaneConstants,
+        ior: [f64; 3],
+        extinction: [f64; 3],
+    ) -> Option<Polynomial> {
         if !constants.metal {
             return None;
         }
