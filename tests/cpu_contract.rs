@@ -416,6 +416,17 @@ fn the_conductors_polynomial_holds_fs_budget_across_its_interval() {
         };
         assert_eq!(form(Isa::Avx512) == FORM_POLY, *fits, "{name} on avx512");
         assert_ne!(form(Isa::Avx2Fma), FORM_POLY, "{name} on avx2+fma");
+        // GGX's certificate takes the budget F leaves: a smaller guard exactly where the
+        // polynomial is taken.
+        let guard = |isa| match Plan::for_material(m).with_conductor_poly(m, isa) {
+            Plan::Microfacet { p, .. } => p.ggx_local_guard,
+            _ => panic!("{name}: a microfacet plan"),
+        };
+        assert_eq!(
+            guard(Isa::Avx512) < guard(Isa::Avx2Fma),
+            *fits,
+            "{name}: guard"
+        );
     }
     // l and v symmetric about h = n = +z at θ_d = acos c: c from just above FAST_MIN_C
     // (its next 16 f32 numbers, then a sweep) to 1.

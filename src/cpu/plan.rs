@@ -5,7 +5,7 @@
 use super::isa::Isa;
 use super::kernel::{Params, FAST_MIN_ROUGHNESS};
 use crate::material::{Distribution, Fresnel, Material, Model, Roughness};
-use crate::terms::d::{blinn, charlie};
+use crate::terms::d::{blinn, charlie, ggx};
 use crate::terms::f::{conductor, dielectric};
 use crate::terms::g::schlick_smith;
 use crate::terms::{DistributionKind, FresnelKind, Geometry};
@@ -201,6 +201,11 @@ impl Plan {
             if let Fresnel::Conductor { ior, extinction } = ct.fresnel {
                 if isa == Isa::Avx512 && p.fast_frame && p.conductor.metal {
                     p.conductor_poly = conductor_fit(&p.conductor, ior, extinction);
+                    // F's bound is the polynomial's, below the metal form's 48u that D's
+                    // certificate leaves room for: D may take the difference.
+                    if let Some(poly) = &p.conductor_poly {
+                        p.ggx_local_guard = ggx::local_frame_guard_for_f(p.m2, poly.bound_u);
+                    }
                 }
             }
         }

@@ -3,6 +3,7 @@
 //! 2014, modern convention only) `1 / (π mx my ((hx/mx)² + (hy/my)² + hz²)²)`; and its
 //! Smith Λ `(−1 + √(1 + m² tan²θ))/2` (Walter et al. 2007; Heitz 2014).
 
+use crate::terms::f::conductor::METAL_FORM_BUDGET;
 use crate::terms::k::Convention;
 use crate::terms::math::MulAdd;
 use crate::terms::real::Real;
@@ -69,8 +70,22 @@ pub const LOCAL_FRAME_D_BUDGET: f64 = 4e-6;
 /// The constant of [`local_frame_ok`] for roughness² `m2`: `16 (1 − m²)² u²/B²`, with
 /// B = [`LOCAL_FRAME_D_BUDGET`].
 pub fn local_frame_guard(m2: f64) -> f32 {
+    local_frame_guard_within(m2, LOCAL_FRAME_D_BUDGET)
+}
+
+/// [`local_frame_guard`] for a material whose F is bounded by `f_u` (in u) rather than
+/// by the metal form's budget (48u): the total stays 9.2e-6, so D may take what F leaves,
+/// `B = 4e-6 + (48 − f_u) u` (the conductor's fitted polynomial: 5–21u, `B` 5.6–6.5e-6).
+/// `f_u` above the metal form's budget gives [`local_frame_guard`].
+pub fn local_frame_guard_for_f(m2: f64, f_u: f64) -> f32 {
     let u = f64::from(f32::EPSILON) / 2.0;
-    let b = LOCAL_FRAME_D_BUDGET;
+    let spare = (METAL_FORM_BUDGET - f_u).max(0.0);
+    local_frame_guard_within(m2, LOCAL_FRAME_D_BUDGET + spare * u)
+}
+
+/// `16 (1 − m²)² u²/B²` for D's budget `B`.
+fn local_frame_guard_within(m2: f64, b: f64) -> f32 {
+    let u = f64::from(f32::EPSILON) / 2.0;
     (16.0 * (1.0 - m2) * (1.0 - m2) * u * u / (b * b)) as f32
 }
 
@@ -121,5 +136,29 @@ pub fn lambda_lane(q2: f32) -> f32 {
         q2 / (2.0 * (1.0 + r))
     } else {
         0.5 * (r - 1.0)
+    }
+}
+
+#[cfg(test)]
+mod guard_tests {
+    use super::*;
+
+    /// D's certificate takes what F leaves of the metal form's 48u and no more: the same
+    /// guard at 48u (and above), a smaller one (more lanes certified) below, and D's
+    /// budget plus F's bound the same total, 4e-6 + 48u, whatever F's bound.
+    #[test]
+    fn the_guard_for_a_tighter_f_keeps_the_total() {
+        let u = f64::from(f32::EPSILON) / 2.0;
+        for m2 in [0.075f64 * 0.075, 0.09, 0.49, 2.25] {
+            assert_eq!(local_frame_guard_for_f(m2, 48.0), local_frame_guard(m2));
+            assert_eq!(local_frame_guard_for_f(m2, 60.0), local_frame_guard(m2));
+            let (g, tight) = (local_frame_guard(m2), local_frame_guard_for_f(m2, 8.8));
+            assert!(tight < g, "m² = {m2}: {tight} !< {g}");
+            // guard = 16 (1 − m²)² u²/B², so B = 4u|1 − m²|/√guard.
+            let b = 4.0 * u * (1.0 - m2).abs() / f64::from(tight).sqrt();
+            let total = b + 8.8 * u;
+            let want = LOCAL_FRAME_D_BUDGET + 48.0 * u;
+            assert!((total - want).abs() < 1e-6 * want, "m² = {m2}: {total:e} vs {want:e}");
+        }
     }
 }
