@@ -192,14 +192,15 @@ impl Plan {
 
     /// The plan with the conductor's F as its fitted polynomial on the f32 frames' lanes
     /// (`conductor::poly`), where material `m` (this plan's) has one within the metal
-    /// form's budget and the engine runs on `isa` = AVX-512: there its FMAs read the
-    /// coefficients as broadcast operands and the polynomial is 11–16 % faster than the
-    /// metal form; on AVX2 it was as fast for GGX and 13 % slower for Beckmann
-    /// (docs/CPU_ENGINE.md), so the other instruction sets keep the metal form.
+    /// form's budget and the engine runs on `isa` = AVX-512 or AVX2+FMA, and GGX's
+    /// certificate with the budget F then leaves (`ggx::local_frame_guard_for_f`). On
+    /// AVX-512 its FMAs read the coefficients as broadcast operands and it is 7–11 % faster
+    /// than the metal form; on AVX2 as fast, with fewer lanes left to another frame and F
+    /// 1.4–6.6u off instead of 3.9–8u (docs/CPU_ENGINE.md). `scalar` keeps the metal form.
     pub fn with_conductor_poly(mut self, m: &Material, isa: Isa) -> Plan {
         if let (Plan::Microfacet { p, .. }, Model::CookTorrance(ct)) = (&mut self, &m.model) {
             if let Fresnel::Conductor { ior, extinction } = ct.fresnel {
-                if isa == Isa::Avx512 && p.fast_frame && p.conductor.metal {
+                if isa != Isa::Scalar && p.fast_frame && p.conductor.metal {
                     p.conductor_poly = conductor_fit(&p.conductor, ior, extinction);
                     // F's bound is the polynomial's, below the metal form's 48u that D's
                     // certificate leaves room for: D may take the difference.
