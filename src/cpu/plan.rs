@@ -6,7 +6,7 @@ use super::isa::Isa;
 use super::kernel::{Params, FAST_MIN_ROUGHNESS};
 use crate::material::{Distribution, Fresnel, Material, Model, Roughness};
 use crate::terms::d::{blinn, charlie, ggx};
-use crate::terms::f::{conductor, dielectric};
+use crate::terms::f::{conductor, dielectric, schlick};
 use crate::terms::g::schlick_smith;
 use crate::terms::{DistributionKind, FresnelKind, Geometry};
 use std::collections::BTreeMap;
@@ -176,7 +176,14 @@ impl Plan {
         if slope {
             (p.m2_f, p.inv_m2_f, p.d_norm_f) = (p.m2 as f32, p.inv_m2 as f32, p.d_norm as f32);
             p.m_f = mr as f32;
-            p.ggx_local_guard = crate::terms::d::ggx::local_frame_guard(p.m2);
+            // D's certificate takes what F's lane form leaves of the metal form's 48u.
+            p.ggx_local_guard = match ct.fresnel {
+                Fresnel::None => ggx::local_frame_guard_for_f(p.m2, 0.0),
+                Fresnel::Schlick { .. } => {
+                    ggx::local_frame_guard_for_f(p.m2, schlick::LANE_BOUND_U)
+                }
+                _ => ggx::local_frame_guard(p.m2),
+            };
         }
         Plan::Microfacet { d, aniso, g, f, p }
     }
