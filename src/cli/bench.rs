@@ -78,8 +78,8 @@ pub struct Args {
     #[arg(long)]
     pub equal_bytes_only: bool,
     /// Interleaved engine/Mitsuba pairs per equal-bytes point, 1 to 50: each rate is the
-    /// median over the pairs and the ratio the median of the pairs' ratios (the issue's
-    /// protocol is 5: Dr.Jit's rate swings 2× between runs on a shared machine); default 1
+    /// median over the pairs and the ratio the median of the pairs' ratios (docs/ publish
+    /// medians of 5: Dr.Jit's rate swings 2× between runs on a shared machine)
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u16).range(1..=50))]
     pub pairs: u16,
     #[command(flatten)]
