@@ -31,13 +31,13 @@ fn assert_local_form_bits(
     engine: &mut CpuEngine,
     isa: Isa,
     mats: &[Material],
-    local: &[(Vec<f32>, usize)],
+    local: &[([f32; 6], usize)],
     out: &Output,
 ) {
     use vkbrdf::batch::LocalBatch;
     for mi in 0..mats.len() {
         let picked: Vec<usize> = (0..local.len()).filter(|&r| local[r].1 == mi).collect();
-        let data: Vec<f32> = picked.iter().flat_map(|&r| local[r].0.clone()).collect();
+        let data: Vec<f32> = picked.iter().flat_map(|&r| local[r].0).collect();
         let lb = LocalBatch::new(data, mi, mats, &memory_source()).expect("local");
         let mut got = Output::default();
         engine
@@ -246,33 +246,13 @@ fn ggx_local_frame_within_the_rule_where_ds_slope_is_steepest() {
     ];
     let toml = common::steepest::materials_toml("ggx", &m_all, &kinds);
     let mats = parse_materials(&toml, "ggx-local").expect("materials");
-    let mut local = Vec::new();
-    let mut rows = Vec::new();
-    let mut i = 0usize;
-    for (mi, m) in m_all.into_iter().enumerate() {
-        for (l, v) in common::steepest::ggx_pairs(m, f64::from(FAST_MIN_C)) {
-            // Unnormalised inputs: the frame's lengths are part of its error.
-            let scale = 1.0 + 0.37 * (i % 7) as f64;
-            i += 1;
-            let lv: Vec<f32> = l
-                .iter()
-                .map(|x| (x * scale) as f32)
-                .chain(v.iter().map(|&x| x as f32))
-                .collect();
-            for g in 0..3 {
-                let material = (3 * mi + g) as f32;
-                local.push((lv.clone(), 3 * mi + g));
-                rows.extend_from_slice(&lv);
-                // N = +z in every other row, tilted (and not unit) in the others.
-                if rows.len() / 10 % 2 == 0 {
-                    rows.extend([0.0f32, 0.0, 1.0]);
-                } else {
-                    rows.extend([0.03f32, -0.02, 1.7]);
-                }
-                rows.push(material);
-            }
-        }
-    }
+    let local = common::steepest::tuples(
+        common::steepest::ggx_pairs,
+        f64::from(FAST_MIN_C),
+        &m_all,
+        kinds.len(),
+    );
+    let rows = common::steepest::rows_z_and_tilted(&local);
     let batch = Batch::new(rows, 10, mats.len(), &memory_source()).expect("batch");
     let request = Request { terms: true };
     let reference = CpuReference::new()
@@ -331,32 +311,13 @@ fn beckmann_local_frame_within_the_rule_where_ds_slope_is_steepest() {
     ];
     let toml = common::steepest::materials_toml("beckmann", &m_all, &kinds);
     let mats = parse_materials(&toml, "beckmann-local").expect("materials");
-    let (mut local, mut rows) = (Vec::new(), Vec::new());
-    let mut i = 0usize;
-    for (mi, m) in m_all.into_iter().enumerate() {
-        for (l, v) in common::steepest::beckmann_pairs(m, f64::from(FAST_MIN_C)) {
-            // Unnormalised inputs: the frame's lengths are part of its error.
-            let (sl, sv) = (1.0 + 0.37 * (i % 7) as f64, 0.6 + 0.29 * (i % 5) as f64);
-            i += 1;
-            let lv: Vec<f32> = l
-                .iter()
-                .map(|x| (x * sl) as f32)
-                .chain(v.iter().map(|x| (x * sv) as f32))
-                .collect();
-            for g in 0..kinds.len() {
-                let material = kinds.len() * mi + g;
-                local.push((lv.clone(), material));
-                rows.extend_from_slice(&lv);
-                // N = +z in every other row, tilted (and not unit) in the others.
-                if rows.len() / 10 % 2 == 0 {
-                    rows.extend([0.0f32, 0.0, 1.0]);
-                } else {
-                    rows.extend([0.03f32, -0.02, 1.7]);
-                }
-                rows.push(material as f32);
-            }
-        }
-    }
+    let local = common::steepest::tuples(
+        common::steepest::beckmann_pairs,
+        f64::from(FAST_MIN_C),
+        &m_all,
+        kinds.len(),
+    );
+    let rows = common::steepest::rows_z_and_tilted(&local);
     let batch = Batch::new(rows, 10, mats.len(), &memory_source()).expect("batch");
     let request = Request { terms: true };
     let reference = CpuReference::new()

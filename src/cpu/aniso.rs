@@ -1,13 +1,14 @@
 //! Anisotropic roughness in the lanes (FORMULAS.md §1–§3): the tangent frame `t`, `b`, and
 //! the anisotropic GGX and Beckmann D and Smith `q2`, all in f64 (roughness ratios up to
 //! 1e4 multiply the frame's error, as the kernel's `make_frame` found), then G, F, K and
-//! the outputs by the isotropic groups' code (`kernel::geometry`, `kernel::f_block`).
+//! the outputs by the isotropic groups' code (`kernel::geometry`, `kernel::two_pass::f_block`).
 
 // The lane loops index several arrays with the same lane number (see `kernel`).
 #![allow(clippy::needless_range_loop)]
 
 use super::frame::{frame64, rsqrt64, Frame64};
-use super::kernel::{geometry, lane_inputs, Inputs, Lane, Params, Stage, LANES};
+use super::kernel::two_pass::Stage;
+use super::kernel::{geometry, lane_inputs, Inputs, Lane, Params, LANES};
 use crate::terms::d::{beckmann, ggx};
 use crate::terms::DistributionKind;
 
@@ -78,7 +79,7 @@ pub(super) fn slope2(p: &Params, t: &Tangent) -> f64 {
 }
 
 /// The first pass of an anisotropic GGX or Beckmann group (`D`): D (modern
-/// convention, FORMULAS.md §2) and G into `st`, for `kernel::f_block`.
+/// convention, FORMULAS.md §2) and G into `st`, for `kernel::two_pass::f_block`.
 #[inline(always)]
 pub fn dg_block64_aniso<const D: u8, const G: u8>(p: &Params, inp: &Inputs, st: &mut Stage) {
     for k in 0..LANES {

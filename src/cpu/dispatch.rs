@@ -3,6 +3,7 @@
 //! compiled per form, the f64-frame groups in two passes, and the groups no lanes are
 //! compiled for sent to the reference. Each variant is a function of its own ([`apart`]).
 
+use super::kernel::two_pass::{f_block, Stage};
 use super::kernel::{self, Inputs, Outputs, LANES};
 use super::plan::Plan;
 use super::{aniso, lobes};
@@ -133,7 +134,7 @@ fn f32_frame_block<S: pulp::Simd, A: MulAdd, const Z: bool>(
 }
 
 /// The groups whose frame is always the f64 one: the empirical lobes, and the microfacet
-/// groups [`kernel::fused`] leaves out, in two passes ([`kernel::dg_block64`]). Each
+/// groups [`kernel::fused`] leaves out, in two passes ([`kernel::two_pass::dg_block64`]). Each
 /// distribution compiles the geometry terms its rules allow (`terms::legality`); the
 /// others take [`reference_block`].
 #[inline(always)]
@@ -144,6 +145,7 @@ fn f64_frame_block<S: pulp::Simd, A: MulAdd>(
     out: &mut [Outputs],
 ) {
     use crate::terms::{DistributionKind as D, Geometry as G};
+    use kernel::two_pass::dg_block64;
     use kernel::*;
     use lobes::{lobe_block, Lobe, L_BLINN_PHONG, L_PHONG, L_RTR, L_WARD, L_WARD_ANISO};
     let (d, aniso, g, f, p) = match plan {
@@ -237,9 +239,9 @@ fn f64_frame_block<S: pulp::Simd, A: MulAdd>(
     }
 }
 
-/// The second pass of the f64-frame groups: F, K and the outputs ([`kernel::f_block`]).
+/// The second pass of the f64-frame groups: F, K and the outputs ([`kernel::two_pass::f_block`]).
 #[inline(always)]
-fn f_pass<A: MulAdd>(f: FresnelKind, p: &kernel::Params, st: &kernel::Stage, out: &mut Outputs) {
+fn f_pass<A: MulAdd>(f: FresnelKind, p: &kernel::Params, st: &Stage, out: &mut Outputs) {
     use kernel::*;
     match f {
         FresnelKind::None => f_block::<A, F_NONE>(p, st, out),

@@ -95,12 +95,12 @@ fn f_none_block<S: pulp::Simd, A: MulAdd>(
     true
 }
 
-/// The groups the engine runs in two passes ([`kernel::dg_block64`]), with F = 1.
+/// The groups the engine runs in two passes ([`kernel::two_pass::dg_block64`]), with F = 1.
 #[inline(always)]
 fn two_pass<A: MulAdd, const D: u8, const G: u8>(p: &Params, inp: &Inputs, out: &mut Outputs) {
-    let mut st = kernel::Stage::default();
-    kernel::dg_block64::<A, D, G>(p, inp, &mut st);
-    kernel::f_block::<A, { kernel::F_NONE }>(p, &st, out);
+    let mut st = kernel::two_pass::Stage::default();
+    kernel::two_pass::dg_block64::<A, D, G>(p, inp, &mut st);
+    kernel::two_pass::f_block::<A, { kernel::F_NONE }>(p, &st, out);
 }
 
 /// One work item: samples `first..first + len` of every point in `points`.

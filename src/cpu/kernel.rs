@@ -25,6 +25,7 @@ use crate::terms::{DistributionKind, FresnelKind, Geometry};
 
 mod channels;
 mod params;
+pub mod two_pass;
 pub use channels::OUTPUT_LIMIT;
 pub(super) use channels::{brdf_of, channels_of, dgk_of, FresnelOf};
 pub use params::Params;
@@ -555,7 +556,7 @@ fn microfacet_block64<A: MulAdd, const D: u8, const G: u8, const F: u8>(
 /// Whether a microfacet group runs fused, with the f32 frame where it suffices
 /// ([`microfacet_block`]): GGX and Beckmann with the V-cavity, a Smith geometry or none,
 /// and any Fresnel term but the dielectric (whose f64 evaluation wants the f64 frame) —
-/// the common groups. The others take the two-pass f64 path ([`dg_block64`]).
+/// the common groups. The others take the two-pass f64 path ([`two_pass::dg_block64`]).
 pub fn fused(d: DistributionKind, aniso: bool, g: Geometry, f: FresnelKind) -> bool {
     let d = !aniso && matches!(d, DistributionKind::Ggx | DistributionKind::Beckmann);
     let g = match g {
@@ -567,102 +568,6 @@ pub fn fused(d: DistributionKind, aniso: bool, g: Geometry, f: FresnelKind) -> b
         Geometry::SchlickSmith | Geometry::Neubelt => false,
     };
     d && g && f != FresnelKind::Dielectric
-}
-
-/// The f64-frame groups' lanes between their two passes (see [`dg_block64`]).
-pub struct Stage {
-    cos_i: [f32; LANES],
-    cos_o: [f32; LANES],
-    c: [f32; LANES],
-    s2: [f32; LANES],
-    one_minus_c: [f32; LANES],
-    c64: [f64; LANES],
-    s2_64: [f64; LANES],
-    d: [f32; LANES],
-    g: [f32; LANES],
-    ok: [bool; LANES],
-}
-
-impl Default for Stage {
-    fn default() -> Self {
-        Stage {
-            cos_i: [0.0; LANES],
-            cos_o: [0.0; LANES],
-            c: [0.0; LANES],
-            s2: [0.0; LANES],
-            one_minus_c: [0.0; LANES],
-            c64: [0.0; LANES],
-            s2_64: [0.0; LANES],
-            d: [0.0; LANES],
-            g: [0.0; LANES],
-            ok: [false; LANES],
-        }
-    }
-}
-
-/// The first pass of the groups that always take the f64 frame (every dielectric group,
-/// the Gaussian, Blinn and Charlie distributions, and the schlick-smith and neubelt
-/// geometries): the frame, D and G of a block into `st`; [`f_block`] then adds F, K and
-/// the outputs. Two passes compile D × G + F variants where one would compile D × G × F
-/// (the fused form took the clean build from 113 to 255 s); these groups pay for it with
-/// a store and a load of ten values a lane.
-#[inline(always)]
-pub fn dg_block64<A: MulAdd, const D: u8, const G: u8>(p: &Params, inp: &Inputs, st: &mut Stage) {
-    for k in 0..LANES {
-        let fr = Lane::from64(&frame64(&lane_inputs(inp, k)));
-        let (d, g) = microfacet_dg::<A, D, G, false>(p, &fr);
-        st.put(k, &fr, d.0 / d.1, g.0 / g.1);
-    }
-}
-
-impl Stage {
-    /// Stores lane `k`'s frame values that F and K read, its D and G.
-    #[inline(always)]
-    pub(super) fn put(&mut self, k: usize, fr: &Lane, d: f32, g: f32) {
-        let st = self;
-        st.cos_i[k] = fr.cos_i;
-        st.cos_o[k] = fr.cos_o;
-        st.c[k] = fr.c;
-        st.s2[k] = fr.s2;
-        st.one_minus_c[k] = fr.one_minus_c;
-        st.c64[k] = fr.c64;
-        st.s2_64[k] = fr.s2_64;
-        st.d[k] = d;
-        st.g[k] = g;
-        st.ok[k] = fr.ok;
-    }
-}
-
-/// The second pass of [`dg_block64`]: F, K and the outputs.
-#[inline(always)]
-pub fn f_block<A: MulAdd, const F: u8>(p: &Params, st: &Stage, out: &mut Outputs) {
-    for k in 0..LANES {
-        // The fields `finish_lane` reads; the others are not needed after D and G.
-        let fr = Lane {
-            cos_i: st.cos_i[k],
-            cos_o: st.cos_o[k],
-            cos_h: 0.0,
-            c: st.c[k],
-            sin2_i: 0.0,
-            sin2_o: 0.0,
-            one_minus_c: st.one_minus_c[k],
-            s2: st.s2[k],
-            sin2_h32: 0.0,
-            cos_h2: 0.0,
-            sin2_h: 0.0,
-            c64: st.c64[k],
-            s2_64: st.s2_64[k],
-            ok: st.ok[k],
-        };
-        finish_lane::<A, F, true, { conductor::FORM_SCALED }>(
-            p,
-            &fr,
-            (st.d[k], 1.0),
-            (st.g[k], 1.0),
-            out,
-            k,
-        );
-    }
 }
 
 /// The terms and the BRDF of lane `k` from its frame (`FAST`: the f32 frame's, see D;
@@ -783,27 +688,18 @@ fn finish_lane<A: MulAdd, const F: u8, const T: bool, const M: u8>(
     out: &mut Outputs,
     k: usize,
 ) {
-    let (cos_i, cos_o, c) = (fr.cos_i, fr.cos_o, fr.c);
-    // F (FORMULAS.md §4) per channel.
-    let (one_minus_c, s2_f) = (fr.one_minus_c, fr.s2);
-    // A loop, not `array::from_fn`: LLVM declined to inline from_fn's closure around
-    // the conductor, which made every lane a call and nothing vectorised.
+    let (cos_i, cos_o) = (fr.cos_i, fr.cos_o);
+    // F (FORMULAS.md §4) per channel. A loop, not `array::from_fn`: LLVM declined to
+    // inline from_fn's closure around the conductor, which made every lane a call and
+    // nothing vectorised.
     let mut f = [1.0f32; 3];
-    let poly = F == F_CONDUCTOR && M == conductor::FORM_POLY;
-    if poly {
-        f = conductor::poly::f_lanes_poly::<A, f32>(c, p.conductor_poly());
-    }
-    for ch in 0..3 {
-        f[ch] = match const { FresnelKind::from_code(F) } {
-            _ if poly => f[ch],
-            FresnelKind::None => 1.0,
-            FresnelKind::Schlick => schlick::f_lane(one_minus_c, p.f0[ch]),
-            FresnelKind::Dielectric => dielectric::f_lane(fr.c64, fr.s2_64, p.ior[ch], p.mu2m1[ch]),
-            FresnelKind::Conductor if M == conductor::FORM_METAL => {
-                conductor::f_lane_metal::<A, f32>(c, s2_f, &p.conductor, ch)
-            }
-            FresnelKind::Conductor => conductor::f_lane(c, s2_f, &p.conductor, ch),
-        };
+    if F == F_CONDUCTOR && M == conductor::FORM_POLY {
+        // The three channels' polynomials at once.
+        f = conductor::poly::f_lanes_poly::<A, f32>(fr.c, p.conductor_poly());
+    } else {
+        for ch in 0..3 {
+            f[ch] = lane_f::<A, F, M>(p, fr, ch);
+        }
     }
     let (brdf, too_large) = brdf_of::<A, f32>(p, d, g, f, cos_i, cos_o);
     for ch in 0..3 {
@@ -816,6 +712,22 @@ fn finish_lane<A: MulAdd, const F: u8, const T: bool, const M: u8>(
         }
     }
     out.rescue[k] = !fr.ok || too_large;
+}
+
+/// F of channel `ch` of a lane in any lane form but the polynomial ([`finish_lane`] forms
+/// its three channels at once).
+#[inline(always)]
+fn lane_f<A: MulAdd, const F: u8, const M: u8>(p: &Params, fr: &Lane, ch: usize) -> f32 {
+    let (c, s2_f, one_minus_c) = (fr.c, fr.s2, fr.one_minus_c);
+    match const { FresnelKind::from_code(F) } {
+        FresnelKind::None => 1.0,
+        FresnelKind::Schlick => schlick::f_lane(one_minus_c, p.f0[ch]),
+        FresnelKind::Dielectric => dielectric::f_lane(fr.c64, fr.s2_64, p.ior[ch], p.mu2m1[ch]),
+        FresnelKind::Conductor if M == conductor::FORM_METAL => {
+            conductor::f_lane_metal::<A, f32>(c, s2_f, &p.conductor, ch)
+        }
+        FresnelKind::Conductor => conductor::f_lane(c, s2_f, &p.conductor, ch),
+    }
 }
 
 #[cfg(test)]

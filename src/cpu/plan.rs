@@ -81,6 +81,22 @@ fn conductor_fit(
     fit
 }
 
+/// GGX's test of the local f32 frame (`ggx::local_frame_guard_for_f`) with D's budget
+/// what F's lane form leaves of the metal form's 48u: F = 1 0u, Schlick's written bound
+/// (`schlick::LANE_BOUND_U`), the conductor's fitted polynomial its own bound, any other
+/// form the whole 48u.
+fn ggx_guard(p: &Params, f: FresnelKind) -> f32 {
+    let f_u = match f {
+        FresnelKind::None => 0.0,
+        FresnelKind::Schlick => schlick::LANE_BOUND_U,
+        FresnelKind::Conductor => p
+            .conductor_poly
+            .map_or(conductor::METAL_FORM_BUDGET, |poly| poly.bound_u),
+        FresnelKind::Dielectric => conductor::METAL_FORM_BUDGET,
+    };
+    ggx::local_frame_guard_for_f(p.m2, f_u)
+}
+
 fn f32x3(a: [f64; 3]) -> [f32; 3] {
     a.map(|x| x as f32)
 }
@@ -176,14 +192,7 @@ impl Plan {
         if slope {
             (p.m2_f, p.inv_m2_f, p.d_norm_f) = (p.m2 as f32, p.inv_m2 as f32, p.d_norm as f32);
             p.m_f = mr as f32;
-            // D's certificate takes what F's lane form leaves of the metal form's 48u.
-            p.ggx_local_guard = match ct.fresnel {
-                Fresnel::None => ggx::local_frame_guard_for_f(p.m2, 0.0),
-                Fresnel::Schlick { .. } => {
-                    ggx::local_frame_guard_for_f(p.m2, schlick::LANE_BOUND_U)
-                }
-                _ => ggx::local_frame_guard(p.m2),
-            };
+            p.ggx_local_guard = ggx_guard(&p, f);
         }
         Plan::Microfacet { d, aniso, g, f, p }
     }
@@ -205,15 +214,11 @@ impl Plan {
     /// than the metal form; on AVX2 as fast, with fewer lanes left to another frame and F
     /// 1.4–6.6u off instead of 3.9–8u (docs/CPU_ENGINE.md). `scalar` keeps the metal form.
     pub fn with_conductor_poly(mut self, m: &Material, isa: Isa) -> Plan {
-        if let (Plan::Microfacet { p, .. }, Model::CookTorrance(ct)) = (&mut self, &m.model) {
+        if let (Plan::Microfacet { p, f, .. }, Model::CookTorrance(ct)) = (&mut self, &m.model) {
             if let Fresnel::Conductor { ior, extinction } = ct.fresnel {
                 if isa != Isa::Scalar && p.fast_frame && p.conductor.metal {
                     p.conductor_poly = conductor_fit(&p.conductor, ior, extinction);
-                    // F's bound is the polynomial's, below the metal form's 48u that D's
-                    // certificate leaves room for: D may take the difference.
-                    if let Some(poly) = &p.conductor_poly {
-                        p.ggx_local_guard = ggx::local_frame_guard_for_f(p.m2, poly.bound_u);
-                    }
+                    p.ggx_local_guard = ggx_guard(p, *f);
                 }
             }
         }

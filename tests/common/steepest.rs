@@ -68,22 +68,61 @@ pub fn materials_toml(distribution: &str, m_all: &[f64], kinds: &[(&str, &str)])
 /// Unit `(l, v)` pairs about N = +z.
 pub type Pairs = Vec<([f64; 3], [f64; 3])>;
 
-/// 10-column rows with N = +z of `pairs(m, c_min)` for each roughness of `m_all`, with
-/// unnormalised L and V (the frame's lengths are part of its error), each pair once for
-/// each of `per_m` materials (row material `per_m · i + g`, as [`materials_toml`] numbers them).
-pub fn rows_z(pairs: fn(f64, f64) -> Pairs, c_min: f64, m_all: &[f64], per_m: usize) -> Vec<f32> {
-    let mut rows = Vec::new();
+/// The local form's tuples `(L, V, material)` of `pairs(m, c_min)` for each roughness of
+/// `m_all`, L and V unnormalised (the frame's lengths are part of its error), each pair
+/// once for each of `per_m` materials (material `per_m · i + g`, as [`materials_toml`]
+/// numbers them).
+pub fn tuples(
+    pairs: fn(f64, f64) -> Pairs,
+    c_min: f64,
+    m_all: &[f64],
+    per_m: usize,
+) -> Vec<([f32; 6], usize)> {
+    let mut out = Vec::new();
     let mut i = 0usize;
     for (mi, &m) in m_all.iter().enumerate() {
         for (l, v) in pairs(m, c_min) {
             let (sl, sv) = (1.0 + 0.37 * (i % 7) as f64, 0.6 + 0.29 * (i % 5) as f64);
             i += 1;
+            let lv = [
+                l[0] * sl,
+                l[1] * sl,
+                l[2] * sl,
+                v[0] * sv,
+                v[1] * sv,
+                v[2] * sv,
+            ];
             for g in 0..per_m {
-                rows.extend(l.iter().map(|x| (x * sl) as f32));
-                rows.extend(v.iter().map(|x| (x * sv) as f32));
-                rows.extend([0.0f32, 0.0, 1.0, (per_m * mi + g) as f32]);
+                out.push((lv.map(|x| x as f32), per_m * mi + g));
             }
         }
+    }
+    out
+}
+
+/// 10-column rows with N = +z of [`tuples`].
+pub fn rows_z(pairs: fn(f64, f64) -> Pairs, c_min: f64, m_all: &[f64], per_m: usize) -> Vec<f32> {
+    let mut rows = Vec::new();
+    for (lv, material) in tuples(pairs, c_min, m_all, per_m) {
+        rows.extend(lv);
+        rows.extend([0.0f32, 0.0, 1.0, material as f32]);
+    }
+    rows
+}
+
+/// 10-column rows of [`tuples`] with N = +z in every other row and tilted (and not unit)
+/// in the others: blocks whose lanes take either frame lane by lane.
+pub fn rows_z_and_tilted(tuples: &[([f32; 6], usize)]) -> Vec<f32> {
+    let mut rows = Vec::new();
+    for (r, (lv, material)) in tuples.iter().enumerate() {
+        rows.extend(lv);
+        let n = if r % 2 == 0 {
+            [0.0f32, 0.0, 1.0]
+        } else {
+            [0.03, -0.02, 1.7]
+        };
+        rows.extend(n);
+        rows.push(*material as f32);
     }
     rows
 }
