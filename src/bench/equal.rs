@@ -66,8 +66,15 @@ pub fn tsc_hz() -> Option<f64> {
         .map(|m| m * 1e6)
 }
 
-/// Median seconds of `repeats` calls of the engine on `local` (one warm-up call first),
-/// evaluating into the same output each time, and that output.
+/// Warm-up before a timed series: calls for at least this long (and at least one). A
+/// peer's process leaves the machine disturbed for several milliseconds after it exits
+/// (measured: the engine's first ~5 calls at 262,144 tuples ran at half rate right after
+/// a Mitsuba run, then recovered), which one warm-up call did not cover; the peer's own
+/// warm-up (its JIT compile) is longer than this.
+const WARM_UP: std::time::Duration = std::time::Duration::from_millis(50);
+
+/// Median seconds of `repeats` calls of the engine on `local` (after [`WARM_UP`] of
+/// untimed calls), evaluating into the same output each time, and that output.
 pub fn time_local(
     engine: &mut CpuEngine,
     local: &LocalBatch,
@@ -76,7 +83,13 @@ pub fn time_local(
 ) -> Result<(f64, Output)> {
     let request = Request::default();
     let mut out = Output::default();
-    engine.evaluate_local_into(local, materials, &request, &mut out)?;
+    let warm = Instant::now();
+    loop {
+        engine.evaluate_local_into(local, materials, &request, &mut out)?;
+        if warm.elapsed() >= WARM_UP {
+            break;
+        }
+    }
     let mut secs = Vec::with_capacity(repeats);
     for _ in 0..repeats.max(1) {
         let t = Instant::now();
