@@ -10,7 +10,8 @@
 //! ```
 //!
 //! A fourth argument `columns` evaluates the same L and V as two `(n, 3)` columns with N
-//! given once (`ColumnBatch`) instead of the local form.
+//! given once (`ColumnBatch`) instead of the local form; `planar`, the local form held as
+//! six columns (`LocalLayout::Columns`) instead of rows.
 //!
 //! For counts by source line, build with `--profile profiling` (the release profile drops
 //! the line tables) and annotate `target/profiling/examples/cpu_engine_count`'s output
@@ -23,6 +24,7 @@
 use std::path::Path;
 use vkbrdf::backend::{Backend, Output, Request};
 use vkbrdf::batch::columns::ColumnBatch;
+use vkbrdf::batch::LocalLayout;
 use vkbrdf::bench::scenarios;
 use vkbrdf::cpu::CpuEngine;
 
@@ -39,11 +41,16 @@ fn main() {
         eprintln!("{name} has no local form (several materials or tangents)");
         std::process::exit(2);
     };
+    // `planar` as a fourth argument: the local form held as six columns.
+    let batch = if args.get(3).is_some_and(|a| a == "planar") {
+        batch.to_layout(LocalLayout::Columns)
+    } else {
+        batch
+    };
     // `columns` as a fourth argument: the same L and V as two (n, 3) columns, N given once.
     let columns = args.get(3).is_some_and(|a| a == "columns");
-    let rows = batch.as_slice().chunks_exact(6);
-    let l: Vec<f32> = rows.clone().flat_map(|r| r[..3].to_vec()).collect();
-    let v: Vec<f32> = rows.flat_map(|r| r[3..].to_vec()).collect();
+    let l: Vec<f32> = (0..n).flat_map(|i| batch.row(i)[..3].to_vec()).collect();
+    let v: Vec<f32> = (0..n).flat_map(|i| batch.row(i)[3..].to_vec()).collect();
     let (z, m) = ([0.0f32, 0.0, 1.0], [batch.material() as f32]);
     let cols =
         ColumnBatch::new([&l, &v, &z], None, &m, n, &s.materials, Path::new("c")).expect("columns");

@@ -4,9 +4,11 @@
 //! `Lx Ly Lz Vx Vy Vz` with N = +z and one material for the whole batch.
 
 pub mod columns;
+mod local_material;
 mod material_column;
 pub mod rows;
 
+pub use local_material::{check_local_material, local_material};
 use material_column::{material_in_range, material_index};
 
 use crate::cancel::Cancel;
@@ -239,17 +241,30 @@ impl Batch<'static> {
     }
 }
 
-/// A local-frame batch: `n × 6` float32 rows `Lx Ly Lz Vx Vy Vz` in the surface's own
+/// A local-frame batch: `n` tuples `Lx Ly Lz Vx Vy Vz` in float32 in the surface's own
 /// frame (N = +z, no tangent) and one material for every row — the input of users whose
 /// directions are already local (a renderer's `wi`, `wo`), 24 bytes a tuple instead of 40.
+/// Held as rows (`n × 6`, C order) or as six columns ([`LocalLayout`]).
 ///
-/// Every tuple means the same as the 10-column row `Lx Ly Lz Vx Vy Vz 0 0 1 material`;
-/// engines that take rows expand it in chunks ([`LocalBatch::rows`]), the CPU engine
-/// evaluates it as it is.
+/// Every tuple means the same as the 10-column row `Lx Ly Lz Vx Vy Vz 0 0 1 material`,
+/// in either layout; engines that take rows expand it in chunks ([`LocalBatch::rows`]),
+/// the CPU engine evaluates it as it is.
 #[derive(Debug, Clone, PartialEq)]
 pub struct LocalBatch {
     data: Vec<f32>,
     material: usize,
+    layout: LocalLayout,
+}
+
+/// How a [`LocalBatch`] holds its values.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LocalLayout {
+    /// `n` rows of 6 (`Lx Ly Lz Vx Vy Vz`): an `(n, 6)` array in C order.
+    Rows,
+    /// Six columns of `n`, `Lx` first: an `(n, 6)` array in Fortran order, or `wi`, `wo`
+    /// as six arrays (what Mitsuba and Dr.Jit hold). The CPU engine's vector variants
+    /// load them into registers as they are, with no transpose.
+    Columns,
 }
 
 impl LocalBatch {
@@ -263,17 +278,37 @@ impl LocalBatch {
         materials: &[Material],
         source: &Path,
     ) -> Result<LocalBatch> {
+        LocalBatch::with_layout(data, LocalLayout::Rows, material, materials, source)
+    }
+
+    /// As [`LocalBatch::new`], for data held in `layout`: with [`LocalLayout::Columns`],
+    /// `data` is six columns of `n` one after another (`Lx` of every tuple, then `Ly`, …).
+    pub fn with_layout(
+        data: Vec<f32>,
+        layout: LocalLayout,
+        material: usize,
+        materials: &[Material],
+        source: &Path,
+    ) -> Result<LocalBatch> {
         check_local_material(material, materials, source)?;
         if !data.len().is_multiple_of(COLUMNS_LOCAL) {
+            let what = match layout {
+                LocalLayout::Rows => "whole rows",
+                LocalLayout::Columns => "six columns of equal length",
+            };
             return Err(Error::Batch {
                 path: source.to_owned(),
                 message: format!(
-                    "{} values do not make whole rows of {COLUMNS_LOCAL} (Lx Ly Lz Vx Vy Vz)",
+                    "{} values do not make {what} of {COLUMNS_LOCAL} (Lx Ly Lz Vx Vy Vz)",
                     data.len()
                 ),
             });
         }
-        Ok(LocalBatch { data, material })
+        Ok(LocalBatch {
+            data,
+            material,
+            layout,
+        })
     }
 
     /// Number of tuples.
@@ -291,19 +326,67 @@ impl LocalBatch {
         self.material
     }
 
-    /// The raw row-major data (6 floats a row).
+    /// How the values are held.
+    pub fn layout(&self) -> LocalLayout {
+        self.layout
+    }
+
+    /// The raw data, in the batch's [`LocalLayout`].
     pub fn as_slice(&self) -> &[f32] {
         &self.data
     }
 
-    /// The row-major data, for reuse (as [`Batch::into_data`]).
+    /// The raw data, for reuse (as [`Batch::into_data`]).
     pub fn into_data(self) -> Vec<f32> {
         self.data
     }
 
+    /// The same tuples held in `layout` (a copy).
+    pub fn to_layout(&self, layout: LocalLayout) -> LocalBatch {
+        let n = self.len();
+        let data = match layout {
+            LocalLayout::Rows => (0..n).flat_map(|i| self.row(i)).collect(),
+            LocalLayout::Columns => {
+                let mut data = vec![0.0; n * COLUMNS_LOCAL];
+                for i in 0..n {
+                    for (c, x) in self.row(i).into_iter().enumerate() {
+                        data[c * n + i] = x;
+                    }
+                }
+                data
+            }
+        };
+        LocalBatch {
+            data,
+            material: self.material,
+            layout,
+        }
+    }
+
+    /// Tuple `i`'s six values `Lx Ly Lz Vx Vy Vz`, in either layout.
+    #[inline]
+    pub fn row(&self, i: usize) -> [f32; COLUMNS_LOCAL] {
+        match self.layout {
+            LocalLayout::Rows => self.data[i * COLUMNS_LOCAL..(i + 1) * COLUMNS_LOCAL]
+                .try_into()
+                .expect("a row of 6"),
+            LocalLayout::Columns => {
+                let n = self.len();
+                std::array::from_fn(|c| self.data[c * n + i])
+            }
+        }
+    }
+
+    /// Column `c` (0–5: `Lx Ly Lz Vx Vy Vz`) of a batch held as columns; `None` for rows.
+    pub fn column(&self, c: usize) -> Option<&[f32]> {
+        let n = self.len();
+        (self.layout == LocalLayout::Columns && c < COLUMNS_LOCAL)
+            .then(|| &self.data[c * n..(c + 1) * n])
+    }
+
     /// Tuple `i`, with N = (0, 0, 1).
     pub fn tuple(&self, i: usize) -> Tuple {
-        let r = &self.data[i * COLUMNS_LOCAL..(i + 1) * COLUMNS_LOCAL];
+        let r = self.row(i);
         Tuple {
             l: [r[0], r[1], r[2]],
             v: [r[3], r[4], r[5]],
@@ -318,10 +401,8 @@ impl LocalBatch {
     pub fn rows(&self, range: std::ops::Range<usize>) -> Batch<'static> {
         let mut data = Vec::with_capacity(range.len() * COLUMNS_PLAIN);
         let m = self.material as f32;
-        for r in self.data[range.start * COLUMNS_LOCAL..range.end * COLUMNS_LOCAL]
-            .chunks_exact(COLUMNS_LOCAL)
-        {
-            data.extend_from_slice(r);
+        for i in range {
+            data.extend_from_slice(&self.row(i));
             data.extend_from_slice(&[0.0, 0.0, 1.0, m]);
         }
         Batch {
@@ -329,74 +410,6 @@ impl LocalBatch {
             columns: COLUMNS_PLAIN,
         }
     }
-}
-
-/// The material of a local-frame batch from the user's choice (`--material NAME|INDEX`): an
-/// index into `materials` or a material's name; with no choice, the only material of a
-/// one-material table. Errors name `source` (the batch) and list the materials when the
-/// choice matches none or a table of several leaves it open.
-pub fn local_material(
-    choice: Option<&str>,
-    materials: &[Material],
-    source: &Path,
-) -> Result<usize> {
-    let listing = || {
-        materials
-            .iter()
-            .enumerate()
-            .map(|(i, m)| format!("{i} `{}`", m.name))
-            .collect::<Vec<_>>()
-            .join(", ")
-    };
-    let err = |message: String| Error::Batch {
-        path: source.to_owned(),
-        message,
-    };
-    let index = match choice {
-        None if materials.len() == 1 => 0,
-        None => {
-            return Err(err(format!(
-                "a 6-column local-frame batch (Lx Ly Lz Vx Vy Vz) has one material for every row, and the materials file defines {}: choose one with --material NAME|INDEX ({})",
-                materials.len(),
-                listing()
-            )))
-        }
-        Some(c) => match materials.iter().position(|m| m.name == c) {
-            Some(i) => i,
-            None => c.trim().parse::<usize>().ok().filter(|&i| i < materials.len()).ok_or_else(|| {
-                err(format!(
-                    "--material {c:?} is neither a material's name nor an index in 0..{} (the materials file defines {})",
-                    materials.len(),
-                    listing()
-                ))
-            })?,
-        },
-    };
-    check_local_material(index, materials, source)?;
-    Ok(index)
-}
-
-/// Checks that `material` may evaluate a local-frame batch: an index into `materials`
-/// and not anisotropic (the local form has no tangent column). `source` names the batch.
-pub fn check_local_material(material: usize, materials: &[Material], source: &Path) -> Result<()> {
-    let err = |message: String| Error::Batch {
-        path: source.to_owned(),
-        message,
-    };
-    let Some(m) = materials.get(material) else {
-        return Err(err(format!(
-            "material {material} is not an index in 0..{} (the materials file defines {})",
-            materials.len(),
-            materials.len()
-        )));
-    };
-    if m.is_anisotropic() {
-        return Err(err(format!(
-            "material {material} (`{}`) is anisotropic (roughness [mx, my]) and needs a tangent, which the 6-column local-frame form (Lx Ly Lz Vx Vy Vz, N = +z) does not carry; give rows of shape (n, 13) instead",
-            m.name
-        )));
-    }
-    Ok(())
 }
 
 /// [`Batch::check_tangents`] on part of a batch: `rows` (row-major, `columns` floats per

@@ -251,9 +251,9 @@ pub fn batch_rows<'a>(
 pub fn local_rows<'a>(
     batch: &'a crate::batch::LocalBatch,
 ) -> impl Fn(usize) -> ([f32; 3], [f32; 3], usize) + Sync + 'a {
-    let (rows, material) = (batch.as_slice(), batch.material());
+    let material = batch.material();
     move |r| {
-        let x = &rows[r * 6..];
+        let x = batch.row(r);
         ([x[0], x[1], x[2]], [x[3], x[4], x[5]], material)
     }
 }

@@ -599,8 +599,15 @@ fn the_local_form_equals_the_ten_column_rows_bit_for_bit() {
     let request = Request { terms: true };
     for m in 0..mats.len() {
         let rows = as_rows(&local, m, mats.len());
-        let lb = LocalBatch::new(local.clone(), m, &mats, &memory_source()).expect("local");
-        for threads in [1, 3] {
+        let rows_lb = LocalBatch::new(local.clone(), m, &mats, &memory_source()).expect("local");
+        let columns_lb = rows_lb.to_layout(vkbrdf::batch::LocalLayout::Columns);
+        assert_eq!(columns_lb.tuple(40_008), rows_lb.tuple(40_008));
+        for (threads, lb) in [
+            (1, &rows_lb),
+            (3, &rows_lb),
+            (1, &columns_lb),
+            (3, &columns_lb),
+        ] {
             let mut engine = CpuEngine::with_threads(threads);
             let want = engine.evaluate(&rows, &mats, &request).expect("rows");
             // A reused output full of stale values, longer than needed and with terms.
@@ -610,9 +617,10 @@ fn the_local_form_equals_the_ten_column_rows_bit_for_bit() {
                 ..Output::default()
             };
             engine
-                .evaluate_local_into(&lb, &mats, &request, &mut got)
+                .evaluate_local_into(lb, &mats, &request, &mut got)
                 .expect("local");
-            assert_eq!(got, want, "material {m}, {threads} thread(s)");
+            let layout = lb.layout();
+            assert_eq!(got, want, "material {m}, {threads} thread(s), {layout:?}");
             assert!(want.counts.invalid > 0 && want.counts.below_horizon > 0);
             assert_eq!(want.counts.first_invalid, Some(5));
         }
@@ -668,6 +676,19 @@ fn a_local_batch_refuses_a_bad_material_or_shape() {
     assert!(
         e.to_string()
             .contains("13 values do not make whole rows of 6"),
+        "{e}"
+    );
+    let e = LocalBatch::with_layout(
+        vec![0.0; 13],
+        vkbrdf::batch::LocalLayout::Columns,
+        0,
+        &mats,
+        &memory_source(),
+    )
+    .unwrap_err();
+    assert!(
+        e.to_string()
+            .contains("13 values do not make six columns of equal length"),
         "{e}"
     );
     let aniso = materials(

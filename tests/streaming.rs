@@ -492,7 +492,8 @@ fn write_npy_as(path: &Path, rows: &[f32], columns: usize, f64s: bool, fortran: 
 }
 
 /// float64 and Fortran-order batches take the streamed path chunk by chunk (1 MiB chunks,
-/// a shard, tangent columns) and give the bytes the C-order float32 batch gives; a bad
+/// a shard, tangent columns, the local form) and give the bytes the C-order float32 batch
+/// gives; a bad
 /// material in a Fortran-order file is named by its batch row.
 #[test]
 fn float64_and_fortran_order_stream_to_the_same_output() {
@@ -507,10 +508,23 @@ fn float64_and_fortran_order_stream_to_the_same_output() {
         with_tangents.extend_from_slice(r);
         with_tangents.extend_from_slice(&[1.0, 0.0, 0.0]);
     }
-    for (name, data, columns) in [("plain", &rows, 10), ("tangents", &with_tangents, 13)] {
+    // The local form (Lx Ly Lz Vx Vy Vz, material `gold`): a float32 Fortran-order file is
+    // read as columns, straight into the engine's batch (`LocalLayout::Columns`).
+    let local: Vec<f32> = rows
+        .chunks_exact(10)
+        .flat_map(|r| r[..6].to_vec())
+        .collect();
+    for (name, data, columns) in [
+        ("plain", &rows, 10),
+        ("tangents", &with_tangents, 13),
+        ("local", &local, 6),
+    ] {
         let run = |input: &Path, out: &str, extra: &[&str]| {
             let o = dir.path().join(out);
             let mut args = vec!["-o", path(&o), "--backend", "cpu", "--max-memory", "1MiB"];
+            if columns == 6 {
+                args.extend_from_slice(&["--material", "gold"]);
+            }
             args.extend_from_slice(extra);
             let r = eval(&m, input, &args);
             assert!(r.status.success(), "{name} {out}: {}", stderr(&r));

@@ -4,7 +4,8 @@
 //! does).
 
 use super::{
-    npy_head, open_sized, Batch, LocalBatch, COLUMNS_LOCAL, COLUMNS_PLAIN, COLUMNS_TANGENT,
+    npy_head, open_sized, Batch, LocalBatch, LocalLayout, COLUMNS_LOCAL, COLUMNS_PLAIN,
+    COLUMNS_TANGENT,
 };
 use crate::error::{Error, Result};
 use crate::material::Material;
@@ -257,7 +258,9 @@ impl NpyRows {
     }
 
     /// Rows `at..at + n` of a local-frame file as a [`LocalBatch`] of material `material`
-    /// (as [`NpyRows::next_local`] makes it); see [`NpyRows::floats_at`].
+    /// (as [`NpyRows::next_local`] makes it); see [`NpyRows::floats_at`]. A float32 file in
+    /// Fortran order is read as it lies, each column straight into the buffer, and held as
+    /// columns ([`LocalLayout::Columns`]), which the CPU engine reads without a transpose.
     pub fn local_at(
         &self,
         at: u64,
@@ -267,7 +270,29 @@ impl NpyRows {
         mut buffer: Vec<f32>,
         bytes: &mut Vec<u8>,
     ) -> Result<LocalBatch> {
-        self.floats_at(at, n, &mut buffer, bytes)?;
-        LocalBatch::new(buffer, material, materials, &self.source)
+        if !(self.fortran && self.dtype == Dtype::F4 && cfg!(target_endian = "little")) {
+            self.floats_at(at, n, &mut buffer, bytes)?;
+            return LocalBatch::new(buffer, material, materials, &self.source);
+        }
+        buffer.resize(n * COLUMNS_LOCAL, 0.0);
+        let file = self.reader.get_ref();
+        for (j, column) in buffer.chunks_exact_mut(n.max(1)).enumerate() {
+            // Column j's rows [at, at + n) lie together at data_start + (j·rows + at)·4.
+            let offset = self.data_start + (j as u64 * self.rows + at) * 4;
+            file.read_exact_at(bytemuck::cast_slice_mut(column), offset)
+                .map_err(|e| Error::Batch {
+                    path: self.source.clone(),
+                    message: format!(
+                        "the data is shorter than the header's shape says (truncated file?), at row {at}: {e}"
+                    ),
+                })?;
+        }
+        LocalBatch::with_layout(
+            buffer,
+            LocalLayout::Columns,
+            material,
+            materials,
+            &self.source,
+        )
     }
 }

@@ -1,17 +1,23 @@
 //! The comparison with Mitsuba 3's LLVM backend at equal bytes: Mitsuba's `roughconductor`
-//! reads 24 bytes a tuple (wi, wo) and writes 12, so the engine gets the same — the 6-column
-//! local-frame batch ([`crate::batch::LocalBatch`]) evaluated into a reused output — on the
-//! same directions, in the same run. Beside it, the engine's 1 → 2-thread ratio on an
+//! reads 24 bytes a tuple (wi, wo, six Dr.Jit arrays) and writes 12, so the engine gets the
+//! same — the local-frame batch ([`crate::batch::LocalBatch`]) held as six columns,
+//! evaluated into a reused output — on the same directions, in the same run. Beside it, the engine's 1 → 2-thread ratio on an
 //! in-cache batch and Lambert against the memory-copy ceiling for its 36 bytes a tuple.
 
 use super::{max_rel_err, median, memcpy_ceiling, peers, scenarios};
 use crate::backend::{Backend, Output, Request};
-use crate::batch::LocalBatch;
+use crate::batch::{LocalBatch, LocalLayout};
 use crate::cpu::CpuEngine;
 use crate::error::Result;
 use crate::material::Material;
 use std::path::Path;
 use std::time::Instant;
+
+/// The local form held as six columns (`LocalLayout::Columns`): Mitsuba gets `wi` and
+/// `wo` as Dr.Jit arrays, a column a component, so the engine gets the same layout.
+fn columns(local: LocalBatch) -> LocalBatch {
+    local.to_layout(LocalLayout::Columns)
+}
 
 /// Bytes a tuple moves in the local form: 6 floats in, 3 out.
 pub const LOCAL_BYTES: usize = 36;
@@ -145,7 +151,8 @@ pub fn rows(
         let ps = sc.peer.expect("the Mitsuba scenarios have a peer");
         for &n in sizes {
             let rows_batch = scenarios::batch(&sc, n, 42);
-            let local = scenarios::local_batch(&sc, n, 42).expect("one material, no tangents");
+            let local =
+                columns(scenarios::local_batch(&sc, n, 42).expect("one material, no tangents"));
             let (mut engine_rates, mut peer_rates, mut ratios) = (vec![], vec![], vec![]);
             let (mut err, mut peer) = (0.0, None);
             for pair in 1..=pairs {
@@ -195,7 +202,7 @@ pub fn rows(
     // 1 → 2 threads where the arithmetic decides: in cache, a microfacet scenario.
     if let Some(&n) = sizes.iter().min() {
         let sc = scenarios::by_name("mitsuba-ggx").expect("exists");
-        let local = scenarios::local_batch(&sc, n, 42).expect("local");
+        let local = columns(scenarios::local_batch(&sc, n, 42).expect("local"));
         let rows_batch = scenarios::batch(&sc, n, 42);
         let mut one = CpuEngine::with_threads(1);
         let mut two = CpuEngine::with_threads(2);
@@ -225,7 +232,7 @@ pub fn rows(
     // Lambert moves its bytes and little else: against a copy of the same bytes.
     if let Some(&n) = sizes.iter().max() {
         let sc = scenarios::by_name("lambert").expect("exists");
-        let local = scenarios::local_batch(&sc, n, 42).expect("local");
+        let local = columns(scenarios::local_batch(&sc, n, 42).expect("local"));
         let rows_batch = scenarios::batch(&sc, n, 42);
         progress(&format!(
             "equal bytes: lambert and a copy of {LOCAL_BYTES} B on {n} tuples"
@@ -253,7 +260,7 @@ pub fn rows(
 /// The rows as a text table.
 pub fn table(rows: &[EqualBytesRow]) -> String {
     let mut s = String::from(
-        "equal bytes (36 B a tuple: the engine on the 6-column local form, reused output):\n",
+        "equal bytes (36 B a tuple: the engine on the local form held as six columns, as Dr.Jit holds wi and wo; reused output):\n",
     );
     s += &format!(
         "{:<17} {:<13} {:>9} {:>9} {:>11} {:>9} {:>11} {:>9} {:>7} {:>10} {:>10}\n",

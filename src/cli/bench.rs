@@ -72,9 +72,10 @@ pub struct Args {
     #[arg(long, value_name = "N", allow_negative_numbers = true,
           value_parser = super::ranges::integer::<usize>(1_000, 1_000_000_000))]
     pub stage_tuples: Option<usize>,
-    /// Run only the equal-bytes comparison with Mitsuba (the CPU engine on the 6-column
-    /// local form against Mitsuba's roughconductor on the same wi/wo, 4,194,304 and
-    /// 262,144 tuples; 1 → 2 threads; Lambert against a copy of its bytes).
+    /// Run only the equal-bytes comparison with Mitsuba (the CPU engine on the local form
+    /// held as six columns, as Dr.Jit holds them, against Mitsuba's roughconductor on the
+    /// same wi/wo, 4,194,304 and 262,144 tuples; 1 → 2 threads; Lambert against a copy of
+    /// its bytes).
     #[arg(long)]
     pub equal_bytes_only: bool,
     /// Interleaved engine/Mitsuba pairs per equal-bytes point, 1 to 50: each rate is the

@@ -292,6 +292,21 @@ fn fill_block<T: transpose::Transpose>(
                 }
             }
         }
+    } else if let Some(b) = batch.local_columns() {
+        // Six columns: a whole block's lanes are each column's 16 values as they are.
+        if whole {
+            for (c, lanes) in inp.v[..COLUMNS_LOCAL].iter_mut().enumerate() {
+                let col = b.column(c).expect("a batch of columns");
+                lanes.copy_from_slice(&col[first..first + LANES]);
+            }
+        } else {
+            for (k, slot) in idx.iter_mut().enumerate() {
+                *slot = rows(first + k.min(n - 1));
+                for (c, x) in b.row(*slot).into_iter().enumerate() {
+                    inp.v[c][k] = x;
+                }
+            }
+        }
     } else if let Source::Columns(b) = batch {
         if !whole {
             for (k, slot) in idx.iter_mut().enumerate() {

@@ -199,10 +199,7 @@ impl FitData {
                 .map(|&i| x[i] * step as f64)
                 .collect::<Vec<f64>>()
         };
-        let rows: Vec<f32> = keep
-            .iter()
-            .flat_map(|&i| self.batch.as_slice()[6 * i..6 * i + 6].to_vec())
-            .collect();
+        let rows: Vec<f32> = keep.iter().flat_map(|&i| self.batch.row(i)).collect();
         FitData {
             source: self.source.clone(),
             batch: LocalBatch::new(rows, 0, &[dummy()], &self.source).expect("whole rows"),

@@ -138,23 +138,61 @@ fn run_registers<S: RegisterIo, const D: u8, const G: u8, const F: u8, const Q: 
     // its outputs.
     let mut tail_rows = [0f32; COLUMNS_LOCAL * 2 * LANES];
     let mut tail_out = [0f32; 3 * 2 * LANES];
+    // The six columns of a batch held so (`LocalLayout::Columns`).
+    let columns: Option<[&[f32]; 6]> = batch.local_columns().map(|b| {
+        let c = |i| b.column(i).expect("a batch of columns");
+        [c(0), c(1), c(2), c(3), c(4), c(5)]
+    });
     let mut j = 0;
     while j < len {
         let n = width.min(len - j);
         let row0 = w.start + j;
-        let rows = if n == width {
-            &data[row0 * COLUMNS_LOCAL..(row0 + width) * COLUMNS_LOCAL]
-        } else {
-            for k in 0..width {
-                let r = row0 + k.min(n - 1);
-                tail_rows[k * COLUMNS_LOCAL..(k + 1) * COLUMNS_LOCAL]
-                    .copy_from_slice(&data[r * COLUMNS_LOCAL..(r + 1) * COLUMNS_LOCAL]);
-            }
-            &tail_rows[..width * COLUMNS_LOCAL]
-        };
         let half = S::WIDTH;
-        let [ax, ay, az, au, av, aw] = simd.local_columns(&rows[..half * COLUMNS_LOCAL]);
-        let [bx, by, bz, bu, bv, bw] = simd.local_columns(&rows[half * COLUMNS_LOCAL..]);
+        let ([ax, ay, az, au, av, aw], [bx, by, bz, bu, bv, bw]) = match columns {
+            // Six columns: each register is 16 (or 8) consecutive values of one.
+            Some(c) if n == width => {
+                let (a, b) = (row0, row0 + half);
+                (
+                    [
+                        load(simd, &c[0][a..]),
+                        load(simd, &c[1][a..]),
+                        load(simd, &c[2][a..]),
+                        load(simd, &c[3][a..]),
+                        load(simd, &c[4][a..]),
+                        load(simd, &c[5][a..]),
+                    ],
+                    [
+                        load(simd, &c[0][b..]),
+                        load(simd, &c[1][b..]),
+                        load(simd, &c[2][b..]),
+                        load(simd, &c[3][b..]),
+                        load(simd, &c[4][b..]),
+                        load(simd, &c[5][b..]),
+                    ],
+                )
+            }
+            _ => {
+                let rows = match columns {
+                    None if n == width => {
+                        &data[row0 * COLUMNS_LOCAL..(row0 + width) * COLUMNS_LOCAL]
+                    }
+                    // A tail (of either layout) as rows, its last row repeated.
+                    _ => {
+                        for k in 0..width {
+                            let r = row0 + k.min(n - 1);
+                            let t = batch.tuple(r);
+                            tail_rows[k * COLUMNS_LOCAL..(k + 1) * COLUMNS_LOCAL]
+                                .copy_from_slice(&[t.l[0], t.l[1], t.l[2], t.v[0], t.v[1], t.v[2]]);
+                        }
+                        &tail_rows[..width * COLUMNS_LOCAL]
+                    }
+                };
+                (
+                    simd.local_columns(&rows[..half * COLUMNS_LOCAL]),
+                    simd.local_columns(&rows[half * COLUMNS_LOCAL..]),
+                )
+            }
+        };
         let r = |x| Reg::new(simd, x);
         let (la, va) = ([r(ax), r(ay), r(az)], [r(au), r(av), r(aw)]);
         let (lb, vb) = ([r(bx), r(by), r(bz)], [r(bu), r(bv), r(bw)]);
@@ -217,6 +255,12 @@ fn run_registers<S: RegisterIo, const D: u8, const G: u8, const F: u8, const Q: 
     (counts, tally)
 }
 
+/// A register of the first [`RegisterIo::WIDTH`] values of `column` (loaded unaligned).
+#[inline(always)]
+fn load<S: RegisterIo>(_simd: S, column: &[f32]) -> S::f32s {
+    bytemuck::pod_read_unaligned(bytemuck::cast_slice(&column[..S::WIDTH]))
+}
+
 /// A register step's flagged lanes (bits over its rows, lane k is row `row0 + k`, output
 /// `j + k`), for [`Flagged::handle`].
 #[derive(Clone, Copy, Default)]
@@ -244,7 +288,6 @@ impl<S: pulp::Simd> Flagged<'_, S> {
     /// what the register path wrote for them.
     fn handle(&mut self, w: &mut Work, counts: &mut Counts, tally: &mut Tally) {
         let Chunk { batch, m, .. } = self.elsewhere.chunk();
-        let data = batch.data();
         for step in &self.steps[..self.n] {
             let (j, row0) = (step.j, step.row0);
             for k in lanes_of(step.rescue) {
@@ -253,8 +296,11 @@ impl<S: pulp::Simd> Flagged<'_, S> {
             }
             for (lanes, to) in [(step.slow, F64_FRAME), (step.general, GENERAL_FRAME)] {
                 for k in lanes_of(lanes) {
-                    let r = &data[(row0 + k) * COLUMNS_LOCAL..(row0 + k + 1) * COLUMNS_LOCAL];
-                    let x = [r[0], r[1], r[2], r[3], r[4], r[5], 0.0, 0.0, 1.0];
+                    let (l, v) = {
+                        let t = batch.tuple(row0 + k);
+                        (t.l, t.v)
+                    };
+                    let x = [l[0], l[1], l[2], v[0], v[1], v[2], 0.0, 0.0, 1.0];
                     let at = (j + k, row0 + k);
                     self.elsewhere.push::<Fused>(to, x, at, w, counts, tally);
                 }

@@ -2,7 +2,7 @@
 //! tuples went ([`Tally`]).
 
 use crate::batch::columns::{Column, ColumnBatch};
-use crate::batch::{Batch, LocalBatch, Tuple, COLUMNS_LOCAL};
+use crate::batch::{Batch, LocalBatch, LocalLayout, Tuple, COLUMNS_LOCAL};
 use crate::cpu::slice_tuples::SliceTuples;
 
 /// Where the tuples of the last evaluation went.
@@ -72,12 +72,21 @@ impl Source<'_> {
         }
     }
 
+    /// The rows as they are held (row-major, [`Source::columns`] a row); empty for the
+    /// forms that are not held as rows, which `run_chunk` reads block by block.
     pub(crate) fn data(&self) -> &[f32] {
         match self {
             Source::Rows(b) => b.as_slice(),
-            Source::Local(b) => b.as_slice(),
-            // Made block by block (see `run_chunk`), never read as rows.
-            Source::Slice(_) | Source::Columns(_) => &[],
+            Source::Local(b) if b.layout() == LocalLayout::Rows => b.as_slice(),
+            Source::Local(_) | Source::Slice(_) | Source::Columns(_) => &[],
+        }
+    }
+
+    /// The local form held as six columns.
+    pub(crate) fn local_columns(&self) -> Option<&LocalBatch> {
+        match self {
+            Source::Local(b) if b.layout() == LocalLayout::Columns => Some(b),
+            _ => None,
         }
     }
 
