@@ -253,6 +253,26 @@ def find_libllvm():
     raise Skip("libLLVM 19 missing (apt-get install -y libllvm19; LLVM 14 is too old, 15 crashes)")
 
 
+# The instruction set of an AVX2-only CPU (AMD Zen 3): what Dr.Jit targets with --llvm-isa avx2.
+AVX2_TARGET = (b"znver3", b"+avx,+avx2,+fma,+f16c,+bmi,+bmi2,+popcnt,+lzcnt,+movbe,+sse4.1,+sse4.2,+ssse3", 8)
+
+
+def restrict_llvm_to_avx2(dr):
+    """Dr.Jit's LLVM backend compiles for the host's best instruction set (AVX-512 here).
+    For a comparison with an engine forced to AVX2 on the same machine, point it at an
+    AVX2-only CPU, 8 lanes a vector, through drjit-core's jit_llvm_set_target (C++ symbol,
+    no Python binding in Dr.Jit 1.5); its kernels then use no AVX-512 instruction."""
+    import ctypes
+    try:
+        core = ctypes.CDLL(os.path.join(os.path.dirname(dr.__file__), "libdrjit-core.so"))
+        set_target = core._Z19jit_llvm_set_targetPKcS0_j
+    except (OSError, AttributeError) as e:
+        raise Skip(f"--llvm-isa avx2: drjit-core's jit_llvm_set_target not found: {e}")
+    set_target.argtypes = [ctypes.c_char_p, ctypes.c_char_p, ctypes.c_uint32]
+    set_target.restype = None
+    set_target(*AVX2_TARGET)
+
+
 def run_mitsuba(args, np, t):
     llvm = find_libllvm()
     os.environ["DRJIT_LIBLLVM_PATH"] = llvm
@@ -266,6 +286,8 @@ def run_mitsuba(args, np, t):
         mi.set_variant("llvm_ad_rgb")
     except Exception as e:  # noqa: BLE001
         raise Skip(f"mi.set_variant('llvm_ad_rgb') failed (LLVM backend unavailable?): {e}")
+    if args.llvm_isa == "avx2":
+        restrict_llvm_to_avx2(dr)
 
     bsdf = mi.load_dict({
         "type": "roughconductor",
@@ -317,7 +339,7 @@ def run_mitsuba(args, np, t):
     if args.check:
         fnp = np.ascontiguousarray(np.array(f, dtype=np.float32).T)  # Color3f -> (3, n) -> (n, 3)
     extras = {"variant": "llvm_ad_rgb", "mitsuba": mi.__version__, "drjit": dr.__version__,
-              "libllvm": llvm, "threads": dr.thread_count(),
+              "libllvm": llvm, "threads": dr.thread_count(), "llvm_isa": args.llvm_isa,
               "G": ("smith-fast (separable, Walter rational G1)" if args.scenario == "beckmann"
                     else "smith (separable, exact GGX G1)"),
               "local_frame_conversion_untimed": not nz_up}
@@ -509,6 +531,9 @@ def main(argv=None):
     ap.add_argument("--beckmann-g", choices=("exact", "fast"), default="exact",
                     help="numpy peer only: Beckmann G1 with erf (exact, default) or Walter's "
                          "rational fit (fast, = Mitsuba's)")
+    ap.add_argument("--llvm-isa", choices=("native", "avx2"), default="native",
+                    help="mitsuba peer only: compile Dr.Jit's kernels for this CPU's best "
+                         "instruction set (native, default) or for an AVX2-only CPU, 8 lanes")
     ap.add_argument("--chunk", type=int, default=0,
                     help="numpy peer only: evaluate in blocks of this many rows (default 0: the "
                          "whole array at once, as written plainly)")

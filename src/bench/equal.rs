@@ -124,6 +124,13 @@ pub fn rows(
     let hz = tsc_hz();
     let cyc = |evals_per_s: f64| hz.map(|h| h / evals_per_s);
     let isa = crate::cpu::instruction_set().to_string();
+    // An engine forced to AVX2 meets Dr.Jit restricted to AVX2 too (8 lanes, no AVX-512
+    // instruction), so that an AVX-512 machine also measures the AVX2 comparison.
+    let peer_isa: Vec<&str> = if isa == "avx2+fma" {
+        vec!["--llvm-isa", "avx2"]
+    } else {
+        Vec::new()
+    };
     let mut engine = CpuEngine::new();
     let threads = engine.threads();
     let mut out = Vec::new();
@@ -166,7 +173,14 @@ pub fn rows(
                 err = max_rel_err(&rows_batch, &sc.materials, &o.brdf, 20_000);
                 if !no_peers {
                     progress(&format!("equal bytes: mitsuba {ps} on {n} tuples{of}"));
-                    peer = Some(peers::run(script, "mitsuba", ps, &rows_batch, repeats));
+                    peer = Some(peers::run_with(
+                        script,
+                        "mitsuba",
+                        ps,
+                        &rows_batch,
+                        repeats,
+                        &peer_isa,
+                    ));
                 }
                 let (after, _) = time_local(&mut engine, &local, &sc.materials, repeats)?;
                 let rate = n as f64 / median(vec![before, after]);
@@ -310,14 +324,21 @@ pub fn table(rows: &[EqualBytesRow]) -> String {
             );
         }
     }
-    // A variant forced by VKBRDF_CPU_ISA is not the peer's: Dr.Jit compiles for the host.
+    // A variant forced by VKBRDF_CPU_ISA: Dr.Jit is restricted to AVX2 alongside AVX2,
+    // else it compiles for the host.
     let best = crate::cpu::Isa::best().to_string();
     if let Some(r) = rows.iter().find(|r| r.instruction_set != best) {
-        s += &format!(
-            "(the engine ran `{}` as VKBRDF_CPU_ISA asked; Mitsuba compiles for this CPU's \
-             best instruction set, `{best}`)\n",
-            r.instruction_set
-        );
+        s += &if r.instruction_set == "avx2+fma" {
+            "(the engine ran `avx2+fma` as VKBRDF_CPU_ISA asked; Mitsuba's kernels were \
+             compiled for an AVX2-only CPU too, 8 lanes: peer.py --llvm-isa avx2)\n"
+                .to_string()
+        } else {
+            format!(
+                "(the engine ran `{}` as VKBRDF_CPU_ISA asked; Mitsuba compiles for this CPU's \
+                 best instruction set, `{best}`)\n",
+                r.instruction_set
+            )
+        };
     }
     s
 }

@@ -43,6 +43,18 @@ pub fn default_script() -> PathBuf {
 /// Runs `peer` (`mitsuba` or `numpy`) on the directions of `batch` (10 columns, N = +z)
 /// for the peer scenario `scenario`, `repeats` timed calls.
 pub fn run(script: &Path, peer: &str, scenario: &str, batch: &Batch, repeats: usize) -> PeerRow {
+    run_with(script, peer, scenario, batch, repeats, &[])
+}
+
+/// [`run`] with more of peer.py's options (`--llvm-isa avx2`).
+pub fn run_with(
+    script: &Path,
+    peer: &str,
+    scenario: &str,
+    batch: &Batch,
+    repeats: usize,
+    extra: &[&str],
+) -> PeerRow {
     let mut row = PeerRow {
         name: peer.into(),
         scenario: scenario.into(),
@@ -85,6 +97,7 @@ pub fn run(script: &Path, peer: &str, scenario: &str, batch: &Batch, repeats: us
         .arg(&out)
         .arg("--check")
         .arg(&check)
+        .args(extra)
         .output();
     let output = match status {
         Ok(o) => o,
