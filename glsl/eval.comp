@@ -97,11 +97,35 @@ void main() {
     uint row = gl_GlobalInvocationID.x;
     // Out-of-range invocations of the last workgroup simply stop: the counts' subgroup
     // operations reduce over the invocations still active.
-    if (row < params.tuple_count) {
 #if defined(GENERATE_IMPORTANCE)
+    if (row < params.tuple_count) {
         importance_block(params.first_row + row);
-#else
-        evaluate_row(row);
-#endif
     }
+#elif defined(MULTI_ROW)
+    // TUPLES_PER_INVOCATION rows, `stride` apart (the host dispatches `stride`
+    // invocations): on llvmpipe, where an invocation is a SIMD lane, an invocation's
+    // fixed cost is paid once for several rows and the rows' independent chains of roots
+    // and divisions interleave. Written out, not as a loop: a loop over the same rows
+    // gained nothing. Only the folded kernels are built with MULTI_ROW (src/gpu/kernel.rs):
+    // in every kernel the four calls cost each pipeline creation the inlining of four
+    // copies, even with the constant at 1 (a warm 1,000-tuple `eval` 0.07 -> 0.12 s).
+    uint n = params.tuple_count;
+    uint stride = (n + TUPLES_PER_INVOCATION - 1u) / TUPLES_PER_INVOCATION;
+    if (row < stride) {
+        evaluate_row(row);
+        if (TUPLES_PER_INVOCATION > 1u && row + stride < n) {
+            evaluate_row(row + stride);
+        }
+        if (TUPLES_PER_INVOCATION > 2u && row + 2u * stride < n) {
+            evaluate_row(row + 2u * stride);
+        }
+        if (TUPLES_PER_INVOCATION > 3u && row + 3u * stride < n) {
+            evaluate_row(row + 3u * stride);
+        }
+    }
+#else
+    if (row < params.tuple_count) {
+        evaluate_row(row);
+    }
+#endif
 }

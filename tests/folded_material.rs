@@ -138,3 +138,60 @@ fn folding_stops_at_its_budget_and_below_its_size() {
     gpu.evaluate(&two, &mats[..2], &request).expect("evaluate");
     assert!(!gpu.last_material_folded());
 }
+
+/// A folded kernel takes 1–4 rows an invocation (`VulkanOptions::folded_tuples_per_invocation`,
+/// rows `stride` apart): every row is evaluated once, whatever the batch's length and its
+/// chunks, and the counts and the first invalid row are the reference's — with invalid
+/// rows placed on each side of the strides' boundaries, and batches shorter than the
+/// rows an invocation takes.
+#[test]
+fn several_rows_an_invocation_evaluate_every_row_once() {
+    let c = check::combinations(1)
+        .expect("combinations")
+        .into_iter()
+        .find(|c| c.name.contains("ggx") && c.name.contains("conductor"))
+        .expect("a GGX conductor combination");
+    let mats = &c.materials[..1];
+    let mut reference = CpuReference::new();
+    let request = Request { terms: true };
+    for per_invocation in 1..=4u32 {
+        let options = VulkanOptions {
+            validation: true,
+            fold_material_min_tuples: 0,
+            folded_tuples_per_invocation: Some(per_invocation),
+            // 1 MiB: a 30,011-row batch goes through in several chunks, each its own
+            // dispatch and stride.
+            max_gpu_memory: 1 << 20,
+            ..VulkanOptions::default()
+        };
+        let Ok(mut gpu) = VulkanBackend::new(DeviceSelector::from_env(), options) else {
+            drop(common::vulkan());
+            return;
+        };
+        for n in [1usize, 2, 3, 5, 4_099, 30_011] {
+            // Every row of the combination's tuples with its first material.
+            let generated = check::generate(&c, n, 7).expect("batch");
+            assert_eq!(generated.len(), n);
+            let mut rows = generated.as_slice().to_vec();
+            for row in rows.chunks_exact_mut(10) {
+                row[9] = 0.0;
+            }
+            // Invalid rows at the ends of the strides (n = 4,099, 4 a lane: stride 1,025).
+            let stride = n.div_ceil(per_invocation as usize);
+            for r in [stride.saturating_sub(1), stride, 2 * stride + 1, n - 1] {
+                if r < n && n > 3 {
+                    rows[r * 10] = f32::NAN;
+                }
+            }
+            let batch = Batch::new(rows, 10, 1, std::path::Path::new("strides")).expect("valid");
+            let out = gpu.evaluate(&batch, mats, &request).expect("evaluate");
+            assert!(gpu.last_material_folded());
+            let want = reference
+                .evaluate(&batch, mats, &request)
+                .expect("reference");
+            let what = format!("{per_invocation} rows an invocation, {n} rows");
+            assert_eq!(out.counts, want.counts, "{what}");
+            assert_within_rule(&what, &batch, mats, &out, &want);
+        }
+    }
+}

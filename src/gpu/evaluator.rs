@@ -24,7 +24,7 @@ pub use timing::{KernelClock, KernelTiming};
 
 use super::context::{Device, DeviceSelector, ValidationCounter};
 use super::emulate_ftz::flush_to_zero_scope;
-use super::kernel::{Kernels, WORKGROUP_SIZE};
+use super::kernel::{default_tuples_per_invocation, workgroups, Kernels, WORKGROUP_SIZE};
 use super::layout::{gpu_materials, GpuCounts, GpuMaterial, PushConstants, BINDING_COUNT};
 use super::memory::{Buffer, MemoryUse, TexelView};
 use super::sync::{CommandPool, DescriptorPool, Fence};
@@ -83,7 +83,12 @@ impl VulkanBackend {
             options.inject_fault = InjectedFault::from_env()?;
         }
         let device = flush_to_zero_scope(|| Device::new(selector.as_ref(), options.validation))?;
-        let kernels = Kernels::new(&device, options.extra_defines.clone())?;
+        let mut kernels = Kernels::new(&device, options.extra_defines.clone())?;
+        let folded_per_invocation = options
+            .folded_tuples_per_invocation
+            .unwrap_or_else(|| default_tuples_per_invocation(&device))
+            .clamp(1, 4);
+        kernels.folded_per_invocation = folded_per_invocation;
         let commands = CommandPool::new(&device, FRAMES_IN_FLIGHT as u32)?;
         let descriptors = DescriptorPool::new(
             &device,
@@ -128,6 +133,7 @@ impl VulkanBackend {
             cancel: crate::cancel::Cancel::new(),
             shared_features: FeatureSet::EMPTY,
             stages: HostStages::default(),
+            folded_per_invocation,
             device,
         })
     }
@@ -316,7 +322,7 @@ impl VulkanBackend {
                 first_row: 0,
             };
             let push = PushConstants::rows(outputs as u32, materials.len() as u32, 0);
-            self.submit(0, pipeline, push, pending)?;
+            self.submit(0, pipeline, push, pending, 1)?;
             self.finish(0, &mut out)
         })();
         result.inspect_err(|_| self.recover())?;
@@ -350,7 +356,10 @@ impl VulkanBackend {
         // Before the pipeline: a device without f64 refuses measured materials here.
         self.upload_measured(materials)?;
         let gpu = gpu_materials(materials);
-        let pipeline = self.pipeline_for(features, &gpu, n)?;
+        let pipeline = (
+            self.pipeline_for(features, &gpu, n)?,
+            self.rows_per_invocation(),
+        );
         self.upload_materials(&gpu)?;
         let bucketed = features.contains(FeatureSet::BUCKETED);
         self.stream(
@@ -365,12 +374,13 @@ impl VulkanBackend {
         Ok(out)
     }
 
-    /// The chunk loop (see the module docs).
+    /// The chunk loop (see the module docs): `pipeline` and the rows an invocation of it
+    /// takes.
     fn stream(
         &mut self,
         batch: RowSource,
         material_count: u32,
-        pipeline: vk::Pipeline,
+        (pipeline, per_invocation): (vk::Pipeline, u32),
         (chunk, bucketed): (usize, bool),
         terms: bool,
         out: &mut Output,
@@ -406,7 +416,7 @@ impl VulkanBackend {
                 })
                 .map_err(|e| e.in_chunk(failed(c)))?;
             let push = PushConstants::rows(len as u32, material_count, start as u32);
-            self.submit(s, pipeline, push, pending)
+            self.submit(s, pipeline, push, pending, per_invocation)
                 .map_err(|e| e.in_chunk(failed(c)))?;
         }
         // Drain in submission order: the oldest pending chunk sits in slot `chunks % S`.
@@ -552,18 +562,21 @@ impl VulkanBackend {
         Ok(())
     }
 
-    /// Records and submits one dispatch of `push.tuple_count` invocations on slot `s`.
+    /// Records and submits one dispatch over `push.tuple_count` rows on slot `s`,
+    /// `per_invocation` rows an invocation (the evaluation kernel's
+    /// [`VulkanOptions::folded_tuples_per_invocation`] for a folded kernel; 1 for the others).
     fn submit(
         &mut self,
         s: usize,
         pipeline: vk::Pipeline,
         push: PushConstants,
         pending: Pending,
+        per_invocation: u32,
     ) -> Result<()> {
         let (d, layout) = (&self.device.raw, self.kernels.layout());
         let slot = &mut self.slots[s];
         let cmd = slot.cmd;
-        let groups = push.tuple_count.div_ceil(WORKGROUP_SIZE);
+        let groups = workgroups(push.tuple_count, per_invocation);
         // Results must be visible to host reads after the fence: compute writes → host reads.
         let barrier = [vk::MemoryBarrier::default()
             .src_access_mask(vk::AccessFlags::SHADER_WRITE)

@@ -24,6 +24,29 @@ use std::sync::Arc;
 /// of every common subgroup size (8 on lavapipe, 32 NVIDIA, 64 AMD).
 pub const WORKGROUP_SIZE: u32 = 64;
 
+/// Rows one invocation of a kernel with its material folded in takes on `device` unless
+/// [`VulkanOptions::folded_tuples_per_invocation`](super::VulkanOptions::folded_tuples_per_invocation)
+/// says otherwise (specialization constant 30, `TUPLES_PER_INVOCATION` in
+/// `glsl/bindings.glsl`): 4 on a CPU implementation (lavapipe), where an invocation is a
+/// SIMD lane and four rows' chains of roots and divisions interleave (kernel-only
+/// Cook–Torrance 1.09–1.13× on llvmpipe, docs/VULKAN.md), 1 on a GPU (not measured there
+/// yet). The table kernels take one everywhere: on llvmpipe four rows made them slower
+/// (mixed-8 0.8×), the material's loads and dispatch copied four times.
+pub(crate) fn default_tuples_per_invocation(device: &Device) -> u32 {
+    if device.physical.properties.device_type == vk::PhysicalDeviceType::CPU {
+        4
+    } else {
+        1
+    }
+}
+
+/// Workgroups that cover `tuples` rows, `per_invocation` rows an invocation.
+pub(crate) fn workgroups(tuples: u32, per_invocation: u32) -> u32 {
+    tuples
+        .div_ceil(per_invocation.max(1))
+        .div_ceil(WORKGROUP_SIZE)
+}
+
 /// Materials one evaluator folds into pipelines at most (see [`fold_material_min_tuples`]):
 /// the bench's scenarios and a few large batches, never a fit's thousands of parameter sets.
 ///
@@ -251,8 +274,11 @@ impl Drop for Pipeline {
 /// ([`super::disk_cache`]).
 pub(crate) struct Kernels {
     cache: HashMap<FeatureSet, Pipeline>,
-    /// The SPIR-V of each feature set compiled so far (the table kernel and its folds share it).
+    /// The SPIR-V of each feature set compiled so far (the table kernel and, with one row
+    /// an invocation, its folds share it).
     spirv: HashMap<FeatureSet, Arc<[u32]>>,
+    /// The folded kernels' SPIR-V with `MULTI_ROW` ([`Kernels::compiled_folded`]).
+    spirv_multi_row: HashMap<FeatureSet, Arc<[u32]>>,
     /// Pipelines with a material folded in ([`Kernels::folded`]), in order of creation: at
     /// most [`FOLDED_MATERIALS_MAX`], never evicted.
     folded: Vec<(FeatureSet, GpuMaterial, Pipeline)>,
@@ -263,6 +289,9 @@ pub(crate) struct Kernels {
     disk: DiskCache,
     /// Pipelines created so far ([`Kernels::created`]).
     created: u64,
+    /// Rows an invocation of a folded pipeline takes (`TUPLES_PER_INVOCATION`, 1–4; set by
+    /// the evaluator, [`default_tuples_per_invocation`] or its option); table kernels 1.
+    pub(crate) folded_per_invocation: u32,
     /// Declared after the pipelines' owners, so that it is written back after they are
     /// gone (`Drop` below clears them first in any case).
     pipeline_cache: PipelineCache,
@@ -294,6 +323,7 @@ impl Kernels {
         let mut kernels = Kernels {
             cache: HashMap::new(),
             spirv: HashMap::new(),
+            spirv_multi_row: HashMap::new(),
             folded: Vec::new(),
             probes: HashMap::new(),
             layout: vk::PipelineLayout::null(),
@@ -301,6 +331,7 @@ impl Kernels {
             extra_defines,
             disk,
             created: 0,
+            folded_per_invocation: 1,
             pipeline_cache,
             device: Arc::clone(device),
         };
@@ -346,6 +377,25 @@ impl Kernels {
         }
         let words: Arc<[u32]> = self.spirv_source(features).words()?.into();
         self.spirv.insert(features, Arc::clone(&words));
+        Ok(words)
+    }
+
+    /// The SPIR-V of a folded kernel for `features`: with several rows an invocation
+    /// ([`Kernels::folded_per_invocation`] > 1), the kernel built with `MULTI_ROW` (its
+    /// `main` takes `TUPLES_PER_INVOCATION` rows), else the table kernel's own.
+    fn compiled_folded(&mut self, features: FeatureSet) -> Result<Arc<[u32]>> {
+        if self.folded_per_invocation <= 1 {
+            return self.compiled(features);
+        }
+        if let Some(words) = self.spirv_multi_row.get(&features) {
+            return Ok(Arc::clone(words));
+        }
+        let mut source = self.spirv_source(features);
+        source
+            .defines
+            .push(("MULTI_ROW".to_string(), "1".to_string()));
+        let words: Arc<[u32]> = source.words()?.into();
+        self.spirv_multi_row.insert(features, Arc::clone(&words));
         Ok(words)
     }
 
@@ -413,7 +463,7 @@ impl Kernels {
                                 None => source.words().map(Arc::from),
                             }
                             .and_then(|words| {
-                                let p = create_pipeline(&device, layout, cache, &words, None)?;
+                                let p = create_pipeline(&device, layout, cache, &words, None, 1)?;
                                 Ok((words, p))
                             });
                             done.push((i, made));
@@ -470,7 +520,7 @@ impl Kernels {
         if self.folded.len() >= FOLDED_MATERIALS_MAX {
             return Ok(None);
         }
-        let spirv = self.compiled(features)?;
+        let spirv = self.compiled_folded(features)?;
         let pipeline = self.create(&spirv, Some(material))?;
         let raw = pipeline.raw;
         self.folded.push((features, *material, pipeline));
@@ -504,7 +554,19 @@ impl Kernels {
     /// A pipeline from `spirv` ([`create_pipeline`]), counted.
     fn create(&mut self, spirv: &[u32], material: Option<&GpuMaterial>) -> Result<Pipeline> {
         let cache = self.pipeline_cache.for_creation();
-        let p = create_pipeline(&self.device, self.layout, cache, spirv, material)?;
+        let per_invocation = if material.is_some() {
+            self.folded_per_invocation
+        } else {
+            1
+        };
+        let p = create_pipeline(
+            &self.device,
+            self.layout,
+            cache,
+            spirv,
+            material,
+            per_invocation,
+        )?;
         self.created += 1;
         Ok(p)
     }
@@ -541,15 +603,19 @@ impl SpirvSource {
     }
 }
 
+/// The specialization constant of the rows an invocation takes.
+const TUPLES_PER_INVOCATION_ID: u32 = 30;
+
 /// A pipeline from `spirv` with the shared `layout`, through `pipeline_cache`: the workgroup
-/// size as constant 0 and, with `material`, MATERIAL_IS_CONSTANT (1) and the material's 28
-/// words (2-29, in field order).
+/// size as constant 0, with `material` MATERIAL_IS_CONSTANT (1) and the material's 28
+/// words (2-29, in field order), and the rows an invocation takes (30, `per_invocation`).
 fn create_pipeline(
     device: &Arc<Device>,
     layout: vk::PipelineLayout,
     pipeline_cache: vk::PipelineCache,
     spirv: &[u32],
     material: Option<&GpuMaterial>,
+    per_invocation: u32,
 ) -> Result<Pipeline> {
     let d = &device.raw;
     let info = vk::ShaderModuleCreateInfo::default().code(spirv);
@@ -562,13 +628,20 @@ fn create_pipeline(
         data.extend_from_slice(bytemuck::bytes_of(m));
     }
     // Constant i at offset 4 i: the data above is laid out in constant order.
-    let entries: Vec<vk::SpecializationMapEntry> = (0..data.len() as u32 / 4)
+    let mut entries: Vec<vk::SpecializationMapEntry> = (0..data.len() as u32 / 4)
         .map(|i| vk::SpecializationMapEntry {
             constant_id: i,
             offset: 4 * i,
             size: 4,
         })
         .collect();
+    // TUPLES_PER_INVOCATION after them (a shader without the constant ignores the entry).
+    entries.push(vk::SpecializationMapEntry {
+        constant_id: TUPLES_PER_INVOCATION_ID,
+        offset: data.len() as u32,
+        size: 4,
+    });
+    data.extend_from_slice(&per_invocation.to_ne_bytes());
     let specialization = vk::SpecializationInfo::default()
         .map_entries(&entries)
         .data(&data);

@@ -52,4 +52,17 @@ impl VulkanBackend {
         }
         Ok(self.kernels.pipeline(features)?.raw())
     }
+
+    /// Rows an invocation takes in the pipeline [`Self::pipeline_for`] chose last: the
+    /// folded kernels' count ([`VulkanOptions::folded_tuples_per_invocation`]) when the
+    /// material was folded in, else one.
+    ///
+    /// [`VulkanOptions::folded_tuples_per_invocation`]: crate::gpu::VulkanOptions::folded_tuples_per_invocation
+    pub(super) fn rows_per_invocation(&self) -> u32 {
+        if self.last_folded {
+            self.folded_per_invocation
+        } else {
+            1
+        }
+    }
 }

@@ -95,7 +95,7 @@ impl VulkanBackend {
                     first_row: start as u64,
                 };
                 let push = push(&grid, start as u32, len as u32);
-                self.submit(s, pipeline, push, pending)?;
+                self.submit(s, pipeline, push, pending, 1)?;
             }
             for k in 0..FRAMES_IN_FLIGHT {
                 self.finish((chunks + k) % FRAMES_IN_FLIGHT, &mut out)?;
@@ -140,7 +140,8 @@ impl VulkanBackend {
                         order: None,
                         first_row: start as u64,
                     };
-                    self.submit(0, pipeline, push(&grid, start as u32, len as u32), pending)?;
+                    let push = push(&grid, start as u32, len as u32);
+                    self.submit(0, pipeline, push, pending, 1)?;
                     self.finish(0, &mut scratch)?;
                     start += len;
                 }
@@ -259,7 +260,8 @@ impl VulkanBackend {
                     grid_height: samples,
                     spacing: u32::from(!job.ggx),
                 };
-                self.submit(s, pipeline, push, pending)?;
+                // One block an invocation: the importance kernel's main takes one row.
+                self.submit(s, pipeline, push, pending, 1)?;
             }
             for k in 0..FRAMES_IN_FLIGHT {
                 let s = (chunks + k) % FRAMES_IN_FLIGHT;

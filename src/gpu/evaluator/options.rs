@@ -26,6 +26,12 @@ pub struct VulkanOptions {
     /// a count, or `off`; `usize::MAX`: never). See docs/VULKAN.md, "Specialised kernels",
     /// for where a fold pays.
     pub fold_material_min_tuples: usize,
+    /// Rows one invocation of a kernel with its material folded in evaluates, 1–4 (rows
+    /// `stride` apart, so neighbouring invocations still read neighbouring rows). `None`
+    /// (the default, unless the environment variable `VKBRDF_TUPLES_PER_INVOCATION` gives
+    /// 1–4): 4 on a CPU implementation (lavapipe: kernel-only Cook–Torrance 1.09–1.13×),
+    /// 1 on a GPU. The table kernels always take one row an invocation.
+    pub folded_tuples_per_invocation: Option<u32>,
     /// Testing aid: a fault to inject into batch evaluations (see [`InjectedFault`]).
     /// Default: none, or what the environment variable `VKBRDF_INJECT_VK_FAULT` says
     /// (read by [`VulkanBackend::new`](crate::gpu::VulkanBackend::new)).
@@ -93,6 +99,7 @@ impl Default for VulkanOptions {
             extra_defines: Vec::new(),
             group_by_material: true,
             fold_material_min_tuples: fold_min_tuples_from_env(),
+            folded_tuples_per_invocation: tuples_per_invocation_from_env(),
             inject_fault: None,
         }
     }
@@ -109,6 +116,15 @@ fn fold_min_tuples_from_env() -> usize {
         Ok(v) => v.trim().parse().unwrap_or(FOLD_MATERIAL_MIN_TUPLES),
         Err(_) => FOLD_MATERIAL_MIN_TUPLES,
     }
+}
+
+/// `VKBRDF_TUPLES_PER_INVOCATION`: 1–4; anything else, the device's default (a setting
+/// for measurements).
+fn tuples_per_invocation_from_env() -> Option<u32> {
+    std::env::var("VKBRDF_TUPLES_PER_INVOCATION")
+        .ok()
+        .and_then(|v| v.trim().parse().ok())
+        .filter(|k| (1..=4).contains(k))
 }
 
 /// Whether `VKBRDF_VALIDATION` asks for the validation layer (`1`, `true` or `yes`).

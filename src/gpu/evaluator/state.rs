@@ -108,6 +108,9 @@ pub struct VulkanBackend {
     pub(super) cancel: crate::cancel::Cancel,
     /// Host time per stage, for the bench.
     pub(super) stages: HostStages,
+    /// Rows an invocation of a folded kernel takes on this device
+    /// ([`VulkanOptions::folded_tuples_per_invocation`]); the table kernels take one.
+    pub(super) folded_per_invocation: u32,
     pub(super) device: Arc<Device>,
 }
 

@@ -14,7 +14,7 @@ use crate::backend::{Request, TERM_COLUMNS};
 use crate::batch::Batch;
 use crate::error::{Error, Result};
 use crate::features::FeatureSet;
-use crate::gpu::kernel::WORKGROUP_SIZE;
+use crate::gpu::kernel::{workgroups, WORKGROUP_SIZE};
 use crate::gpu::layout::{gpu_materials, GpuCounts, PushConstants, BINDING_COUNT};
 use crate::gpu::memory::{Buffer, MemoryUse, TexelView};
 use crate::gpu::sync::TimestampPool;
@@ -160,6 +160,7 @@ impl VulkanBackend {
         let features = self.grouping(Self::features_with(batch, materials, request, forced));
         let gpu = gpu_materials(materials);
         let pipeline = self.pipeline_for(features, &gpu, total)?;
+        let per_invocation = self.rows_per_invocation();
         self.upload_materials(&gpu)?;
         let rows = &batch.as_slice()[..n * cols];
         // Grouping by material is host work done once here (the end-to-end timing has it).
@@ -174,6 +175,7 @@ impl VulkanBackend {
             order: order.as_deref(),
             terms,
             material_count: materials.len(),
+            per_invocation,
         };
         let mut timing = self.time_resident(pipeline, &run, total, repeats, true)?;
         timing.bytes_per_tuple = 4 * (cols + 3 + if terms { TERM_COLUMNS } else { 0 });
@@ -205,6 +207,7 @@ impl VulkanBackend {
             order: None,
             terms: false,
             material_count: 1,
+            per_invocation: 1,
         };
         let mut timing = self.time_resident(pipeline, &run, total, repeats, false)?;
         timing.bytes_per_tuple = 4 * (columns + 3);
@@ -326,7 +329,7 @@ impl VulkanBackend {
                         layout,
                         pipeline,
                         set,
-                        push,
+                        (push, run.per_invocation),
                         dispatches,
                         pool.as_ref(),
                     )
@@ -438,10 +441,14 @@ struct Resident<'a> {
     /// Whether the kernel writes the terms.
     terms: bool,
     material_count: usize,
+    /// Rows an invocation takes (the evaluation kernel's `tuples_per_invocation`; the copy
+    /// kernel 1).
+    per_invocation: u32,
 }
 
-/// Records `dispatches` dispatches of `pipeline` over `push.tuple_count` rows, bracketed by
-/// timestamps 0 and 1 of `pool` when there is one.
+/// Records `dispatches` dispatches of `pipeline` over `push.tuple_count` rows
+/// (`per_invocation` rows an invocation), bracketed by timestamps 0 and 1 of `pool` when
+/// there is one.
 #[allow(clippy::too_many_arguments)]
 fn record_dispatches(
     d: &ash::Device,
@@ -449,11 +456,11 @@ fn record_dispatches(
     layout: vk::PipelineLayout,
     pipeline: vk::Pipeline,
     set: vk::DescriptorSet,
-    push: PushConstants,
+    (push, per_invocation): (PushConstants, u32),
     dispatches: usize,
     pool: Option<&TimestampPool>,
 ) {
-    let groups = push.tuple_count.div_ceil(WORKGROUP_SIZE);
+    let groups = workgroups(push.tuple_count, per_invocation);
     // Each dispatch rewrites the same outputs: order them (write → write), as a real
     // sequence of dependent batches would be, rather than let them overlap.
     let between = [vk::MemoryBarrier::default()
