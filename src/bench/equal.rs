@@ -79,7 +79,7 @@ pub fn tsc_hz() -> Option<f64> {
 /// warm-up (its JIT compile) is longer than this.
 const WARM_UP: std::time::Duration = std::time::Duration::from_millis(50);
 
-/// Median seconds of `repeats` calls of the engine on `local` (after [`WARM_UP`] of
+/// Median seconds of `repeats` calls of the engine on `local` (after 50 ms of
 /// untimed calls), evaluating into the same output each time, and that output.
 pub fn time_local(
     engine: &mut CpuEngine,
