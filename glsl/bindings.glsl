@@ -55,7 +55,8 @@ layout(constant_id = 27) const uint MATERIAL_KIND_Y = 0u;
 layout(constant_id = 28) const uint MATERIAL_KIND_Z = 0u;
 layout(constant_id = 29) const uint MATERIAL_KIND_W = 0u;
 
-// Rows an invocation evaluates, 1-4 (src/gpu/kernel.rs, `tuples_per_invocation`): rows
+// Rows an invocation of a folded kernel built with MULTI_ROW evaluates, 1-4
+// (VulkanOptions::folded_tuples_per_invocation, src/gpu/evaluator/options.rs): rows
 // `row`, `row + stride`, … with stride = ceil(tuple_count / TUPLES_PER_INVOCATION), so
 // neighbouring invocations still read neighbouring rows.
 layout(constant_id = 30) const uint TUPLES_PER_INVOCATION = 1u;

@@ -24,7 +24,7 @@ pub use timing::{KernelClock, KernelTiming};
 
 use super::context::{Device, DeviceSelector, ValidationCounter};
 use super::emulate_ftz::flush_to_zero_scope;
-use super::kernel::{default_tuples_per_invocation, workgroups, Kernels, WORKGROUP_SIZE};
+use super::kernel::{workgroups, Kernels, WORKGROUP_SIZE};
 use super::layout::{gpu_materials, GpuCounts, GpuMaterial, PushConstants, BINDING_COUNT};
 use super::memory::{Buffer, MemoryUse, TexelView};
 use super::sync::{CommandPool, DescriptorPool, Fence};
@@ -86,7 +86,7 @@ impl VulkanBackend {
         let mut kernels = Kernels::new(&device, options.extra_defines.clone())?;
         let folded_per_invocation = options
             .folded_tuples_per_invocation
-            .unwrap_or_else(|| default_tuples_per_invocation(&device))
+            .unwrap_or(1)
             .clamp(1, 4);
         kernels.folded_per_invocation = folded_per_invocation;
         let commands = CommandPool::new(&device, FRAMES_IN_FLIGHT as u32)?;

@@ -24,22 +24,6 @@ use std::sync::Arc;
 /// of every common subgroup size (8 on lavapipe, 32 NVIDIA, 64 AMD).
 pub const WORKGROUP_SIZE: u32 = 64;
 
-/// Rows one invocation of a kernel with its material folded in takes on `device` unless
-/// [`VulkanOptions::folded_tuples_per_invocation`](super::VulkanOptions::folded_tuples_per_invocation)
-/// says otherwise (specialization constant 30, `TUPLES_PER_INVOCATION` in
-/// `glsl/bindings.glsl`): 4 on a CPU implementation (lavapipe), where an invocation is a
-/// SIMD lane and four rows' chains of roots and divisions interleave (kernel-only
-/// Cook–Torrance 1.09–1.13× on llvmpipe, docs/VULKAN.md), 1 on a GPU (not measured there
-/// yet). The table kernels take one everywhere: on llvmpipe four rows made them slower
-/// (mixed-8 0.8×), the material's loads and dispatch copied four times.
-pub(crate) fn default_tuples_per_invocation(device: &Device) -> u32 {
-    if device.physical.properties.device_type == vk::PhysicalDeviceType::CPU {
-        4
-    } else {
-        1
-    }
-}
-
 /// Workgroups that cover `tuples` rows, `per_invocation` rows an invocation.
 pub(crate) fn workgroups(tuples: u32, per_invocation: u32) -> u32 {
     tuples
@@ -290,7 +274,7 @@ pub(crate) struct Kernels {
     /// Pipelines created so far ([`Kernels::created`]).
     created: u64,
     /// Rows an invocation of a folded pipeline takes (`TUPLES_PER_INVOCATION`, 1–4; set by
-    /// the evaluator, [`default_tuples_per_invocation`] or its option); table kernels 1.
+    /// the evaluator from its option); table kernels 1.
     pub(crate) folded_per_invocation: u32,
     /// Declared after the pipelines' owners, so that it is written back after they are
     /// gone (`Drop` below clears them first in any case).

@@ -29,8 +29,10 @@ pub struct VulkanOptions {
     /// Rows one invocation of a kernel with its material folded in evaluates, 1–4 (rows
     /// `stride` apart, so neighbouring invocations still read neighbouring rows). `None`
     /// (the default, unless the environment variable `VKBRDF_TUPLES_PER_INVOCATION` gives
-    /// 1–4): 4 on a CPU implementation (lavapipe: kernel-only Cook–Torrance 1.09–1.13×),
-    /// 1 on a GPU. The table kernels always take one row an invocation.
+    /// 1–4): one. On lavapipe 4 makes the kernel alone 1.09–1.14× faster, but each fold's
+    /// pipeline creation costs +0.07 s warm and +0.45 s cold, which a 2^24-tuple `eval`
+    /// (the fold threshold) does not earn back (~0.02 s): for repeated or far larger
+    /// batches (docs/VULKAN.md). Unmeasured on a GPU. The table kernels always take one.
     pub folded_tuples_per_invocation: Option<u32>,
     /// Testing aid: a fault to inject into batch evaluations (see [`InjectedFault`]).
     /// Default: none, or what the environment variable `VKBRDF_INJECT_VK_FAULT` says
