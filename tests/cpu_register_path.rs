@@ -6,12 +6,14 @@
 //! of the rescue threshold, c on either side of `FAST_MIN_C`, lengths at the frame's
 //! limits, invalid and below-horizon tuples — and on uniform directions. The lane loops
 //! are what the 10-column rows with N = (0, 0, 1) take, so the test compares the local
-//! form, held as rows and as six columns, with those rows on every instruction set (the register path runs on AVX2 and AVX-512;
+//! form, held as rows and as six columns, and `(n, 3)` columns of L and V with N given
+//! once, with those rows on every instruction set (the register path runs on AVX2 and AVX-512;
 //! the others must agree with their own rows as before).
 
 mod common;
 
 use vkbrdf::backend::{Backend, Output, Request};
+use vkbrdf::batch::columns::ColumnBatch;
 use vkbrdf::batch::{memory_source, Batch, LocalBatch, LocalLayout};
 use vkbrdf::cpu::{CpuEngine, Isa};
 use vkbrdf::material::{parse_materials, Material};
@@ -167,25 +169,37 @@ fn the_register_path_gives_the_lane_loops_bits_on_every_group_it_serves() {
         for (mat, served) in materials(m) {
             let mats = vec![mat];
             let lb = LocalBatch::new(local.clone(), 0, &mats, &memory_source()).expect("local");
-            // The same tuples held as six columns: read without a transpose.
+            // The same tuples held as six columns (read without a transpose), and as the
+            // Python package's `(n, 3)` columns of L and V with N = +z given once.
             let planar = lb.to_layout(LocalLayout::Columns);
-            for (isa, lb) in Isa::available_all()
+            let l: Vec<f32> = local
+                .chunks_exact(6)
+                .flat_map(|r| r[..3].to_vec())
+                .collect();
+            let v: Vec<f32> = local
+                .chunks_exact(6)
+                .flat_map(|r| r[3..].to_vec())
+                .collect();
+            let z = [0.0f32, 0.0, 1.0];
+            let columns = ColumnBatch::new([&l, &v, &z], None, &[0.0], n, &mats, &memory_source())
+                .expect("columns");
+            for (isa, form) in Isa::available_all()
                 .into_iter()
-                .flat_map(|isa| [(isa, &lb), (isa, &planar)])
+                .flat_map(|isa| [(isa, 0), (isa, 1), (isa, 2)])
             {
                 let mut engine = CpuEngine::with_isa(1, isa);
                 for terms in [false, true] {
                     let request = Request { terms };
                     let want = engine.evaluate(&rows, &mats, &request).expect("rows");
                     let mut got = Output::default();
-                    engine
-                        .evaluate_local_into(lb, &mats, &request, &mut got)
-                        .expect("local");
-                    let what = format!(
-                        "{:?} m = {m}, {isa}, {:?}, terms {terms}",
-                        mats[0],
-                        lb.layout()
-                    );
+                    match form {
+                        0 => engine.evaluate_local_into(&lb, &mats, &request, &mut got),
+                        1 => engine.evaluate_local_into(&planar, &mats, &request, &mut got),
+                        _ => engine.evaluate_columns_into(&columns, &mats, &request, &mut got),
+                    }
+                    .expect("evaluate");
+                    let form = ["rows", "six columns", "(n, 3) columns"][form];
+                    let what = format!("{:?} m = {m}, {isa}, {form}, terms {terms}", mats[0]);
                     assert_eq!(got.counts, want.counts, "{what}");
                     for (i, (a, b)) in got.brdf.iter().zip(&want.brdf).enumerate() {
                         assert_eq!(a.to_bits(), b.to_bits(), "{what}: row {}", i / 3);

@@ -77,10 +77,17 @@ impl pulp::WithSimd for ChunkOp<'_, '_> {
 impl super::isa::WithFma for ChunkOp<'_, '_> {
     #[inline(always)]
     fn with_fma<S: transpose::Transpose + RegisterIo>(self, simd: S) -> (Counts, Tally) {
-        if let (Source::Local(_), None, Plan::Microfacet { d, aniso, g, f, p }) =
-            (self.batch, self.order, self.plan)
-        {
-            if register::serves(*d, *aniso, *g, *f, p) {
+        if let (None, Plan::Microfacet { d, aniso, g, f, p }) = (self.order, self.plan) {
+            // The local form, or `(n, 3)` columns of L and V with N = +z given once.
+            let local = match self.batch {
+                Source::Local(_) => true,
+                Source::Columns(b) => {
+                    let [l, v, _] = b.directions();
+                    self.batch.normal_is_z() && matches!((l, v), (Column::Each(_), Column::Each(_)))
+                }
+                _ => false,
+            };
+            if local && register::serves(*d, *aniso, *g, *f, p) {
                 let op = LocalRegisters {
                     plan: self.plan,
                     batch: self.batch,

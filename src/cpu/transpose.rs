@@ -187,13 +187,19 @@ fn columns<const C: usize, const K: usize>(
 pub(super) mod avx512 {
     // By the crate's paths: the layering test reads `super` as the parent file.
     use crate::cpu::kernel::LANES;
-    use crate::cpu::transpose::{columns, LOCAL};
+    use crate::cpu::transpose::{columns, LOCAL, XYZ};
     use core::arch::x86_64::{__m512, __m512i};
 
     /// The local form's 6 columns of its 16 rows `block` (18 permutes, 12 blends).
     #[inline(always)]
     pub(crate) fn local_columns(simd: pulp::x86::V4, block: &[f32; 96]) -> [__m512; 6] {
         columns::<6, 6>(simd, block, &LOCAL)
+    }
+
+    /// The 3 columns of 16 rows `x y z` (an `(n, 3)` array's, the register path's read).
+    #[inline(always)]
+    pub(crate) fn xyz_columns(simd: pulp::x86::V4, block: &[f32; 48]) -> [__m512; 3] {
+        columns::<3, 3>(simd, block, &XYZ)
     }
 
     /// For output register j (floats 16j … 16j + 15 of 16 rows of RGB), lane k: the
@@ -446,6 +452,12 @@ pub(super) mod avx2 {
     #[inline(always)]
     pub(crate) fn local_columns(simd: pulp::x86::V3, block: &[f32; 48]) -> [__m256; 6] {
         local_rows(simd, block, 0)
+    }
+
+    /// The 3 columns of 8 rows `x y z` (an `(n, 3)` array's, the register path's read).
+    #[inline(always)]
+    pub(crate) fn xyz_columns(simd: pulp::x86::V3, block: &[f32; 24]) -> [__m256; 3] {
+        xyz_rows(simd, block, 0)
     }
 
     /// 3 columns of 8 lanes (RGB) into 8 rows of 3.

@@ -6,6 +6,7 @@
 use super::deferred::{lanes_of, rescue, Chunk, Elsewhere, F64_FRAME, GENERAL_FRAME};
 use super::work::{Source, Tally, Work};
 use crate::backend::Counts;
+use crate::batch::columns::Column;
 use crate::batch::COLUMNS_LOCAL;
 use crate::cpu::kernel::{self, LANES};
 use crate::cpu::plan::Plan;
@@ -143,14 +144,32 @@ fn run_registers<S: RegisterIo, const D: u8, const G: u8, const F: u8, const Q: 
         let c = |i| b.column(i).expect("a batch of columns");
         [c(0), c(1), c(2), c(3), c(4), c(5)]
     });
+    // L's and V's `(n, 3)` columns of a `ColumnBatch` (N = +z given once).
+    let xyz = match batch {
+        Source::Columns(b) => match b.directions() {
+            [Column::Each(l), Column::Each(v), _] => Some((l, v)),
+            _ => None,
+        },
+        _ => None,
+    };
     let mut j = 0;
     while j < len {
         let n = width.min(len - j);
         let row0 = w.start + j;
         let half = S::WIDTH;
-        let ([ax, ay, az, au, av, aw], [bx, by, bz, bu, bv, bw]) = match columns {
+        let ([ax, ay, az, au, av, aw], [bx, by, bz, bu, bv, bw]) = match (columns, xyz) {
+            // `(n, 3)` columns: each register's x, y, z from its rows of 3 (one transpose
+            // of 3 columns each, where rows of 6 take one of 6).
+            (_, Some((l, v))) if n == width => {
+                let (a, b) = (3 * row0, 3 * (row0 + half));
+                let ([lx, ly, lz], [vx, vy, vz]) =
+                    (simd.xyz_columns(&l[a..]), simd.xyz_columns(&v[a..]));
+                let ([mx, my, mz], [wx, wy, wz]) =
+                    (simd.xyz_columns(&l[b..]), simd.xyz_columns(&v[b..]));
+                ([lx, ly, lz, vx, vy, vz], [mx, my, mz, wx, wy, wz])
+            }
             // Six columns: each register is 16 (or 8) consecutive values of one.
-            Some(c) if n == width => {
+            (Some(c), _) if n == width => {
                 let (a, b) = (row0, row0 + half);
                 (
                     [
@@ -172,11 +191,11 @@ fn run_registers<S: RegisterIo, const D: u8, const G: u8, const F: u8, const Q: 
                 )
             }
             _ => {
-                let rows = match columns {
-                    None if n == width => {
+                let rows = match (columns, xyz) {
+                    (None, None) if n == width => {
                         &data[row0 * COLUMNS_LOCAL..(row0 + width) * COLUMNS_LOCAL]
                     }
-                    // A tail (of either layout) as rows, its last row repeated.
+                    // A tail (of any form) as rows, its last row repeated.
                     _ => {
                         for k in 0..width {
                             let r = row0 + k.min(n - 1);

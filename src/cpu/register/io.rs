@@ -20,6 +20,9 @@ pub(crate) trait RegisterIo: Simd {
     /// The 6 columns of [`Self::WIDTH`] rows of the local form.
     fn local_columns(self, rows: &[f32]) -> [Self::f32s; 6];
 
+    /// The 3 columns of [`Self::WIDTH`] rows `x y z` (an `(n, 3)` array's).
+    fn xyz_columns(self, rows: &[f32]) -> [Self::f32s; 3];
+
     /// 3 columns (RGB) into [`Self::WIDTH`] rows of 3.
     fn rgb_rows(self, rgb: [Self::f32s; 3], rows: &mut [f32]);
 
@@ -45,6 +48,14 @@ impl RegisterIo for pulp::x86::V3 {
         let [a, b, c, d, e, f] = crate::cpu::transpose::avx2::local_columns(self, rows);
         let r = bytemuck::cast;
         [r(a), r(b), r(c), r(d), r(e), r(f)]
+    }
+
+    #[inline(always)]
+    fn xyz_columns(self, rows: &[f32]) -> [Self::f32s; 3] {
+        let rows: &[f32; 24] = rows[..24].try_into().expect("8 rows of 3");
+        let [x, y, z] = crate::cpu::transpose::avx2::xyz_columns(self, rows);
+        let r = bytemuck::cast;
+        [r(x), r(y), r(z)]
     }
 
     #[inline(always)]
@@ -90,6 +101,14 @@ impl RegisterIo for pulp::x86::V4 {
         let [a, b, c, d, e, f] = crate::cpu::transpose::avx512::local_columns(self, rows);
         let r = bytemuck::cast;
         [r(a), r(b), r(c), r(d), r(e), r(f)]
+    }
+
+    #[inline(always)]
+    fn xyz_columns(self, rows: &[f32]) -> [Self::f32s; 3] {
+        let rows: &[f32; 48] = rows[..48].try_into().expect("16 rows of 3");
+        let [x, y, z] = crate::cpu::transpose::avx512::xyz_columns(self, rows);
+        let r = bytemuck::cast;
+        [r(x), r(y), r(z)]
     }
 
     #[inline(always)]
