@@ -38,18 +38,31 @@ impl LocalRegisters<'_, '_> {
         // metal form (without its selects where every channel has Re η² < 0).
         use conductor::{FORM_METAL as METAL, FORM_POLY as POLY, FORM_QUOTIENT as QUOTIENT};
         let form = p.conductor_form();
+        // The input's form (`INPUT_*`): a function each, so that no loop holds another
+        // form's pointers (the local form's rows took 4.5 more instructions an evaluation
+        // on AVX2 beside the six columns' test, 63.1 → 67.6 for Beckmann).
+        let input = match self.batch {
+            Source::Columns(_) => INPUT_XYZ,
+            _ if self.batch.local_columns().is_some() => INPUT_PLANAR,
+            _ => INPUT_ROWS,
+        };
+        macro_rules! apart {
+            ($d:expr, $g:expr, $f:expr, $q:expr) => {
+                match input {
+                    INPUT_ROWS => registers_apart::<S, $d, $g, $f, $q, INPUT_ROWS>(simd, self),
+                    INPUT_PLANAR => registers_apart::<S, $d, $g, $f, $q, INPUT_PLANAR>(simd, self),
+                    _ => registers_apart::<S, $d, $g, $f, $q, INPUT_XYZ>(simd, self),
+                }
+            };
+        }
         macro_rules! by_f {
             ($d:expr, $g:expr) => {
                 match f {
-                    F::None => registers_apart::<S, $d, $g, F_NONE, METAL>(simd, self),
-                    F::Schlick => registers_apart::<S, $d, $g, F_SCHLICK, METAL>(simd, self),
-                    _ if form == POLY => {
-                        registers_apart::<S, $d, $g, F_CONDUCTOR, POLY>(simd, self)
-                    }
-                    _ if form == QUOTIENT => {
-                        registers_apart::<S, $d, $g, F_CONDUCTOR, QUOTIENT>(simd, self)
-                    }
-                    _ => registers_apart::<S, $d, $g, F_CONDUCTOR, METAL>(simd, self),
+                    F::None => apart!($d, $g, F_NONE, METAL),
+                    F::Schlick => apart!($d, $g, F_SCHLICK, METAL),
+                    _ if form == POLY => apart!($d, $g, F_CONDUCTOR, POLY),
+                    _ if form == QUOTIENT => apart!($d, $g, F_CONDUCTOR, QUOTIENT),
+                    _ => apart!($d, $g, F_CONDUCTOR, METAL),
                 }
             };
         }
@@ -65,32 +78,46 @@ impl LocalRegisters<'_, '_> {
     }
 }
 
+/// The register path's input: the local form's rows (`(n, 6)`, C order).
+const INPUT_ROWS: u8 = 0;
+/// The local form as six columns (`LocalLayout::Columns`).
+const INPUT_PLANAR: u8 = 1;
+/// `(n, 3)` columns of L and V with N = +z given once (a `ColumnBatch`).
+const INPUT_XYZ: u8 = 2;
+
 /// [`run_registers`] as a function of its own compiled for `simd` (as each group's lanes
-/// are, `dispatch::apart`).
+/// are, `dispatch::apart`); `X`: the input's form (`INPUT_*`).
 #[inline(never)]
-fn registers_apart<S: RegisterIo, const D: u8, const G: u8, const F: u8, const Q: u8>(
+fn registers_apart<
+    S: RegisterIo,
+    const D: u8,
+    const G: u8,
+    const F: u8,
+    const Q: u8,
+    const X: u8,
+>(
     simd: S,
     op: LocalRegisters,
 ) -> (Counts, Tally) {
-    simd.vectorize(RegistersFn::<S, D, G, F, Q> { simd, op })
+    simd.vectorize(RegistersFn::<S, D, G, F, Q, X> { simd, op })
 }
 
 /// [`run_registers`] as pulp calls it inside the instruction set's features (a struct,
 /// not a closure: LLVM left the closure out of line, and with it every intrinsic became a
 /// call).
-struct RegistersFn<'a, 'b, S, const D: u8, const G: u8, const F: u8, const Q: u8> {
+struct RegistersFn<'a, 'b, S, const D: u8, const G: u8, const F: u8, const Q: u8, const X: u8> {
     simd: S,
     op: LocalRegisters<'a, 'b>,
 }
 
-impl<S: RegisterIo, const D: u8, const G: u8, const F: u8, const Q: u8> pulp::NullaryFnOnce
-    for RegistersFn<'_, '_, S, D, G, F, Q>
+impl<S: RegisterIo, const D: u8, const G: u8, const F: u8, const Q: u8, const X: u8>
+    pulp::NullaryFnOnce for RegistersFn<'_, '_, S, D, G, F, Q, X>
 {
     type Output = (Counts, Tally);
 
     #[inline(always)]
     fn call(self) -> (Counts, Tally) {
-        run_registers::<S, D, G, F, Q>(self.simd, self.op)
+        run_registers::<S, D, G, F, Q, X>(self.simd, self.op)
     }
 }
 
@@ -99,7 +126,7 @@ impl<S: RegisterIo, const D: u8, const G: u8, const F: u8, const Q: u8> pulp::Nu
 /// `local_finish`) and written, the lanes it flags sent to the reference or gathered for
 /// the f64 frame as [`super::run_blocks`] does with a block's.
 #[inline(always)]
-fn run_registers<S: RegisterIo, const D: u8, const G: u8, const F: u8, const Q: u8>(
+fn run_registers<S: RegisterIo, const D: u8, const G: u8, const F: u8, const Q: u8, const X: u8>(
     simd: S,
     op: LocalRegisters,
 ) -> (Counts, Tally) {
@@ -140,13 +167,17 @@ fn run_registers<S: RegisterIo, const D: u8, const G: u8, const F: u8, const Q: 
     let mut tail_rows = [0f32; COLUMNS_LOCAL * 2 * LANES];
     let mut tail_out = [0f32; 3 * 2 * LANES];
     // The six columns of a batch held so (`LocalLayout::Columns`).
-    let columns: Option<[&[f32]; 6]> = batch.local_columns().map(|b| {
-        let c = |i| b.column(i).expect("a batch of columns");
-        [c(0), c(1), c(2), c(3), c(4), c(5)]
-    });
+    let columns: Option<[&[f32]; 6]> =
+        batch
+            .local_columns()
+            .filter(|_| X == INPUT_PLANAR)
+            .map(|b| {
+                let c = |i| b.column(i).expect("a batch of columns");
+                [c(0), c(1), c(2), c(3), c(4), c(5)]
+            });
     // L's and V's `(n, 3)` columns of a `ColumnBatch` (N = +z given once).
     let xyz = match batch {
-        Source::Columns(b) => match b.directions() {
+        Source::Columns(b) if X == INPUT_XYZ => match b.directions() {
             [Column::Each(l), Column::Each(v), _] => Some((l, v)),
             _ => None,
         },
