@@ -183,6 +183,36 @@ fn the_register_path_gives_the_lane_loops_bits_on_every_group_it_serves() {
             let z = [0.0f32, 0.0, 1.0];
             let columns = ColumnBatch::new([&l, &v, &z], None, &[0.0], n, &mats, &memory_source())
                 .expect("columns");
+            // V given once for every row (a fixed viewer), L one a row.
+            let v_once = [0.3f32, -0.2, 0.9];
+            let fixed: Vec<f32> = l
+                .chunks_exact(3)
+                .flat_map(|x| [x[0], x[1], x[2], 0.3, -0.2, 0.9])
+                .collect();
+            let fixed_rows = as_rows(&fixed);
+            let fixed_columns =
+                ColumnBatch::new([&l, &v_once, &z], None, &[0.0], n, &mats, &memory_source())
+                    .expect("columns");
+            for isa in Isa::available_all() {
+                let mut engine = CpuEngine::with_isa(1, isa);
+                let request = Request { terms: false };
+                let want = engine.evaluate(&fixed_rows, &mats, &request).expect("rows");
+                let mut got = Output::default();
+                engine
+                    .evaluate_columns_into(&fixed_columns, &mats, &request, &mut got)
+                    .expect("columns");
+                let what = format!("{:?} m = {m}, {isa}, V given once", mats[0]);
+                assert_eq!(got.counts, want.counts, "{what}");
+                for (i, (a, b)) in got.brdf.iter().zip(&want.brdf).enumerate() {
+                    assert_eq!(a.to_bits(), b.to_bits(), "{what}: row {}", i / 3);
+                }
+                let on_registers = matches!(isa, Isa::Avx2Fma | Isa::Avx512) && served;
+                assert_eq!(
+                    engine.last_tally().registers == n as u64,
+                    on_registers,
+                    "{what}"
+                );
+            }
             for (isa, form) in Isa::available_all()
                 .into_iter()
                 .flat_map(|isa| [(isa, 0), (isa, 1), (isa, 2)])

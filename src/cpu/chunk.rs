@@ -78,13 +78,11 @@ impl super::isa::WithFma for ChunkOp<'_, '_> {
     #[inline(always)]
     fn with_fma<S: transpose::Transpose + RegisterIo>(self, simd: S) -> (Counts, Tally) {
         if let (None, Plan::Microfacet { d, aniso, g, f, p }) = (self.order, self.plan) {
-            // The local form, or `(n, 3)` columns of L and V with N = +z given once.
+            // The local form, or columns of L and V (each one a row or one for every row)
+            // with N = +z given once.
             let local = match self.batch {
                 Source::Local(_) => true,
-                Source::Columns(b) => {
-                    let [l, v, _] = b.directions();
-                    self.batch.normal_is_z() && matches!((l, v), (Column::Each(_), Column::Each(_)))
-                }
+                Source::Columns(_) => self.batch.normal_is_z(),
                 _ => false,
             };
             if local && register::serves(*d, *aniso, *g, *f, p) {

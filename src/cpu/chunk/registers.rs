@@ -175,13 +175,23 @@ fn run_registers<S: RegisterIo, const D: u8, const G: u8, const F: u8, const Q: 
                 let c = |i| b.column(i).expect("a batch of columns");
                 [c(0), c(1), c(2), c(3), c(4), c(5)]
             });
-    // L's and V's `(n, 3)` columns of a `ColumnBatch` (N = +z given once).
+    // L's and V's columns of a `ColumnBatch` (N = +z given once): one vector a row, or
+    // one for every row.
     let xyz = match batch {
-        Source::Columns(b) if X == INPUT_XYZ => match b.directions() {
-            [Column::Each(l), Column::Each(v), _] => Some((l, v)),
-            _ => None,
-        },
+        Source::Columns(b) if X == INPUT_XYZ => {
+            let [l, v, _] = b.directions();
+            Some((l, v))
+        }
         _ => None,
+    };
+    // A register of x, y, z of rows `at..` of a column (a vector given once, splatted).
+    let xyz_at = |c: Column, at: usize| -> [S::f32s; 3] {
+        match c {
+            Column::Each(rows) => simd.xyz_columns(&rows[3 * at..]),
+            Column::Every([x, y, z]) => {
+                [simd.splat_f32s(x), simd.splat_f32s(y), simd.splat_f32s(z)]
+            }
+        }
     };
     let mut j = 0;
     while j < len {
@@ -192,11 +202,9 @@ fn run_registers<S: RegisterIo, const D: u8, const G: u8, const F: u8, const Q: 
             // `(n, 3)` columns: each register's x, y, z from its rows of 3 (one transpose
             // of 3 columns each, where rows of 6 take one of 6).
             (_, Some((l, v))) if n == width => {
-                let (a, b) = (3 * row0, 3 * (row0 + half));
-                let ([lx, ly, lz], [vx, vy, vz]) =
-                    (simd.xyz_columns(&l[a..]), simd.xyz_columns(&v[a..]));
-                let ([mx, my, mz], [wx, wy, wz]) =
-                    (simd.xyz_columns(&l[b..]), simd.xyz_columns(&v[b..]));
+                let (a, b) = (row0, row0 + half);
+                let ([lx, ly, lz], [vx, vy, vz]) = (xyz_at(l, a), xyz_at(v, a));
+                let ([mx, my, mz], [wx, wy, wz]) = (xyz_at(l, b), xyz_at(v, b));
                 ([lx, ly, lz, vx, vy, vz], [mx, my, mz, wx, wy, wz])
             }
             // Six columns: each register is 16 (or 8) consecutive values of one.
