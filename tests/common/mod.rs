@@ -2,6 +2,7 @@
 #![allow(dead_code)]
 
 pub mod combinations;
+pub mod mixed;
 pub mod npy;
 pub mod quadrature;
 pub mod rule;

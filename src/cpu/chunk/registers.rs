@@ -199,27 +199,7 @@ fn run_registers<S: RegisterIo, const D: u8, const G: u8, const F: u8, const Q: 
                 ([lx, ly, lz, vx, vy, vz], [mx, my, mz, wx, wy, wz])
             }
             // Six columns: each register is 16 (or 8) consecutive values of one.
-            (Some(c), _) if n == width => {
-                let (a, b) = (row0, row0 + half);
-                (
-                    [
-                        load(simd, &c[0][a..]),
-                        load(simd, &c[1][a..]),
-                        load(simd, &c[2][a..]),
-                        load(simd, &c[3][a..]),
-                        load(simd, &c[4][a..]),
-                        load(simd, &c[5][a..]),
-                    ],
-                    [
-                        load(simd, &c[0][b..]),
-                        load(simd, &c[1][b..]),
-                        load(simd, &c[2][b..]),
-                        load(simd, &c[3][b..]),
-                        load(simd, &c[4][b..]),
-                        load(simd, &c[5][b..]),
-                    ],
-                )
-            }
+            (Some(c), _) if n == width => (load6(simd, c, row0), load6(simd, c, row0 + half)),
             _ => {
                 let rows = match (columns, xyz) {
                     (None, None) if n == width => {
@@ -313,6 +293,19 @@ fn xyz_at<S: RegisterIo>(simd: S, c: Column, at: usize) -> [S::f32s; 3] {
         Column::Each(rows) => simd.xyz_columns(&rows[3 * at..]),
         Column::Every([x, y, z]) => [simd.splat_f32s(x), simd.splat_f32s(y), simd.splat_f32s(z)],
     }
+}
+
+/// A register each of the six columns' values from row `at` on.
+#[inline(always)]
+fn load6<S: RegisterIo>(simd: S, c: [&[f32]; 6], at: usize) -> [S::f32s; 6] {
+    [
+        load(simd, &c[0][at..]),
+        load(simd, &c[1][at..]),
+        load(simd, &c[2][at..]),
+        load(simd, &c[3][at..]),
+        load(simd, &c[4][at..]),
+        load(simd, &c[5][at..]),
+    ]
 }
 
 /// A register of the first [`RegisterIo::WIDTH`] values of `column` (loaded unaligned).
