@@ -27,8 +27,11 @@ fn polar(theta: f64, phi: f64) -> [f64; 3] {
     ]
 }
 
-/// The local rows (`Lx Ly Lz Vx Vy Vz`) of the hard tuples for roughness `m`.
-fn hard_rows(m: f64) -> Vec<f32> {
+/// The local rows (`Lx Ly Lz Vx Vy Vz`) of the hard tuples for roughness `m`; `unit`: every
+/// L and V of unit length and no invalid tuple, so that whole steps of the register path
+/// take the frames' near-unit scales alone (other lengths in a step send it the way that
+/// chooses lane by lane).
+fn hard_rows(m: f64, unit: bool) -> Vec<f32> {
     let mut pairs: Vec<([f64; 3], [f64; 3])> = Vec::new();
     // D steepest in h (GGX: tan θ_h = m/2, m, 2m; Beckmann: out to its exp's cut-off),
     // c from 0.05 (below FAST_MIN_C) to 1.
@@ -84,14 +87,21 @@ fn hard_rows(m: f64) -> Vec<f32> {
         // Lengths other than 1, up to the frame's limits (|x|² in [1e-30, 1e30]) and past
         // them, on some tuples.
         let scale = match i % 13 {
+            _ if unit => 1.0,
             3 => 3.7,
             5 => 1e-6,
             7 => 1e14,
             9 => 1e-16,
+            // Squared lengths either side of the h64 frame's near-unit test (1 ± 2⁻¹²).
+            11 => (1.0 + 0.99 / 4096.0f64).sqrt(),
+            12 => (1.0 - 1.01 / 4096.0f64).sqrt(),
             _ => 1.0,
         };
         rows.extend(l.iter().map(|&x| (x * scale) as f32));
         rows.extend(v.iter().map(|&x| x as f32));
+    }
+    if unit {
+        return rows;
     }
     // Invalid tuples: zero, NaN and infinite components.
     for bad in [[0.0f32; 3], [f32::NAN, 0.0, 1.0], [0.0, f32::INFINITY, 1.0]] {
@@ -161,8 +171,11 @@ fn the_register_path_gives_the_lane_loops_bits_on_every_group_it_serves() {
         .iter()
         .any(|i| matches!(i, Isa::Avx2Fma | Isa::Avx512));
     let (mut deferred, mut rescued) = (0, 0);
-    for m in [0.075, 0.0751, 0.3, 1.0] {
-        let local = hard_rows(m);
+    for (m, unit) in [0.075, 0.0751, 0.3, 1.0]
+        .into_iter()
+        .flat_map(|m| [(m, false), (m, true)])
+    {
+        let local = hard_rows(m, unit);
         let n = local.len() / 6;
         assert!(!n.is_multiple_of(16), "a tail that is not a whole step");
         let rows = as_rows(&local);

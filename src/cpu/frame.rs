@@ -206,15 +206,25 @@ struct LocalParts<T: Real> {
 /// Lanes whose [`frame_local_h64`] can be formed: one f32 (its f64 part in one f64), or a
 /// register (`cpu::register`, its f64 part half a register at a time).
 pub(super) trait FrameLanes: Real {
-    /// [`half_parts`] of these lanes.
-    fn half_parts<A: MulAdd>(l: [Self; 3], v: [Self; 3]) -> HalfParts<Self>;
+    /// [`half_parts`] of these lanes (`NEAR`: every lane's L and V are near unit length,
+    /// [`near_unit_lanes`]).
+    fn half_parts<A: MulAdd, const NEAR: bool>(l: [Self; 3], v: [Self; 3]) -> HalfParts<Self>;
+
+    /// Whether every lane of `m` is set.
+    fn all(m: Self::Mask) -> bool;
 }
 
 impl FrameLanes for f32 {
     #[inline(always)]
-    fn half_parts<A: MulAdd>(l: [f32; 3], v: [f32; 3]) -> HalfParts<f32> {
+    fn half_parts<A: MulAdd, const NEAR: bool>(l: [f32; 3], v: [f32; 3]) -> HalfParts<f32> {
+        let near = NEAR || near_unit_lanes::<A, f32>(l, v);
         let (l, v) = (l.map(f64::from), v.map(f64::from));
-        half_parts::<A, f64>(l, v)
+        half_parts::<A, f64, NEAR>(l, v, near)
+    }
+
+    #[inline(always)]
+    fn all(m: bool) -> bool {
+        m
     }
 }
 
@@ -229,8 +239,11 @@ impl FrameLanes for f32 {
 /// f32 scales add is ~21u of the rule's 1e-5. Five f64 values rounded (two scales, h's
 /// three components) where [`frame_local64`] rounds eleven.
 #[inline(always)]
-pub(super) fn frame_local_h64<A: MulAdd, T: FrameLanes>(l: [T; 3], v: [T; 3]) -> Frame<T> {
-    let w = T::half_parts::<A>(l, v);
+pub(super) fn frame_local_h64<A: MulAdd, T: FrameLanes, const NEAR: bool>(
+    l: [T; 3],
+    v: [T; 3],
+) -> Frame<T> {
+    let w = T::half_parts::<A, NEAR>(l, v);
     let (lx, ly, lz) = (l[0] * w.il, l[1] * w.il, l[2] * w.il);
     let (vx, vy, vz) = (v[0] * w.iv, v[1] * w.iv, v[2] * w.iv);
     local_frame_of(LocalParts {
@@ -260,14 +273,42 @@ pub(super) struct HalfParts<T: Real> {
     lengths_ok: T::Mask,
 }
 
-/// The f64 part of [`frame_local_h64`] from L and V in f64 lanes: each scale `1/|x|` by
-/// [`rsqrt64_fast`] and h = L·s_l + V·s_v, each rounded once; then h's scale in f32.
+/// The f64 part of [`frame_local_h64`] from L and V in f64 lanes: each scale `1/|x|` and
+/// h = L·s_l + V·s_v, each rounded once; then h's scale in f32.
+///
+/// The scales: on the lanes of `near` ([`near_unit_lanes`]: L's and V's squared lengths
+/// within [`NEAR_UNIT`] of 1, as every input normalised in f32 or f64 is)
+/// [`rsqrt64_near_unit`], a cubic without a root or a division; on the others
+/// [`rsqrt64_fast`]. `NEAR`: every lane is near (the register path tests a step's lanes
+/// first), and the second is not formed at all.
 #[inline(always)]
-pub(super) fn half_parts<A: MulAdd, W: Wide>(l: [W; 3], v: [W; 3]) -> HalfParts<W::Narrow> {
+pub(super) fn half_parts<A: MulAdd, W: Wide, const NEAR: bool>(
+    l: [W; 3],
+    v: [W; 3],
+    near: <W::Narrow as Real>::Mask,
+) -> HalfParts<W::Narrow> {
     let ll = sq3_wide::<A, W>(l);
-    let il = rsqrt64_fast::<A, W>(ll);
     let vv = sq3_wide::<A, W>(v);
-    let iv = rsqrt64_fast::<A, W>(vv);
+    let q = [ll.narrow(), vv.narrow()];
+    let (il, iv) = (rsqrt64_near_unit::<A, W>(ll), rsqrt64_near_unit::<A, W>(vv));
+    let near_parts = scaled_parts::<A, W>(l, v, q, il, iv);
+    if NEAR {
+        return near_parts;
+    }
+    let (il, iv) = (rsqrt64_fast::<A, W>(ll), rsqrt64_fast::<A, W>(vv));
+    near_parts.select(near, scaled_parts::<A, W>(l, v, q, il, iv))
+}
+
+/// [`half_parts`] from the scales `il = 1/|L|`, `iv = 1/|V|` (in f64) and the squared
+/// lengths rounded to f32 (`q`).
+#[inline(always)]
+fn scaled_parts<A: MulAdd, W: Wide>(
+    l: [W; 3],
+    v: [W; 3],
+    q: [W::Narrow; 2],
+    il: W,
+    iv: W,
+) -> HalfParts<W::Narrow> {
     let h = [
         A::mul_add_wide(l[0], il, v[0] * iv),
         A::mul_add_wide(l[1], il, v[1] * iv),
@@ -283,7 +324,22 @@ pub(super) fn half_parts<A: MulAdd, W: Wide>(l: [W; 3], v: [W; 3]) -> HalfParts<
         cos_h: hz * ih,
         sin2_h: A::mul_add(hx, hx, hy * hy) * (ih * ih),
         // On the f32 roundings, as [`frame`] tests them.
-        lengths_ok: length2_ok(ll.narrow()) & length2_ok(vv.narrow()),
+        lengths_ok: length2_ok(q[0]) & length2_ok(q[1]),
+    }
+}
+
+impl<T: Real> HalfParts<T> {
+    /// `self` on the lanes of `m`, `other` on the rest.
+    #[inline(always)]
+    fn select(self, m: T::Mask, other: HalfParts<T>) -> HalfParts<T> {
+        HalfParts {
+            il: T::select(m, self.il, other.il),
+            iv: T::select(m, self.iv, other.iv),
+            c: T::select(m, self.c, other.c),
+            cos_h: T::select(m, self.cos_h, other.cos_h),
+            sin2_h: T::select(m, self.sin2_h, other.sin2_h),
+            lengths_ok: self.lengths_ok,
+        }
     }
 }
 
@@ -336,9 +392,14 @@ fn side2_wide<A: MulAdd, W: Wide>(a: [W; 3]) -> W {
 /// radians (the two scales' difference along `l − v`, the components' roundings, the
 /// sum's). The cosines are single components (relative to 4.5u at any angle) and the sines
 /// sums of squares of components, as in [`frame`] — which forms l, v and h in f64 to make
-/// that turn `u·√3/2` whatever c, at ~25 instructions an evaluation more (AVX2).
+/// that turn `u·√3/2` whatever c, at ~25 instructions an evaluation more (AVX2). The
+/// scales are [`rsqrt_near_unit`]'s where a squared length is within [`NEAR_UNIT`] of 1
+/// (within 2u: `|x|²`'s 1.5u halved, and the quadratic's last rounding), else [`rsqrt`]'s.
 #[inline(always)]
-pub(super) fn frame_local32<A: MulAdd, T: Real>(l: [T; 3], v: [T; 3]) -> Frame<T> {
+pub(super) fn frame_local32<A: MulAdd, T: Real, const NEAR: bool>(
+    l: [T; 3],
+    v: [T; 3],
+) -> Frame<T> {
     let [lx, ly, lz] = l;
     let [vx, vy, vz] = v;
     let (ll, vv) = (
@@ -348,7 +409,17 @@ pub(super) fn frame_local32<A: MulAdd, T: Real>(l: [T; 3], v: [T; 3]) -> Frame<T
     // Each value as soon as its operands are there, so that a register path holds few at
     // once (the lane loops' bits do not depend on the order).
     let lengths_ok = length2_ok(ll) & length2_ok(vv);
-    let (il, iv) = (rsqrt(ll), rsqrt(vv));
+    let (il, iv) = (rsqrt_near_unit::<A, T>(ll), rsqrt_near_unit::<A, T>(vv));
+    let (il, iv) = if NEAR {
+        (il, iv)
+    } else {
+        // Each lane's own choice, whatever its neighbours' (the same bits on every path).
+        let near = near_unit(ll) & near_unit(vv);
+        (
+            T::select(near, il, rsqrt(ll)),
+            T::select(near, iv, rsqrt(vv)),
+        )
+    };
     let (lx, ly, lz) = (lx * il, ly * il, lz * il);
     let (vx, vy, vz) = (vx * iv, vy * iv, vz * iv);
     let sin2_i = A::mul_add(lx, lx, ly * ly);
@@ -415,6 +486,50 @@ pub(super) fn rsqrt64(x: f64) -> f64 {
     let y0 = f64::from(1.0 / (x as f32).sqrt());
     let y1 = y0 * (1.5 - 0.5 * x * y0 * y0);
     y1 * (1.5 - 0.5 * x * y1 * y1)
+}
+
+/// How far from 1 (`|1 − |x|²|` of the f32 squared length) [`rsqrt64_near_unit`] may be
+/// used: its cubic's truncation there is `35 a⁴/128 ≤ 1e-15` (a = |x|² − 1 ≤ 2⁻¹² + u),
+/// as accurate as [`rsqrt64_fast`]. Inputs normalised in f32 are within ~3u of 1.
+const NEAR_UNIT: f32 = 1.0 / 4096.0;
+
+/// Whether the lanes' L and V both have squared lengths (in f32, as [`frame_local32`]
+/// forms them) within [`NEAR_UNIT`] of 1: the lanes whose local frames take the near-unit
+/// scales ([`rsqrt_near_unit`], [`rsqrt64_near_unit`]).
+#[inline(always)]
+pub(super) fn near_unit_lanes<A: MulAdd, T: Real>(l: [T; 3], v: [T; 3]) -> T::Mask {
+    let sq = |a: [T; 3]| A::mul_add(a[2], a[2], A::mul_add(a[0], a[0], a[1] * a[1]));
+    near_unit(sq(l)) & near_unit(sq(v))
+}
+
+/// Whether an f32 squared length `q` is within [`NEAR_UNIT`] of 1 (`1 − q` is exact there,
+/// by Sterbenz's lemma; false for NaN).
+#[inline(always)]
+fn near_unit<T: Real>(q: T) -> T::Mask {
+    (q.splat_as(1.0) - q).abs().le_scalar(NEAR_UNIT)
+}
+
+/// `1/√q` in f32 for q = 1 + a within [`NEAR_UNIT`] of 1: `1 − a/2 + 3a²/8` by Horner, a
+/// exact, the quadratic's truncation ≤ 5|a|³/16 < 5e-12 and its last rounding u/2 — within
+/// `u/2` of the exact `1/√q` where [`rsqrt`] (a root and a division) is within ~u, without
+/// the divider.
+#[inline(always)]
+fn rsqrt_near_unit<A: MulAdd, T: Real>(q: T) -> T {
+    let a = q - q.splat_as(1.0);
+    let p = A::mul_add(a, q.splat_as(0.375), q.splat_as(-0.5));
+    A::mul_add(a, p, q.splat_as(1.0))
+}
+
+/// `1/√x` for x = 1 + a near 1 (|a| ≤ [`NEAR_UNIT`], a formed exactly from the exact x):
+/// the Taylor cubic `1 − a/2 + 3a²/8 − 5a³/16` by Horner in f64, relative error below
+/// 1.2e-15 (truncation ≤ 1e-15, the f64 roundings ~2e-16) — no root and no division,
+/// whose latency the h64 frame's chain otherwise starts with.
+#[inline(always)]
+fn rsqrt64_near_unit<A: MulAdd, W: Wide>(x: W) -> W {
+    let a = x + x.splat_as(-1.0);
+    let p = A::mul_add_wide(a, x.splat_as(-0.3125), x.splat_as(0.375));
+    let p = A::mul_add_wide(a, p, x.splat_as(-0.5));
+    A::mul_add_wide(a, p, x.splat_as(1.0))
 }
 
 /// `1/√x` in f64 with one Newton step from f32's estimate: relative error below 1e-14

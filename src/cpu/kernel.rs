@@ -14,7 +14,8 @@
 #![allow(clippy::needless_range_loop)]
 
 use super::frame::{
-    frame, frame64, frame_local32, frame_local_h64, length2_ok, rsqrt, Frame, Frame64, GRAZING,
+    frame, frame64, frame_local32, frame_local_h64, length2_ok, near_unit_lanes, rsqrt, Frame,
+    Frame64, GRAZING,
 };
 use crate::backend::TERM_COLUMNS;
 use crate::terms::d::{beckmann, blinn, charlie, gaussian, ggx};
@@ -341,7 +342,15 @@ pub fn microfacet_block<A: MulAdd, const D: u8, const G: u8, const F: u8, const 
         let mode = if !local_d || !any(&z) || p.general_frame_only {
             FRAME_GENERAL
         } else if !z.contains(&false) {
-            FRAME_LOCAL
+            let near: [bool; LANES] = std::array::from_fn(|k| {
+                let x = lane_inputs(inp, k);
+                near_unit_lanes::<A, f32>([x[0], x[1], x[2]], [x[3], x[4], x[5]])
+            });
+            if near.contains(&false) {
+                FRAME_LOCAL
+            } else {
+                FRAME_LOCAL_NEAR
+            }
         } else {
             FRAME_EACH
         };
@@ -352,6 +361,7 @@ pub fn microfacet_block<A: MulAdd, const D: u8, const G: u8, const F: u8, const 
             };
         }
         match mode {
+            FRAME_LOCAL_NEAR => frames_in!(FRAME_LOCAL_NEAR),
             FRAME_LOCAL => frames_in!(FRAME_LOCAL),
             FRAME_EACH => frames_in!(FRAME_EACH),
             _ => frames_in!(FRAME_GENERAL),
@@ -445,6 +455,10 @@ fn terms32<A: MulAdd, const D: u8, const G: u8, const F: u8, const T: bool, cons
 const FRAME_GENERAL: u8 = 0;
 const FRAME_LOCAL: u8 = 1;
 const FRAME_EACH: u8 = 2;
+/// [`FRAME_LOCAL`] where every lane's L and V are also of unit length
+/// (`frame::near_unit_lanes`): the local frames' near-unit scales alone, as the register
+/// path's steps take them.
+const FRAME_LOCAL_NEAR: u8 = 3;
 
 /// The f32 frames of a block into `fs` (structure of arrays) and `ok`, the lanes that
 /// must take the f64 frame into `slow`, and the lanes of the local frame that its
@@ -467,9 +481,10 @@ fn frames<A: MulAdd, const D: u8, const Z: bool, const MODE: u8>(
         let x = lane_inputs(inp, k);
         let (xl, xv) = ([x[0], x[1], x[2]], [x[3], x[4], x[5]]);
         let (fr, local) = match MODE {
-            FRAME_LOCAL => (local_frame::<A, D>(xl, xv), true),
+            FRAME_LOCAL_NEAR => (local_frame::<A, D, true>(xl, xv), true),
+            FRAME_LOCAL => (local_frame::<A, D, false>(xl, xv), true),
             FRAME_EACH => {
-                let (a, b) = (local_frame::<A, D>(xl, xv), frame::<A, Z>(&x));
+                let (a, b) = (local_frame::<A, D, false>(xl, xv), frame::<A, Z>(&x));
                 (if z[k] { a } else { b }, z[k])
             }
             _ => (frame::<A, Z>(&x), false),
@@ -499,10 +514,10 @@ fn frames<A: MulAdd, const D: u8, const Z: bool, const MODE: u8>(
 /// lanes D's certificate then tests, or Beckmann's `frame_local_h64`, whose bound holds on
 /// every lane (docs/CPU_ENGINE.md).
 #[inline(always)]
-fn local_frame<A: MulAdd, const D: u8>(l: [f32; 3], v: [f32; 3]) -> Frame {
+fn local_frame<A: MulAdd, const D: u8, const NEAR: bool>(l: [f32; 3], v: [f32; 3]) -> Frame {
     match const { DistributionKind::from_code(D) } {
-        DistributionKind::Beckmann => frame_local_h64::<A, f32>(l, v),
-        _ => frame_local32::<A, f32>(l, v),
+        DistributionKind::Beckmann => frame_local_h64::<A, f32, NEAR>(l, v),
+        _ => frame_local32::<A, f32, NEAR>(l, v),
     }
 }
 

@@ -14,7 +14,7 @@
 //! reference, exactly as a block of the lane loops flags them. Which instruction sets have
 //! the path, and their reads and writes: `io.rs`.
 
-use super::frame::{frame_local32, frame_local_h64, Frame, FrameLanes};
+use super::frame::{frame_local32, frame_local_h64, near_unit_lanes, Frame, FrameLanes};
 use super::kernel::{self, Params, FAST_MIN_C};
 use crate::terms::d::{beckmann, ggx};
 use crate::terms::f::conductor::poly::Polynomial;
@@ -71,12 +71,12 @@ pub(super) fn serves(
 /// registers' frames. Together the stages give the BRDF's channels and which lanes they
 /// are not for ([`Flags`], [`Flags::rescue`]), as `kernel::microfacet_block` decides for the same lanes.
 #[inline(always)]
-pub(super) fn ggx_local_dgk<T: Real, const G: u8, const F: u8>(
+pub(super) fn ggx_local_dgk<T: FrameLanes, const G: u8, const F: u8, const NEAR: bool>(
     p: &Params,
     l: [T; 3],
     v: [T; 3],
 ) -> Staged<T> {
-    let fr = frame_local32::<Fused, T>(l, v);
+    let fr = frame_local32::<Fused, T, NEAR>(l, v);
     let certified = ggx::local_frame_ok(fr.cos_h, fr.sin2_h, fr.c, p.m2_f, p.ggx_local_guard);
     let slow = fr.ok & fr.c.lt_scalar(FAST_MIN_C);
     let general = fr.ok & !slow & !certified;
@@ -101,12 +101,12 @@ pub(super) fn ggx_local_dgk<T: Real, const G: u8, const F: u8>(
 /// this frame — so no lane is left to the general frame; `c` below `FAST_MIN_C` still takes
 /// the f64 frame. D, G (none, the V-cavity, smith-fast) and K are the lane loops' forms.
 #[inline(always)]
-pub(super) fn beckmann_local_dgk<T: FrameLanes, const G: u8, const F: u8>(
+pub(super) fn beckmann_local_dgk<T: FrameLanes, const G: u8, const F: u8, const NEAR: bool>(
     p: &Params,
     l: [T; 3],
     v: [T; 3],
 ) -> Staged<T> {
-    let fr = frame_local_h64::<Fused, T>(l, v);
+    let fr = frame_local_h64::<Fused, T, NEAR>(l, v);
     let slow = fr.ok & fr.c.lt_scalar(FAST_MIN_C);
     // No lane for the general frame: this is it (an all-false mask of the lanes' kind).
     let general = slow & !slow;
@@ -159,16 +159,29 @@ fn staged<T: Real, const F: u8>(
 /// The first stage for distribution `D` (the kernel's code): [`beckmann_local_dgk`] or
 /// [`ggx_local_dgk`].
 #[inline(always)]
-pub(super) fn local_dgk<T: FrameLanes, const D: u8, const G: u8, const F: u8>(
+pub(super) fn local_dgk<T: FrameLanes, const D: u8, const G: u8, const F: u8, const NEAR: bool>(
     p: &Params,
     l: [T; 3],
     v: [T; 3],
 ) -> Staged<T> {
     if D == kernel::D_BECKMANN {
-        beckmann_local_dgk::<T, G, F>(p, l, v)
+        beckmann_local_dgk::<T, G, F, NEAR>(p, l, v)
     } else {
-        ggx_local_dgk::<T, G, F>(p, l, v)
+        ggx_local_dgk::<T, G, F, NEAR>(p, l, v)
     }
+}
+
+/// Whether every lane of a step's two registers (L, V each) has L and V of unit length
+/// (`frame::near_unit_lanes`): the step then runs its frames with `NEAR`.
+#[inline(always)]
+pub(super) fn near_unit_step<S: RegisterIo>(
+    la: [Reg<S>; 3],
+    va: [Reg<S>; 3],
+    lb: [Reg<S>; 3],
+    vb: [Reg<S>; 3],
+) -> bool {
+    let m = near_unit_lanes::<Fused, _>(la, va) & near_unit_lanes::<Fused, _>(lb, vb);
+    <Reg<S> as FrameLanes>::all(m)
 }
 
 /// What [`ggx_local_dgk`] and [`beckmann_local_dgk`] hand to [`local_finish`].

@@ -69,7 +69,9 @@ pub fn materials_toml(distribution: &str, m_all: &[f64], kinds: &[(&str, &str)])
 pub type Pairs = Vec<([f64; 3], [f64; 3])>;
 
 /// The local form's tuples `(L, V, material)` of `pairs(m, c_min)` for each roughness of
-/// `m_all`, L and V unnormalised (the frame's lengths are part of its error), each pair
+/// `m_all`, L and V of unit length in a quarter of them, of squared lengths just inside or
+/// outside 1 ± 2⁻¹² in two more and far from unit in the rest (the frames' lengths are
+/// part of their error, and the h64 frame takes unit ones another way), each pair
 /// once for each of `per_m` materials (material `per_m · i + g`, as [`materials_toml`]
 /// numbers them).
 pub fn tuples(
@@ -82,7 +84,15 @@ pub fn tuples(
     let mut i = 0usize;
     for (mi, &m) in m_all.iter().enumerate() {
         for (l, v) in pairs(m, c_min) {
-            let (sl, sv) = (1.0 + 0.37 * (i % 7) as f64, 0.6 + 0.29 * (i % 5) as f64);
+            // Unit lengths (the h64 frame's near-unit scales), squared lengths just inside
+            // and just outside its `NEAR_UNIT` (1 ± 2⁻¹²), and lengths far from 1.
+            let near = (2.0f64).powi(-12);
+            let (sl, sv) = match i % 4 {
+                0 => (1.0, 1.0),
+                1 => ((1.0 + 0.9 * near).sqrt(), (1.0 - 0.9 * near).sqrt()),
+                2 => (1.0, (1.0 + 1.1 * near).sqrt()),
+                _ => (1.0 + 0.37 * (i % 7) as f64, 0.6 + 0.29 * (i % 5) as f64),
+            };
             i += 1;
             let lv = [
                 l[0] * sl,

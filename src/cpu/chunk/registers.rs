@@ -225,30 +225,13 @@ fn run_registers<S: RegisterIo, const D: u8, const G: u8, const F: u8, const Q: 
         let r = |x| Reg::new(simd, x);
         let (la, va) = ([r(ax), r(ay), r(az)], [r(au), r(av), r(aw)]);
         let (lb, vb) = ([r(bx), r(by), r(bz)], [r(bu), r(bv), r(bw)]);
-        // Each register's flags leave its registers as bits after the first stage.
-        let sa = register::local_dgk::<_, D, G, F>(p, la, va);
-        let fa = sa.flags();
-        let sb = register::local_dgk::<_, D, G, F>(p, lb, vb);
-        let fb = sb.flags();
-        // The conductor's polynomial, on AVX-512 through an opaque reference: LLVM
-        // otherwise hoists its 45 broadcast coefficients out of the loop and spills them,
-        // which cost more than the metal form's roots save; read each step, they fold
-        // into the FMAs as broadcast operands (`RegisterIo::BROADCAST_OPERANDS`).
-        // Each register's own: one reference for both let LLVM read the coefficients
-        // for the second while it held the first's.
-        let poly = || {
-            if S::BROADCAST_OPERANDS {
-                std::hint::black_box(p.conductor_poly())
-            } else {
-                p.conductor_poly()
-            }
+        // A step whose lanes all have unit-length L and V (every normalised input) takes
+        // the frames' near-unit scales alone, without a branch inside the step.
+        let (lo, hi, bad_a, bad_b, fa, fb) = if register::near_unit_step(la, va, lb, vb) {
+            two_registers::<S, D, G, F, Q, true>(simd, p, (la, va), (lb, vb))
+        } else {
+            two_registers::<S, D, G, F, Q, false>(simd, p, (la, va), (lb, vb))
         };
-        let ([ra, ga, ba], bad_a) = register::local_finish::<_, F, Q>(p, poly(), sa);
-        let ([rb, gb, bb], bad_b) = register::local_finish::<_, F, Q>(p, poly(), sb);
-        let (lo, hi) = (
-            [ra.get(), ga.get(), ba.get()],
-            [rb.get(), gb.get(), bb.get()],
-        );
         let out: &mut [f32] = if n == width {
             &mut w.brdf[j * 3..(j + width) * 3]
         } else {
@@ -261,7 +244,6 @@ fn run_registers<S: RegisterIo, const D: u8, const G: u8, const F: u8, const Q: 
         }
         let valid = u32::MAX >> (32 - n);
         let both = |a: u32, b: u32| (a | (b << half)) & valid;
-        let (bad_a, bad_b) = (simd.bits(bad_a.get()), simd.bits(bad_b.get()));
         let step = FlaggedStep {
             j,
             row0,
@@ -282,6 +264,61 @@ fn run_registers<S: RegisterIo, const D: u8, const G: u8, const F: u8, const Q: 
     later.handle(w, &mut counts, &mut tally);
     (later.elsewhere).finish::<Fused>(w, &mut counts, &mut tally);
     (counts, tally)
+}
+
+/// A step's two registers (`a`, `b`: L and V) through both stages (`NEAR`: every lane's L
+/// and V of unit length, `register::near_unit_step`): their RGB, the bits of their output
+/// tests, and their first stage's flags.
+#[inline(always)]
+#[allow(clippy::type_complexity)]
+fn two_registers<
+    S: RegisterIo,
+    const D: u8,
+    const G: u8,
+    const F: u8,
+    const Q: u8,
+    const NEAR: bool,
+>(
+    simd: S,
+    p: &kernel::Params,
+    a: ([Reg<S>; 3], [Reg<S>; 3]),
+    b: ([Reg<S>; 3], [Reg<S>; 3]),
+) -> (
+    [S::f32s; 3],
+    [S::f32s; 3],
+    u32,
+    u32,
+    register::Flags,
+    register::Flags,
+) {
+    // Each register's flags leave its registers as bits after the first stage.
+    let sa = register::local_dgk::<_, D, G, F, NEAR>(p, a.0, a.1);
+    let fa = sa.flags();
+    let sb = register::local_dgk::<_, D, G, F, NEAR>(p, b.0, b.1);
+    let fb = sb.flags();
+    // The conductor's polynomial, on AVX-512 through an opaque reference: LLVM
+    // otherwise hoists its 45 broadcast coefficients out of the loop and spills them,
+    // which cost more than the metal form's roots save; read each step, they fold
+    // into the FMAs as broadcast operands (`RegisterIo::BROADCAST_OPERANDS`).
+    // Each register's own: one reference for both let LLVM read the coefficients
+    // for the second while it held the first's.
+    let poly = || {
+        if S::BROADCAST_OPERANDS {
+            std::hint::black_box(p.conductor_poly())
+        } else {
+            p.conductor_poly()
+        }
+    };
+    let ([ra, ga, ba], bad_a) = register::local_finish::<_, F, Q>(p, poly(), sa);
+    let ([rb, gb, bb], bad_b) = register::local_finish::<_, F, Q>(p, poly(), sb);
+    (
+        [ra.get(), ga.get(), ba.get()],
+        [rb.get(), gb.get(), bb.get()],
+        simd.bits(bad_a.get()),
+        simd.bits(bad_b.get()),
+        fa,
+        fb,
+    )
 }
 
 /// A register each of x, y, z of rows `at..` of a direction's column (a vector given once,

@@ -269,10 +269,26 @@ fn widen<S: RegisterIo>(x: Reg<S>) -> WideReg<S> {
 
 impl<S: RegisterIo> FrameLanes for Reg<S> {
     #[inline(always)]
-    fn half_parts<A: MulAdd>(l: [Reg<S>; 3], v: [Reg<S>; 3]) -> HalfParts<Reg<S>> {
-        frame::half_parts::<A, WideReg<S>>(
+    fn half_parts<A: MulAdd, const NEAR: bool>(
+        l: [Reg<S>; 3],
+        v: [Reg<S>; 3],
+    ) -> HalfParts<Reg<S>> {
+        // With NEAR the mask is not read (an all-false one of the lanes' kind).
+        let near = if NEAR {
+            l[0].lt(l[0])
+        } else {
+            frame::near_unit_lanes::<A, Reg<S>>(l, v)
+        };
+        frame::half_parts::<A, WideReg<S>, NEAR>(
             [widen(l[0]), widen(l[1]), widen(l[2])],
             [widen(v[0]), widen(v[1]), widen(v[2])],
+            near,
         )
+    }
+
+    #[inline(always)]
+    fn all(m: RegMask<S>) -> bool {
+        let full = u32::MAX >> (32 - S::WIDTH);
+        m.s.bits(m.m) == full
     }
 }
