@@ -6,10 +6,10 @@
 # hides AVX-512, so the counts are the AVX2 path's (or `scalar`'s with VKBRDF_CPU_ISA).
 # Needs valgrind and the cpu_engine_count example:
 #   cargo build --release --example cpu_engine_count
-#   bash benches/cpu_count.sh target/release/examples/cpu_engine_count mitsuba-ggx [columns]
+#   bash benches/cpu_count.sh target/release/examples/cpu_engine_count mitsuba-ggx [columns|planar|rows]
 # (`columns`: the same L and V as (n, 3) columns, N given once, instead of the local form).
 set -euo pipefail
-bin=${1:?usage: cpu_count.sh CPU_ENGINE_COUNT_BINARY SCENARIO [columns]}
+bin=${1:?usage: cpu_count.sh CPU_ENGINE_COUNT_BINARY SCENARIO [columns|planar|rows]}
 scenario=${2:?scenario}
 form=${3:-}
 tuples=65536

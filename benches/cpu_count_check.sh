@@ -17,7 +17,7 @@ while read -r scenario form isa ceiling _; do
     echo "skipped: $scenario $form on $isa (this CPU cannot run it)"
     continue
   fi
-  arg=""; [ "$form" = columns ] && arg=columns
+  arg=""; [ "$form" = local ] || arg=$form
   line=$(VKBRDF_CPU_ISA=$isa bash benches/cpu_count.sh "$bin" "$scenario" $arg)
   count=$(echo "$line" | awk '{print $(NF-3)}')
   if awk -v c="$count" -v m="$ceiling" 'BEGIN { exit !(c > m) }'; then

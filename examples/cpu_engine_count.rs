@@ -11,7 +11,8 @@
 //!
 //! A fourth argument `columns` evaluates the same L and V as two `(n, 3)` columns with N
 //! given once (`ColumnBatch`) instead of the local form; `planar`, the local form held as
-//! six columns (`LocalLayout::Columns`) instead of rows.
+//! six columns (`LocalLayout::Columns`) instead of rows; `rows`, the scenario's 10-column
+//! rows (N = +z a row: the lane loops).
 //!
 //! For counts by source line, build with `--profile profiling` (the release profile drops
 //! the line tables) and annotate `target/profiling/examples/cpu_engine_count`'s output
@@ -49,6 +50,12 @@ fn main() {
     };
     // `columns` as a fourth argument: the same L and V as two (n, 3) columns, N given once.
     let columns = args.get(3).is_some_and(|a| a == "columns");
+    // `rows` as a fourth argument: the same tuples as 10-column rows with N = (0, 0, 1),
+    // which the lane loops take (a block at a time, not the register path).
+    let rows = args
+        .get(3)
+        .is_some_and(|a| a == "rows")
+        .then(|| scenarios::batch(&s, n, 1));
     let l: Vec<f32> = (0..n).flat_map(|i| batch.row(i)[..3].to_vec()).collect();
     let v: Vec<f32> = (0..n).flat_map(|i| batch.row(i)[3..].to_vec()).collect();
     let (z, m) = ([0.0f32, 0.0, 1.0], [batch.material() as f32]);
@@ -63,7 +70,11 @@ fn main() {
     let mut engine = CpuEngine::with_isa(1, isa);
     let mut out = Output::default();
     for _ in 0..reps {
-        if columns {
+        if let Some(rows) = &rows {
+            engine
+                .evaluate_into(rows, &s.materials, &Request::default(), &mut out)
+                .expect("evaluates");
+        } else if columns {
             engine
                 .evaluate_columns_into(&cols, &s.materials, &Request::default(), &mut out)
                 .expect("evaluates");

@@ -71,6 +71,18 @@ float inv_length_local32(vec3 x, out float length2) {
     }
     return float(rsqrt64_once(q));
 }
+
+// inv_length_local32 of an input direction (L or V), whose squared length is near 1
+// when it was normalised: rsqrt64_input's cubic there, within the same u (1 + 1e-6).
+float inv_length_input32(vec3 x, out float length2) {
+    dvec3 d = dvec3(x);
+    double q = dot(d, d);
+    length2 = float(q);
+    if (!(q >= 1e-20 && q <= 1e20)) {
+        return 0.0;
+    }
+    return float(rsqrt64_input(q));
+}
 #else
 // x.x as a pair (hi, lo) to ~2^-36 relative, without f64: each square exact as three
 // floats through Veltkamp's split (xh^2, 2 xh xl, xl^2, each product of 12-bit halves
@@ -104,6 +116,11 @@ float inv_length_local32(vec3 x, out float length2) {
     precise float y1 = y + y * (0.5 * r);
     return y1;
 }
+
+// Without f64 the inputs take the same float-float scale as any vector.
+float inv_length_input32(vec3 x, out float length2) {
+    return inv_length_local32(x, length2);
+}
 #endif
 
 // Whether material m's lanes may take the local f32 frame: GGX Cook-Torrance, and not the
@@ -120,7 +137,7 @@ bool local32_material(GpuMaterial m) {
 // |n x h|^2 within 6u, c within u (5 + 1/c) of the exact ones, beyond the turn.
 uint frame_scalars_local32(Row r, GpuMaterial m, inout Frame f) {
     float ql, qv, qh;
-    vec3 l = r.l * inv_length_local32(r.l, ql), v = r.v * inv_length_local32(r.v, qv);
+    vec3 l = r.l * inv_length_input32(r.l, ql), v = r.v * inv_length_input32(r.v, qv);
     // `>=` is false for NaN: no such lane passes.
     if (!(l.z >= LOCAL32_MIN_COS && v.z >= LOCAL32_MIN_COS)) {
         return STATUS_UNCERTIFIED;

@@ -42,7 +42,7 @@ uint frame_scalars_local_h64(Row r, GpuMaterial m, inout Frame f) {
     if (!(ql >= 1e-20 && ql <= 1e20 && qv >= 1e-20 && qv <= 1e20)) {
         return STATUS_UNCERTIFIED;
     }
-    double sl = rsqrt64_once(ql), sv = rsqrt64_once(qv);
+    double sl = rsqrt64_input(ql), sv = rsqrt64_input(qv);
     vec3 l = r.l * float(sl), v = r.v * float(sv);
     if (!(l.z >= LOCAL32_MIN_COS && v.z >= LOCAL32_MIN_COS)) {
         return STATUS_UNCERTIFIED;

@@ -48,6 +48,20 @@ double rsqrt64_once(double q) {
     double y = double(inversesqrt(float(q)));
     return y * (1.5 - 0.5 * q * y * y);
 }
+
+// rsqrt64_once for the squared length q of an input direction, which is within 2^-12 of 1
+// whenever the input was normalised (in f32: within a few u): there the Taylor cubic in
+// a = q - 1 (exact, Sterbenz), 1 - a/2 + 3a^2/8 - 5a^3/16, whose truncation 35a^4/128 is
+// below 1e-15 — no inversesqrt (a root and a division on llvmpipe), no conversion; any
+// other q, rsqrt64_once. A subgroup whose lanes are all near unit skips the other side
+// (the CPU engine's near-unit scales, src/cpu/frame.rs).
+double rsqrt64_input(double q) {
+    double a = q - 1.0;
+    if (abs(a) <= 1.0 / 4096.0) {
+        return 1.0 + a * (-0.5 + a * (0.375 - 0.3125 * a));
+    }
+    return rsqrt64_once(q);
+}
 #endif
 
 // ---------------------------------------------------------------- finiteness and normalise

@@ -50,9 +50,13 @@ pub(crate) fn apart<S: pulp::Simd, R>(simd: S, lanes: impl FnOnce() -> R) -> R {
 
 /// `body` for each block `i` of a run and its outputs `o`, as one function apart
 /// ([`apart`]): the call is paid once a run.
+///
+/// The closure is `inline(always)`: left out of line, it is compiled outside the
+/// instruction set's features, and every FMA in it becomes a `fmaf` call (a change that
+/// grew `microfacet_block` once made Beckmann's rows 15× slower so).
 macro_rules! each_block {
     ($simd:expr, $inp:expr, $out:expr, |$i:ident, $o:ident| $body:expr) => {
-        apart($simd, || {
+        apart($simd, #[inline(always)] || {
             for ($i, $o) in $inp.iter().zip($out.iter_mut()) {
                 $body;
             }

@@ -498,8 +498,13 @@ const NEAR_UNIT: f32 = 1.0 / 4096.0;
 /// scales ([`rsqrt_near_unit`], [`rsqrt64_near_unit`]).
 #[inline(always)]
 pub(super) fn near_unit_lanes<A: MulAdd, T: Real>(l: [T; 3], v: [T; 3]) -> T::Mask {
-    let sq = |a: [T; 3]| A::mul_add(a[2], a[2], A::mul_add(a[0], a[0], a[1] * a[1]));
-    near_unit(sq(l)) & near_unit(sq(v))
+    near_unit(length2::<A, T>(l)) & near_unit(length2::<A, T>(v))
+}
+
+/// `|a|²` in f32 as [`frame_local32`] forms it: `a₂² + (a₀² + a₁²)`.
+#[inline(always)]
+fn length2<A: MulAdd, T: Real>(a: [T; 3]) -> T {
+    A::mul_add(a[2], a[2], A::mul_add(a[0], a[0], a[1] * a[1]))
 }
 
 /// Whether an f32 squared length `q` is within [`NEAR_UNIT`] of 1 (`1 − q` is exact there,

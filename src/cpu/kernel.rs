@@ -342,10 +342,13 @@ pub fn microfacet_block<A: MulAdd, const D: u8, const G: u8, const F: u8, const 
         let mode = if !local_d || !any(&z) || p.general_frame_only {
             FRAME_GENERAL
         } else if !z.contains(&false) {
-            let near: [bool; LANES] = std::array::from_fn(|k| {
+            // A loop, not `array::from_fn`'s closure: LLVM left that out of line, outside
+            // the instruction set's features, and every FMA in it became a `fmaf` call.
+            let mut near = [false; LANES];
+            for (k, near) in near.iter_mut().enumerate() {
                 let x = lane_inputs(inp, k);
-                near_unit_lanes::<A, f32>([x[0], x[1], x[2]], [x[3], x[4], x[5]])
-            });
+                *near = near_unit_lanes::<A, f32>([x[0], x[1], x[2]], [x[3], x[4], x[5]]);
+            }
             if near.contains(&false) {
                 FRAME_LOCAL
             } else {
