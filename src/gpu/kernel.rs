@@ -107,6 +107,19 @@ fn target(physical: &PhysicalInfo) -> shaderc::EnvVersion {
     }
 }
 
+/// Whether the kernel numbers its rows by subgroup (`ROW_FROM_SUBGROUP` in eval.comp): on a
+/// CPU device (lavapipe), whose subgroups are full SIMD loops of `subgroup_size` lanes that
+/// divide the workgroup, so that `gl_SubgroupID · gl_SubgroupSize + gl_SubgroupInvocationID`
+/// numbers the workgroup's invocations once each. llvmpipe forms `gl_GlobalInvocationID`
+/// from a remainder a lane (eight integer divisions a SIMD loop); GPUs keep it, which the
+/// specification defines without any assumption about their subgroups.
+fn row_from_subgroup(p: &PhysicalInfo, subgroups: bool) -> bool {
+    subgroups
+        && p.properties.device_type == vk::PhysicalDeviceType::CPU
+        && p.subgroup_size
+            .is_some_and(|s| s > 0 && WORKGROUP_SIZE % s == 0)
+}
+
 /// The macros of the kernel for `features`: every feature name, every code and binding,
 /// and `USE_SUBGROUP_ARITHMETIC` when the counts can be reduced across a subgroup.
 pub fn kernel_defines(features: FeatureSet, subgroup_arithmetic: bool) -> Vec<(String, String)> {
@@ -392,6 +405,9 @@ impl Kernels {
         let mut defines = kernel_defines(features, arithmetic);
         if p.shader_float64 {
             defines.push(("HAS_FLOAT64".to_string(), "1".to_string()));
+        }
+        if row_from_subgroup(p, arithmetic) {
+            defines.push(("ROW_FROM_SUBGROUP".to_string(), "1".to_string()));
         }
         defines.extend(self.extra_defines.iter().cloned());
         SpirvSource {
