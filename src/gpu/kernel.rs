@@ -117,7 +117,7 @@ fn row_from_subgroup(p: &PhysicalInfo, subgroups: bool) -> bool {
     subgroups
         && p.properties.device_type == vk::PhysicalDeviceType::CPU
         && p.subgroup_size
-            .is_some_and(|s| s > 0 && WORKGROUP_SIZE % s == 0)
+            .is_some_and(|s| s > 0 && WORKGROUP_SIZE.is_multiple_of(s))
 }
 
 /// The macros of the kernel for `features`: every feature name, every code and binding,
