@@ -394,7 +394,7 @@ fn side2_wide<A: MulAdd, W: Wide>(a: [W; 3]) -> W {
 /// sums of squares of components, as in [`frame`] — which forms l, v and h in f64 to make
 /// that turn `u·√3/2` whatever c, at ~25 instructions an evaluation more (AVX2). The
 /// scales are [`rsqrt_near_unit`]'s where a squared length is within [`NEAR_UNIT`] of 1
-/// (within 2u: `|x|²`'s 1.5u halved, and the quadratic's last rounding), else [`rsqrt`]'s.
+/// (within 2.5u: `|x|²`'s γ₃ ≈ 3u halved, and the quadratic's last rounding), else [`rsqrt`]'s.
 #[inline(always)]
 pub(super) fn frame_local32<A: MulAdd, T: Real, const NEAR: bool>(
     l: [T; 3],
@@ -515,9 +515,9 @@ fn near_unit<T: Real>(q: T) -> T::Mask {
 }
 
 /// `1/√q` in f32 for q = 1 + a within [`NEAR_UNIT`] of 1: `1 − a/2 + 3a²/8` by Horner, a
-/// exact, the quadratic's truncation ≤ 5|a|³/16 < 5e-12 and its last rounding u/2 — within
-/// `u/2` of the exact `1/√q` where [`rsqrt`] (a root and a division) is within ~u, without
-/// the divider.
+/// exact, the quadratic's truncation ≤ 5|a|³/16 < 5e-12 and its last rounding (u = 2⁻²⁴,
+/// the inner one is 2⁻¹² smaller) — within about u of the exact `1/√q` where [`rsqrt`] (a
+/// root and a division) is within ~2u, without the divider.
 #[inline(always)]
 fn rsqrt_near_unit<A: MulAdd, T: Real>(q: T) -> T {
     let a = q - q.splat_as(1.0);
