@@ -61,27 +61,16 @@ void local_frame_cosines(vec3 l, vec3 v, inout Frame f) {
 // float32's inversesqrt (within 2 ulp, Vulkan's precision table, plus the argument's
 // rounding: e <= 5u) and one Newton step in f64 (1.5 e^2 < 2e-13). Outside
 // [1e-20, 1e20], 0: the cosine tests then send the lane to the f64 frame. q rounded once
-// is returned in length2.
-float inv_length_local32(vec3 x, out float length2) {
+// is returned in length2. `direction`: x is an input direction (L or V), whose squared length
+// is near 1 when it was normalised: rsqrt64_input's cubic there, within the same bound.
+float inv_length_local32(vec3 x, bool direction, out float length2) {
     dvec3 d = dvec3(x);
     double q = dot(d, d);
     length2 = float(q);
     if (!(q >= 1e-20 && q <= 1e20)) {
         return 0.0;
     }
-    return float(rsqrt64_once(q));
-}
-
-// inv_length_local32 of an input direction (L or V), whose squared length is near 1
-// when it was normalised: rsqrt64_input's cubic there, within the same u (1 + 1e-6).
-float inv_length_input32(vec3 x, out float length2) {
-    dvec3 d = dvec3(x);
-    double q = dot(d, d);
-    length2 = float(q);
-    if (!(q >= 1e-20 && q <= 1e20)) {
-        return 0.0;
-    }
-    return float(rsqrt64_input(q));
+    return float(direction ? rsqrt64_input(q) : rsqrt64_once(q));
 }
 #else
 // x.x as a pair (hi, lo) to ~2^-36 relative, without f64: each square exact as three
@@ -99,12 +88,13 @@ vec2 length2_local32(vec3 x) {
     return fast_two_sum(t.x, lo);
 }
 
-// inv_length_local32 of the f64 branch without f64: float32's inversesqrt (e <= 5u) and
-// one Newton step y (1 + r/2) whose residual r = 1 - q y^2 is formed from the exact pair
+// inv_length_local32 of the f64 branch without f64 (inputs or not, the same float-float
+// scale): float32's inversesqrt (e <= 5u) and one Newton step y (1 + r/2) whose
+// residual r = 1 - q y^2 is formed from the exact pair
 // y^2 and the pair q (1 - t.x is exact, t.x being within 1e-5 of 1); the step's last
 // addition is the one rounding left: within u (1 + 1e-6). q's high part (within u) is
 // returned in length2.
-float inv_length_local32(vec3 x, out float length2) {
+float inv_length_local32(vec3 x, bool direction, out float length2) {
     vec2 q = length2_local32(x);
     length2 = q.x;
     if (!(q.x >= 1e-20 && q.x <= 1e20)) {
@@ -115,11 +105,6 @@ float inv_length_local32(vec3 x, out float length2) {
     precise float r = (1.0 - t.x) - t.y;
     precise float y1 = y + y * (0.5 * r);
     return y1;
-}
-
-// Without f64 the inputs take the same float-float scale as any vector.
-float inv_length_input32(vec3 x, out float length2) {
-    return inv_length_local32(x, length2);
 }
 #endif
 
@@ -137,13 +122,13 @@ bool local32_material(GpuMaterial m) {
 // |n x h|^2 within 6u, c within u (5 + 1/c) of the exact ones, beyond the turn.
 uint frame_scalars_local32(Row r, GpuMaterial m, inout Frame f) {
     float ql, qv, qh;
-    vec3 l = r.l * inv_length_input32(r.l, ql), v = r.v * inv_length_input32(r.v, qv);
+    vec3 l = r.l * inv_length_local32(r.l, true, ql), v = r.v * inv_length_local32(r.v, true, qv);
     // `>=` is false for NaN: no such lane passes.
     if (!(l.z >= LOCAL32_MIN_COS && v.z >= LOCAL32_MIN_COS)) {
         return STATUS_UNCERTIFIED;
     }
     vec3 h = l + v;
-    float inv_len = inv_length_local32(h, qh);
+    float inv_len = inv_length_local32(h, false, qh);
     f.cos_h = h.z * inv_len;
     f.sin2_h = dot(h.xy, h.xy) * (inv_len * inv_len);
     f.c = 0.5 * (qh * inv_len);

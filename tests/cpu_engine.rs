@@ -4,6 +4,7 @@
 
 mod common;
 
+use common::materials;
 use common::mixed::{mixed_batch, uniform};
 use vkbrdf::backend::{Backend, Request};
 use vkbrdf::batch::{memory_source, Batch};
@@ -11,12 +12,8 @@ use vkbrdf::cancel::Cancel;
 use vkbrdf::check::{self, CheckOptions};
 use vkbrdf::cpu::plan::Plan;
 use vkbrdf::cpu::CpuEngine;
-use vkbrdf::material::{parse_materials, Material};
+use vkbrdf::material::Material;
 use vkbrdf::reference::CpuReference;
-
-fn materials(toml: &str) -> Vec<Material> {
-    parse_materials(toml, "test").expect("materials parse")
-}
 
 #[test]
 fn every_combination_matches_the_reference_on_every_instruction_set() {

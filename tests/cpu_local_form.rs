@@ -4,16 +4,12 @@
 
 mod common;
 
+use common::materials;
 use common::mixed::mixed_batch;
 use vkbrdf::backend::{Backend, Request};
 use vkbrdf::batch::{memory_source, Batch};
 use vkbrdf::cpu::CpuEngine;
-use vkbrdf::material::{parse_materials, Material};
 use vkbrdf::reference::CpuReference;
-
-fn materials(toml: &str) -> Vec<Material> {
-    parse_materials(toml, "test").expect("materials parse")
-}
 
 // ---------------------------------------------------------------------------------------
 // The local-frame form: `Lx Ly Lz Vx Vy Vz`, N = +z, one material.

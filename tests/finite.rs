@@ -4,14 +4,12 @@
 
 mod common;
 
+use common::materials;
+
 use std::f64::consts::PI;
 use vkbrdf::backend::{Request, TERM_COLUMNS};
 use vkbrdf::batch::{memory_source, Batch};
-use vkbrdf::material::{parse_materials, Material};
-
-fn materials(toml: &str) -> Vec<Material> {
-    parse_materials(toml, "test").expect("legal material")
-}
+use vkbrdf::material::parse_materials;
 
 /// Rows `L V N material` (10 columns).
 fn batch(rows: &[[f32; 10]], materials: usize) -> Batch<'static> {

@@ -206,25 +206,24 @@ struct LocalParts<T: Real> {
 /// Lanes whose [`frame_local_h64`] can be formed: one f32 (its f64 part in one f64), or a
 /// register (`cpu::register`, its f64 part half a register at a time).
 pub(super) trait FrameLanes: Real {
-    /// [`half_parts`] of these lanes (`NEAR`: every lane's L and V are near unit length,
-    /// [`near_unit_lanes`]).
-    fn half_parts<A: MulAdd, const NEAR: bool>(l: [Self; 3], v: [Self; 3]) -> HalfParts<Self>;
-
-    /// Whether every lane of `m` is set.
-    fn all(m: Self::Mask) -> bool;
+    /// [`half_parts`] of these lanes, `near` their [`near_unit_lanes`] (not read with
+    /// `NEAR`: every lane is near).
+    fn half_parts<A: MulAdd, const NEAR: bool>(
+        l: [Self; 3],
+        v: [Self; 3],
+        near: Self::Mask,
+    ) -> HalfParts<Self>;
 }
 
 impl FrameLanes for f32 {
     #[inline(always)]
-    fn half_parts<A: MulAdd, const NEAR: bool>(l: [f32; 3], v: [f32; 3]) -> HalfParts<f32> {
-        let near = NEAR || near_unit_lanes::<A, f32>(l, v);
+    fn half_parts<A: MulAdd, const NEAR: bool>(
+        l: [f32; 3],
+        v: [f32; 3],
+        near: bool,
+    ) -> HalfParts<f32> {
         let (l, v) = (l.map(f64::from), v.map(f64::from));
         half_parts::<A, f64, NEAR>(l, v, near)
-    }
-
-    #[inline(always)]
-    fn all(m: bool) -> bool {
-        m
     }
 }
 
@@ -243,7 +242,8 @@ pub(super) fn frame_local_h64<A: MulAdd, T: FrameLanes, const NEAR: bool>(
     l: [T; 3],
     v: [T; 3],
 ) -> Frame<T> {
-    let w = T::half_parts::<A, NEAR>(l, v);
+    // With NEAR the mask is not read, and the compiler drops its arithmetic.
+    let w = T::half_parts::<A, NEAR>(l, v, near_unit_lanes::<A, T>(l, v));
     let (lx, ly, lz) = (l[0] * w.il, l[1] * w.il, l[2] * w.il);
     let (vx, vy, vz) = (v[0] * w.iv, v[1] * w.iv, v[2] * w.iv);
     local_frame_of(LocalParts {
@@ -402,10 +402,8 @@ pub(super) fn frame_local32<A: MulAdd, T: Real, const NEAR: bool>(
 ) -> Frame<T> {
     let [lx, ly, lz] = l;
     let [vx, vy, vz] = v;
-    let (ll, vv) = (
-        A::mul_add(lz, lz, A::mul_add(lx, lx, ly * ly)),
-        A::mul_add(vz, vz, A::mul_add(vx, vx, vy * vy)),
-    );
+    // The same squared lengths as `near_unit_lanes` tests.
+    let (ll, vv) = (length2::<A, T>(l), length2::<A, T>(v));
     // Each value as soon as its operands are there, so that a register path holds few at
     // once (the lane loops' bits do not depend on the order).
     let lengths_ok = length2_ok(ll) & length2_ok(vv);
@@ -413,7 +411,8 @@ pub(super) fn frame_local32<A: MulAdd, T: Real, const NEAR: bool>(
     let (il, iv) = if NEAR {
         (il, iv)
     } else {
-        // Each lane's own choice, whatever its neighbours' (the same bits on every path).
+        // Each lane's own choice, whatever its neighbours' (the same bits on every path):
+        // `near_unit_lanes` on the lengths already formed.
         let near = near_unit(ll) & near_unit(vv);
         (
             T::select(near, il, rsqrt(ll)),

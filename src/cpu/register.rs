@@ -71,7 +71,7 @@ pub(super) fn serves(
 /// registers' frames. Together the stages give the BRDF's channels and which lanes they
 /// are not for ([`Flags`], [`Flags::rescue`]), as `kernel::microfacet_block` decides for the same lanes.
 #[inline(always)]
-pub(super) fn ggx_local_dgk<T: FrameLanes, const G: u8, const F: u8, const NEAR: bool>(
+pub(super) fn ggx_local_dgk<T: Real, const G: u8, const F: u8, const NEAR: bool>(
     p: &Params,
     l: [T; 3],
     v: [T; 3],
@@ -180,8 +180,7 @@ pub(super) fn near_unit_step<S: RegisterIo>(
     lb: [Reg<S>; 3],
     vb: [Reg<S>; 3],
 ) -> bool {
-    let m = near_unit_lanes::<Fused, _>(la, va) & near_unit_lanes::<Fused, _>(lb, vb);
-    <Reg<S> as FrameLanes>::all(m)
+    (near_unit_lanes::<Fused, _>(la, va) & near_unit_lanes::<Fused, _>(lb, vb)).all()
 }
 
 /// What [`ggx_local_dgk`] and [`beckmann_local_dgk`] hand to [`local_finish`].

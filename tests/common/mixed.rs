@@ -1,12 +1,9 @@
 //! A batch over several materials in an interleaved order, with invalid and below-horizon
 //! rows, and the seeded values it is made of (the CPU engine's tests).
 
+use super::materials;
 use vkbrdf::batch::{memory_source, Batch};
-use vkbrdf::material::{parse_materials, Material};
-
-fn materials(toml: &str) -> Vec<Material> {
-    parse_materials(toml, "test").expect("materials parse")
-}
+use vkbrdf::material::Material;
 
 /// Seeded values uniform in [−1, 1) (a 64-bit LCG's top 24 bits).
 pub fn uniform(seed: u64) -> impl FnMut() -> f32 {

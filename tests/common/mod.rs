@@ -12,7 +12,13 @@ pub mod strategies;
 use std::process::{Command, Output};
 use vkbrdf::backend::Backend;
 use vkbrdf::gpu::{DeviceSelector, VulkanBackend, VulkanOptions};
+use vkbrdf::material::{parse_materials, Material};
 use vkbrdf::reference::CpuReference;
+
+/// The materials of a test's TOML text (which must parse).
+pub fn materials(toml: &str) -> Vec<Material> {
+    parse_materials(toml, "test").expect("test materials parse")
+}
 
 /// The Vulkan backend with validation on, or `None` (with a loud message) when no device
 /// exists. With `VKBRDF_REQUIRE_VULKAN=1` (CI) a missing device panics: Vulkan tests never

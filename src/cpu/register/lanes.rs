@@ -272,23 +272,20 @@ impl<S: RegisterIo> FrameLanes for Reg<S> {
     fn half_parts<A: MulAdd, const NEAR: bool>(
         l: [Reg<S>; 3],
         v: [Reg<S>; 3],
+        near: RegMask<S>,
     ) -> HalfParts<Reg<S>> {
-        // With NEAR the mask is not read (an all-false one of the lanes' kind).
-        let near = if NEAR {
-            l[0].lt(l[0])
-        } else {
-            frame::near_unit_lanes::<A, Reg<S>>(l, v)
-        };
         frame::half_parts::<A, WideReg<S>, NEAR>(
             [widen(l[0]), widen(l[1]), widen(l[2])],
             [widen(v[0]), widen(v[1]), widen(v[2])],
             near,
         )
     }
+}
 
+impl<S: RegisterIo> RegMask<S> {
+    /// Whether every lane is set.
     #[inline(always)]
-    fn all(m: RegMask<S>) -> bool {
-        let full = u32::MAX >> (32 - S::WIDTH);
-        m.s.bits(m.m) == full
+    pub(crate) fn all(self) -> bool {
+        self.s.bits(self.m) == u32::MAX >> (32 - S::WIDTH)
     }
 }
