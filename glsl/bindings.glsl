@@ -9,10 +9,11 @@
 #include "layout.glsl"
 
 // Rows `Lx Ly Lz Vx Vy Vz Nx Ny Nz material [Tx Ty Tz]` (src/batch.rs), row-major f32,
-// read as RGBA32F texels of a uniform texel buffer over the same bytes (the storage-buffer
-// binding BINDING_TUPLES is not read by the kernel). On lavapipe a texelFetch of 4 floats
-// costs about what one scalar storage-buffer load does (bounds check and address per lane),
-// so 3 fetches instead of 10 loads per row (measured: src/gpu/mod.rs, "Input").
+// read with tangents (13 columns) as RGBA32F texels of a uniform texel buffer over the
+// same bytes, whose 4-word fetches cost on lavapipe about what one scalar storage-buffer
+// load does (bounds check and address per lane): 4 fetches instead of 13 loads per row
+// (measured: src/gpu/mod.rs, "Input"); without (10 columns) as five word pairs of the
+// storage buffer BINDING_TUPLES (input.glsl).
 // textureBuffer, not samplerBuffer: a sampled image of Dim Buffer draws a SPIR-V warning
 // from the validation layer, and texelFetch needs no sampler.
 // Read as RGBA32UI, the bits themselves: see input_vector.

@@ -31,13 +31,6 @@ struct Row {
 // of isotropic materials to the local frames.
 const uvec3 LOCAL_N_BITS = uvec3(0u, 0u, 0x3f800000u);
 
-// The 4 words at offset `off` (0..3) of the 8 words a, b.
-uvec4 window4(uvec4 a, uvec4 b, uint off) {
-    return off == 0u ? a
-        : off == 1u ? uvec4(a.yzw, b.x)
-        : off == 2u ? uvec4(a.zw, b.xy)
-        : uvec4(a.w, b.xyz);
-}
 
 // An input vector from its f32 bits, for the f32 arithmetic. GPUs flush f32 subnormals to
 // zero in arithmetic (NVIDIA's compute shaders do; lavapipe does not): without this, a
@@ -65,10 +58,19 @@ vec3 input_vector(uvec3 b) {
     return r;
 }
 
-// Row `row` from the texels that hold it. It starts at float row * COLUMNS, i.e. at float
-// `off` of texel `first`; its COLUMNS floats end within texel first + 2 (10 columns) or
-// first + 3 (13), and each texel fetched holds at least one float of the row, so no fetch
-// leaves the buffer (the host rounds it up to whole texels).
+#if defined(HAS_TANGENTS)
+// The 4 words at offset `off` (0..3) of the 8 words a, b.
+uvec4 window4(uvec4 a, uvec4 b, uint off) {
+    return off == 0u ? a
+        : off == 1u ? uvec4(a.yzw, b.x)
+        : off == 2u ? uvec4(a.zw, b.xy)
+        : uvec4(a.w, b.xyz);
+}
+
+// Row `row` of 13 columns from the texels that hold it. It starts at float row * 13,
+// i.e. at float `off` of texel `first`; its floats end within texel first + 3, and each
+// texel fetched holds at least one float of the row, so no fetch leaves the buffer (the
+// host rounds it up to whole texels).
 Row load_row(uint row) {
     uint start = row * COLUMNS;
     int first = int(start >> 2u);
@@ -76,11 +78,7 @@ Row load_row(uint row) {
     uvec4 a = texelFetch(tuple_texels, first);
     uvec4 b = texelFetch(tuple_texels, first + 1);
     uvec4 c = texelFetch(tuple_texels, first + 2);
-#if defined(HAS_TANGENTS)
     uvec4 d = texelFetch(tuple_texels, first + 3);
-#else
-    uvec4 d = uvec4(0u); // 10 columns end within c (off is 0 or 2)
-#endif
     uvec4 w0 = window4(a, b, off); // Lx Ly Lz Vx
     uvec4 w1 = window4(b, c, off); // Vy Vz Nx Ny
     uvec4 w2 = window4(c, d, off); // Nz material Tx Ty
@@ -89,17 +87,42 @@ Row load_row(uint row) {
     r.v_bits = uvec3(w0.w, w1.xy);
     r.n_bits = uvec3(w1.zw, w2.x);
     r.material = uintBitsToFloat(w2.y);
-#if defined(HAS_TANGENTS)
     r.t_bits = uvec3(w2.zw, window4(d, d, off).x); // Tz = d[off]
-#else
-    r.t_bits = uvec3(0u);
-#endif
     r.l = input_vector(r.l_bits);
     r.v = input_vector(r.v_bits);
     r.n = input_vector(r.n_bits);
     r.t = input_vector(r.t_bits);
     return r;
 }
+#else
+// The rows of 10 columns as word pairs (row i is pairs 5i to 5i + 4: 10 i words is even),
+// over the same bytes as the texels. On lavapipe every load a lane makes from a buffer is
+// a loop over the SIMD lanes with a bounds test each, and a texelFetch a call into the
+// driver's texel function: five pairs (10 words, no window to select) measured faster
+// than three texels (4M tuples, lambert 97 -> 106 M/s as a table kernel and 132 -> 136
+// folded; docs/VULKAN.md); 13-column rows, whose start is not always even, keep the texels.
+layout(std430, set = 0, binding = BINDING_TUPLES) readonly buffer TuplePairs {
+    uvec2 tuple_pairs[];
+};
+
+// Row `row` of 10 columns: L, V, N and the material index.
+Row load_row(uint row) {
+    uint p = row * 5u;
+    uvec2 p0 = tuple_pairs[p], p1 = tuple_pairs[p + 1u], p2 = tuple_pairs[p + 2u];
+    uvec2 p3 = tuple_pairs[p + 3u], p4 = tuple_pairs[p + 4u];
+    Row r;
+    r.l_bits = uvec3(p0, p1.x);
+    r.v_bits = uvec3(p1.y, p2);
+    r.n_bits = uvec3(p3, p4.x);
+    r.material = uintBitsToFloat(p4.y);
+    r.t_bits = uvec3(0u);
+    r.l = input_vector(r.l_bits);
+    r.v = input_vector(r.v_bits);
+    r.n = input_vector(r.n_bits);
+    r.t = vec3(0.0);
+    return r;
+}
+#endif
 
 #if defined(GENERATE_HALF_DIFF) || defined(GENERATE_IMPORTANCE)
 // The bits of a row made on the device (normal values: no subnormal to keep).

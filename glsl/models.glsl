@@ -9,6 +9,7 @@
 #include "frame_fields.glsl"
 #include "material.glsl"
 #include "terms.glsl"
+#include "conductor_poly.glsl"
 
 // One tuple's result: the BRDF and the term columns D, G, F_rgb, K.
 struct Eval {
@@ -102,22 +103,23 @@ float slope2_h(Frame f, GpuMaterial m) {
 }
 
 #if defined(HAS_G_SMITH) || defined(HAS_G_SMITH_CORRELATED) || defined(HAS_G_SMITH_FAST)
+// m^2 |n x w|^2, anisotropic mx^2 (w.t)^2 + my^2 (w.b)^2: m2_tan2's numerator.
+float m2_sin2(GpuMaterial m, vec2 w_tb, float sin2_w) {
+#if defined(HAS_ANISOTROPIC)
+    if (is_anisotropic(m)) {
+        vec2 m2 = material_roughness2(m);
+        return m2.x * w_tb.x * w_tb.x + m2.y * w_tb.y * w_tb.y;
+    }
+#endif
+    return material_roughness2(m).x * sin2_w;
+}
+
 // m^2 tan^2(w) = m^2 |n x w|^2 / (n.w)^2, anisotropic (mx^2 (w.t)^2 + my^2 (w.b)^2) / (n.w)^2
 // (FORMULAS.md §3): the argument of Smith's Lambda and of the smith-fast fit. w.t, w.b and
 // |n x w|^2 come from make_frame (in f64 where the device has it: with roughness ratios
 // up to 1e4 the f32 tangent frame's error put G 3e-4 off at grazing, stress corpus).
 float m2_tan2(GpuMaterial m, vec2 w_tb, float sin2_w, float cos_w) {
-    float num;
-#if defined(HAS_ANISOTROPIC)
-    if (is_anisotropic(m)) {
-        vec2 m2 = material_roughness2(m);
-        num = m2.x * w_tb.x * w_tb.x + m2.y * w_tb.y * w_tb.y;
-    } else
-#endif
-    {
-        num = material_roughness2(m).x * sin2_w;
-    }
-    return num / (cos_w * cos_w);
+    return m2_sin2(m, w_tb, sin2_w) / (cos_w * cos_w);
 }
 #endif
 
@@ -248,7 +250,7 @@ double distribution_lambda_f64(GpuMaterial m, vec2 w_tb, float sin2_w, double co
 #endif
     }
 #if defined(HAS_G_SMITH) || defined(HAS_G_SMITH_CORRELATED) || defined(HAS_G_SMITH_FAST)
-    double q2 = double(m2_tan2(m, w_tb, sin2_w, 1.0)) / (cos_w * cos_w);
+    double q2 = double(m2_sin2(m, w_tb, sin2_w)) / (cos_w * cos_w);
 #else
     double q2 = 0.0;
 #endif
@@ -270,7 +272,7 @@ double fast_g1_f64(GpuMaterial m, vec2 w_tb, float sin2_w, double cos_w) {
     if (cos_w >= TINY_COS) {
         return double(smith_fast_g1(m2_tan2(m, w_tb, sin2_w, float(cos_w))));
     }
-    return smith_fast_g1_f64(cos_w / sqrt(double(m2_tan2(m, w_tb, sin2_w, 1.0)))); // a < 1.6
+    return smith_fast_g1_f64(cos_w / sqrt(double(m2_sin2(m, w_tb, sin2_w)))); // a < 1.6
 #else
     return 1.0;
 #endif
@@ -362,7 +364,7 @@ void microfacet_gk_f64(Frame f, GpuMaterial m, uint convention, out double g, ou
 // float32 (the distribution's *_one_plus_lambda_xf, from sqrt(q2) > 1e8).
 vec2 one_plus_lambda_tiny_xf(GpuMaterial m, vec2 w_tb, float sin2_w, vec2 cos_w) {
 #if defined(HAS_G_SMITH) || defined(HAS_G_SMITH_CORRELATED) || defined(HAS_G_SMITH_FAST)
-    vec2 sq = xf_div(xf(sqrt(m2_tan2(m, w_tb, sin2_w, 1.0))), cos_w); // sqrt(q2)
+    vec2 sq = xf_div(xf(sqrt(m2_sin2(m, w_tb, sin2_w))), cos_w); // sqrt(q2)
 #else
     vec2 sq = vec2(0.0);
 #endif
@@ -397,7 +399,7 @@ vec2 fast_g1_xf(GpuMaterial m, vec2 w_tb, float sin2_w, float cos_w, vec2 cos_w_
     if (cos_w >= TINY_COS) {
         return xf(smith_fast_g1(m2_tan2(m, w_tb, sin2_w, cos_w)));
     }
-    return smith_fast_g1_xf(xf_div(cos_w_xf, xf(sqrt(m2_tan2(m, w_tb, sin2_w, 1.0)))));
+    return smith_fast_g1_xf(xf_div(cos_w_xf, xf(sqrt(m2_sin2(m, w_tb, sin2_w)))));
 #else
     return xf(1.0);
 #endif
@@ -500,6 +502,13 @@ vec3 frame_conductor_f(Frame f, GpuMaterial m) {
     }
 #endif
 #if !defined(NO_METAL_FORM)
+    // A folded conductor with a fitted polynomial (a specialization constant: without it
+    // the branch is compiled out); lanes below its interval take the metal form.
+#if !defined(NO_F_POLY)
+    if (MATERIAL_F_POLY && f.c >= CONDUCTOR_POLY_MIN_C) {
+        return conductor_f_poly(f.c);
+    }
+#endif
     // A material-uniform branch: a batch's lanes of one material all take the same side.
     vec3 fr;
     if (material_metal_form(m)) {
@@ -549,12 +558,27 @@ Eval model_cook_torrance(Frame f, GpuMaterial m) {
 #endif
 #if defined(HAS_G_SMITH)
     case GEOM_SMITH:
+#if defined(HAS_LAMBDA_GGX)
+        if (material_distribution(m) == DIST_GGX) {
+            e.g = smith_g_ggx(f.cos_o, ggx_lambda_root(f.cos_o, m2_sin2(m, f.v_tb, f.sin2_o)),
+                              f.cos_i, ggx_lambda_root(f.cos_i, m2_sin2(m, f.l_tb, f.sin2_i)));
+            break;
+        }
+#endif
         e.g = smith_g(distribution_lambda(m, m2_tan2(m, f.v_tb, f.sin2_o, f.cos_o)),
                       distribution_lambda(m, m2_tan2(m, f.l_tb, f.sin2_i, f.cos_i)));
         break;
 #endif
 #if defined(HAS_G_SMITH_CORRELATED)
     case GEOM_SMITH_CORRELATED:
+#if defined(HAS_LAMBDA_GGX)
+        if (material_distribution(m) == DIST_GGX) {
+            e.g = smith_correlated_g_ggx(
+                f.cos_o, ggx_lambda_root(f.cos_o, m2_sin2(m, f.v_tb, f.sin2_o)),
+                f.cos_i, ggx_lambda_root(f.cos_i, m2_sin2(m, f.l_tb, f.sin2_i)));
+            break;
+        }
+#endif
         e.g = smith_correlated_g(distribution_lambda(m, m2_tan2(m, f.v_tb, f.sin2_o, f.cos_o)),
                                 distribution_lambda(m, m2_tan2(m, f.l_tb, f.sin2_i, f.cos_i)));
         break;

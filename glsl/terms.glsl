@@ -162,6 +162,15 @@ float ggx_lambda(float q2) {
     float r = sqrt(1.0 + q2);
     return q2 <= 1.0 ? q2 / (2.0 * (1.0 + r)) : 0.5 * (r - 1.0);
 }
+// R = sqrt(cos^2 + m^2 sin^2) of a direction w, given cos = n.w and m2_sin2 = m^2 |n x w|^2
+// (anisotropic: mx^2 (w.t)^2 + my^2 (w.b)^2): GGX's 1 + Lambda = (cos + R)/(2 cos), a sum
+// of positive terms, without Lambda's cancellation at small m^2 tan^2 and without the
+// division tan^2 takes (the CPU lanes' form, src/terms/g/smith.rs g_ratio_ggx). For cos
+// >= TINY_COS (1e-15) cos^2 is a normal float32; below it the f64 or pair forms take G.
+float ggx_lambda_root(float cos_w, float m2_sin2_w) {
+    return sqrt(cos_w * cos_w + m2_sin2_w);
+}
+
 #if defined(HAS_FLOAT64)
 // ggx_lambda in f64 for q2 >= 1e14 (a cosine below TINY_COS), where the subtraction does not
 // cancel.
@@ -266,6 +275,14 @@ vec2 cook_torrance_g_xf(vec2 cos_i, vec2 cos_o, vec2 cos_h, vec2 c) {
 float smith_g(float lambda_o, float lambda_i) {
     return 1.0 / ((1.0 + lambda_o) * (1.0 + lambda_i));
 }
+#if defined(HAS_LAMBDA_GGX)
+// smith_g for GGX from each direction's cosine and root R (ggx_lambda_root):
+// 1/((1 + Lambda_o)(1 + Lambda_i)) = 4 cos_o cos_i / ((cos_o + R_o)(cos_i + R_i)), one
+// division where the Lambda form takes five.
+float smith_g_ggx(float cos_o, float r_o, float cos_i, float r_i) {
+    return (4.0 * cos_o * cos_i) / ((cos_o + r_o) * (cos_i + r_i));
+}
+#endif
 #if defined(HAS_FLOAT64)
 // smith_g in f64.
 double smith_g_f64(double lambda_o, double lambda_i) {
@@ -286,6 +303,13 @@ vec2 smith_g_xf(vec2 one_plus_lambda_o, vec2 one_plus_lambda_i) {
 float smith_correlated_g(float lambda_o, float lambda_i) {
     return 1.0 / (1.0 + lambda_o + lambda_i);
 }
+#if defined(HAS_LAMBDA_GGX)
+// smith_correlated_g for GGX (see smith_g_ggx): 1/(1 + Lambda_o + Lambda_i) =
+// 2 cos_o cos_i / (cos_i R_o + cos_o R_i).
+float smith_correlated_g_ggx(float cos_o, float r_o, float cos_i, float r_i) {
+    return (2.0 * cos_o * cos_i) / (cos_i * r_o + cos_o * r_i);
+}
+#endif
 #if defined(HAS_FLOAT64)
 // smith_correlated_g in f64.
 double smith_correlated_g_f64(double lambda_o, double lambda_i) {

@@ -195,3 +195,67 @@ fn several_rows_an_invocation_evaluate_every_row_once() {
         }
     }
 }
+
+/// A folded conductor with a fitted polynomial takes F from it where c ≥ 0.1 and from the
+/// metal form below (glsl/conductor_poly.glsl): both sides of that threshold, the fitted
+/// interval's ends and normal incidence, at D's peak and on its slopes, with N = +z (the
+/// local frames) and with a tilted N (the general frame), for GGX and Beckmann on the
+/// bench's metal, copper and gold — within the rule and with the reference's counts.
+#[test]
+fn a_folded_conductors_polynomial_is_within_the_rule_at_its_threshold() {
+    let Some(mut gpu) = vulkan_folding(0) else {
+        return;
+    };
+    let metals = [
+        ("[0.2, 0.92, 1.1]", "[3.9, 2.45, 2.14]"),
+        ("[0.27, 0.68, 1.2]", "[3.61, 2.63, 2.3]"),
+        ("[0.18, 0.42, 1.37]", "[3.42, 2.35, 1.77]"),
+    ];
+    let below = f32::from_bits(0.1f32.to_bits() - 1);
+    let above = f32::from_bits(0.1f32.to_bits() + 1);
+    let cs = [
+        0.05, 0.0919, below, 0.1, above, 0.3, 0.546875, 0.9, 0.999, 1.0,
+    ];
+    // N = +z, and N tilted (the rows rotated about the x axis by 0.4 rad).
+    let (s, co) = (0.4f32.sin(), 0.4f32.cos());
+    let tilt = |w: [f32; 3]| [w[0], co * w[1] - s * w[2], s * w[1] + co * w[2]];
+    let mut reference = CpuReference::new();
+    let request = Request { terms: true };
+    for (ior, extinction) in metals {
+        for (dist, geometry, m) in [("ggx", "smith", 0.3), ("beckmann", "smith-fast", 0.1)] {
+            let toml = format!(
+                "[[material]]\nname = \"metal\"\nmodel = \"cook-torrance\"\ndistribution = \"{dist}\"\nroughness = {m}\ngeometry = \"{geometry}\"\nfresnel = \"conductor\"\nior = {ior}\nextinction = {extinction}\n"
+            );
+            let mats = parse_materials(&toml, "test").expect("valid");
+            let mut rows = Vec::new();
+            for &c in &cs {
+                let (cd, sd) = (f64::from(c), (1.0 - f64::from(c) * f64::from(c)).sqrt());
+                for tan_h in [0.0, m, 3.0 * m] {
+                    let th = f64::atan(tan_h);
+                    // h in the xz plane, l and v either side of it along y.
+                    let h = [th.sin(), 0.0, th.cos()];
+                    let l = [cd * h[0], sd, cd * h[2]].map(|x| x as f32);
+                    let v = [cd * h[0], -sd, cd * h[2]].map(|x| x as f32);
+                    for tilted in [false, true] {
+                        let (l, v, n) = if tilted {
+                            (tilt(l), tilt(v), tilt([0.0, 0.0, 1.0]))
+                        } else {
+                            (l, v, [0.0, 0.0, 1.0])
+                        };
+                        rows.extend_from_slice(&[l, v, n].concat());
+                        rows.push(0.0);
+                    }
+                }
+            }
+            let batch = Batch::new(rows, 10, 1, std::path::Path::new("threshold")).expect("valid");
+            let out = gpu.evaluate(&batch, &mats, &request).expect("evaluate");
+            assert!(gpu.last_material_folded());
+            let want = reference
+                .evaluate(&batch, &mats, &request)
+                .expect("reference");
+            let what = format!("{dist}, η = {ior} + {extinction}i");
+            assert_eq!(out.counts, want.counts, "{what}");
+            assert_within_rule(&what, &batch, &mats, &out, &want);
+        }
+    }
+}

@@ -1,5 +1,5 @@
 //! The kernel's f32 Cook–Torrance arithmetic on the bench's Mitsuba paths (GGX D and Smith
-//! G on the local f32 frame; Beckmann D through `exp_acc` and Smith-fast G on the float64
+//! G in root form on the local f32 frame; Beckmann D through `exp_acc` and Smith-fast G on the float64
 //! local frame; the conductor's metal form, the modern K and the product: glsl/terms.glsl,
 //! glsl/math.glsl, glsl/models.glsl) under the precisions the Vulkan specification allows,
 //! not those lavapipe happens to have: `+ − ×` correctly rounded (u = 2⁻²⁴), `x/y` within
@@ -16,6 +16,7 @@ use glam::DVec3;
 use std::cell::Cell;
 use vkbrdf::terms::d::{beckmann, ggx};
 use vkbrdf::terms::f::conductor;
+use vkbrdf::terms::f::conductor::poly::{Polynomial, CENTRE, DEGREE};
 use vkbrdf::terms::g::{smith, smith_fast};
 
 const U: f64 = f32::EPSILON as f64 / 2.0;
@@ -142,28 +143,58 @@ fn conductor_worst_execution(n: f64, k: f64) -> f64 {
     worst
 }
 
-/// `model_cook_torrance`'s f for one channel, step by step as the GLSL takes it.
+/// `model_cook_torrance`'s f for one channel, step by step as the GLSL takes it, with F's
+/// metal form.
 fn kernel_f(x: &Execution, g: &Geometry, mat: &Material, ch: usize) -> f64 {
+    kernel_f_with(x, g, mat, |x| {
+        conductor_f_metal(x, g.c, mat.n[ch], mat.k[ch])
+    })
+}
+
+/// [`kernel_f`] with F's replay `f`.
+fn kernel_f_with(
+    x: &Execution,
+    g: &Geometry,
+    mat: &Material,
+    f: impl Fn(&Execution) -> f64,
+) -> f64 {
     let (inv_m2, m2) = (f32_of(1.0 / (mat.m * mat.m)), f32_of(mat.m * mat.m));
     let norm = f32_of(1.0 / (std::f64::consts::PI * mat.m * mat.m));
     // ggx_d(slope2_h, cos_h, norm)
     let slope2 = x.mul(g.sin2_h, inv_m2);
     let d = x.add(slope2, x.mul(g.cos_h, g.cos_h));
     let dd = x.div(norm, x.mul(d, d));
-    // smith_g(ggx_lambda(m2_tan2(v)), ggx_lambda(m2_tan2(l)))
-    let lambda = |sin2: f64, cos: f64| {
-        let q2 = x.div(x.mul(m2, sin2), x.mul(cos, cos));
-        let r = x.sqrt(x.add(1.0, q2));
-        if q2 <= 1.0 {
-            x.div(q2, 2.0 * x.add(1.0, r))
+    // smith_g_ggx(cos_o, ggx_lambda_root(cos_o, m2_sin2(v)), cos_i, ggx_lambda_root(…))
+    let root = |sin2: f64, cos: f64| x.sqrt(x.add(x.mul(cos, cos), x.mul(m2, sin2)));
+    let (ro, ri) = (root(g.sin2_o, g.cos_o), root(g.sin2_i, g.cos_i));
+    let num = x.mul(4.0 * g.cos_o, g.cos_i);
+    let gg = x.div(num, x.mul(x.add(g.cos_o, ro), x.add(g.cos_i, ri)));
+    product(x, dd, gg, f(x), g.cos_i, g.cos_o)
+}
+
+/// [`kernel_f`] in a folded kernel of a conductor with a fitted polynomial
+/// (glsl/conductor_poly.glsl): F by Horner's rule in `t = c − CENTRE` from the
+/// coefficients as the host rounds them, each step a product and a sum (Vulkan lets an
+/// `fma` round twice), where c ≥ `CONDUCTOR_POLY_MIN_C` (0.1); below, the metal form.
+fn kernel_f_poly(x: &Execution, g: &Geometry, mat: &Material, ch: usize) -> f64 {
+    let poly = Polynomial::fitted(mat.n, mat.k).expect("the metals here have a fit");
+    let f_poly = |x: &Execution| {
+        let b = poly.b[ch].map(f64::from);
+        let t = x.sub(g.c, f64::from(CENTRE));
+        let mut r = b[DEGREE];
+        for i in (0..DEGREE).rev() {
+            r = x.add(x.mul(r, t), b[i]);
+        }
+        r
+    };
+    let f = |x: &Execution| {
+        if g.c >= f64::from(0.1f32) {
+            f_poly(x)
         } else {
-            0.5 * x.sub(r, 1.0)
+            conductor_f_metal(x, g.c, mat.n[ch], mat.k[ch])
         }
     };
-    let (lo, li) = (lambda(g.sin2_o, g.cos_o), lambda(g.sin2_i, g.cos_i));
-    let gg = x.div(1.0, x.mul(x.add(1.0, lo), x.add(1.0, li)));
-    let f = conductor_f_metal(x, g.c, mat.n[ch], mat.k[ch]);
-    product(x, dd, gg, f, g.cos_i, g.cos_o)
+    kernel_f_with(x, g, mat, f)
 }
 
 /// `modern_k`, then `model_cook_torrance`'s (D G) F K and the colour (diffuse 0 plus
@@ -256,6 +287,12 @@ const GGX_LOCAL32: Path = Path {
     min_c: 1.0 / 16.0,
 };
 
+/// [`GGX_LOCAL32`] in a folded kernel whose conductor has a fitted polynomial.
+const GGX_LOCAL32_POLY: Path = Path {
+    kernel: kernel_f_poly,
+    ..GGX_LOCAL32
+};
+
 /// Beckmann's lanes on the float64 local frame, whose values' roundings the replay holds.
 const BECKMANN_F64: Path = Path {
     kernel: kernel_f_beckmann,
@@ -330,6 +367,13 @@ fn fits_the_rule(path: &Path) {
 #[test]
 fn the_kernels_cook_torrance_arithmetic_fits_the_rule_under_vulkans_precisions() {
     fits_the_rule(&GGX_LOCAL32);
+}
+
+/// The same path in a folded kernel, F from the conductor's fitted polynomial
+/// (glsl/conductor_poly.glsl) on the lanes with c ≥ 0.1 and the metal form below.
+#[test]
+fn the_kernels_cook_torrance_arithmetic_with_fs_polynomial_fits_the_rule() {
+    fits_the_rule(&GGX_LOCAL32_POLY);
 }
 
 /// `exp_acc` (glsl/math.glsl) of an f32 `x` in its normal range: Cody–Waite reduction with

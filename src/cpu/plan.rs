@@ -9,9 +9,7 @@ use crate::terms::d::{blinn, charlie, ggx};
 use crate::terms::f::{conductor, dielectric, schlick};
 use crate::terms::g::schlick_smith;
 use crate::terms::{DistributionKind, FresnelKind, Geometry};
-use std::collections::BTreeMap;
 use std::f64::consts::PI;
-use std::sync::Mutex;
 
 /// How a material group is evaluated.
 #[derive(Debug, Clone, Copy)]
@@ -53,32 +51,6 @@ pub enum Plan {
     Measured,
     /// Every tuple through the f64 reference.
     Reference,
-}
-
-/// The conductor's polynomial ([`conductor::poly::Polynomial::fit`], ~30 µs), once a process per
-/// η: the engine makes its plans on every call (every chunk of a stream), and a fitting
-/// run evaluates the same η many times. The cache is cleared when it holds 65,536 fits.
-fn conductor_fit(
-    constants: &conductor::LaneConstants,
-    ior: [f64; 3],
-    extinction: [f64; 3],
-) -> Option<conductor::poly::Polynomial> {
-    type Fits = BTreeMap<[u64; 6], Option<conductor::poly::Polynomial>>;
-    static FITS: Mutex<Fits> = Mutex::new(BTreeMap::new());
-    let key = [ior, extinction].concat();
-    let key: [u64; 6] = std::array::from_fn(|i| key[i].to_bits());
-    // A poisoned lock only means another thread panicked while inserting: the map holds
-    // whole entries either way.
-    if let Some(fit) = FITS.lock().unwrap_or_else(|e| e.into_inner()).get(&key) {
-        return *fit;
-    }
-    let fit = conductor::poly::Polynomial::fit(constants, ior, extinction);
-    let mut fits = FITS.lock().unwrap_or_else(|e| e.into_inner());
-    if fits.len() >= 1 << 16 {
-        fits.clear();
-    }
-    fits.insert(key, fit);
-    fit
 }
 
 /// GGX's test of the local f32 frame (`ggx::local_frame_guard_for_f`) with D's budget
@@ -217,7 +189,7 @@ impl Plan {
         if let (Plan::Microfacet { p, f, .. }, Model::CookTorrance(ct)) = (&mut self, &m.model) {
             if let Fresnel::Conductor { ior, extinction } = ct.fresnel {
                 if isa != Isa::Scalar && p.fast_frame && p.conductor.metal {
-                    p.conductor_poly = conductor_fit(&p.conductor, ior, extinction);
+                    p.conductor_poly = conductor::poly::Polynomial::fitted(ior, extinction);
                     p.ggx_local_guard = ggx_guard(p, *f);
                 }
             }

@@ -357,7 +357,7 @@ impl VulkanBackend {
         self.upload_measured(materials)?;
         let gpu = gpu_materials(materials);
         let pipeline = (
-            self.pipeline_for(features, &gpu, n)?,
+            self.pipeline_for(features, (&gpu, materials), n)?,
             self.rows_per_invocation(),
         );
         self.upload_materials(&gpu)?;

@@ -65,8 +65,9 @@ pub const BINDING_TERMS: u32 = 3;
 /// Descriptor binding of the [`GpuCounts`] of a chunk.
 pub const BINDING_COUNTS: u32 = 4;
 /// Descriptor binding of the tuple input again, as a uniform texel buffer of RGBA32UI texels (the bits, read exactly)
-/// over the same bytes as [`BINDING_TUPLES`] (the kernel reads its rows through it: on
-/// lavapipe `texelFetch` of a vec4 is far cheaper than four scalar storage-buffer loads).
+/// over the same bytes as [`BINDING_TUPLES`] (the table kernels read their rows through it:
+/// on lavapipe `texelFetch` of a vec4 is far cheaper than four scalar storage-buffer loads;
+/// folded kernels read 4-word elements of [`BINDING_TUPLES`] instead, `glsl/input.glsl`).
 pub const BINDING_TUPLE_TEXELS: u32 = 5;
 /// Descriptor binding of a chunk's evaluation order (`BUCKETED` kernels): invocation `i`
 /// evaluates chunk row `order[i]`, so that rows of one material run side by side.

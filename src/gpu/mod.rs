@@ -29,6 +29,7 @@ pub mod devices;
 mod disk_cache;
 mod emulate_ftz;
 mod evaluator;
+mod fold;
 pub mod kernel;
 pub mod layout;
 mod memory;

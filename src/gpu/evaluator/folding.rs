@@ -8,7 +8,9 @@
 use super::VulkanBackend;
 use crate::error::Result;
 use crate::features::FeatureSet;
+use crate::gpu::fold::Fold;
 use crate::gpu::layout::GpuMaterial;
+use crate::material::Material;
 use ash::vk;
 
 impl VulkanBackend {
@@ -38,13 +40,14 @@ impl VulkanBackend {
     pub(super) fn pipeline_for(
         &mut self,
         features: FeatureSet,
-        materials: &[GpuMaterial],
+        (rows, materials): (&[GpuMaterial], &[Material]),
         tuples: usize,
     ) -> Result<vk::Pipeline> {
         self.last_folded = false;
-        if let [material] = materials {
+        if let ([row], [material]) = (rows, materials) {
             if tuples >= self.options.fold_material_min_tuples {
-                if let Some(p) = self.kernels.folded(features, material)? {
+                let fold = Fold::new(row, material);
+                if let Some(p) = self.kernels.folded(features, &fold)? {
                     self.last_folded = true;
                     return Ok(p);
                 }

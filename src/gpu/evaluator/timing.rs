@@ -159,7 +159,7 @@ impl VulkanBackend {
         }
         let features = self.grouping(Self::features_with(batch, materials, request, forced));
         let gpu = gpu_materials(materials);
-        let pipeline = self.pipeline_for(features, &gpu, total)?;
+        let pipeline = self.pipeline_for(features, (&gpu, materials), total)?;
         let per_invocation = self.rows_per_invocation();
         self.upload_materials(&gpu)?;
         let rows = &batch.as_slice()[..n * cols];

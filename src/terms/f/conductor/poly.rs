@@ -15,6 +15,8 @@
 use super::{f, LaneConstants, METAL_FORM_BUDGET};
 use crate::terms::math::MulAdd;
 use crate::terms::real::Real;
+use std::collections::BTreeMap;
+use std::sync::Mutex;
 
 /// The polynomial's degree (15 coefficients a channel).
 pub const DEGREE: usize = 14;
@@ -174,6 +176,30 @@ impl Polynomial {
             out.bound_u = out.bound_u.max(bound_u);
         }
         Some(out)
+    }
+
+    /// [`Polynomial::fit`] of `η = ior + i·extinction` (with its [`LaneConstants`]), once a
+    /// process per η (a fit takes ~30 µs): the CPU engine makes its plans on every call
+    /// (every chunk of a stream), a fitting run evaluates the same η many times, and the
+    /// Vulkan kernel folds the fit into each pipeline of a conductor material. The cache is
+    /// cleared when it holds 65,536 fits.
+    pub fn fitted(ior: [f64; 3], extinction: [f64; 3]) -> Option<Polynomial> {
+        type Fits = BTreeMap<[u64; 6], Option<Polynomial>>;
+        static FITS: Mutex<Fits> = Mutex::new(BTreeMap::new());
+        let key = [ior, extinction].concat();
+        let key: [u64; 6] = std::array::from_fn(|i| key[i].to_bits());
+        // A poisoned lock only means another thread panicked while inserting: the map
+        // holds whole entries either way.
+        if let Some(fit) = FITS.lock().unwrap_or_else(|e| e.into_inner()).get(&key) {
+            return *fit;
+        }
+        let fit = Polynomial::fit(&LaneConstants::new(ior, extinction), ior, extinction);
+        let mut fits = FITS.lock().unwrap_or_else(|e| e.into_inner());
+        if fits.len() >= 1 << 16 {
+            fits.clear();
+        }
+        fits.insert(key, fit);
+        fit
     }
 }
 
