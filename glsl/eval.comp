@@ -16,8 +16,8 @@
 // Compiled once per FeatureSet (src/gpu/kernel.rs): the HAS_* / WRITE_TERMS macros decide
 // which models, terms and outputs exist at all. Also injected from Rust (said once there):
 // the MODEL_* / DIST_* / GEOM_* / FRESNEL_* / CONV_* / FLAG_* codes, the BINDING_* numbers,
-// USE_SUBGROUP_ARITHMETIC when the device can reduce counts across a subgroup, and
-// ROW_FROM_SUBGROUP on CPU devices (main). The workgroup size is specialization constant 0.
+// USE_SUBGROUP_ARITHMETIC when the device can reduce counts across a subgroup, and on CPU
+// devices ROW_FROM_SUBGROUP (main) and F64_ROOTS (math.glsl's rsqrt64_once). The workgroup size is specialization constant 0.
 
 #extension GL_EXT_samplerless_texture_functions : require
 

@@ -43,10 +43,17 @@ float float_or_inf(double x) {
 // [1e-20, 1e20]): float32's inversesqrt of q's rounding (within 2 ulp, the Vulkan
 // precision table, plus the argument's rounding: e <= 5u) and one Newton step in f64,
 // which takes e to 1.5 e^2 < 2e-13 — enough for a value rounded once to f32 (the local
-// frames); frame64.glsl's rsqrt64 takes a second step for f64's last bits.
+// frames); frame64.glsl's rsqrt64 takes a second step for f64's last bits. With F64_ROOTS
+// (CPU devices, src/gpu/kernel.rs, whose f64 root and division are instructions where a
+// GPU emulates them): 1/sqrt(q) in f64, about 1e-16 off (lavapipe, folded mitsuba-ggx
+// +1.5-2 %).
 double rsqrt64_once(double q) {
+#if defined(F64_ROOTS)
+    return 1.0 / sqrt(q);
+#else
     double y = double(inversesqrt(float(q)));
     return y * (1.5 - 0.5 * q * y * y);
+#endif
 }
 
 // rsqrt64_once for the squared length q of an input direction, which is within 2^-12 of 1

@@ -415,6 +415,12 @@ impl Kernels {
         if row_from_subgroup(p, arithmetic) {
             defines.push(("ROW_FROM_SUBGROUP".to_string(), "1".to_string()));
         }
+        // A CPU device's f64 square root and division are instructions (GPUs emulate both):
+        // glsl/math.glsl's rsqrt64_once then takes them instead of an f32 estimate and a
+        // Newton step (lavapipe, folded mitsuba-ggx +1.5–2 %).
+        if p.shader_float64 && p.properties.device_type == vk::PhysicalDeviceType::CPU {
+            defines.push(("F64_ROOTS".to_string(), "1".to_string()));
+        }
         defines.extend(self.extra_defines.iter().cloned());
         SpirvSource {
             features,
