@@ -9,7 +9,6 @@
 #include "frame_fields.glsl"
 #include "material.glsl"
 #include "terms.glsl"
-#include "conductor_poly.glsl"
 
 // One tuple's result: the BRDF and the term columns D, G, F_rgb, K.
 struct Eval {

@@ -17,6 +17,7 @@
 
 #include "math.glsl"
 #include "ff.glsl"
+#include "f_poly_constants.glsl"
 
 // HTSG (htsg.glsl) evaluates the conductor's F: its code is compiled with the model's.
 #if defined(HAS_HTSG) && !defined(HAS_F_CONDUCTOR)
@@ -542,6 +543,37 @@ vec3 conductor_f_metal(float c, vec3 n, vec3 k, vec3 e2rm1) {
     vec3 bs = mag + c2;
     vec3 bp = mag * c2 + s2 * s2;
     return (bs - ca2) * bp / ((bs + ca2) * (bp + ca2 * s2));
+}
+
+// The fitted interval's centre (35/64, exactly an f32): t = c - CONDUCTOR_POLY_CENTRE is
+// exact for c in [CENTRE/2, 2 CENTRE] (Sterbenz) and otherwise rounded once.
+const float CONDUCTOR_POLY_CENTRE = 0.546875;
+// The least c the polynomial takes (the CPU engine's FAST_MIN_C): the fitted interval
+// starts at 0.091875; a lane below takes the metal form.
+const float CONDUCTOR_POLY_MIN_C = 0.1;
+
+// A folded conductor's F as its fitted polynomial (f_poly_constants.glsl: the CPU
+// engine's conductor::poly, 14 multiply-adds a channel where the metal form takes two
+// square roots and a division) at c in [CONDUCTOR_POLY_MIN_C, 1 + a few u], by Horner's
+// rule in t, the channels' steps side by side. Without the constants the compiler drops it.
+vec3 conductor_f_poly(float c) {
+    float t = c - CONDUCTOR_POLY_CENTRE;
+    vec3 r = vec3(F_POLY_R14, F_POLY_G14, F_POLY_B14);
+    r = r * t + vec3(F_POLY_R13, F_POLY_G13, F_POLY_B13);
+    r = r * t + vec3(F_POLY_R12, F_POLY_G12, F_POLY_B12);
+    r = r * t + vec3(F_POLY_R11, F_POLY_G11, F_POLY_B11);
+    r = r * t + vec3(F_POLY_R10, F_POLY_G10, F_POLY_B10);
+    r = r * t + vec3(F_POLY_R9, F_POLY_G9, F_POLY_B9);
+    r = r * t + vec3(F_POLY_R8, F_POLY_G8, F_POLY_B8);
+    r = r * t + vec3(F_POLY_R7, F_POLY_G7, F_POLY_B7);
+    r = r * t + vec3(F_POLY_R6, F_POLY_G6, F_POLY_B6);
+    r = r * t + vec3(F_POLY_R5, F_POLY_G5, F_POLY_B5);
+    r = r * t + vec3(F_POLY_R4, F_POLY_G4, F_POLY_B4);
+    r = r * t + vec3(F_POLY_R3, F_POLY_G3, F_POLY_B3);
+    r = r * t + vec3(F_POLY_R2, F_POLY_G2, F_POLY_B2);
+    r = r * t + vec3(F_POLY_R1, F_POLY_G1, F_POLY_B1);
+    r = r * t + vec3(F_POLY_R0, F_POLY_G0, F_POLY_B0);
+    return r;
 }
 #endif
 

@@ -197,7 +197,7 @@ fn several_rows_an_invocation_evaluate_every_row_once() {
 }
 
 /// A folded conductor with a fitted polynomial takes F from it where c ≥ 0.1 and from the
-/// metal form below (glsl/conductor_poly.glsl): both sides of that threshold, the fitted
+/// metal form below (`conductor_f_poly`, glsl/terms.glsl): both sides of that threshold, the fitted
 /// interval's ends and normal incidence, at D's peak and on its slopes, with N = +z (the
 /// local frames) and with a tilted N (the general frame), for GGX and Beckmann on the
 /// bench's metal, copper and gold — within the rule and with the reference's counts.

@@ -173,7 +173,7 @@ fn kernel_f_with(
 }
 
 /// [`kernel_f`] in a folded kernel of a conductor with a fitted polynomial
-/// (glsl/conductor_poly.glsl): F by Horner's rule in `t = c − CENTRE` from the
+/// (`conductor_f_poly`, glsl/terms.glsl): F by Horner's rule in `t = c − CENTRE` from the
 /// coefficients as the host rounds them, each step a product and a sum (Vulkan lets an
 /// `fma` round twice), where c ≥ `CONDUCTOR_POLY_MIN_C` (0.1); below, the metal form.
 fn kernel_f_poly(x: &Execution, g: &Geometry, mat: &Material, ch: usize) -> f64 {
@@ -370,7 +370,7 @@ fn the_kernels_cook_torrance_arithmetic_fits_the_rule_under_vulkans_precisions()
 }
 
 /// The same path in a folded kernel, F from the conductor's fitted polynomial
-/// (glsl/conductor_poly.glsl) on the lanes with c ≥ 0.1 and the metal form below.
+/// (`conductor_f_poly`, glsl/terms.glsl) on the lanes with c ≥ 0.1 and the metal form below.
 #[test]
 fn the_kernels_cook_torrance_arithmetic_with_fs_polynomial_fits_the_rule() {
     fits_the_rule(&GGX_LOCAL32_POLY);

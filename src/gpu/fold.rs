@@ -3,7 +3,7 @@
 //! `glsl/bindings.glsl`) and, for a Cook–Torrance conductor whose F has a fitted
 //! polynomial within the metal form's budget (`terms::f::conductor::poly`, the CPU
 //! engine's), that polynomial's coefficients (constants 31–76,
-//! `glsl/conductor_poly.glsl`).
+//! `glsl/f_poly_constants.glsl`, read by `conductor_f_poly` in `glsl/terms.glsl`).
 
 use super::layout::GpuMaterial;
 use crate::material::{Fresnel, Material, Model};

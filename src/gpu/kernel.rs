@@ -47,8 +47,8 @@ pub const SOURCES: &[(&str, &str)] = &[
     ("ff.glsl", include_str!("../../glsl/ff.glsl")),
     ("terms.glsl", include_str!("../../glsl/terms.glsl")),
     (
-        "conductor_poly.glsl",
-        include_str!("../../glsl/conductor_poly.glsl"),
+        "f_poly_constants.glsl",
+        include_str!("../../glsl/f_poly_constants.glsl"),
     ),
     ("models.glsl", include_str!("../../glsl/models.glsl")),
     ("htsg.glsl", include_str!("../../glsl/htsg.glsl")),
@@ -513,7 +513,7 @@ impl Kernels {
 
     /// The pipeline for `features` with a material folded in as specialization constants
     /// ([`Fold`]: `material_at` in `glsl/bindings.glsl`, and F's polynomial in
-    /// `glsl/conductor_poly.glsl`): the compiler then treats the material as a kernel
+    /// `glsl/f_poly_constants.glsl`): the compiler then treats the material as a kernel
     /// written for it would, folding its constants and its terms' dispatch.
     /// `None` once this evaluator has folded [`FOLDED_MATERIALS_MAX`] materials: each fold
     /// is a compile, and a caller that changes the material from batch to batch (a fit)
