@@ -502,7 +502,8 @@ vec3 frame_conductor_f(Frame f, GpuMaterial m) {
 #endif
 #if !defined(NO_METAL_FORM)
     // A folded conductor with a fitted polynomial (a specialization constant: without it
-    // the branch is compiled out); lanes below its interval take the metal form.
+    // the branch is compiled out); lanes below its interval take the metal form. NO_F_POLY
+    // (a kernel_time variant) turns it off, for measuring.
 #if !defined(NO_F_POLY)
     if (MATERIAL_F_POLY && f.c >= CONDUCTOR_POLY_MIN_C) {
         return conductor_f_poly(f.c);
