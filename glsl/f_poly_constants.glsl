@@ -2,7 +2,7 @@
 // engine's fitted polynomial in c (src/terms/f/conductor/poly.rs, Trefethen 2013: the Chebyshev interpolant of F on
 // [0.091875, 1.001875], degree 14, its coefficients rounded once to f32) for a folded
 // material: the host sets MATERIAL_F_POLY and the coefficients as specialization
-// constants 31-76 (src/gpu/kernel.rs) only for a Cook-Torrance conductor whose fit's
+// constants 31-76 (src/gpu/fold.rs) only for a Cook-Torrance conductor whose fit's
 // written bound (Horner's running error with or without fused multiply-adds, which is
 // Vulkan's allowance for fma, the coefficients' and t's roundings, the truncation) is
 // within the metal form's 48u; + - * are correctly rounded on Vulkan, and no value here

@@ -113,6 +113,15 @@ float m2_sin2(GpuMaterial m, vec2 w_tb, float sin2_w) {
     return material_roughness2(m).x * sin2_w;
 }
 
+#if defined(HAS_LAMBDA_GGX)
+// GGX's roots R = sqrt(cos^2 + m2_sin2) of v and l (ggx_lambda_root): the two Smith forms'
+// operands, (R_o, R_i).
+vec2 roots_ggx(Frame f, GpuMaterial m) {
+    return vec2(ggx_lambda_root(f.cos_o, m2_sin2(m, f.v_tb, f.sin2_o)),
+                ggx_lambda_root(f.cos_i, m2_sin2(m, f.l_tb, f.sin2_i)));
+}
+#endif
+
 // m^2 tan^2(w) = m^2 |n x w|^2 / (n.w)^2, anisotropic (mx^2 (w.t)^2 + my^2 (w.b)^2) / (n.w)^2
 // (FORMULAS.md §3): the argument of Smith's Lambda and of the smith-fast fit. w.t, w.b and
 // |n x w|^2 come from make_frame (in f64 where the device has it: with roughness ratios
@@ -560,8 +569,8 @@ Eval model_cook_torrance(Frame f, GpuMaterial m) {
     case GEOM_SMITH:
 #if defined(HAS_LAMBDA_GGX)
         if (material_distribution(m) == DIST_GGX) {
-            e.g = smith_g_ggx(f.cos_o, ggx_lambda_root(f.cos_o, m2_sin2(m, f.v_tb, f.sin2_o)),
-                              f.cos_i, ggx_lambda_root(f.cos_i, m2_sin2(m, f.l_tb, f.sin2_i)));
+            vec2 r = roots_ggx(f, m);
+            e.g = smith_g_ggx(f.cos_o, r.x, f.cos_i, r.y);
             break;
         }
 #endif
@@ -573,9 +582,8 @@ Eval model_cook_torrance(Frame f, GpuMaterial m) {
     case GEOM_SMITH_CORRELATED:
 #if defined(HAS_LAMBDA_GGX)
         if (material_distribution(m) == DIST_GGX) {
-            e.g = smith_correlated_g_ggx(
-                f.cos_o, ggx_lambda_root(f.cos_o, m2_sin2(m, f.v_tb, f.sin2_o)),
-                f.cos_i, ggx_lambda_root(f.cos_i, m2_sin2(m, f.l_tb, f.sin2_i)));
+            vec2 r = roots_ggx(f, m);
+            e.g = smith_correlated_g_ggx(f.cos_o, r.x, f.cos_i, r.y);
             break;
         }
 #endif

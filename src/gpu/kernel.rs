@@ -561,9 +561,9 @@ impl Kernels {
     }
 
     /// A pipeline from `spirv` ([`create_pipeline`]), counted.
-    fn create(&mut self, spirv: &[u32], material: Option<&Fold>) -> Result<Pipeline> {
+    fn create(&mut self, spirv: &[u32], fold: Option<&Fold>) -> Result<Pipeline> {
         let cache = self.pipeline_cache.for_creation();
-        let per_invocation = if material.is_some() {
+        let per_invocation = if fold.is_some() {
             self.folded_per_invocation
         } else {
             1
@@ -573,7 +573,7 @@ impl Kernels {
             self.layout,
             cache,
             spirv,
-            material,
+            fold,
             per_invocation,
         )?;
         self.created += 1;
