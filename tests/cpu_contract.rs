@@ -435,3 +435,142 @@ fn the_conductors_polynomial_holds_fs_budget_across_its_interval() {
         assert!(worst <= 56.0 * u, "{isa}: F off by {worst:.3e} (> 56u)");
     }
 }
+
+/// Beckmann's f32 D is 0 past `beckmann::lane_exp_floor` (its products' subnormals cost x86
+/// an assist a register): h either side of that cut (tan²θ_h/m² = −2·floor·(1 ± 2e-3)),
+/// for the materials that move it — roughness from `FAST_MIN_ROUGHNESS` to ~1,200 (where
+/// the cut falls at cos_h just above `GRAZING`, D's `1/cos⁴` and K at their largest), a
+/// specular weight of 1,000, every convention, each geometry the lanes take — with l and v
+/// at c = 0.999, 0.5 and 0.15 (0.999 at the grazing cut): every value within the rule on every instruction set (a cut
+/// that left out K, the specular weight or `1/cos⁴` fails it by orders of magnitude), D
+/// exactly 0 just past the cut where the reference's is not (the cut is taken) and not 0
+/// just inside it.
+#[test]
+fn beckmann_tail_cut_is_within_the_rule_on_every_instruction_set() {
+    use vkbrdf::terms::d::beckmann::lane_exp_floor;
+    // (roughness or 0 for "at the grazing cut", geometry, Fresnel, convention, k, weight)
+    let kinds: [(f64, &str, &str, &str, f64, f64); 6] = [
+        (
+            FAST_MIN_ROUGHNESS,
+            "smith-fast",
+            "fresnel = \"conductor\"\nior = [0.2, 0.9, 1.5]\nextinction = [3.0, 2.4, 1.9]",
+            "modern",
+            std::f64::consts::PI,
+            1.0,
+        ),
+        (
+            0.3,
+            "none",
+            "fresnel = \"none\"",
+            "modern",
+            std::f64::consts::PI,
+            1.0,
+        ),
+        (
+            1.5,
+            "cook-torrance",
+            "fresnel = \"schlick\"\nf0 = [0.04, 0.5, 1.0]",
+            "seed",
+            4.0,
+            1.0,
+        ),
+        (
+            0.0,
+            "none",
+            "fresnel = \"none\"",
+            "modern",
+            std::f64::consts::PI,
+            1.0,
+        ),
+        (
+            0.0,
+            "none",
+            "fresnel = \"none\"",
+            "cook-torrance-1982",
+            1.0,
+            1000.0,
+        ),
+        (
+            0.0,
+            "smith-fast",
+            "fresnel = \"none\"",
+            "cook-torrance-1982",
+            1.0,
+            1.0,
+        ),
+    ];
+    let half_cut = |m: f64, k: f64, w: f64| -f64::from(lane_exp_floor(1.0 / (k * m * m), w, 1.0));
+    let mut toml = String::new();
+    let mut rows = Vec::new();
+    let mut past = Vec::new();
+    for (mi, &(m, g, f, conv, k, w)) in kinds.iter().enumerate() {
+        // Roughness 0: the m whose cut puts cos_h at 1.03e-4 (tan θ_h = 9,709).
+        let grazing = m == 0.0;
+        let m = if !grazing {
+            m
+        } else {
+            (0..20).fold(1000.0, |m, _| 9709.0 / (2.0 * half_cut(m, k, w)).sqrt())
+        };
+        toml.push_str(&format!(
+            "[[material]]\nname = \"m{mi}\"\nmodel = \"cook-torrance\"\n\
+             distribution = \"beckmann\"\ngeometry = \"{g}\"\nroughness = {m}\n{f}\n\
+             convention = \"{conv}\"\nspecular_weight = {w}\n"
+        ));
+        let x = 2.0 * half_cut(m, k, w);
+        for side in [-2e-3f64, 2e-3] {
+            let th = (m * (x * (1.0 + side)).sqrt()).atan();
+            for phi in [0.4f64, 2.2] {
+                let h = [th.sin() * phi.cos(), th.sin() * phi.sin(), th.cos()];
+                let a = [-phi.sin(), phi.cos(), 0.0];
+                // At the grazing cut only c near 1 keeps cos_i = c·cos_h above 1e-4.
+                let cs: &[f64] = if grazing {
+                    &[0.999]
+                } else {
+                    &[0.999, 0.5, 0.15]
+                };
+                for &c in cs {
+                    let s = (1.0 - c * c).sqrt();
+                    let l: [f64; 3] = std::array::from_fn(|j| c * h[j] + s * a[j]);
+                    let v: [f64; 3] = std::array::from_fn(|j| c * h[j] - s * a[j]);
+                    rows.extend(l.map(|q| q as f32));
+                    rows.extend(v.map(|q| q as f32));
+                    rows.extend([0.0f32, 0.0, 1.0, mi as f32]);
+                    past.push(side > 0.0);
+                }
+            }
+        }
+    }
+    let mats = parse_materials(&toml, "beckmann-tail").expect("materials");
+    let batch = Batch::new(rows, 10, mats.len(), &memory_source()).expect("batch");
+    let request = Request { terms: true };
+    let reference = CpuReference::new()
+        .evaluate(&batch, &mats, &request)
+        .expect("reference");
+    let ref_d = reference.terms.as_ref().expect("terms");
+    for isa in Isa::available_all() {
+        let out = CpuEngine::with_isa(1, isa)
+            .evaluate(&batch, &mats, &request)
+            .expect("rows");
+        judge(
+            &format!("tail rows on {isa}"),
+            &batch,
+            &mats,
+            &out,
+            &reference,
+        );
+        let d = out.terms.as_ref().expect("terms");
+        for (i, &past) in past.iter().enumerate() {
+            // Lanes below GRAZING go to the reference, which has no cut: only the f32
+            // frame's lanes (cos_i, cos_o ≥ 1e-4 here by construction) are asked.
+            assert!(ref_d[i * 6] > 0.0, "{isa}: row {i}: the reference's D is 0");
+            assert_eq!(
+                d[i * 6] == 0.0,
+                past,
+                "{isa}: row {i}: D {} (reference {}), {} the cut",
+                d[i * 6],
+                ref_d[i * 6],
+                if past { "past" } else { "inside" }
+            );
+        }
+    }
+}

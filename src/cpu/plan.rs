@@ -5,7 +5,7 @@
 use super::isa::Isa;
 use super::kernel::{Params, FAST_MIN_ROUGHNESS};
 use crate::material::{Distribution, Fresnel, Material, Model, Roughness};
-use crate::terms::d::{blinn, charlie, ggx};
+use crate::terms::d::{beckmann, blinn, charlie, ggx};
 use crate::terms::f::{conductor, dielectric, schlick};
 use crate::terms::g::schlick_smith;
 use crate::terms::{DistributionKind, FresnelKind, Geometry};
@@ -67,6 +67,18 @@ fn ggx_guard(p: &Params, f: FresnelKind) -> f32 {
         FresnelKind::Dielectric => conductor::METAL_FORM_BUDGET,
     };
     ggx::local_frame_guard_for_f(p.m2, f_u)
+}
+
+/// Beckmann's [`beckmann::lane_exp_floor`] for the material of `p` and its Fresnel term
+/// (F's largest: 1, or a Schlick F0 above 1).
+fn beckmann_exp_floor(p: &Params, f: &Fresnel) -> f32 {
+    let max3 = |a: [f64; 3]| a.into_iter().fold(0.0f64, f64::max);
+    let spec_max = max3(p.spec.map(f64::from));
+    let f_max = match f {
+        Fresnel::Schlick { f0 } => max3(*f0),
+        _ => 1.0,
+    };
+    beckmann::lane_exp_floor(p.d_norm, spec_max, f_max)
 }
 
 fn f32x3(a: [f64; 3]) -> [f32; 3] {
@@ -165,6 +177,7 @@ impl Plan {
             (p.m2_f, p.inv_m2_f, p.d_norm_f) = (p.m2 as f32, p.inv_m2 as f32, p.d_norm as f32);
             p.m_f = mr as f32;
             p.ggx_local_guard = ggx_guard(&p, f);
+            p.d_exp_floor = beckmann_exp_floor(&p, &ct.fresnel);
         }
         Plan::Microfacet { d, aniso, g, f, p }
     }

@@ -93,8 +93,18 @@ const ROUND_MAGIC: f32 = 12_582_912.0;
 /// a power of two.
 #[inline(always)]
 pub fn exp_neg<T: Real>(x: T) -> T {
-    let below = x.lt_scalar(-87.0);
-    let xc = T::select(below, x.splat_as(-87.0), x);
+    exp_neg_above(x, -87.0)
+}
+
+/// [`exp_neg`] with 0 below `floor` (≥ −87) instead of below −87: for a caller whose
+/// result is below what the rule can tell from 0 once `x < floor`, and whose products of
+/// such tiny values would otherwise leave f32's normal range (subnormal operands and
+/// results cost a microcode assist a register on x86). The same bits as [`exp_neg`] for
+/// `x ≥ floor`.
+#[inline(always)]
+pub fn exp_neg_above<T: Real>(x: T, floor: f32) -> T {
+    let below = x.lt_scalar(floor);
+    let xc = T::select(below, x.splat_as(floor), x);
     // k = round(x log₂e) in the low bits of `t` (ROUND_MAGIC's ulp is 1), taken from them
     // as an integer: `k as i32` on the float is a saturating cast, which LLVM does not
     // vectorise (it made every lane of a block a scalar conversion and compare, a third of

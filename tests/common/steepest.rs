@@ -11,8 +11,10 @@ pub fn ggx_pairs(m: f64, c_min: f64) -> Vec<([f64; 3], [f64; 3])> {
 }
 
 /// [`ggx_pairs`] for Beckmann, whose D's slope `2 tan θ_h (1/(m² cos² θ_h) − 2)` grows
-/// without bound: h at tan θ_h = m, 3m and 9m, and either side of tan²θ_h/m² = 174 (13.19m),
-/// where the lanes' `exp(−x/2)` reaches its cut-off at −87 and D goes to 0.
+/// without bound: h at tan θ_h = m, 3m and 9m (inside the f32 lanes' cut,
+/// `beckmann::lane_exp_floor`: 9.1–9.3m for the tests' materials), and either side of
+/// tan²θ_h/m² = 174 (13.19m), where `exp(−x/2)`'s own range ends at −87 (the reference's
+/// D is not 0 there; the lanes' is).
 pub fn beckmann_pairs(m: f64, c_min: f64) -> Vec<([f64; 3], [f64; 3])> {
     pairs_at(&[m, 3.0 * m, 9.0 * m, 13.18 * m, 13.2 * m], c_min)
 }

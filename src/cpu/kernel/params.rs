@@ -25,6 +25,9 @@ pub struct Params {
     pub m_f: f32,
     /// See `m2_f`.
     pub d_norm_f: f32,
+    /// Beckmann's f32 D: the argument of `exp` below which it is 0
+    /// (`beckmann::lane_exp_floor`).
+    pub d_exp_floor: f32,
     /// GGX's test of the local form's f32 frame (`ggx::local_frame_guard`).
     pub ggx_local_guard: f32,
     /// K (the convention's lane form).

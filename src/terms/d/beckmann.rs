@@ -3,7 +3,7 @@
 //! al. 2007 / Heitz 2014, modern convention only) `exp(−((hx/mx)² + (hy/my)²)/hz²) /
 //! (π mx my hz⁴)`; and its Smith Λ (Walter et al. 2007, eq. 25 via Heitz 2014).
 
-use crate::terms::math::{erfc, exp_neg};
+use crate::terms::math::{erfc, exp_neg, exp_neg_above};
 use crate::terms::real::Real;
 use crate::terms::k::Convention;
 use std::f64::consts::PI;
@@ -65,14 +65,44 @@ pub fn lambda(a2_inv: f64) -> f64 {
 /// D in a lane of the f32 frame, given `1/m²` and `1/(k m²)` rounded once. The f32 frame's
 /// materials have m ≥ `FAST_MIN_ROUGHNESS` and its lanes cos_h ≥ `GRAZING`, which keeps
 /// every quantity inside f32's normal range (1/cos²_h ≤ 1e8, the norm ≤ 5.7e17).
-/// `exp(−x)·norm` as `(e·norm)·e` with `e = exp(−x/2)`, as [`d_lane64`].
+/// `exp(−x)·norm` as `(e·norm)·e` with `e = exp(−x/2)`, as [`d_lane64`]; 0 where
+/// `−x/2 < floor` ([`lane_exp_floor`]).
 #[inline(always)]
-pub fn d_lane32<T: Real>(cos_h: T, sin2_h: T, inv_m2: f32, norm: f32) -> T {
+pub fn d_lane32<T: Real>(cos_h: T, sin2_h: T, inv_m2: f32, norm: f32, floor: f32) -> T {
     let cos_h2 = cos_h * cos_h;
     let ic = cos_h2.splat_as(1.0) / cos_h2;
     let half_x = sin2_h * ic * inv_m2 * 0.5;
-    let e = exp_neg(half_x * -1.0);
+    let e = exp_neg_above(half_x * -1.0, floor);
     e * (ic * norm * ic) * e
+}
+
+/// Cosines (`cos_i`, `cos_o`, `cos_h`) of the lanes [`d_lane32`] serves are at least this
+/// (`cpu::frame::GRAZING`; the f32 frames send smaller ones elsewhere).
+const LANE_MIN_COS: f64 = 1e-4;
+
+/// The argument of `exp` below which [`d_lane32`] gives 0: where D and the specular part
+/// of f it enters are below 1e-12, a tenth of what the rule (FORMULAS.md §1) allows any
+/// value at its floor (`1e-5 · 1e-6`), so 0 conforms. Without it, D's last product
+/// `(e·norm)·e` and the products after it go subnormal on the lanes far in the tail (12 %
+/// of the bench's uniform lanes at m = 0.3), and x86 takes a microcode assist for each
+/// such register.
+///
+/// With `e = exp(−x/2)` and `−x/2 < floor`: D = e²·norm/cos⁴_h < e^{2 floor}·norm/LANE_MIN_COS⁴,
+/// and the specular part `s c_spec · D·G·F·K` ≤ that times `weight` = `s c_spec` · G's
+/// largest (smith-fast's fit reaches 1.000123) · F's largest (`f_max`: 1 but for a Schlick
+/// F0 above it) · K's largest at these cosines over every convention (`1/(π cos_i cos_o)`).
+/// So `floor = −½ ln(norm · max(1, weight) / (LANE_MIN_COS⁴ · 1e-12))`, at least −87
+/// (`exp_neg`'s own range): −41.5 for the bench's m = 0.3.
+pub fn lane_exp_floor(norm: f64, spec_max: f64, f_max: f64) -> f32 {
+    let k_max = 1.0 / (PI * LANE_MIN_COS * LANE_MIN_COS);
+    let weight = (spec_max * 1.000_123 * f_max.max(1.0) * k_max).max(1.0);
+    let half = 0.5 * (norm * weight / (LANE_MIN_COS.powi(4) * 1e-12)).ln();
+    // A NaN or a non-positive norm (no Beckmann material has one) keeps exp_neg's range.
+    if half.is_finite() && half > 0.0 {
+        (-half).max(-87.0) as f32
+    } else {
+        -87.0
+    }
 }
 
 /// D in a lane of the f64 frame: `exp(−tan²/m²)/(k m² cos⁴)` as `(e·norm)·e` with
