@@ -278,7 +278,7 @@ pub(super) struct HalfParts<T: Real> {
 ///
 /// The scales: on the lanes of `near` ([`near_unit_lanes`]: L's and V's squared lengths
 /// within [`NEAR_UNIT`] of 1, as every input normalised in f32 or f64 is)
-/// [`rsqrt64_near_unit`], a cubic without a root or a division; on the others
+/// [`rsqrt64_near_unit`], a quadratic without a root or a division; on the others
 /// [`rsqrt64_fast`]. `NEAR`: every lane is near (the register path tests a step's lanes
 /// first), and the second is not formed at all.
 #[inline(always)]
@@ -293,7 +293,13 @@ pub(super) fn half_parts<A: MulAdd, W: Wide, const NEAR: bool>(
     let (il, iv) = (rsqrt64_near_unit::<A, W>(ll), rsqrt64_near_unit::<A, W>(vv));
     let near_parts = scaled_parts::<A, W>(l, v, q, il, iv);
     if NEAR {
-        return near_parts;
+        // Every lane's f32 squared lengths are within NEAR_UNIT of 1, so inside
+        // [LENGTH2_MIN, LENGTH2_MAX]: the test on `q` is true without forming it (`c < c`
+        // is false for every c, NaN too; the compiler folds it).
+        return HalfParts {
+            lengths_ok: !near_parts.c.lt(near_parts.c),
+            ..near_parts
+        };
     }
     let (il, iv) = (rsqrt64_fast::<A, W>(ll), rsqrt64_fast::<A, W>(vv));
     near_parts.select(near, scaled_parts::<A, W>(l, v, q, il, iv))
@@ -488,8 +494,9 @@ pub(super) fn rsqrt64(x: f64) -> f64 {
 }
 
 /// How far from 1 (`|1 − |x|²|` of the f32 squared length) [`rsqrt64_near_unit`] may be
-/// used: its cubic's truncation there is `35 a⁴/128 ≤ 1e-15` (a = |x|² − 1 ≤ 2⁻¹² + u),
-/// as accurate as [`rsqrt64_fast`]. Inputs normalised in f32 are within ~3u of 1.
+/// used: its quadratic's truncation there is `5 a³/16 ≤ 4.6e-12` (a = |x|² − 1 ≤ 2⁻¹² + u),
+/// which the h64 frame needs far below u (see there), and [`rsqrt_near_unit`]'s f32
+/// quadratic `5 a³/16` below its one rounding. Inputs normalised in f32 are within ~3u of 1.
 const NEAR_UNIT: f32 = 1.0 / 4096.0;
 
 /// Whether the lanes' L and V both have squared lengths (in f32, as [`frame_local32`]
@@ -525,14 +532,16 @@ fn rsqrt_near_unit<A: MulAdd, T: Real>(q: T) -> T {
 }
 
 /// `1/√x` for x = 1 + a near 1 (|a| ≤ [`NEAR_UNIT`], a formed exactly from the exact x):
-/// the Taylor cubic `1 − a/2 + 3a²/8 − 5a³/16` by Horner in f64, relative error below
-/// 1.2e-15 (truncation ≤ 1e-15, the f64 roundings ~2e-16) — no root and no division,
-/// whose latency the h64 frame's chain otherwise starts with.
+/// the Taylor quadratic `1 − a/2 + 3a²/8` by Horner in f64, relative error below 4.6e-12
+/// (the truncation `5|a|³/16`; the f64 roundings ~2e-16) — no root and no division, whose
+/// latency the h64 frame's chain otherwise starts with. What the h64 frame needs of its
+/// scales is that they agree to far better than u = 6e-8: their difference turns h by
+/// `(ε_l − ε_v) tan θ_d/2 ≤ 4.6e-11` radians (tan θ_d ≤ 10 on its lanes), 8e-4 u.
+/// (A cubic term took one more f64 multiply-add a half register for nothing it needs.)
 #[inline(always)]
 fn rsqrt64_near_unit<A: MulAdd, W: Wide>(x: W) -> W {
     let a = x + x.splat_as(-1.0);
-    let p = A::mul_add_wide(a, x.splat_as(-0.3125), x.splat_as(0.375));
-    let p = A::mul_add_wide(a, p, x.splat_as(-0.5));
+    let p = A::mul_add_wide(a, x.splat_as(0.375), x.splat_as(-0.5));
     A::mul_add_wide(a, p, x.splat_as(1.0))
 }
 
