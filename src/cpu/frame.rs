@@ -9,6 +9,9 @@
 /// §1, "Overflow": cosines down to the smallest subnormal must still come out exact).
 pub const GRAZING: f64 = 1e-4;
 
+/// GRAZING²: `cos_h ≥ GRAZING` is `hz² ≥ GRAZING²·|h|²` for hz > 0.
+const GRAZING2: f32 = (GRAZING * GRAZING) as f32;
+
 use crate::terms::math::MulAdd;
 use crate::terms::real::{Real, Wide};
 
@@ -23,9 +26,19 @@ pub(super) struct Frame<T: Real = f32> {
     /// `1 − c²`.
     pub(super) s2: T,
     pub(super) sin2_h: T,
+    /// tan²θ_h (Beckmann's D reads it): from h's components where the frame has them
+    /// ([`frame_local_h64`]), else `sin2_h/cos_h²` ([`tan2_of`]).
+    pub(super) tan2_h: T,
     pub(super) sin2_i: T,
     pub(super) sin2_o: T,
     pub(super) ok: T::Mask,
+}
+
+/// tan²θ_h = `sin2_h · (1/cos_h²)` from a frame's f32 values: the ratio cancels the common
+/// `1/|N|` (and h's) scale of both, so it is within ~2.5u of theirs.
+#[inline(always)]
+pub(super) fn tan2_of<T: Real>(cos_h: T, sin2_h: T) -> T {
+    sin2_h * (cos_h.splat_as(1.0) / (cos_h * cos_h))
 }
 
 /// Squared lengths in this range leave the lanes' f32 arithmetic a factor 1e19 either
@@ -145,6 +158,7 @@ pub(super) fn frame<A: MulAdd, const Z: bool>(x: &[f32; 9]) -> Frame {
         c,
         s2,
         sin2_h,
+        tan2_h: tan2_of(cos_h, sin2_h),
         sin2_i,
         sin2_o,
         ok,
@@ -171,8 +185,7 @@ fn local_frame_of<T: Real>(w: LocalParts<T>) -> Frame<T> {
     let s2 = (dx * dx + dy * dy + dz * dz) * 0.25;
     let g = GRAZING as f32;
     // `≥` is false for NaN: lanes that went non-finite above are rescued too.
-    let ok =
-        w.lengths_ok & lz.ge_scalar(g) & vz.ge_scalar(g) & w.cos_h.ge_scalar(g) & w.c.ge_scalar(g);
+    let ok = w.lengths_ok & lz.ge_scalar(g) & vz.ge_scalar(g) & w.h_up & w.c.ge_scalar(g);
     Frame {
         cos_i: lz,
         cos_o: vz,
@@ -180,6 +193,7 @@ fn local_frame_of<T: Real>(w: LocalParts<T>) -> Frame<T> {
         c: w.c,
         s2,
         sin2_h: w.sin2_h,
+        tan2_h: w.tan2_h,
         sin2_i: w.sin2_i,
         sin2_o: w.sin2_o,
         ok,
@@ -199,6 +213,9 @@ struct LocalParts<T: Real> {
     c: T,
     cos_h: T,
     sin2_h: T,
+    tan2_h: T,
+    /// cos_h ≥ [`GRAZING`] (or the same test on `tan2_h`, see [`HalfParts::h_up`]).
+    h_up: T::Mask,
     /// `|L|²` and `|V|²` (rounded to f32) inside [`LENGTH2_MIN`, `LENGTH2_MAX`].
     lengths_ok: T::Mask,
 }
@@ -254,6 +271,8 @@ pub(super) fn frame_local_h64<A: MulAdd, T: FrameLanes, const NEAR: bool>(
         c: w.c,
         cos_h: w.cos_h,
         sin2_h: w.sin2_h,
+        tan2_h: w.tan2_h,
+        h_up: w.h_up,
         lengths_ok: w.lengths_ok,
     })
 }
@@ -269,6 +288,15 @@ pub(super) struct HalfParts<T: Real> {
     c: T,
     cos_h: T,
     sin2_h: T,
+    /// tan²θ_h from h's rounded components, `(hx² + hy²)/hz²`.
+    tan2_h: T,
+    /// cos_h ≥ [`GRAZING`], tested as `hz² ≥ GRAZING²·|h|²` (hz > 0 wherever l and v are
+    /// above the horizon, which the frame tests too): from values formed early, so that
+    /// the lane's flags do not wait on a root or a division (their bits leave the
+    /// registers each step: a test on `tan2_h` instead cost 10 % of Beckmann's step), and
+    /// a lane that reads neither cos_h nor `sin2_h` (Beckmann's D with smith-fast) forms
+    /// no `1/|h|` at all.
+    h_up: T::Mask,
     /// `|L|²` and `|V|²` (rounded to f32) inside [`LENGTH2_MIN`, `LENGTH2_MAX`].
     lengths_ok: T::Mask,
 }
@@ -321,14 +349,18 @@ fn scaled_parts<A: MulAdd, W: Wide>(
         A::mul_add_wide(l[2], il, v[2] * iv),
     ];
     let (hx, hy, hz) = (h[0].narrow(), h[1].narrow(), h[2].narrow());
-    let hh = A::mul_add(hz, hz, A::mul_add(hx, hx, hy * hy));
+    let side2 = A::mul_add(hx, hx, hy * hy);
+    let hh = A::mul_add(hz, hz, side2);
     let ih = rsqrt(hh);
+    let tan2_h = side2 / (hz * hz);
     HalfParts {
         il: il.narrow(),
         iv: iv.narrow(),
-        c: hh * ih * 0.5,
+        c: hh.sqrt() * 0.5,
         cos_h: hz * ih,
-        sin2_h: A::mul_add(hx, hx, hy * hy) * (ih * ih),
+        sin2_h: side2 * (ih * ih),
+        tan2_h,
+        h_up: (hh * GRAZING2).le(hz * hz),
         // On the f32 roundings, as [`frame`] tests them.
         lengths_ok: length2_ok(q[0]) & length2_ok(q[1]),
     }
@@ -344,6 +376,8 @@ impl<T: Real> HalfParts<T> {
             c: T::select(m, self.c, other.c),
             cos_h: T::select(m, self.cos_h, other.cos_h),
             sin2_h: T::select(m, self.sin2_h, other.sin2_h),
+            tan2_h: T::select(m, self.tan2_h, other.tan2_h),
+            h_up: self.h_up,
             lengths_ok: self.lengths_ok,
         }
     }
@@ -366,14 +400,21 @@ fn wide_parts<A: MulAdd>(l: [f64; 3], v: [f64; 3]) -> LocalParts<f32> {
     let h = [l[0] + v[0], l[1] + v[1], l[2] + v[2]];
     let hh = sq3_wide::<A, f64>(h);
     let ih = rsqrt64_fast::<A, f64>(hh);
+    let (cos_h, sin2_h) = (
+        (h[2] * ih).narrow(),
+        (side2_wide::<A, f64>(h) * (ih * ih)).narrow(),
+    );
     LocalParts {
         l: [lx, ly, lz],
         v: [vx, vy, vz],
         sin2_i,
         sin2_o,
         c: (hh * ih * 0.5).narrow(),
-        cos_h: (h[2] * ih).narrow(),
-        sin2_h: (side2_wide::<A, f64>(h) * (ih * ih)).narrow(),
+        cos_h,
+        sin2_h,
+        // As [`frame`] forms it from the same values (the same bits).
+        tan2_h: tan2_of(cos_h, sin2_h),
+        h_up: cos_h.ge_scalar(GRAZING as f32),
         // On the f32 roundings, as [`frame`] tests them.
         lengths_ok: length2_ok(ll.narrow()) & length2_ok(vv.narrow()),
     }
@@ -448,6 +489,7 @@ pub(super) fn frame_local32<A: MulAdd, T: Real, const NEAR: bool>(
         c,
         s2,
         sin2_h,
+        tan2_h: tan2_of(cos_h, sin2_h),
         sin2_i,
         sin2_o,
         ok,

@@ -225,6 +225,8 @@ pub(crate) struct Lane {
     one_minus_c: f32,
     s2: f32,
     sin2_h32: f32,
+    /// tan²θ_h (Beckmann's f32 D).
+    tan2_h32: f32,
     cos_h2: f64,
     sin2_h: f64,
     c64: f64,
@@ -248,6 +250,7 @@ impl Lane {
             one_minus_c,
             s2: f.s2,
             sin2_h32: f.sin2_h,
+            tan2_h32: f.tan2_h,
             cos_h2: f64::from(f.cos_h) * f64::from(f.cos_h),
             sin2_h: f64::from(f.sin2_h),
             c64,
@@ -270,6 +273,8 @@ impl Lane {
             one_minus_c: (1.0 - f.c) as f32,
             s2: s2_64 as f32,
             sin2_h32: f.sin2_h as f32,
+            // Not read: the f64 frame's lanes take D's f64 forms.
+            tan2_h32: (f.sin2_h / (f.cos_h * f.cos_h)) as f32,
             cos_h2: f.cos_h * f.cos_h,
             sin2_h: f.sin2_h,
             c64: f.c,
@@ -372,7 +377,7 @@ pub fn microfacet_block<A: MulAdd, const D: u8, const G: u8, const F: u8, const 
         // In the block, unless the caller gathers them (as it does the f64 frame's lanes):
         // computed here, they made every block with one run both frames.
         if any(&general) && !p.defer_slow {
-            general_frames::<A, Z>(inp, &general, &mut fs, &mut ok, &mut slow);
+            general_frames::<A, D, Z>(inp, &general, &mut fs, &mut ok, &mut slow);
             general = [false; LANES];
         }
         // Two loops, so that the one without terms divides nothing out; a conductor whose
@@ -444,7 +449,9 @@ fn terms32<A: MulAdd, const D: u8, const G: u8, const F: u8, const T: bool, cons
             cos_o: fs[1][k],
             cos_h: fs[2][k],
             c: fs[3][k],
+            // Slot 4 holds sin²θ_h, or tan²θ_h for Beckmann ([`frame_slots`]).
             sin2_h: fs[4][k],
+            tan2_h: fs[4][k],
             sin2_i: fs[5][k],
             sin2_o: fs[6][k],
             s2: fs[7][k],
@@ -452,6 +459,17 @@ fn terms32<A: MulAdd, const D: u8, const G: u8, const F: u8, const T: bool, cons
         });
         microfacet_lane::<A, D, G, F, true, T, M>(p, &lane, out, k);
     }
+}
+
+/// A lane's frame as [`terms32`] reads it from a block's eight arrays: slot 4 is
+/// tan²θ_h for Beckmann (its D reads that and no sine), sin²θ_h for the others.
+#[inline(always)]
+fn frame_slots<const D: u8>(fr: &Frame) -> [f32; 8] {
+    let beckmann = const { matches!(DistributionKind::from_code(D), DistributionKind::Beckmann) };
+    let h = if beckmann { fr.tan2_h } else { fr.sin2_h };
+    [
+        fr.cos_i, fr.cos_o, fr.cos_h, fr.c, h, fr.sin2_i, fr.sin2_o, fr.s2,
+    ]
 }
 
 /// Which f32 frame a block's lanes take (see [`frames`]).
@@ -503,9 +521,7 @@ fn frames<A: MulAdd, const D: u8, const Z: bool, const MODE: u8>(
                 | ggx::local_frame_ok(fr.cos_h, fr.sin2_h, fr.c, p.m2_f, p.ggx_local_guard);
             general[k] = fr.ok & !below & !certified;
         }
-        let v = [
-            fr.cos_i, fr.cos_o, fr.cos_h, fr.c, fr.sin2_h, fr.sin2_i, fr.sin2_o, fr.s2,
-        ];
+        let v = frame_slots::<D>(&fr);
         for j in 0..8 {
             fs[j][k] = v[j];
         }
@@ -529,7 +545,7 @@ fn local_frame<A: MulAdd, const D: u8, const NEAR: bool>(l: [f32; 3], v: [f32; 3
 /// a material that may take the f32 frame (docs/CPU_ENGINE.md, "The f32 frame's error
 /// bound") — with their `ok` and, where its `c` is below [`FAST_MIN_C`], `slow`.
 #[inline(always)]
-fn general_frames<A: MulAdd, const Z: bool>(
+fn general_frames<A: MulAdd, const D: u8, const Z: bool>(
     inp: &Inputs,
     general: &[bool; LANES],
     fs: &mut [[f32; LANES]; 8],
@@ -538,9 +554,7 @@ fn general_frames<A: MulAdd, const Z: bool>(
 ) {
     for k in 0..LANES {
         let fr = frame::<A, Z>(&lane_inputs(inp, k));
-        let v = [
-            fr.cos_i, fr.cos_o, fr.cos_h, fr.c, fr.sin2_h, fr.sin2_i, fr.sin2_o, fr.s2,
-        ];
+        let v = frame_slots::<D>(&fr);
         if general[k] {
             for j in 0..8 {
                 fs[j][k] = v[j];
@@ -635,7 +649,7 @@ fn microfacet_dg<A: MulAdd, const D: u8, const G: u8, const FAST: bool>(
         }
         DistributionKind::Ggx => (ggx::d_lane64(fr.cos_h2, fr.sin2_h, p.m2, p.d_norm), 1.0),
         DistributionKind::Beckmann if FAST => (
-            beckmann::d_lane32(cos_h, fr.sin2_h32, p.inv_m2_f, p.d_norm_f, p.d_exp_floor),
+            beckmann::d_lane32(fr.tan2_h32, p.inv_m2_f, p.d_norm_f, p.d_exp_floor),
             1.0,
         ),
         DistributionKind::Beckmann => (

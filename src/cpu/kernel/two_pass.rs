@@ -89,6 +89,7 @@ pub fn f_block<A: MulAdd, const F: u8>(p: &Params, st: &Stage, out: &mut Outputs
             one_minus_c: st.one_minus_c[k],
             s2: st.s2[k],
             sin2_h32: 0.0,
+            tan2_h32: 0.0,
             cos_h2: 0.0,
             sin2_h: 0.0,
             c64: st.c64[k],

@@ -62,18 +62,18 @@ pub fn lambda(a2_inv: f64) -> f64 {
     ((-a * a).exp() / (a * PI.sqrt()) - libm::erfc(a)) / 2.0
 }
 
-/// D in a lane of the f32 frame, given `1/m²` and `1/(k m²)` rounded once. The f32 frame's
-/// materials have m ≥ `FAST_MIN_ROUGHNESS` and its lanes cos_h ≥ `GRAZING`, which keeps
-/// every quantity inside f32's normal range (1/cos²_h ≤ 1e8, the norm ≤ 5.7e17).
-/// `exp(−x)·norm` as `(e·norm)·e` with `e = exp(−x/2)`, as [`d_lane64`]; 0 where
-/// `−x/2 < floor` ([`lane_exp_floor`]).
+/// D in a lane of the f32 frame, given tan²θ_h (the frame's `tan2_h`), `1/m²` and
+/// `1/(k m²)` rounded once: `1/cos⁴θ_h = (1 + tan²θ_h)²`, so D reads no cosine and no
+/// division. The f32 frame's materials have m ≥ `FAST_MIN_ROUGHNESS` and its lanes
+/// cos_h ≥ `GRAZING`, which keeps every quantity inside f32's normal range
+/// (`1 + tan²` ≤ 1e8, the norm ≤ 5.7e17). `exp(−x)·norm` as `(e·norm)·e` with
+/// `e = exp(−x/2)`, as [`d_lane64`]; 0 where `−x/2 < floor` ([`lane_exp_floor`]).
 #[inline(always)]
-pub fn d_lane32<T: Real>(cos_h: T, sin2_h: T, inv_m2: f32, norm: f32, floor: f32) -> T {
-    let cos_h2 = cos_h * cos_h;
-    let ic = cos_h2.splat_as(1.0) / cos_h2;
-    let half_x = sin2_h * ic * inv_m2 * 0.5;
+pub fn d_lane32<T: Real>(tan2_h: T, inv_m2: f32, norm: f32, floor: f32) -> T {
+    let sec2 = tan2_h + 1.0;
+    let half_x = tan2_h * inv_m2 * 0.5;
     let e = exp_neg_above(half_x * -1.0, floor);
-    e * (ic * norm * ic) * e
+    e * (sec2 * norm * sec2) * e
 }
 
 /// Cosines (`cos_i`, `cos_o`, `cos_h`) of the lanes [`d_lane32`] serves are at least this

@@ -31,37 +31,35 @@ pub fn g1(a2_inv: f64) -> f64 {
 }
 
 /// G of both directions in a lane as a quotient `(num, den)`, given each direction's cosine
-/// and `sin²` and m: `a = cos/(m sin)` of both over one division, `1/(m² sin_i sin_o)`,
-/// and the two fits' quotients multiplied, so that the lane divides once more for D·G·K
-/// (6 divisions become 1). A sine below 1e-12 is taken as 1e-12, where `a` ≥ 1e4 is far
-/// past the fit's 1.6 and G1 = 1 either way; that floor keeps `m sin_i sin_o` ≥ 1e-31 for
-/// m ≥ 1e-7. An `a` past 1.6 (or non-finite) takes the fit's 1 as `1/1`.
+/// and `sin²` and m: each fit's quotient with numerator and denominator multiplied by
+/// `t² = (m sin θ)²` ([`fit_scaled`]), which takes `a = cos/t` out of it, and the two
+/// quotients multiplied, so that the lane's one division for D·G·K is G's too (6
+/// divisions become 0 here).
 #[inline(always)]
 pub fn g_ratio<A: MulAdd, T: Real>(cos_i: T, sin2_i: T, cos_o: T, sin2_o: T, m: f32) -> (T, T) {
-    let (s_i, s_o) = (sine_floor(sin2_i.sqrt()), sine_floor(sin2_o.sqrt()));
-    let den = s_i * m * s_o;
-    let inv = den.splat_as(1.0) / den;
-    let (n_i, d_i) = fit_ratio::<A, T>(cos_i * s_o * inv);
-    let (n_o, d_o) = fit_ratio::<A, T>(cos_o * s_i * inv);
+    let (n_i, d_i) = fit_scaled::<A, T>(cos_i, sin2_i, m);
+    let (n_o, d_o) = fit_scaled::<A, T>(cos_o, sin2_o, m);
     (n_i * n_o, d_i * d_o)
 }
 
-/// `s < 1e-12 ? 1e-12 : s` (a NaN sine stays NaN: its lane failed the frame's tests).
-/// Functions, not closures, here and in [`fit_ratio`]: a closure in a lane form was left
-/// out of line on the register path, where its intrinsics then became calls.
+/// The fit of G1 at `a = cos/t`, `t = m sin θ`, as `(num, den)` times t²:
+/// `cos (3.535 t + 2.181 cos)` over `t² + 2.276 cos t + 2.577 cos²` — sums of positive
+/// terms, each within a few u, as the quotient in `a` was — and `(1, 1)` where
+/// `a ≥ 1.6`, tested as `cos² ≥ 2.56 t²` (true for NaN; a sine of 0 makes t = 0 and
+/// takes it too, where `a = ∞`). A function, not a closure: a closure in a lane form was
+/// left out of line on the register path, where its intrinsics then became calls.
+///
+/// Range, on the lanes that take it (cos ≥ `GRAZING` = 1e-4): where the fit is taken,
+/// t > cos/1.6, so every product stays normal down to D·G·K values of 1e-11 and below,
+/// which is all the rule can see (FORMULAS.md §1: its floor's absolute 1e-11).
 #[inline(always)]
-fn sine_floor<T: Real>(s: T) -> T {
-    T::select(s.lt_scalar(1e-12), s.splat_as(1e-12), s)
-}
-
-/// The fit of G1 at `a` as `(num, den)`, `(1, 1)` from 1.6 on (and for NaN), each in
-/// Horner's form with `a·b + c` as the instruction set forms it (`A`): `a (3.535 + 2.181 a)`
-/// and `1 + a (2.276 + 2.577 a)`, sums of positive terms.
-#[inline(always)]
-fn fit_ratio<A: MulAdd, T: Real>(a: T) -> (T, T) {
-    let n = A::mul_add(a, a.splat_as(2.181), a.splat_as(3.535)) * a;
-    let d = A::mul_add(a, A::mul_add(a, a.splat_as(2.577), a.splat_as(2.276)), a.splat_as(1.0));
-    let (past, one) = (!a.lt_scalar(1.6), a.splat_as(1.0));
+fn fit_scaled<A: MulAdd, T: Real>(cos: T, sin2: T, m: f32) -> (T, T) {
+    let t = sin2.sqrt() * m;
+    let t2 = t * t;
+    let c2 = cos * cos;
+    let n = A::mul_add(t, t.splat_as(3.535), cos * 2.181) * cos;
+    let d = A::mul_add(c2, c2.splat_as(2.577), A::mul_add(cos * 2.276, t, t2));
+    let (past, one) = (!c2.lt(t2 * 2.56), cos.splat_as(1.0));
     (T::select(past, one, n), T::select(past, one, d))
 }
 
