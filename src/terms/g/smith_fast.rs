@@ -32,7 +32,7 @@ pub fn g1(a2_inv: f64) -> f64 {
 
 /// G of both directions in a lane as a quotient `(num, den)`, given each direction's cosine
 /// and `sin²` and m: each fit's quotient with numerator and denominator multiplied by
-/// `t² = (m sin θ)²` ([`fit_scaled`]), which takes `a = cos/t` out of it, and the two
+/// `t² = (m sin θ)²` (`fit_scaled`), which takes `a = cos/t` out of it, and the two
 /// quotients multiplied, so that the lane's one division for D·G·K is G's too (6
 /// divisions become 0 here).
 #[inline(always)]
