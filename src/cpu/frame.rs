@@ -247,8 +247,9 @@ impl FrameLanes for f32 {
 /// The local form's frame (N = +z) for Beckmann's lanes: h = L·s_l + V·s_v formed in f64
 /// from the exact squared lengths and each component rounded once — so h turns by those
 /// roundings only (tan θ_h within u, θ_h within u/2), as on the general f32 frame — and
-/// the rest in f32: h's scale (cos_h within 3.5u, `|n × h|²` within 7u, their ratio tan²θ_h
-/// within 4u, c within 4.5u), l = L·s_l and v = V·s_v with the scales rounded once (cos_i,
+/// the rest in f32: tan²θ_h = `(hx² + hy²)/hz²` from h's components (within 2u; D reads
+/// only it), c = `√|h|²/2` (1.25u), h's scale where a term reads cos_h (3.5u) or
+/// `|n × h|²` (7u), l = L·s_l and v = V·s_v with the scales rounded once (cos_i,
 /// cos_o within u; `|n × l|²`, `|n × v|²` within 3u). D reads h's direction, which no
 /// slope of D can magnify beyond the general frame's, so the bound holds on every lane
 /// without a certificate (docs/CPU_ENGINE.md, "The local form's h64 frame"); what the
