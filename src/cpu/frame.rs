@@ -214,7 +214,8 @@ struct LocalParts<T: Real> {
     cos_h: T,
     sin2_h: T,
     tan2_h: T,
-    /// cos_h ≥ [`GRAZING`] (or the same test on `tan2_h`, see [`HalfParts::h_up`]).
+    /// cos_h ≥ [`GRAZING`] (tested on h's components in the h64 frame, see
+    /// [`HalfParts::h_up`]).
     h_up: T::Mask,
     /// `|L|²` and `|V|²` (rounded to f32) inside [`LENGTH2_MIN`, `LENGTH2_MAX`].
     lengths_ok: T::Mask,
@@ -378,7 +379,8 @@ impl<T: Real> HalfParts<T> {
             cos_h: T::select(m, self.cos_h, other.cos_h),
             sin2_h: T::select(m, self.sin2_h, other.sin2_h),
             tan2_h: T::select(m, self.tan2_h, other.tan2_h),
-            h_up: self.h_up,
+            // Each lane's own h: the near scales' h is meaningless on the other lanes.
+            h_up: (m & self.h_up) | (!m & other.h_up),
             lengths_ok: self.lengths_ok,
         }
     }
