@@ -385,6 +385,7 @@ pub fn microfacet_block<A: MulAdd, const D: u8, const G: u8, const F: u8, const 
         // half the arithmetic) or, where the plan fitted one, its polynomial in c (valid
         // for c ≥ FAST_MIN_C: these lanes), while the f64 frame's lanes keep the scaled
         // form, as the other Fresnel terms keep theirs.
+        use conductor::FORM_TABLES as TABLES;
         use conductor::{FORM_METAL as METAL, FORM_POLY as POLY, FORM_SCALED as SCALED};
         // The quotient form is the metal form's bits: the lane loops keep one of the two.
         let form = match p.conductor_form() {
@@ -397,8 +398,10 @@ pub fn microfacet_block<A: MulAdd, const D: u8, const G: u8, const F: u8, const 
             (false, SCALED) => terms32::<A, D, G, F, false, SCALED>(p, &fs, &ok, out),
             (true, METAL) => terms32::<A, D, G, F, true, METAL>(p, &fs, &ok, out),
             (false, METAL) => terms32::<A, D, G, F, false, METAL>(p, &fs, &ok, out),
-            (true, _) => terms32::<A, D, G, F, true, POLY>(p, &fs, &ok, out),
-            (false, _) => terms32::<A, D, G, F, false, POLY>(p, &fs, &ok, out),
+            (true, POLY) => terms32::<A, D, G, F, true, POLY>(p, &fs, &ok, out),
+            (false, POLY) => terms32::<A, D, G, F, false, POLY>(p, &fs, &ok, out),
+            (true, _) => terms32::<A, D, G, F, true, TABLES>(p, &fs, &ok, out),
+            (false, _) => terms32::<A, D, G, F, false, TABLES>(p, &fs, &ok, out),
         }
     }
     if p.defer_slow && p.fast_frame {
@@ -443,6 +446,14 @@ fn terms32<A: MulAdd, const D: u8, const G: u8, const F: u8, const T: bool, cons
     ok: &[bool; LANES],
     out: &mut Outputs,
 ) {
+    // The segment tables' form: the block's F at once, in AVX-512's registers (the
+    // register path's instructions), before the lanes' loop, which reads it.
+    let f_tables = match p.conductor_segments.as_ref() {
+        Some(tables) if F == F_CONDUCTOR && M == conductor::FORM_TABLES => {
+            super::segments::f_block(&fs[3], tables)
+        }
+        _ => [[1.0; LANES]; 3],
+    };
     for k in 0..LANES {
         let lane = Lane::from32(&Frame {
             cos_i: fs[0][k],
@@ -457,7 +468,8 @@ fn terms32<A: MulAdd, const D: u8, const G: u8, const F: u8, const T: bool, cons
             s2: fs[7][k],
             ok: ok[k],
         });
-        microfacet_lane::<A, D, G, F, true, T, M>(p, &lane, out, k);
+        let f = [f_tables[0][k], f_tables[1][k], f_tables[2][k]];
+        microfacet_lane::<A, D, G, F, true, T, M>(p, &lane, f, out, k);
     }
 }
 
@@ -579,6 +591,7 @@ fn microfacet_block64<A: MulAdd, const D: u8, const G: u8, const F: u8>(
         microfacet_lane::<A, D, G, F, false, true, { conductor::FORM_SCALED }>(
             p,
             &Lane::from64(&fr),
+            [1.0; 3],
             out,
             k,
         );
@@ -603,7 +616,8 @@ pub fn fused(d: DistributionKind, aniso: bool, g: Geometry, f: FresnelKind) -> b
 }
 
 /// The terms and the BRDF of lane `k` from its frame (`FAST`: the f32 frame's, see D;
-/// `T`: the terms are wanted; `M`: the conductor's lane form, see [`finish_lane`]).
+/// `T`: the terms are wanted; `M`: the conductor's lane form, see [`finish_lane`], and
+/// `f` its F where the block formed it: the segment tables' form).
 #[inline(always)]
 fn microfacet_lane<
     A: MulAdd,
@@ -616,11 +630,12 @@ fn microfacet_lane<
 >(
     p: &Params,
     fr: &Lane,
+    f: [f32; 3],
     out: &mut Outputs,
     k: usize,
 ) {
     let (d, g) = microfacet_dg::<A, D, G, FAST>(p, fr);
-    finish_lane::<A, F, T, M>(p, fr, d, g, out, k);
+    finish_lane::<A, F, T, M>(p, fr, d, g, f, out, k);
 }
 
 /// D and G of one lane (FORMULAS.md §2–§3) from its frame (`FAST`: the f32 frame's), each
@@ -709,14 +724,16 @@ pub(super) fn geometry<const D: u8, const G: u8>(
 /// are divided out only when wanted (`T`), after the BRDF, whose bits do not depend on
 /// `T`. `M`: the conductor's lane form (`conductor::FORM_*`): the metal form
 /// (`conductor::f_lane_metal`) or the polynomial (`conductor::poly::f_lanes_poly`, the f32 frame's
-/// lanes only), which the caller chooses only for a material legal for it, else the scaled
-/// form.
+/// lanes only), or the segment tables' (`FORM_TABLES`, which the block forms and hands
+/// the lane's as `f_tables`, which no other form reads), which the caller chooses only for
+/// a material legal for it, else the scaled form.
 #[inline(always)]
 fn finish_lane<A: MulAdd, const F: u8, const T: bool, const M: u8>(
     p: &Params,
     fr: &Lane,
     d: (f32, f32),
     g: (f32, f32),
+    f_tables: [f32; 3],
     out: &mut Outputs,
     k: usize,
 ) {
@@ -725,7 +742,9 @@ fn finish_lane<A: MulAdd, const F: u8, const T: bool, const M: u8>(
     // inline from_fn's closure around the conductor, which made every lane a call and
     // nothing vectorised.
     let mut f = [1.0f32; 3];
-    if F == F_CONDUCTOR && M == conductor::FORM_POLY {
+    if F == F_CONDUCTOR && M == conductor::FORM_TABLES {
+        f = f_tables;
+    } else if F == F_CONDUCTOR && M == conductor::FORM_POLY {
         // The three channels' polynomials at once.
         f = conductor::poly::f_lanes_poly::<A, f32>(fr.c, p.conductor_poly());
     } else {

@@ -32,6 +32,7 @@ mod frame;
 mod measured;
 pub mod plan;
 mod register;
+mod segments;
 mod slice_tuples;
 pub mod transpose;
 pub use chunk::Tally;

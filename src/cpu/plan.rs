@@ -61,9 +61,11 @@ fn ggx_guard(p: &Params, f: FresnelKind) -> f32 {
     let f_u = match f {
         FresnelKind::None => 0.0,
         FresnelKind::Schlick => schlick::LANE_BOUND_U,
-        FresnelKind::Conductor => p
-            .conductor_poly
-            .map_or(conductor::METAL_FORM_BUDGET, |poly| poly.bound_u),
+        FresnelKind::Conductor => match (&p.conductor_segments, &p.conductor_poly) {
+            (Some(tables), _) => tables.bound_u,
+            (None, Some(poly)) => poly.bound_u,
+            (None, None) => conductor::METAL_FORM_BUDGET,
+        },
         FresnelKind::Dielectric => conductor::METAL_FORM_BUDGET,
     };
     ggx::local_frame_guard_for_f(p.m2, f_u)
@@ -198,10 +200,17 @@ impl Plan {
     /// AVX-512 its FMAs read the coefficients as broadcast operands and it is 7–11 % faster
     /// than the metal form; on AVX2 as fast, with fewer lanes left to another frame and F
     /// 1.4–6.6u off instead of 3.9–8u (docs/CPU_ENGINE.md). `scalar` keeps the metal form.
+    /// On AVX-512 the segment tables (`conductor::segments`) take the polynomial's place
+    /// where they fit: 4 multiply-adds and 5 permutes a channel instead of 14
+    /// multiply-adds, and F within ~3u instead of 5–21u (round 22).
     pub fn with_conductor_poly(mut self, m: &Material, isa: Isa) -> Plan {
         if let (Plan::Microfacet { p, f, .. }, Model::CookTorrance(ct)) = (&mut self, &m.model) {
             if let Fresnel::Conductor { ior, extinction } = ct.fresnel {
                 if isa != Isa::Scalar && p.fast_frame && p.conductor.metal {
+                    if isa == Isa::Avx512 {
+                        p.conductor_segments =
+                            conductor::segments::Segments::fitted(ior, extinction);
+                    }
                     p.conductor_poly = conductor::poly::Polynomial::fitted(ior, extinction);
                     p.ggx_local_guard = ggx_guard(p, *f);
                 }

@@ -16,8 +16,10 @@
 
 use super::frame::{frame_local32, frame_local_h64, near_unit_lanes, Frame, FrameLanes};
 use super::kernel::{self, Params, FAST_MIN_C};
+use super::segments::SegmentLanes;
 use crate::terms::d::{beckmann, ggx};
 use crate::terms::f::conductor::poly::Polynomial;
+use crate::terms::f::conductor::segments::Segments;
 use crate::terms::f::{conductor, schlick};
 use crate::terms::g::{cook_torrance, smith, smith_correlated, smith_fast};
 use crate::terms::math::Fused;
@@ -222,18 +224,24 @@ impl<T: Real, const F: u8, const Q: u8> kernel::FresnelOf<T> for Fresnel<'_, T, 
 }
 
 /// The second stage (after [`ggx_local_dgk`]): F (`poly`: the material's polynomial, as
-/// the caller reads it, [`Params::conductor_poly`]), the channels, and the lanes whose output
+/// the caller reads it, [`Params::conductor_poly`]; `tables`: its segment tables where the
+/// plan took them, [`Params::conductor_segments`], in the polynomial's place), the channels, and the lanes whose output
 /// may be non-finite or out of range (`kernel::channels_of`'s test). Which lanes the
 /// reference or another frame takes follows from these and [`Staged::flags`], which the
 /// caller reads as bits after the first stage (masks held across the second stage's
 /// arithmetic were spilled).
 #[inline(always)]
-pub(super) fn local_finish<T: Real, const F: u8, const Q: u8>(
+pub(super) fn local_finish<T: SegmentLanes, const F: u8, const Q: u8>(
     p: &Params,
     poly: &Polynomial,
+    tables: Option<&Segments>,
     st: Staged<T>,
 ) -> ([T; 3], T::Mask) {
     if F == kernel::F_CONDUCTOR && Q == conductor::FORM_POLY {
+        if let (true, Some(tables)) = (T::TABLES, tables) {
+            let f = T::f_segments(st.c, tables);
+            return kernel::channels_of::<Fused, _>(p, st.dgk, st.size, f);
+        }
         // The three channels' polynomials at once (their Horner chains interleaved).
         let f = conductor::poly::f_lanes_poly::<Fused, _>(st.c, poly);
         return kernel::channels_of::<Fused, _>(p, st.dgk, st.size, f);

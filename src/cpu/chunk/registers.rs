@@ -34,8 +34,11 @@ impl LocalRegisters<'_, '_> {
         let Plan::Microfacet { d, g, f, p, .. } = self.plan else {
             unreachable!("the register path serves microfacet groups (`register::serves`)")
         };
-        // The conductor's lane form: its polynomial where the plan fitted one, else the
-        // metal form (without its selects where every channel has Re η² < 0).
+        // The conductor's lane form: its segment tables or polynomial where the plan took
+        // one (one variant: `register::local_finish` takes the tables where they are
+        // present), else the metal form (without its selects where every channel has
+        // Re η² < 0).
+        use conductor::FORM_TABLES as TABLES;
         use conductor::{FORM_METAL as METAL, FORM_POLY as POLY, FORM_QUOTIENT as QUOTIENT};
         let form = p.conductor_form();
         // The input's form (`INPUT_*`): a function each, so that no loop holds another
@@ -60,7 +63,7 @@ impl LocalRegisters<'_, '_> {
                 match f {
                     F::None => apart!($d, $g, F_NONE, METAL),
                     F::Schlick => apart!($d, $g, F_SCHLICK, METAL),
-                    _ if form == POLY => apart!($d, $g, F_CONDUCTOR, POLY),
+                    _ if form == POLY || form == TABLES => apart!($d, $g, F_CONDUCTOR, POLY),
                     _ if form == QUOTIENT => apart!($d, $g, F_CONDUCTOR, QUOTIENT),
                     _ => apart!($d, $g, F_CONDUCTOR, METAL),
                 }
@@ -309,8 +312,16 @@ fn two_registers<
             p.conductor_poly()
         }
     };
-    let ([ra, ga, ba], bad_a) = register::local_finish::<_, F, Q>(p, poly(), sa);
-    let ([rb, gb, bb], bad_b) = register::local_finish::<_, F, Q>(p, poly(), sb);
+    // The segment tables likewise: hoisted, their 32 registers would spill.
+    let tables = || {
+        if S::BROADCAST_OPERANDS {
+            std::hint::black_box(p.conductor_segments.as_ref())
+        } else {
+            p.conductor_segments.as_ref()
+        }
+    };
+    let ([ra, ga, ba], bad_a) = register::local_finish::<_, F, Q>(p, poly(), tables(), sa);
+    let ([rb, gb, bb], bad_b) = register::local_finish::<_, F, Q>(p, poly(), tables(), sb);
     (
         [ra.get(), ga.get(), ba.get()],
         [rb.get(), gb.get(), bb.get()],

@@ -43,6 +43,10 @@ pub struct Params {
     /// The conductor's fitted polynomial, where the f32 lanes take it
     /// ([`conductor::poly::Polynomial::fit`]; `None` for every other material).
     pub conductor_poly: Option<conductor::poly::Polynomial>,
+    /// The conductor's segment tables, where the f32 lanes take them instead of the
+    /// polynomial ([`conductor::segments::Segments::fit`]: on AVX-512, whose permutes look
+    /// them up; `None` for every other material and instruction set).
+    pub conductor_segments: Option<conductor::segments::Segments>,
     /// Whether the caller asked for the terms (D, G, F, K): without them the lanes form
     /// D·G·K over one division and never divide out the terms (see `finish_lane`).
     pub terms: bool,
@@ -69,10 +73,13 @@ pub struct Params {
 
 impl Params {
     /// The lane form of the conductor's F on the f32 frames' lanes (`conductor::FORM_*`):
-    /// the polynomial where the plan fitted one, else the metal form (as its quotient where
+    /// the segment tables where the plan took them, else the polynomial where it fitted
+    /// one, else the metal form (as its quotient where
     /// every channel's `Re η²` is negative), else the scaled form.
     pub fn conductor_form(&self) -> u8 {
-        if self.conductor_poly.is_some() {
+        if self.conductor_segments.is_some() {
+            conductor::FORM_TABLES
+        } else if self.conductor_poly.is_some() {
             conductor::FORM_POLY
         } else if self.conductor.metal_quotient {
             conductor::FORM_QUOTIENT

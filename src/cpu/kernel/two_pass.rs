@@ -101,6 +101,7 @@ pub fn f_block<A: MulAdd, const F: u8>(p: &Params, st: &Stage, out: &mut Outputs
             &fr,
             (st.d[k], 1.0),
             (st.g[k], 1.0),
+            [1.0; 3],
             out,
             k,
         );

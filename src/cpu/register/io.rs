@@ -2,6 +2,7 @@
 //! ([`RegisterIo`]): AVX2's and AVX-512's, the engine's variants with FMA, both of which
 //! have the path.
 
+use crate::terms::f::conductor::segments::Segments;
 use pulp::Simd;
 
 /// An instruction set's register path: the width of a register and its own ways to read
@@ -34,6 +35,14 @@ pub(crate) trait RegisterIo: Simd {
 
     /// Two halves of f64 lanes ([`Self::widen`]'s order) rounded to the nearest f32.
     fn narrow(self, w: [Self::f64s; 2]) -> Self::f32s;
+
+    /// Whether a plan takes the conductor's segment tables on this instruction set (where
+    /// a register of 16 entries is one permute): AVX-512's. AVX2's register path compiles
+    /// no branch for them (the branch alone cost it 2.4–2.9 instructions an evaluation).
+    const TABLES: bool;
+
+    /// The conductor's F of three channels from the segment tables (`cpu::segments`).
+    fn f_segments(self, c: Self::f32s, tables: &Segments) -> [Self::f32s; 3];
 }
 
 /// AVX2's reads and writes, 8 tuples a register: the transposes of `transpose::avx2`,
@@ -41,6 +50,7 @@ pub(crate) trait RegisterIo: Simd {
 #[cfg(target_arch = "x86_64")]
 impl RegisterIo for pulp::x86::V3 {
     const BROADCAST_OPERANDS: bool = false;
+    const TABLES: bool = false;
 
     #[inline(always)]
     fn local_columns(self, rows: &[f32]) -> [Self::f32s; 6] {
@@ -81,6 +91,13 @@ impl RegisterIo for pulp::x86::V3 {
         [bytemuck::cast(lo), bytemuck::cast(hi)]
     }
 
+    /// Lane by lane (a plan takes the tables only on AVX-512; the same bits).
+    #[inline(always)]
+    fn f_segments(self, c: Self::f32s, tables: &Segments) -> [Self::f32s; 3] {
+        let c: [f32; 8] = bytemuck::cast(c);
+        bytemuck::cast(crate::cpu::segments::f_block(&c, tables))
+    }
+
     #[inline(always)]
     fn narrow(self, w: [Self::f64s; 2]) -> Self::f32s {
         let lo = self.avx._mm256_cvtpd_ps(bytemuck::cast(w[0]));
@@ -94,6 +111,7 @@ impl RegisterIo for pulp::x86::V3 {
 #[cfg(target_arch = "x86_64")]
 impl RegisterIo for pulp::x86::V4 {
     const BROADCAST_OPERANDS: bool = true;
+    const TABLES: bool = true;
 
     #[inline(always)]
     fn local_columns(self, rows: &[f32]) -> [Self::f32s; 6] {
@@ -131,6 +149,11 @@ impl RegisterIo for pulp::x86::V4 {
         let lo = f._mm512_cvtps_pd(f._mm512_castps512_ps256(x));
         let hi = f._mm512_cvtps_pd(self.avx512dq._mm512_extractf32x8_ps::<1>(x));
         [bytemuck::cast(lo), bytemuck::cast(hi)]
+    }
+
+    #[inline(always)]
+    fn f_segments(self, c: Self::f32s, tables: &Segments) -> [Self::f32s; 3] {
+        crate::cpu::segments::f_register(self, c, tables)
     }
 
     #[inline(always)]

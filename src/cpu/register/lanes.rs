@@ -5,6 +5,8 @@
 
 use super::io::RegisterIo;
 use crate::cpu::frame::{self, FrameLanes, HalfParts};
+use crate::cpu::segments::SegmentLanes;
+use crate::terms::f::conductor::segments::Segments;
 use crate::terms::math::MulAdd;
 use crate::terms::real::{Real, Wide};
 use pulp::Simd;
@@ -279,6 +281,15 @@ impl<S: RegisterIo> FrameLanes for Reg<S> {
             [widen(v[0]), widen(v[1]), widen(v[2])],
             near,
         )
+    }
+}
+
+impl<S: RegisterIo> SegmentLanes for Reg<S> {
+    const TABLES: bool = S::TABLES;
+
+    #[inline(always)]
+    fn f_segments(c: Reg<S>, tables: &Segments) -> [Reg<S>; 3] {
+        c.s.f_segments(c.v, tables).map(|v| Reg { s: c.s, v })
     }
 }
 

@@ -6,6 +6,7 @@ use crate::terms::real::Real;
 use num_complex::Complex64;
 
 pub mod poly;
+pub mod segments;
 
 /// The lane forms of F a material's f32 lanes may take (a const parameter of the lane loops
 /// and the register path): [`f_lane`], the form for every η.
@@ -18,6 +19,9 @@ pub const FORM_QUOTIENT: u8 = 2;
 /// [`poly::f_lanes_poly`]: a metal whose fitted polynomial is within the metal form's
 /// budget ([`poly::Polynomial::fit`]).
 pub const FORM_POLY: u8 = 3;
+/// [`segments::f_lane_segments`]: a metal whose segment tables fit within the metal form's
+/// budget ([`segments::Segments::fit`]), on AVX-512's lanes (its permutes look them up).
+pub const FORM_TABLES: u8 = 4;
 
 /// The spelling in a materials file.
 pub const NAME: &str = "conductor";

@@ -30,9 +30,6 @@ pub const CENTRE: f32 = 0.546875;
 /// frames' lanes (≥ `FAST_MIN_C` = 0.1, ≤ 1 plus the frame's few ulp).
 const HALF_WIDTH: f64 = 0.455;
 
-/// Chebyshev points of the interpolant whose upper coefficients measure the truncation.
-const NODES: usize = 33;
-
 /// A conductor's F per channel as `Σ bᵢ tⁱ` in `t = c − CENTRE` (coefficients `b[ch][i]`,
 /// rounded once to f32), and the bound it was admitted under.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -44,52 +41,62 @@ pub struct Polynomial {
     pub bound_u: f64,
 }
 
-/// One channel's fit: the f64 coefficients of `t`'s powers and the truncation's bound
-/// (absolute), or `None` when the Chebyshev coefficients do not fall far enough by the
-/// interpolant's last ones to trust the bound.
-fn fit_channel(n: f64, k: f64) -> Option<([f64; DEGREE + 1], f64)> {
-    let centre = f64::from(CENTRE);
-    // F at the Chebyshev points of the first kind on [centre − h, centre + h].
-    let x: Vec<f64> = (0..NODES)
-        .map(|j| (std::f64::consts::PI * (j as f64 + 0.5) / NODES as f64).cos())
+/// Chebyshev points of the interpolant whose upper coefficients measure the truncation.
+const NODES: usize = 33;
+
+/// One channel's fit of F for `η = n + ik` on `[centre − half_width, centre + half_width]`
+/// (F at `nodes` Chebyshev points, the interpolant truncated to degree `N − 1`): the f64
+/// coefficients of the powers of `t = c − centre` and the truncation's bound (absolute), or
+/// `None` when the Chebyshev coefficients do not fall far enough by the interpolant's last
+/// ones to trust the bound (Trefethen 2013, ch. 4 and 8).
+pub(super) fn fit_channel<const N: usize>(
+    centre: f64,
+    half_width: f64,
+    nodes: usize,
+    n: f64,
+    k: f64,
+) -> Option<([f64; N], f64)> {
+    // F at the Chebyshev points of the first kind on the interval.
+    let x: Vec<f64> = (0..nodes)
+        .map(|j| (std::f64::consts::PI * (j as f64 + 0.5) / nodes as f64).cos())
         .collect();
-    let fx: Vec<f64> = x.iter().map(|&x| f(centre + HALF_WIDTH * x, n, k)).collect();
+    let fx: Vec<f64> = x.iter().map(|&x| f(centre + half_width * x, n, k)).collect();
     if fx.iter().any(|v| !v.is_finite()) {
         return None;
     }
-    // Chebyshev coefficients of the degree-32 interpolant (a discrete cosine transform).
-    let mut a = vec![0.0; NODES];
+    // Chebyshev coefficients of the interpolant (a discrete cosine transform).
+    let mut a = vec![0.0; nodes];
     for (m, am) in a.iter_mut().enumerate() {
-        let angle = |j: usize| std::f64::consts::PI * m as f64 * (j as f64 + 0.5) / NODES as f64;
-        let s: f64 = (0..NODES).map(|j| fx[j] * angle(j).cos()).sum();
-        *am = s * 2.0 / NODES as f64 * if m == 0 { 0.5 } else { 1.0 };
+        let angle = |j: usize| std::f64::consts::PI * m as f64 * (j as f64 + 0.5) / nodes as f64;
+        let s: f64 = (0..nodes).map(|j| fx[j] * angle(j).cos()).sum();
+        *am = s * 2.0 / nodes as f64 * if m == 0 { 0.5 } else { 1.0 };
     }
     // The coefficients beyond the interpolant's (and their aliases in it) are bounded by
     // its last ones where these have fallen far below u (6e-8): a function analytic in a
-    // Bernstein ellipse has |aₘ| ≤ 2Mρ⁻ᵐ, so the tail past 32 is below the last few.
-    // Where they have not, F is near a singularity and the bound is not trusted.
-    let last: f64 = a[NODES - 4..].iter().map(|c| c.abs()).sum();
+    // Bernstein ellipse has |aₘ| ≤ 2Mρ⁻ᵐ, so the tail past the interpolant is below the
+    // last few. Where they have not, F is near a singularity and the bound is not trusted.
+    let last: f64 = a[nodes - 4..].iter().map(|c| c.abs()).sum();
     if last > 1e-10 {
         return None;
     }
-    // Truncation to DEGREE: the dropped coefficients, the aliasing of the computed ones
-    // and the tail, each at most the sum of the dropped magnitudes plus the last ones.
-    let truncation = 2.0 * a[DEGREE + 1..].iter().map(|c| c.abs()).sum::<f64>() + 3.0 * last;
+    // Truncation to degree N − 1: the dropped coefficients, the aliasing of the computed
+    // ones and the tail, each at most the sum of the dropped magnitudes plus the last ones.
+    let truncation = 2.0 * a[N..].iter().map(|c| c.abs()).sum::<f64>() + 3.0 * last;
     // Σ aₘ Tₘ(x) to powers of x (Tₘ₊₁ = 2x Tₘ − Tₘ₋₁), then x = t/h to powers of t.
-    let mut pow = [0.0; DEGREE + 1];
-    let (mut tm1, mut tm) = ([0.0; DEGREE + 1], [0.0; DEGREE + 1]);
+    let mut pow = [0.0; N];
+    let (mut tm1, mut tm) = ([0.0; N], [0.0; N]);
     tm1[0] = 1.0; // T₀
     tm[1] = 1.0; // T₁
     pow[0] += a[0];
-    for i in 0..=DEGREE {
+    for i in 0..N {
         pow[i] += a[1] * tm[i];
     }
-    for am in &a[2..=DEGREE] {
-        let mut next = [0.0; DEGREE + 1];
-        for i in 0..=DEGREE {
+    for am in &a[2..N] {
+        let mut next = [0.0; N];
+        for i in 0..N {
             next[i] = if i > 0 { 2.0 * tm[i - 1] } else { 0.0 } - tm1[i];
         }
-        for i in 0..=DEGREE {
+        for i in 0..N {
             pow[i] += am * next[i];
         }
         (tm1, tm) = (tm, next);
@@ -97,35 +104,41 @@ fn fit_channel(n: f64, k: f64) -> Option<([f64; DEGREE + 1], f64)> {
     let mut scale = 1.0;
     for p in &mut pow {
         *p /= scale;
-        scale *= HALF_WIDTH;
+        scale *= half_width;
     }
     Some((pow, truncation))
 }
 
-/// The relative error bound, in u, of [`f_lanes_poly`] for one channel with coefficients
-/// `b` (as rounded to f32) whose f64 polynomial is within `truncation` of F on the
-/// interval, over every `c` in it and either MulAdd kind:
+/// The relative error bound, in u, of Horner's rule in f32 for one channel with
+/// coefficients `b` (as rounded to f32) of the powers of `t`, `|t| ≤ half_width`, whose f64
+/// polynomial is within `truncation` of F there:
 ///
 /// `(truncation/u + max_t Σ (2i + 3)|bᵢ||t|ⁱ) / F_min`.
 ///
 /// - Horner's running error (Higham 2002, §5.1): a step `rᵢ = rᵢ₊₁ t + bᵢ` rounds once
 ///   with FMA and twice without, each rounding relative to a value at most
-///   `Σⱼ≥ᵢ |bⱼ||t|ʲ⁻ⁱ`, carried to the result by `|t|ⁱ`: in all ≤ `2u Σ (i + 1)|bᵢ||t|ⁱ`.
+///   `Σⱼ≥ᵢ |bⱼ||t|ʲ⁻ⁱ`, carried to the result by `|t|ⁱ`: in all ≤ `2u Σ (i + 1)|bᵢ||t|ⁱ`
+///   without FMA, half that with it.
 /// - The coefficients' rounding to f32: `u Σ |bᵢ||t|ⁱ`.
-/// - `t = c − CENTRE` rounded (c outside Sterbenz's range): `t(1 + δ)`, `|δ| ≤ u`, moves
-///   the value by ≤ `u Σ i|bᵢ||t|ⁱ`.
+/// - `t` rounded (where `c − centre` is not exact): `t(1 + δ)`, `|δ| ≤ u`, moves the value
+///   by ≤ `u Σ i|bᵢ||t|ⁱ` — inside the sum with FMA (`(i + 1) + 1 + i`), which is how
+///   [`f_lanes_poly`] runs; where `t` is exact (the segments' lanes), with or without.
 ///
-/// The maximum is taken on a grid of 4,097 points in t (the sum grows with |t|, so its
+/// The maximum is taken on a grid of `grid + 1` points in t (the sum grows with |t|, so its
 /// maximum is at an end) and F_min is the least f64 polynomial value on the same grid
 /// less the truncation and the largest change between neighbouring points.
-fn bound(b: &[f64; DEGREE + 1], truncation: f64) -> f64 {
+pub(super) fn bound<const N: usize>(
+    b: &[f64; N],
+    truncation: f64,
+    half_width: f64,
+    grid: usize,
+) -> f64 {
     let u = f64::from(f32::EPSILON) / 2.0;
-    let h = HALF_WIDTH;
+    let h = half_width;
     let at = |t: f64| b.iter().rev().fold(0.0, |acc, &bi| acc * t + bi);
-    let slope: f64 = (1..=DEGREE)
+    let slope: f64 = (1..N)
         .map(|i| i as f64 * b[i].abs() * h.powi(i as i32 - 1))
         .sum();
-    let grid = 4096;
     let step = 2.0 * h / grid as f64;
     let fmin = (0..=grid)
         .map(|j| at(-h + step * j as f64))
@@ -135,10 +148,46 @@ fn bound(b: &[f64; DEGREE + 1], truncation: f64) -> f64 {
     if fmin.is_nan() || fmin <= 0.0 {
         return f64::INFINITY;
     }
-    let rounding: f64 = (0..=DEGREE)
+    let rounding: f64 = (0..N)
         .map(|i| (2 * i + 3) as f64 * b[i].abs() * h.powi(i as i32))
         .sum();
     (truncation / u + rounding) / fmin
+}
+
+/// A process's fits by `η` (both the polynomial's and the segments'): a fit takes ~30 µs
+/// to a few hundred, the CPU engine makes its plans on every call (every chunk of a
+/// stream), a fitting run evaluates the same η many times, and the Vulkan kernel folds the
+/// polynomial into each pipeline of a conductor material. Cleared when it holds 65,536 fits.
+pub(super) struct FitCache<V>(Mutex<BTreeMap<[u64; 6], Option<V>>>);
+
+impl<V: Copy> FitCache<V> {
+    /// An empty cache.
+    pub(super) const fn new() -> FitCache<V> {
+        FitCache(Mutex::new(BTreeMap::new()))
+    }
+
+    /// The fit of `η = ior + i·extinction`, from the cache or made by `fit` once.
+    pub(super) fn get(
+        &self,
+        ior: [f64; 3],
+        extinction: [f64; 3],
+        fit: impl FnOnce() -> Option<V>,
+    ) -> Option<V> {
+        let key = [ior, extinction].concat();
+        let key: [u64; 6] = std::array::from_fn(|i| key[i].to_bits());
+        // A poisoned lock only means another thread panicked while inserting: the map
+        // holds whole entries either way.
+        if let Some(v) = self.0.lock().unwrap_or_else(|e| e.into_inner()).get(&key) {
+            return *v;
+        }
+        let v = fit();
+        let mut fits = self.0.lock().unwrap_or_else(|e| e.into_inner());
+        if fits.len() >= 1 << 16 {
+            fits.clear();
+        }
+        fits.insert(key, v);
+        v
+    }
 }
 
 impl Polynomial {
@@ -166,9 +215,15 @@ impl Polynomial {
             bound_u: 0.0,
         };
         for ch in 0..3 {
-            let (pow, truncation) = fit_channel(ior[ch], extinction[ch])?;
+            let (pow, truncation) = fit_channel::<{ DEGREE + 1 }>(
+                f64::from(CENTRE),
+                HALF_WIDTH,
+                NODES,
+                ior[ch],
+                extinction[ch],
+            )?;
             let rounded = pow.map(|x| x as f32);
-            let bound_u = bound(&rounded.map(f64::from), truncation);
+            let bound_u = bound(&rounded.map(f64::from), truncation, HALF_WIDTH, 4096);
             if bound_u > METAL_FORM_BUDGET {
                 return None;
             }
@@ -179,27 +234,12 @@ impl Polynomial {
     }
 
     /// [`Polynomial::fit`] of `η = ior + i·extinction` (with its [`LaneConstants`]), once a
-    /// process per η (a fit takes ~30 µs): the CPU engine makes its plans on every call
-    /// (every chunk of a stream), a fitting run evaluates the same η many times, and the
-    /// Vulkan kernel folds the fit into each pipeline of a conductor material. The cache is
-    /// cleared when it holds 65,536 fits.
+    /// process per η ([`FitCache`]).
     pub fn fitted(ior: [f64; 3], extinction: [f64; 3]) -> Option<Polynomial> {
-        type Fits = BTreeMap<[u64; 6], Option<Polynomial>>;
-        static FITS: Mutex<Fits> = Mutex::new(BTreeMap::new());
-        let key = [ior, extinction].concat();
-        let key: [u64; 6] = std::array::from_fn(|i| key[i].to_bits());
-        // A poisoned lock only means another thread panicked while inserting: the map
-        // holds whole entries either way.
-        if let Some(fit) = FITS.lock().unwrap_or_else(|e| e.into_inner()).get(&key) {
-            return *fit;
-        }
-        let fit = Polynomial::fit(&LaneConstants::new(ior, extinction), ior, extinction);
-        let mut fits = FITS.lock().unwrap_or_else(|e| e.into_inner());
-        if fits.len() >= 1 << 16 {
-            fits.clear();
-        }
-        fits.insert(key, fit);
-        fit
+        static FITS: FitCache<Polynomial> = FitCache::new();
+        FITS.get(ior, extinction, || {
+            Polynomial::fit(&LaneConstants::new(ior, extinction), ior, extinction)
+        })
     }
 }
 
