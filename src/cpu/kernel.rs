@@ -664,7 +664,7 @@ fn microfacet_dg<A: MulAdd, const D: u8, const G: u8, const FAST: bool>(
         }
         DistributionKind::Ggx => (ggx::d_lane64(fr.cos_h2, fr.sin2_h, p.m2, p.d_norm), 1.0),
         DistributionKind::Beckmann if FAST => (
-            beckmann::d_lane32(fr.tan2_h32, p.inv_m2_f, p.d_norm_f, p.d_exp_floor),
+            beckmann::d_lane32::<A, _>(fr.tan2_h32, p.inv_m2_f, p.d_norm_f, p.d_exp_floor),
             1.0,
         ),
         DistributionKind::Beckmann => (

@@ -114,7 +114,7 @@ pub(super) fn beckmann_local_dgk<T: FrameLanes, const G: u8, const F: u8, const 
     let general = slow & !slow;
     let (cos_i, cos_o, one) = (fr.cos_i, fr.cos_o, fr.c.splat_as(1.0));
     let d = (
-        beckmann::d_lane32(fr.tan2_h, p.inv_m2_f, p.d_norm_f, p.d_exp_floor),
+        beckmann::d_lane32::<Fused, _>(fr.tan2_h, p.inv_m2_f, p.d_norm_f, p.d_exp_floor),
         one,
     );
     let g = match const { Geometry::from_code(G) } {

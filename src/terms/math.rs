@@ -93,16 +93,17 @@ const ROUND_MAGIC: f32 = 12_582_912.0;
 /// a power of two.
 #[inline(always)]
 pub fn exp_neg<T: Real>(x: T) -> T {
-    exp_neg_above(x, -87.0)
+    exp_neg_above::<Rounded, T>(x, -87.0)
 }
 
 /// [`exp_neg`] with 0 below `floor` (≥ −87) instead of below −87: for a caller whose
 /// result is below what the rule can tell from 0 once `x < floor`, and whose products of
 /// such tiny values would otherwise leave f32's normal range (subnormal operands and
-/// results cost a microcode assist a register on x86). The same bits as [`exp_neg`] for
-/// `x ≥ floor`.
+/// results cost a microcode assist a register on x86). Its multiply-adds as `A` forms
+/// them: with [`Rounded`] the same bits as [`exp_neg`] for `x ≥ floor`; with [`Fused`]
+/// half the operations (a lane form's, where the instruction set has FMA).
 #[inline(always)]
-pub fn exp_neg_above<T: Real>(x: T, floor: f32) -> T {
+pub fn exp_neg_above<A: MulAdd, T: Real>(x: T, floor: f32) -> T {
     let below = x.lt_scalar(floor);
     let xc = T::select(below, x.splat_as(floor), x);
     // k = round(x log₂e) in the low bits of `t` (ROUND_MAGIC's ulp is 1), taken from them
@@ -110,19 +111,30 @@ pub fn exp_neg_above<T: Real>(x: T, floor: f32) -> T {
     // vectorise (it made every lane of a block a scalar conversion and compare, a third of
     // Beckmann's block). 2^k's bits are `(k + 127) << 23`, i.e. `t`'s bits shifted, plus
     // `(127 − ROUND_MAGIC's bits) << 23`, wrapping.
-    let t = xc * std::f32::consts::LOG2_E + ROUND_MAGIC;
+    let t = A::mul_add(
+        xc,
+        xc.splat_as(std::f32::consts::LOG2_E),
+        xc.splat_as(ROUND_MAGIC),
+    );
     let k = t - ROUND_MAGIC;
-    let r = (xc - k * LN2_HI) - k * LN2_LO;
+    // k·LN2_HI is exact (LN2_HI's low bits are zero), so `xc − k·LN2_HI` is one rounding
+    // either way.
+    let r = A::mul_add(
+        k,
+        k.splat_as(-LN2_LO),
+        A::mul_add(k, k.splat_as(-LN2_HI), xc),
+    );
     // Estrin's scheme: the same polynomial at depth 4 instead of Horner's 7, so that a
     // register path, which has few lanes in flight, does not wait on one long chain.
     let r2 = r * r;
     let r4 = r2 * r2;
-    let (p01, p23) = (r + 1.0, r * (1.0 / 6.0) + 1.0 / 2.0);
+    let poly = |a: f32, b: f32| A::mul_add(r, r.splat_as(a), r.splat_as(b));
+    let (p01, p23) = (r + 1.0, poly(1.0 / 6.0, 1.0 / 2.0));
     let (p45, p67) = (
-        r * (1.0 / 120.0) + 1.0 / 24.0,
-        r * (1.0 / 5040.0) + 1.0 / 720.0,
+        poly(1.0 / 120.0, 1.0 / 24.0),
+        poly(1.0 / 5040.0, 1.0 / 720.0),
     );
-    let p = (p23 * r2 + p01) + (p67 * r2 + p45) * r4;
+    let p = A::mul_add(A::mul_add(p67, r2, p45), r4, A::mul_add(p23, r2, p01));
     const BIAS: u32 = 127u32.wrapping_sub(ROUND_MAGIC.to_bits()) << 23;
     let scale = t.exponent_bits(BIAS);
     T::select(below, x.splat_as(0.0), p * scale)
@@ -298,14 +310,24 @@ mod tests {
 
     #[test]
     fn exp_neg_is_within_a_few_ulp_of_f64_exp() {
-        let mut worst = 0f64;
+        // Both multiply-add kinds: `exp_neg` (two roundings) and the fused lane form.
+        let (mut worst, mut worst_fused) = (0f64, 0f64);
         for i in 0..200_000 {
             let x = -87.0 * f64::from(i) / 200_000.0;
-            let got = f64::from(exp_neg(x as f32));
             let want = f64::from(x as f32).exp();
+            let got = f64::from(exp_neg(x as f32));
             worst = worst.max(((got - want) / want).abs());
+            let fused = f64::from(exp_neg_above::<Fused, f32>(x as f32, -87.0));
+            worst_fused = worst_fused.max(((fused - want) / want).abs());
         }
         assert!(worst < 5e-7, "worst relative error {worst}");
+        assert!(
+            worst_fused < 5e-7,
+            "fused: worst relative error {worst_fused}"
+        );
+        // The floor: 0 below it, exp_neg's value at and above it.
+        assert_eq!(exp_neg_above::<Rounded, f32>(-41.6, -41.5), 0.0);
+        assert_eq!(exp_neg_above::<Rounded, f32>(-41.5, -41.5), exp_neg(-41.5));
         assert_eq!(exp_neg(-88.0), 0.0);
         assert_eq!(exp_neg(f32::NEG_INFINITY), 0.0);
     }

@@ -3,7 +3,7 @@
 //! al. 2007 / Heitz 2014, modern convention only) `exp(−((hx/mx)² + (hy/my)²)/hz²) /
 //! (π mx my hz⁴)`; and its Smith Λ (Walter et al. 2007, eq. 25 via Heitz 2014).
 
-use crate::terms::math::{erfc, exp_neg, exp_neg_above};
+use crate::terms::math::{erfc, exp_neg, exp_neg_above, MulAdd};
 use crate::terms::real::Real;
 use crate::terms::k::Convention;
 use std::f64::consts::PI;
@@ -69,10 +69,10 @@ pub fn lambda(a2_inv: f64) -> f64 {
 /// (`1 + tan²` ≤ 1e8, the norm ≤ 5.7e17). `exp(−x)·norm` as `(e·norm)·e` with
 /// `e = exp(−x/2)`, as [`d_lane64`]; 0 where `−x/2 < floor` ([`lane_exp_floor`]).
 #[inline(always)]
-pub fn d_lane32<T: Real>(tan2_h: T, inv_m2: f32, norm: f32, floor: f32) -> T {
+pub fn d_lane32<A: MulAdd, T: Real>(tan2_h: T, inv_m2: f32, norm: f32, floor: f32) -> T {
     let sec2 = tan2_h + 1.0;
     let half_x = tan2_h * inv_m2 * 0.5;
-    let e = exp_neg_above(half_x * -1.0, floor);
+    let e = exp_neg_above::<A, T>(half_x * -1.0, floor);
     e * (sec2 * norm * sec2) * e
 }
 
