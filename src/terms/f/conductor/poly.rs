@@ -154,8 +154,8 @@ pub(super) fn bound<const N: usize>(
     (truncation / u + rounding) / fmin
 }
 
-/// A process's fits by `η` (both the polynomial's and the segments'): a fit takes ~30 µs
-/// to a few hundred, the CPU engine makes its plans on every call (every chunk of a
+/// A process's fits by `η` (both the polynomial's and the segments'): a fit takes ~0.1 ms
+/// (the polynomial) to ~0.2 (the segments), the CPU engine makes its plans on every call (every chunk of a
 /// stream), a fitting run evaluates the same η many times, and the Vulkan kernel folds the
 /// polynomial into each pipeline of a conductor material. Cleared when it holds 65,536 fits.
 pub(super) struct FitCache<V>(Mutex<BTreeMap<[u64; 6], Option<V>>>);
@@ -234,7 +234,7 @@ impl Polynomial {
     }
 
     /// [`Polynomial::fit`] of `η = ior + i·extinction` (with its [`LaneConstants`]), once a
-    /// process per η ([`FitCache`]).
+    /// process per η (a per-process cache shared with the segment tables' fits).
     pub fn fitted(ior: [f64; 3], extinction: [f64; 3]) -> Option<Polynomial> {
         static FITS: FitCache<Polynomial> = FitCache::new();
         FITS.get(ior, extinction, || {

@@ -94,7 +94,7 @@ fn centre_and_half_width(s: usize) -> (f64, f64) {
 
 impl Segments {
     /// The tables of `η = ior + i·extinction`, when every channel's bound over every
-    /// segment a lane may read (c from [`LOWEST_C`] to [`TOP`]) is within
+    /// segment a lane may read (c from 0.1, `FAST_MIN_C`, to 1.001875) is within
     /// [`METAL_FORM_BUDGET`] and the material may take the metal form (`constants.metal`),
     /// else `None`. A segment's bound is [`super::poly`]'s: the truncation of its
     /// interpolant, Horner's running error with or without FMA, and the coefficients'
@@ -139,7 +139,7 @@ impl Segments {
     }
 
     /// [`Segments::fit`] of `η = ior + i·extinction` (with its [`LaneConstants`]), once a
-    /// process per η (a fit takes ~0.3 ms).
+    /// process per η (a fit takes ~0.2 ms).
     pub fn fitted(ior: [f64; 3], extinction: [f64; 3]) -> Option<Segments> {
         static FITS: FitCache<Segments> = FitCache::new();
         FITS.get(ior, extinction, || {
