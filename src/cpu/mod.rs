@@ -73,6 +73,23 @@ fn chunk_rows(n: usize, threads: usize) -> usize {
     share.clamp(MIN_CHUNK, CHUNK)
 }
 
+/// The length of the next chunk when `rest` rows are left, `chunk` a chunk and `threads`
+/// threads take them: `chunk` until the last `threads` chunks' worth, then a quarter of
+/// it (at least `MIN_CHUNK`, a multiple of the lanes' block), so that the thread that
+/// finishes first waits on a short chunk, not a whole one, for the other (guided
+/// scheduling's tail).
+fn chunk_len(rest: usize, chunk: usize, threads: usize) -> usize {
+    let len = if rest > chunk * threads {
+        chunk
+    } else {
+        (chunk / 4)
+            .next_multiple_of(LANES)
+            .max(MIN_CHUNK)
+            .min(chunk)
+    };
+    len.min(rest)
+}
+
 /// The native CPU engine.
 #[derive(Debug, Clone)]
 pub struct CpuEngine {
@@ -284,13 +301,13 @@ impl CpuEngine {
             set_len(t, n * TERM_COLUMNS);
         }
         let chunk = chunk_rows(n, self.threads);
-        let mut queue = Vec::with_capacity(n.div_ceil(chunk));
+        let mut queue = Vec::with_capacity(n.div_ceil(chunk) + 4 * self.threads);
         {
             let mut rest_b: &mut [f32] = &mut out.brdf;
             let mut rest_t: Option<&mut [f32]> = out.terms.as_deref_mut();
             let mut start = 0;
             while start < n {
-                let len = chunk.min(n - start);
+                let len = chunk_len(n - start, chunk, self.threads);
                 let (b, rb) = std::mem::take(&mut rest_b).split_at_mut(len * 3);
                 rest_b = rb;
                 let t = match rest_t.take() {
@@ -472,5 +489,39 @@ impl Backend for CpuEngine {
                 })
                 .collect(),
         )
+    }
+}
+
+#[cfg(test)]
+mod chunk_tests {
+    use super::*;
+
+    /// The chunks cover the batch once, whole blocks but the last, and end in the short
+    /// tail: at 262,144 rows on two threads fourteen chunks of 16,384 and eight of 4,096.
+    #[test]
+    fn chunks_cover_the_batch_and_end_short() {
+        for (n, threads) in [
+            (262_144, 2),
+            (4_194_304, 2),
+            (1_000_003, 16),
+            (100, 2),
+            (0, 2),
+        ] {
+            let chunk = chunk_rows(n, threads);
+            let mut lens = Vec::new();
+            let mut start = 0;
+            while start < n {
+                let len = chunk_len(n - start, chunk, threads);
+                assert!(len > 0 && len <= chunk, "n = {n}: {len}");
+                lens.push(len);
+                start += len;
+            }
+            assert_eq!(start, n);
+            let whole = &lens[..lens.len().saturating_sub(1)];
+            assert!(whole.iter().all(|l| l % LANES == 0), "n = {n}: {lens:?}");
+            if n == 262_144 {
+                assert_eq!(lens, [[16_384; 14].as_slice(), &[4_096; 8]].concat());
+            }
+        }
     }
 }
