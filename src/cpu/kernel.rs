@@ -382,9 +382,9 @@ pub fn microfacet_block<A: MulAdd, const D: u8, const G: u8, const F: u8, const 
         }
         // Two loops, so that the one without terms divides nothing out; a conductor whose
         // every channel is legal for it takes F's metal form (`conductor::f_lane_metal`,
-        // half the arithmetic) or, where the plan fitted one, its polynomial in c (valid
-        // for c ≥ FAST_MIN_C: these lanes), while the f64 frame's lanes keep the scaled
-        // form, as the other Fresnel terms keep theirs.
+        // half the arithmetic) or, where the plan fitted one, its polynomial in c or (on
+        // AVX-512) its segment tables (valid for c ≥ FAST_MIN_C: these lanes), while the
+        // f64 frame's lanes keep the scaled form, as the other Fresnel terms keep theirs.
         use conductor::FORM_TABLES as TABLES;
         use conductor::{FORM_METAL as METAL, FORM_POLY as POLY, FORM_SCALED as SCALED};
         // The quotient form is the metal form's bits: the lane loops keep one of the two.

@@ -201,8 +201,8 @@ impl Plan {
     /// than the metal form; on AVX2 as fast, with fewer lanes left to another frame and F
     /// 1.4–6.6u off instead of 3.9–8u (docs/CPU_ENGINE.md). `scalar` keeps the metal form.
     /// On AVX-512 the segment tables (`conductor::segments`) take the polynomial's place
-    /// where they fit: 4 multiply-adds and 5 permutes a channel instead of 14
-    /// multiply-adds, and F within ~3u instead of 5–21u (round 22).
+    /// where they fit: 5 multiply-adds and 6 permutes a channel instead of 14
+    /// multiply-adds, and F within ~3.5u instead of 5–21u (round 22).
     pub fn with_conductor_poly(mut self, m: &Material, isa: Isa) -> Plan {
         if let (Plan::Microfacet { p, f, .. }, Model::CookTorrance(ct)) = (&mut self, &m.model) {
             if let Fresnel::Conductor { ior, extinction } = ct.fresnel {

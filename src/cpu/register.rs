@@ -225,7 +225,8 @@ impl<T: Real, const F: u8, const Q: u8> kernel::FresnelOf<T> for Fresnel<'_, T, 
 
 /// The second stage (after [`ggx_local_dgk`]): F (`poly`: the material's polynomial, as
 /// the caller reads it, [`Params::conductor_poly`]; `tables`: its segment tables where the
-/// plan took them, [`Params::conductor_segments`], in the polynomial's place), the channels, and the lanes whose output
+/// plan took them, [`Params::conductor_segments`], in the polynomial's place, on an
+/// instruction set with [`SegmentLanes::TABLES`]), the channels, and the lanes whose output
 /// may be non-finite or out of range (`kernel::channels_of`'s test). Which lanes the
 /// reference or another frame takes follows from these and [`Staged::flags`], which the
 /// caller reads as bits after the first stage (masks held across the second stage's

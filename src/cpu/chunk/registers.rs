@@ -312,7 +312,7 @@ fn two_registers<
             p.conductor_poly()
         }
     };
-    // The segment tables likewise: hoisted, their 32 registers would spill.
+    // The segment tables likewise: hoisted, their 19 registers would spill.
     let tables = || {
         if S::BROADCAST_OPERANDS {
             std::hint::black_box(p.conductor_segments.as_ref())
