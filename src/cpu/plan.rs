@@ -211,7 +211,10 @@ impl Plan {
                         p.conductor_segments =
                             conductor::segments::Segments::fitted(ior, extinction);
                     }
-                    p.conductor_poly = conductor::poly::Polynomial::fitted(ior, extinction);
+                    // Where the tables are taken no lane reads the polynomial.
+                    if p.conductor_segments.is_none() {
+                        p.conductor_poly = conductor::poly::Polynomial::fitted(ior, extinction);
+                    }
                     p.ggx_local_guard = ggx_guard(p, *f);
                 }
             }

@@ -320,9 +320,10 @@ mod tests {
             let fused = f64::from(exp_neg_above::<Fused, f32>(x as f32, -87.0));
             worst_fused = worst_fused.max(((fused - want) / want).abs());
         }
-        assert!(worst < 5e-7, "worst relative error {worst}");
+        // About 2 ulp, as documented (measured 1.72e-7 on both kinds; 1 ulp ≤ 1.19e-7).
+        assert!(worst < 2.5e-7, "worst relative error {worst}");
         assert!(
-            worst_fused < 5e-7,
+            worst_fused < 2.5e-7,
             "fused: worst relative error {worst_fused}"
         );
         // The floor: 0 below it, exp_neg's value at and above it.

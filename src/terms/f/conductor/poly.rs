@@ -266,13 +266,13 @@ pub fn f_lanes_poly<A: MulAdd, T: Real>(c: T, p: &Polynomial) -> [T; 3] {
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
     use crate::terms::math::{Fused, Rounded};
 
     /// Metals of the bench and the tests: the Mitsuba scenarios' metal, copper, gold,
-    /// silver-like and iron-like η.
-    const METALS: [([f64; 3], [f64; 3]); 5] = [
+    /// silver-like and iron-like η (the segment tables' tests take them too).
+    pub(in crate::terms::f::conductor) const METALS: [([f64; 3], [f64; 3]); 5] = [
         ([0.2, 0.92, 1.1], [3.9, 2.45, 2.14]),
         ([0.27, 0.68, 1.22], [3.61, 2.62, 2.24]),
         ([0.18, 0.42, 1.37], [3.42, 2.35, 1.77]),
@@ -284,24 +284,40 @@ mod tests {
     /// f32 lane may bring (a dense sweep from `FAST_MIN_C` to 1 and the f32 numbers next
     /// to both ends), on both MulAdd kinds.
     fn measured(p: &Polynomial, ior: [f64; 3], ext: [f64; 3]) -> f64 {
-        let u = f64::from(f32::EPSILON) / 2.0;
-        let mut cs: Vec<f32> = (0..=200_000)
-            .map(|i| (0.1 + 0.9 * f64::from(i) / 200_000.0) as f32)
-            .collect();
+        let mut cs = sweep();
         let mut c = 0.1f32;
         for _ in 0..64 {
             cs.push(c);
             c = f32::from_bits(c.to_bits() + 1);
         }
         cs.extend([1.0f32, f32::from_bits(1.0f32.to_bits() - 1), 1.0 + f32::EPSILON]);
+        worst_u(&cs, ior, ext, |c| {
+            [f_lanes_poly::<Fused, f32>(c, p), f_lanes_poly::<Rounded, f32>(c, p)]
+        })
+    }
+
+    /// A dense sweep of c from `FAST_MIN_C` (0.1) to 1: 200,001 values.
+    pub(in crate::terms::f::conductor) fn sweep() -> Vec<f32> {
+        (0..=200_000)
+            .map(|i| (0.1 + 0.9 * f64::from(i) / 200_000.0) as f32)
+            .collect()
+    }
+
+    /// The largest relative error in u against the f64 F over `cs` of a lane form `eval`
+    /// (its three channels with FMA and without) for `η = ior + i·ext`.
+    pub(in crate::terms::f::conductor) fn worst_u(
+        cs: &[f32],
+        ior: [f64; 3],
+        ext: [f64; 3],
+        eval: impl Fn(f32) -> [[f32; 3]; 2],
+    ) -> f64 {
+        let u = f64::from(f32::EPSILON) / 2.0;
         let mut worst = 0f64;
-        for &c in &cs {
+        for &c in cs {
+            let got = eval(c);
             for ch in 0..3 {
                 let want = f(f64::from(c), ior[ch], ext[ch]);
-                for got in [
-                    f_lanes_poly::<Fused, f32>(c, p)[ch],
-                    f_lanes_poly::<Rounded, f32>(c, p)[ch],
-                ] {
+                for got in got.map(|g| g[ch]) {
                     worst = worst.max((f64::from(got) - want).abs() / want / u);
                 }
             }

@@ -173,26 +173,14 @@ pub fn f_lane_segments<A: MulAdd>(c: f32, tables: &Segments) -> [f32; 3] {
 
 #[cfg(test)]
 mod tests {
-    use super::super::f;
+    use super::super::poly::tests::{sweep, worst_u, METALS};
     use super::*;
     use crate::terms::math::{Fused, Rounded};
-
-    /// Metals of the bench and the tests (as `poly`'s), and a low-F0 conductor.
-    const METALS: [([f64; 3], [f64; 3]); 6] = [
-        ([0.2, 0.92, 1.1], [3.9, 2.45, 2.14]),
-        ([0.27, 0.68, 1.22], [3.61, 2.62, 2.24]),
-        ([0.18, 0.42, 1.37], [3.42, 2.35, 1.77]),
-        ([0.05, 0.06, 0.05], [4.2, 3.6, 2.5]),
-        ([2.9, 2.9, 2.6], [3.1, 2.9, 2.8]),
-        ([1.5, 1.0, 0.9], [1.2, 0.9, 0.8]),
-    ];
 
     /// Every `c` a lane may bring: a dense sweep from 0.1 to 1, each segment's first and
     /// last f32 and their neighbours across the boundary, and the f32 numbers just past 1.
     fn lane_cs() -> Vec<f32> {
-        let mut cs: Vec<f32> = (0..=200_000)
-            .map(|i| (0.1 + 0.9 * f64::from(i) / 200_000.0) as f32)
-            .collect();
+        let mut cs = sweep();
         for s in 3..SEGMENTS {
             let start = span(s).0 as f32;
             let below = f32::from_bits(start.to_bits() - 1);
@@ -209,20 +197,9 @@ mod tests {
 
     /// The largest relative error in u against the f64 F, on both MulAdd kinds.
     fn measured(t: &Segments, ior: [f64; 3], ext: [f64; 3]) -> f64 {
-        let u = f64::from(f32::EPSILON) / 2.0;
-        let mut worst = 0f64;
-        for c in lane_cs() {
-            for ch in 0..3 {
-                let want = f(f64::from(c), ior[ch], ext[ch]);
-                for got in [
-                    f_lane_segments::<Fused>(c, t)[ch],
-                    f_lane_segments::<Rounded>(c, t)[ch],
-                ] {
-                    worst = worst.max((f64::from(got) - want).abs() / want / u);
-                }
-            }
-        }
-        worst
+        worst_u(&lane_cs(), ior, ext, |c| {
+            [f_lane_segments::<Fused>(c, t), f_lane_segments::<Rounded>(c, t)]
+        })
     }
 
     #[test]
@@ -255,9 +232,6 @@ mod tests {
     fn metals_fit_inside_their_bound() {
         for (ior, ext) in METALS {
             let constants = LaneConstants::new(ior, ext);
-            if !constants.metal {
-                continue;
-            }
             let t = Segments::fit(&constants, ior, ext)
                 .unwrap_or_else(|| panic!("{ior:?} {ext:?} should fit"));
             let err = measured(&t, ior, ext);
