@@ -213,11 +213,116 @@ pub trait Backend {
         None
     }
 
+    /// A stream of chunks of a batch of `total_rows` rows over `materials`
+    /// ([`OverlappedStream`]). An engine that can keep several chunks in flight (a device:
+    /// it computes one chunk while the host copies the next in and the last out)
+    /// overrides it; the default evaluates each chunk when it is submitted, by
+    /// [`Backend::evaluate_into`] or [`Backend::evaluate_local_into`]. An error is one that
+    /// setting up the first chunk would have met (a device without f64 refusing measured
+    /// materials, a material table over the device's limits).
+    fn overlapped<'a>(
+        &'a mut self,
+        materials: &'a [Material],
+        request: Request,
+        _total_rows: u64,
+    ) -> Result<Box<dyn OverlappedStream + 'a>> {
+        Ok(Box::new(CallByCall {
+            backend: self,
+            materials,
+            request,
+        }))
+    }
+
     /// The engine's own direction generators, if it has them ([`GeneratedDirections`]):
     /// the tables then send a material and a grid or sampling plan instead of tuples. The
     /// default is none, and the tables build the tuples on the host.
     fn generated_directions(&mut self) -> Option<&mut dyn GeneratedDirections> {
         None
+    }
+}
+
+/// One chunk of a stream, as [`OverlappedStream::submit`] takes it.
+#[derive(Clone, Copy)]
+pub enum StreamChunk<'a> {
+    /// Rows of 10 or 13 columns.
+    Rows(&'a Batch<'a>),
+    /// The local-frame form (N = +z, one material).
+    Local(&'a LocalBatch),
+}
+
+impl StreamChunk<'_> {
+    /// Rows in the chunk.
+    pub fn len(&self) -> usize {
+        match self {
+            StreamChunk::Rows(b) => b.len(),
+            StreamChunk::Local(b) => b.len(),
+        }
+    }
+
+    /// Whether the chunk has no rows.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+}
+
+/// A stream of chunks ([`Backend::overlapped`]): the chunks' outputs come back in
+/// submission order, each exactly what [`Backend::evaluate_into`] (or
+/// [`Backend::evaluate_local_into`]) gives for that chunk alone, its counts' first invalid
+/// row counted from the chunk's first row. Dropping it with chunks in flight waits for the
+/// device and discards them.
+pub trait OverlappedStream {
+    /// The most rows one chunk may have (a device's chunk for its memory budget).
+    fn max_chunk_rows(&self) -> usize;
+
+    /// Starts evaluating `chunk` into `out` (its previous contents do not matter); the
+    /// chunk's rows are copied or consumed before this returns, so the caller may reuse
+    /// its buffers. `first_row`, the chunk's place in the batch, names it in errors.
+    /// Returns the oldest chunk's output when this call completed it: an engine with
+    /// every slot in flight completes the oldest first; one without overlap, this chunk.
+    fn submit(
+        &mut self,
+        chunk: StreamChunk<'_>,
+        first_row: u64,
+        out: Output,
+    ) -> Result<Option<Output>>;
+
+    /// Completes the oldest chunk in flight and returns its output; `None` when none is.
+    fn finish_oldest(&mut self) -> Result<Option<Output>>;
+}
+
+/// [`Backend::overlapped`]'s default: each chunk evaluated when it is submitted.
+struct CallByCall<'a, B: Backend + ?Sized> {
+    backend: &'a mut B,
+    materials: &'a [Material],
+    request: Request,
+}
+
+impl<B: Backend + ?Sized> OverlappedStream for CallByCall<'_, B> {
+    fn max_chunk_rows(&self) -> usize {
+        usize::MAX
+    }
+
+    fn submit(
+        &mut self,
+        chunk: StreamChunk<'_>,
+        _first_row: u64,
+        mut out: Output,
+    ) -> Result<Option<Output>> {
+        match chunk {
+            StreamChunk::Rows(b) => {
+                self.backend
+                    .evaluate_into(b, self.materials, &self.request, &mut out)?
+            }
+            StreamChunk::Local(b) => {
+                self.backend
+                    .evaluate_local_into(b, self.materials, &self.request, &mut out)?
+            }
+        }
+        Ok(Some(out))
+    }
+
+    fn finish_oldest(&mut self) -> Result<Option<Output>> {
+        Ok(None) // `submit` returned every chunk's output
     }
 }
 

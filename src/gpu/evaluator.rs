@@ -13,6 +13,7 @@ mod generated;
 mod grouping;
 mod link;
 mod options;
+mod overlapped;
 mod row_source;
 mod state;
 mod timing;
@@ -29,7 +30,7 @@ use super::layout::{gpu_materials, GpuCounts, GpuMaterial, PushConstants, BINDIN
 use super::memory::{Buffer, MemoryUse, TexelView};
 use super::sync::{CommandPool, DescriptorPool, Fence};
 use super::vk_error::vk_error;
-use crate::backend::{Backend, Counts, Output, Request, TERM_COLUMNS};
+use crate::backend::{Backend, Counts, Output, OverlappedStream, Request, TERM_COLUMNS};
 use crate::batch::columns::ColumnBatch;
 use crate::batch::{Batch, COLUMNS_TANGENT};
 use crate::error::{Error, FailedChunk, Result};
@@ -717,6 +718,16 @@ impl Backend for VulkanBackend {
         let features = self.grouping(features.with_forced(self.shared_features));
         *out = self.run(RowSource::Columns(batch), materials, features)?;
         Ok(())
+    }
+
+    fn overlapped<'a>(
+        &'a mut self,
+        materials: &'a [Material],
+        request: Request,
+        total_rows: u64,
+    ) -> Result<Box<dyn OverlappedStream + 'a>> {
+        let stream = overlapped::VulkanStream::new(self, materials, request, total_rows)?;
+        Ok(Box::new(stream))
     }
 
     fn share_kernels(&mut self, materials: &[Material]) {

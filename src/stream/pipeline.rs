@@ -4,7 +4,7 @@
 
 use super::job::{NpyOut, Setup, StreamJob, StreamSummary};
 use crate::atomic::Staged;
-use crate::backend::{Backend, Output, Request, TERM_COLUMNS};
+use crate::backend::{Backend, Output, OverlappedStream, Request, StreamChunk, TERM_COLUMNS};
 use crate::batch::rows::NpyRows;
 use crate::batch::{check_tangent_rows, Batch, LocalBatch};
 use crate::cancel::Cancel;
@@ -37,6 +37,17 @@ pub(super) fn evaluate(
     let mut spike = match job.spike {
         Some(path) => Some(NpyOut::start(path, n, 3, cancel)?),
         None => None,
+    };
+    // A spectral job evaluates each chunk several times (its basis or wavelength
+    // materials), call by call; every other job streams its chunks through the engine's
+    // overlapped form, whose chunks may be smaller (a device's slot).
+    let mut engine = match job.spectral {
+        None => Engine::Stream(backend.overlapped(job.materials, *request, n)?),
+        Some(_) => Engine::Calls(backend),
+    };
+    let chunk = match &engine {
+        Engine::Stream(stream) => chunk.min(stream.max_chunk_rows()),
+        Engine::Calls(_) => chunk,
     };
     let mut summary = StreamSummary {
         chunk_rows: chunk,
@@ -105,14 +116,23 @@ pub(super) fn evaluate(
             },
         );
         let evaluated = (|| -> Result<()> {
+            // Chunks the engine holds: their first row, rows and spike weights, oldest first.
+            let mut held = std::collections::VecDeque::new();
+            let mut done = |out: Output, summary: &mut StreamSummary, held: &mut Held| {
+                let (first, len, spikes) = held.pop_front().expect("one held chunk an output");
+                let mut counted = out.counts;
+                counted.first_invalid = counted.first_invalid.map(|r| r + first);
+                summary.counts.absorb(&counted);
+                summary.chunks += 1;
+                progress(first + len as u64 - part.start, n);
+                write_tx.send((out, spikes)).is_ok() // false: the writer failed (reported below)
+            };
             for message in read_rx {
                 cancel.check()?;
                 let (first, batch, read_s) = message?;
                 summary.read_s += read_s;
                 let t = std::time::Instant::now();
-                let mut out = recycle_rx.try_recv().unwrap_or_default();
-                batch.evaluate(backend, job, request, &mut out)?;
-                let len = batch.len();
+                let out = recycle_rx.try_recv().unwrap_or_default();
                 // The spike's weights, when asked for: the host's f64 form (cheap next to
                 // the BRDF's series), in the same chunk, so all outputs advance together.
                 let spikes = match (&batch, job.spike.is_some()) {
@@ -120,17 +140,36 @@ pub(super) fn evaluate(
                     (Chunk::Rows(b), true) => spike_rows(b, job.materials),
                     (Chunk::Local(b), true) => spike_rows(&b.rows(0..b.len()), job.materials),
                 };
+                held.push_back((first, batch.len(), spikes));
+                let finished = match &mut engine {
+                    Engine::Stream(stream) => stream.submit(batch.as_stream(), first, out)?,
+                    Engine::Calls(backend) => {
+                        let mut out = out;
+                        batch.evaluate(&mut **backend, job, request, &mut out)?;
+                        Some(out)
+                    }
+                };
                 summary.eval_s += t.elapsed().as_secs_f64();
-                let mut counted = out.counts;
-                counted.first_invalid = counted.first_invalid.map(|r| r + first);
-                summary.counts.absorb(&counted);
-                summary.chunks += 1;
-                progress(first + len as u64 - part.start, n);
                 if let Chunk::Rows(b) = batch {
                     let _ = spent_tx.try_send(b.into_data()); // full: the reader has spares
                 }
-                if write_tx.send((out, spikes)).is_err() {
-                    break; // the writer failed: its error is reported below
+                if let Some(out) = finished {
+                    if !done(out, &mut summary, &mut held) {
+                        return Ok(());
+                    }
+                }
+            }
+            if let Engine::Stream(stream) = &mut engine {
+                loop {
+                    cancel.check()?;
+                    let t = std::time::Instant::now();
+                    let Some(out) = stream.finish_oldest()? else {
+                        break;
+                    };
+                    summary.eval_s += t.elapsed().as_secs_f64();
+                    if !done(out, &mut summary, &mut held) {
+                        break;
+                    }
                 }
             }
             Ok(())
@@ -156,6 +195,15 @@ pub(super) fn evaluate(
     Ok((summary, Some(staged)))
 }
 
+/// What evaluates the chunks: the engine's stream, or (a spectral job) the engine itself.
+enum Engine<'a> {
+    Stream(Box<dyn OverlappedStream + 'a>),
+    Calls(&'a mut dyn Backend),
+}
+
+/// The chunks an engine holds, oldest first: first row, rows, spike weights.
+type Held = std::collections::VecDeque<(u64, usize, Vec<f32>)>;
+
 /// One chunk as read: rows, or the local-frame form.
 enum Chunk {
     Rows(Batch<'static>),
@@ -168,6 +216,14 @@ impl Chunk {
         match self {
             Chunk::Rows(b) => b.len(),
             Chunk::Local(b) => b.len(),
+        }
+    }
+
+    /// The chunk as an engine's stream takes it.
+    fn as_stream(&self) -> StreamChunk<'_> {
+        match self {
+            Chunk::Rows(b) => StreamChunk::Rows(b),
+            Chunk::Local(b) => StreamChunk::Local(b),
         }
     }
 
