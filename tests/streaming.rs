@@ -615,11 +615,13 @@ fn the_cpu_engines_workers_write_what_one_call_computes() {
 
 #[test]
 fn the_vulkan_stream_keeps_chunks_in_flight_and_writes_what_one_call_computes() {
-    // `eval` on Vulkan keeps three chunks in flight across the stream's chunks
-    // (`Backend::overlapped`): with a 2 MiB device budget a slot holds ~7,600 rows, so
-    // 300,001 rows cycle the ring ~40 times; mixed materials take the grouped kernel, two
-    // invalid rows lie in different chunks, and a local-frame input streams too. Each
-    // output must equal one `evaluate` call's bits (the kernel evaluates tuple by tuple).
+    // `eval` on Vulkan keeps chunks in flight across the stream's chunks
+    // (`Backend::overlapped`; VKBRDF_CHUNKS_IN_FLIGHT 0, 2 — a GPU's default — and 3,
+    // the whole ring): with a 2 MiB device budget a slot holds ~7,600 rows, so 300,001
+    // rows cycle the ring ~40 times; mixed materials take the grouped kernel, two invalid
+    // rows lie in different chunks, a shard starts mid-chunk, and a local-frame input
+    // streams too. Each output must equal one `evaluate` call's bits (the kernel evaluates
+    // tuple by tuple).
     use vkbrdf::backend::{Backend, Request};
     let Some(mut gpu) = common::vulkan() else {
         return;
@@ -641,18 +643,35 @@ fn the_vulkan_stream_keeps_chunks_in_flight_and_writes_what_one_call_computes() 
     assert_eq!(want.counts.first_invalid, Some(1_000));
     let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
     let (o, ot) = (dir.path().join("o.npy"), dir.path().join("ot.npy"));
-    for extra in [
-        &["--max-gpu-memory", "2M", "--max-memory", "1MiB"][..],
-        &["--max-gpu-memory", "2M", "--shard", "2/3"],
-        &[],
+    let run = |depth: &str, args: &[&str]| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_vkbrdf"))
+            .arg("eval")
+            .args(["-m", path(&m)])
+            .args(args)
+            .env("VKBRDF_CHUNKS_IN_FLIGHT", depth)
+            .output()
+            .expect("run vkbrdf")
+    };
+    let budget = ["--max-gpu-memory", "2M"];
+    for (depth, extra) in [
+        ("0", &["--max-memory", "1MiB"][..]),
+        ("2", &["--max-memory", "1MiB"]),
+        ("3", &["--max-memory", "1MiB"]),
+        ("2", &["--shard", "2/3"]),
+        ("3", &["--shard", "2/3"]),
+        ("default", &[]),
     ] {
-        let mut args = vec!["-o", path(&o), "--terms", path(&ot), "--backend", "vulkan"];
+        let mut args = vec!["-i", path(&t), "-o", path(&o), "--terms", path(&ot)];
+        args.extend(["--backend", "vulkan", "--json"]);
+        if depth != "default" {
+            args.extend(budget);
+        }
         args.extend_from_slice(extra);
-        args.push("--json");
-        let r = eval(&m, &t, &args);
+        let r = run(depth, &args);
+        let extra = (depth, extra);
         assert!(r.status.success(), "{extra:?}: {}", stderr(&r));
         let doc: serde_json::Value = serde_json::from_slice(&r.stdout).expect("JSON summary");
-        let rows = match extra.get(2) {
+        let rows = match extra.1.first() {
             Some(&"--shard") => n / 3..2 * n / 3,
             _ => 0..n,
         };
@@ -691,21 +710,16 @@ fn the_vulkan_stream_keeps_chunks_in_flight_and_writes_what_one_call_computes() 
     let want = gpu
         .evaluate(&rows, &table, &Request::default())
         .expect("one call");
-    let args = [
-        "-o",
-        path(&o),
-        "--backend",
-        "vulkan",
-        "--material",
-        "0",
-        "--max-gpu-memory",
-        "2M",
-    ];
-    let r = eval(&m, &lt, &args);
-    assert!(r.status.success(), "local: {}", stderr(&r));
-    let (brdf, _) = vkbrdf::batch::read_npy_f32(&o).expect("BRDF");
-    assert!(
-        bits(&brdf) == bits(&want.brdf),
-        "local: BRDF differs from one call"
-    );
+    for depth in ["0", "2"] {
+        let mut args = vec!["-i", path(&lt), "-o", path(&o), "--backend", "vulkan"];
+        args.extend(["--material", "0"]);
+        args.extend(budget);
+        let r = run(depth, &args);
+        assert!(r.status.success(), "local, {depth}: {}", stderr(&r));
+        let (brdf, _) = vkbrdf::batch::read_npy_f32(&o).expect("BRDF");
+        assert!(
+            bits(&brdf) == bits(&want.brdf),
+            "local, {depth}: BRDF differs from one call"
+        );
+    }
 }

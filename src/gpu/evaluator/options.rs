@@ -34,6 +34,14 @@ pub struct VulkanOptions {
     /// (the fold threshold) does not earn back (~0.02 s): for repeated or far larger
     /// batches (docs/VULKAN.md). Unmeasured on a GPU. The table kernels always take one.
     pub folded_tuples_per_invocation: Option<u32>,
+    /// Chunks of an `eval` stream left on the device while the host copies the next chunk
+    /// in and an older one out (`Backend::overlapped`), 0 to
+    /// [`FRAMES_IN_FLIGHT`](crate::gpu::FRAMES_IN_FLIGHT) (more is taken as that). `None`
+    /// (the default, unless the environment variable `VKBRDF_CHUNKS_IN_FLIGHT` gives a
+    /// count): 0 on a CPU device
+    /// (lavapipe computes on the host's own cores, so nothing overlaps: 1–3 measured no
+    /// faster there, and each slot's buffers are one more first touch), 2 on a GPU.
+    pub chunks_in_flight: Option<usize>,
     /// Testing aid: a fault to inject into batch evaluations (see [`InjectedFault`]).
     /// Default: none, or what the environment variable `VKBRDF_INJECT_VK_FAULT` says
     /// (read by [`VulkanBackend::new`](crate::gpu::VulkanBackend::new)).
@@ -102,6 +110,7 @@ impl Default for VulkanOptions {
             group_by_material: true,
             fold_material_min_tuples: fold_min_tuples_from_env(),
             folded_tuples_per_invocation: tuples_per_invocation_from_env(),
+            chunks_in_flight: chunks_in_flight_from_env(),
             inject_fault: None,
         }
     }
@@ -127,6 +136,14 @@ fn tuples_per_invocation_from_env() -> Option<u32> {
         .ok()
         .and_then(|v| v.trim().parse().ok())
         .filter(|k| (1..=4).contains(k))
+}
+
+/// `VKBRDF_CHUNKS_IN_FLIGHT`: a count (above 3 taken as 3); anything else, the device's
+/// default (a setting for measurements).
+fn chunks_in_flight_from_env() -> Option<usize> {
+    std::env::var("VKBRDF_CHUNKS_IN_FLIGHT")
+        .ok()
+        .and_then(|v| v.trim().parse().ok())
 }
 
 /// Whether `VKBRDF_VALIDATION` asks for the validation layer (`1`, `true` or `yes`).

@@ -6,9 +6,8 @@
 //! copied (on the H200, end to end ran at 1/80 of the kernel).
 //!
 //! Each chunk is exactly one slot's dispatch, evaluated as a call on that chunk alone
-//! would: the same pipeline choice (the material folded in when the whole stream has one
-//! material and the fold threshold's rows), the same grouping by material, the same
-//! counts.
+//! would: the same pipeline choice (the fold decided on the chunk's rows), the same
+//! grouping by material, the same counts.
 
 use super::state::{Pending, VulkanBackend, FRAMES_IN_FLIGHT};
 use crate::backend::{Counts, Output, OverlappedStream, Request, StreamChunk, TERM_COLUMNS};
@@ -39,7 +38,14 @@ pub(super) struct VulkanStream<'a> {
     chunk: usize,
     /// Chunks submitted so far (the next one's index).
     submitted: u64,
+    /// Rows of the stream's first chunk: every chunk's but the last, so the count of chunks
+    /// errors give.
+    stream_chunk: u64,
     in_flight: VecDeque<InFlight>,
+    /// Chunks left in flight when `submit` returns
+    /// ([`VulkanOptions::chunks_in_flight`](crate::gpu::VulkanOptions::chunks_in_flight));
+    /// the ring uses `depth + 1` slots (at most [`FRAMES_IN_FLIGHT`]).
+    depth: usize,
 }
 
 impl<'a> VulkanStream<'a> {
@@ -52,6 +58,11 @@ impl<'a> VulkanStream<'a> {
         total_rows: u64,
     ) -> Result<VulkanStream<'a>> {
         let chunk = backend.chunk_tuples(materials.len())?;
+        let depth = match backend.options.chunks_in_flight {
+            Some(k) => k.min(FRAMES_IN_FLIGHT),
+            None if backend.is_cpu_device() => 0,
+            None => FRAMES_IN_FLIGHT - 1,
+        };
         backend.upload_measured(materials)?;
         let gpu = gpu_materials(materials);
         backend.upload_materials(&gpu)?;
@@ -63,7 +74,9 @@ impl<'a> VulkanStream<'a> {
             total_rows,
             chunk,
             submitted: 0,
+            stream_chunk: chunk as u64,
             in_flight: VecDeque::with_capacity(FRAMES_IN_FLIGHT),
+            depth,
         })
     }
 
@@ -71,14 +84,24 @@ impl<'a> VulkanStream<'a> {
     fn failed(&self, index: u64, rows: std::ops::Range<u64>) -> FailedChunk {
         FailedChunk {
             index,
-            count: self.total_rows.div_ceil(self.chunk as u64).max(index + 1),
+            count: self
+                .total_rows
+                .div_ceil(self.stream_chunk.max(1))
+                .max(index + 1),
             rows,
             max_gpu_memory: self.backend.options.max_gpu_memory,
         }
     }
 
+    /// The slot of chunk `index`: the ring's `depth + 1` slots in turn, so a stream that
+    /// keeps nothing in flight reuses one slot's buffers.
+    fn slot(&self, index: u64) -> usize {
+        (index % (self.depth + 1).min(FRAMES_IN_FLIGHT) as u64) as usize
+    }
+
     /// Loads `batch` into the next slot and submits its dispatch.
     fn start(&mut self, batch: &Batch, index: u64, rows: std::ops::Range<u64>) -> Result<()> {
+        let s = self.slot(index);
         let b = &mut *self.backend;
         let features = if b.shared_features == FeatureSet::EMPTY {
             FeatureSet::of_batch(batch, self.materials, &self.request)
@@ -87,10 +110,11 @@ impl<'a> VulkanStream<'a> {
         };
         let features = b.grouping(features);
         b.last_features = Some(features);
-        let total = usize::try_from(self.total_rows).unwrap_or(usize::MAX);
-        let pipeline = b.pipeline_for(features, (&self.gpu, self.materials), total)?;
+        // The fold is decided on the chunk's rows, as a call on the chunk alone decides it:
+        // a folded conductor takes F's fitted polynomial, so deciding on the stream's rows
+        // would change the bits with the batch's size, and a shard's from the whole run's.
+        let pipeline = b.pipeline_for(features, (&self.gpu, self.materials), batch.len())?;
         let per_invocation = b.rows_per_invocation();
-        let s = (index % FRAMES_IN_FLIGHT as u64) as usize;
         let (len, terms) = (batch.len(), features.contains(FeatureSet::TERMS));
         let material_count = self.materials.len();
         let order = b.load_chunk(
@@ -154,12 +178,16 @@ impl OverlappedStream for VulkanStream<'_> {
             "a stream chunk of {len} rows exceeds max_chunk_rows() = {}",
             self.chunk
         );
-        let done = if self.in_flight.len() == FRAMES_IN_FLIGHT {
+        let ring = (self.depth + 1).min(FRAMES_IN_FLIGHT);
+        let done = if self.in_flight.len() == ring {
             self.complete_oldest()?
         } else {
             None
         };
         let (index, rows) = (self.submitted, first_row..first_row + len as u64);
+        if index == 0 {
+            self.stream_chunk = len as u64;
+        }
         // The outputs a call on this chunk alone starts from (`Output::zeroed`), reusing
         // `out`'s allocations; every float is overwritten on readback.
         out.brdf.resize(3 * len, 0.0);
@@ -183,11 +211,15 @@ impl OverlappedStream for VulkanStream<'_> {
         }
         self.submitted += 1;
         self.in_flight.push_back(InFlight {
-            slot: (index % FRAMES_IN_FLIGHT as u64) as usize,
+            slot: self.slot(index),
             out,
             index,
             rows,
         });
+        if self.in_flight.len() > self.depth {
+            debug_assert!(done.is_none(), "one completion a submission");
+            return self.complete_oldest();
+        }
         Ok(done)
     }
 
