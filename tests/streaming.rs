@@ -617,7 +617,7 @@ fn the_cpu_engines_workers_write_what_one_call_computes() {
 fn the_vulkan_stream_keeps_chunks_in_flight_and_writes_what_one_call_computes() {
     // `eval` on Vulkan keeps chunks in flight across the stream's chunks
     // (`Backend::overlapped`; VKBRDF_CHUNKS_IN_FLIGHT 0, 2 — a GPU's default — and 3,
-    // the whole ring): with a 2 MiB device budget a slot holds ~7,600 rows, so 300,001
+    // the whole ring) and copies split over threads (VKBRDF_HOST_COPY_THREADS): with a 2 MiB device budget a slot holds ~7,600 rows, so 300,001
     // rows cycle the ring ~40 times; mixed materials take the grouped kernel, two invalid
     // rows lie in different chunks, a shard starts mid-chunk, and a local-frame input
     // streams too. Each output must equal one `evaluate` call's bits (the kernel evaluates
@@ -643,12 +643,20 @@ fn the_vulkan_stream_keeps_chunks_in_flight_and_writes_what_one_call_computes() 
     assert_eq!(want.counts.first_invalid, Some(1_000));
     let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
     let (o, ot) = (dir.path().join("o.npy"), dir.path().join("ot.npy"));
+    // `depth` chunks in flight; the host's copies split over 3 threads where the depth is 3
+    // and in the default case (2^17-row chunks: 5 MiB, so the copies do split).
     let run = |depth: &str, args: &[&str]| {
+        let threads = if matches!(depth, "3" | "default") {
+            "3"
+        } else {
+            "1"
+        };
         std::process::Command::new(env!("CARGO_BIN_EXE_vkbrdf"))
             .arg("eval")
             .args(["-m", path(&m)])
             .args(args)
             .env("VKBRDF_CHUNKS_IN_FLIGHT", depth)
+            .env("VKBRDF_HOST_COPY_THREADS", threads)
             .output()
             .expect("run vkbrdf")
     };

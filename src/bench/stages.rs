@@ -403,8 +403,9 @@ pub fn print(rows: &[StageRow]) {
         );
         if let Some(l) = r.link {
             println!(
-                "  {:<26} host memcpy into / out of mapped memory: {:.1} / {:.1} GB/s; transfers host→device / device→host: {:.1} / {:.1} GB/s",
+                "  {:<26} host memcpy into / out of mapped memory ({} thread(s), as eval copies): {:.1} / {:.1} GB/s; transfers host→device / device→host: {:.1} / {:.1} GB/s",
                 "",
+                l.copy_threads,
                 l.host_to_mapped / 1e9,
                 l.mapped_to_host / 1e9,
                 l.host_to_device / 1e9,

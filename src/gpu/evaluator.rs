@@ -25,6 +25,7 @@ pub use timing::{KernelClock, KernelTiming};
 
 use super::context::{Device, DeviceSelector, ValidationCounter};
 use super::emulate_ftz::flush_to_zero_scope;
+use super::host_copy::{self, HostCopy};
 use super::kernel::{workgroups, Kernels, WORKGROUP_SIZE};
 use super::layout::{gpu_materials, GpuCounts, GpuMaterial, PushConstants, BINDING_COUNT};
 use super::memory::{Buffer, MemoryUse, TexelView};
@@ -90,6 +91,11 @@ impl VulkanBackend {
             .unwrap_or(1)
             .clamp(1, 4);
         kernels.folded_per_invocation = folded_per_invocation;
+        let copy_threads = options.host_copy_threads.unwrap_or_else(|| {
+            host_copy::default_threads(
+                device.physical.properties.device_type == vk::PhysicalDeviceType::CPU,
+            )
+        });
         let commands = CommandPool::new(&device, FRAMES_IN_FLIGHT as u32)?;
         let descriptors = DescriptorPool::new(
             &device,
@@ -135,6 +141,7 @@ impl VulkanBackend {
             shared_features: FeatureSet::EMPTY,
             stages: HostStages::default(),
             folded_per_invocation,
+            host_copy: HostCopy::new(copy_threads),
             device,
         })
     }
@@ -466,8 +473,13 @@ impl VulkanBackend {
         // SAFETY: slot `s` is not pending (precondition), so the device neither reads nor
         // writes its buffers.
         unsafe {
-            let input = grouped.as_deref().unwrap_or(rows);
-            slot.input.as_mut().expect("prepared").write(0, input);
+            let input: &[u8] = bytemuck::cast_slice(grouped.as_deref().unwrap_or(rows));
+            let mapped = slot
+                .input
+                .as_mut()
+                .expect("prepared")
+                .mapped_mut(input.len());
+            self.host_copy.copy(mapped, input);
             if let Some(order) = &order {
                 slot.order.as_mut().expect("prepared").write(0, order);
             }
@@ -643,10 +655,11 @@ impl VulkanBackend {
         // completed: the buffers hold final, host-visible results and nothing writes them.
         unsafe {
             let brdf = slot.brdf.as_ref().expect("prepared");
-            read_in_place(brdf, &mut out.brdf[p.brdf.clone()], 3, p.order.as_deref());
+            let (order, copy) = (p.order.as_deref(), &self.host_copy);
+            read_in_place(brdf, &mut out.brdf[p.brdf.clone()], 3, order, copy);
             if let (Some(range), Some(terms)) = (p.terms.clone(), out.terms.as_mut()) {
                 let buffer = slot.terms.as_ref().expect("prepared with terms");
-                read_in_place(buffer, &mut terms[range], TERM_COLUMNS, p.order.as_deref());
+                read_in_place(buffer, &mut terms[range], TERM_COLUMNS, order, copy);
             }
             slot.counts.read(0, &mut counts);
         }

@@ -210,6 +210,38 @@ impl Buffer {
         };
     }
 
+    /// The mapping's first `len` bytes, for a copy split over threads
+    /// (`gpu::host_copy`).
+    ///
+    /// # Panics
+    /// If `len` exceeds the buffer, or the buffer is [`MemoryUse::Resident`].
+    ///
+    /// # Safety
+    /// As for [`Buffer::write`], for as long as the slice lives.
+    pub unsafe fn mapped_mut(&mut self, len: usize) -> &mut [u8] {
+        assert!(!self.mapped.is_null(), "a resident buffer is not mapped");
+        assert!(len as u64 <= self.size, "mapped range out of range");
+        // SAFETY: `len` bytes from the mapping's start lie inside it (checked above); the
+        // `&mut self` borrow keeps every other host access out while the slice lives, and
+        // the caller keeps the device out.
+        unsafe { std::slice::from_raw_parts_mut(self.mapped, len) }
+    }
+
+    /// The mapping's first `len` bytes, for a copy split over threads.
+    ///
+    /// # Panics
+    /// If `len` exceeds the buffer, or the buffer is [`MemoryUse::Resident`].
+    ///
+    /// # Safety
+    /// As for [`Buffer::read`], for as long as the slice lives.
+    pub unsafe fn mapped(&self, len: usize) -> &[u8] {
+        assert!(!self.mapped.is_null(), "a resident buffer is not mapped");
+        assert!(len as u64 <= self.size, "mapped range out of range");
+        // SAFETY: inside the mapping (checked above); no host writer while `&self` is
+        // borrowed (writes take `&mut self`), no device writer (the caller).
+        unsafe { std::slice::from_raw_parts(self.mapped, len) }
+    }
+
     /// Copies `out.len()` elements from byte `offset` of the buffer into `out`.
     ///
     /// # Panics

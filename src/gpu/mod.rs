@@ -30,6 +30,7 @@ mod disk_cache;
 mod emulate_ftz;
 mod evaluator;
 mod fold;
+mod host_copy;
 pub mod kernel;
 pub mod layout;
 mod memory;

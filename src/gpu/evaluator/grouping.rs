@@ -3,6 +3,7 @@
 //! llvmpipe runs a subgroup's lanes in SIMD, so a subgroup mixing models runs every
 //! model's path; grouped, it runs one (mixed 8-material kernel 2.3× on lavapipe).
 
+use crate::gpu::host_copy::HostCopy;
 use crate::gpu::memory::Buffer;
 
 /// The evaluation order of a chunk's `rows` (`cols` floats each, material index in column
@@ -37,7 +38,8 @@ pub(super) fn gather_rows(rows: &[f32], cols: usize, order: &[u32]) -> Vec<f32> 
 }
 
 /// Reads `buffer`'s first `out.len()` floats into `out`, rows of `cols`, putting output row
-/// i at row `order[i]` when the rows were uploaded in that order.
+/// i at row `order[i]` when the rows were uploaded in that order; in row order, `copy`
+/// splits the copy over its threads.
 ///
 /// # Safety
 /// As [`Buffer::read`]: nothing writes the buffer meanwhile.
@@ -46,11 +48,16 @@ pub(super) unsafe fn read_in_place(
     out: &mut [f32],
     cols: usize,
     order: Option<&[u32]>,
+    copy: &HostCopy,
 ) {
     match order {
-        // SAFETY: nothing writes `buffer` during the call (this function's own contract,
-        // passed on unchanged); `Buffer::read` checks that `out` fits the mapping.
-        None => unsafe { buffer.read(0, out) },
+        None => {
+            let len = std::mem::size_of_val(out);
+            // SAFETY: nothing writes `buffer` during the call (this function's own
+            // contract, passed on unchanged); `Buffer::mapped` checks that `out` fits.
+            let mapped = unsafe { buffer.mapped(len) };
+            copy.copy(bytemuck::cast_slice_mut(out), mapped)
+        }
         Some(order) => {
             let mut grouped = vec![0f32; out.len()];
             // SAFETY: as above; `grouped` has `out`'s length.

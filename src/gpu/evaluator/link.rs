@@ -22,6 +22,9 @@ pub struct LinkRates {
     pub host_to_device: f64,
     /// A transfer command from device-local memory into a mapped buffer.
     pub device_to_host: f64,
+    /// Threads the host's copies are split over, as the evaluator splits them
+    /// ([`VulkanOptions::host_copy_threads`](crate::gpu::VulkanOptions::host_copy_threads)).
+    pub copy_threads: usize,
 }
 
 impl VulkanBackend {
@@ -38,8 +41,11 @@ impl VulkanBackend {
         // One untimed round first: the pages of every buffer faulted in.
         for round in 0..=repeats.max(1) {
             let t = Instant::now();
+            // The host's copies split over threads as the evaluator's stages split them.
+            let (bytes_in, len) = (bytemuck::cast_slice(&host), 4 * host.len());
             // SAFETY: no submitted work uses `upload` (every one-shot below waited).
-            unsafe { upload.write(0, &host) };
+            let mapped = unsafe { upload.mapped_mut(len) };
+            self.host_copy.copy(mapped, bytes_in);
             let host_to_mapped = t.elapsed().as_secs_f64();
             let t = Instant::now();
             self.copy(&upload, &resident, bytes)?;
@@ -49,7 +55,9 @@ impl VulkanBackend {
             let device_to_host = t.elapsed().as_secs_f64();
             let t = Instant::now();
             // SAFETY: the copy above was waited for, and its barrier made it host-visible.
-            unsafe { readback.read(0, &mut back) };
+            let mapped = unsafe { readback.mapped(len) };
+            self.host_copy
+                .copy(bytemuck::cast_slice_mut(&mut back), mapped);
             let mapped_to_host = t.elapsed().as_secs_f64();
             if round > 0 {
                 for (v, s) in times.iter_mut().zip([
@@ -73,6 +81,7 @@ impl VulkanBackend {
             mapped_to_host: b,
             host_to_device: c,
             device_to_host: d,
+            copy_threads: self.host_copy.threads(),
         })
     }
 

@@ -42,6 +42,12 @@ pub struct VulkanOptions {
     /// (lavapipe computes on the host's own cores, so nothing overlaps: 1–3 measured no
     /// faster there, and each slot's buffers are one more first touch), 2 on a GPU.
     pub chunks_in_flight: Option<usize>,
+    /// Threads the host's copies into and out of the device's mapped buffers are split
+    /// over. `None` (the default, unless the environment variable
+    /// `VKBRDF_HOST_COPY_THREADS` gives a count): 1 on a CPU device, whose kernel needs the
+    /// host's cores, else a quarter of the host's cores, 1 to 4 (one thread's copy caps a
+    /// stream near 200 M tuples/s; docs/STREAMING.md).
+    pub host_copy_threads: Option<usize>,
     /// Testing aid: a fault to inject into batch evaluations (see [`InjectedFault`]).
     /// Default: none, or what the environment variable `VKBRDF_INJECT_VK_FAULT` says
     /// (read by [`VulkanBackend::new`](crate::gpu::VulkanBackend::new)).
@@ -111,6 +117,7 @@ impl Default for VulkanOptions {
             fold_material_min_tuples: fold_min_tuples_from_env(),
             folded_tuples_per_invocation: tuples_per_invocation_from_env(),
             chunks_in_flight: chunks_in_flight_from_env(),
+            host_copy_threads: count_from_env("VKBRDF_HOST_COPY_THREADS"),
             inject_fault: None,
         }
     }
@@ -141,9 +148,13 @@ fn tuples_per_invocation_from_env() -> Option<u32> {
 /// `VKBRDF_CHUNKS_IN_FLIGHT`: a count (above 3 taken as 3); anything else, the device's
 /// default (a setting for measurements).
 fn chunks_in_flight_from_env() -> Option<usize> {
-    std::env::var("VKBRDF_CHUNKS_IN_FLIGHT")
-        .ok()
-        .and_then(|v| v.trim().parse().ok())
+    count_from_env("VKBRDF_CHUNKS_IN_FLIGHT")
+}
+
+/// A count from the environment variable `name`; unset or unreadable, `None` (the
+/// device's default: these are settings for measurements, not worth an error).
+fn count_from_env(name: &str) -> Option<usize> {
+    std::env::var(name).ok().and_then(|v| v.trim().parse().ok())
 }
 
 /// Whether `VKBRDF_VALIDATION` asks for the validation layer (`1`, `true` or `yes`).

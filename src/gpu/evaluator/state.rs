@@ -6,6 +6,7 @@
 use super::options::VulkanOptions;
 use crate::features::FeatureSet;
 use crate::gpu::context::Device;
+use crate::gpu::host_copy::HostCopy;
 use crate::gpu::kernel::Kernels;
 use crate::gpu::layout::{descriptor_type, BINDING_COUNT, BINDING_TUPLE_TEXELS};
 use crate::gpu::memory::{Buffer, TexelView};
@@ -111,6 +112,9 @@ pub struct VulkanBackend {
     /// Rows an invocation of a folded kernel takes on this device
     /// ([`VulkanOptions::folded_tuples_per_invocation`]); the table kernels take one.
     pub(super) folded_per_invocation: u32,
+    /// Copies into the input buffers and out of the output buffers, over a few threads on
+    /// a GPU host ([`VulkanOptions::host_copy_threads`]).
+    pub(super) host_copy: HostCopy,
     pub(super) device: Arc<Device>,
 }
 
