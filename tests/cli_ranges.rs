@@ -311,3 +311,38 @@ fn a_closed_stdout_is_not_a_panic() {
     assert!(!err.contains("panicked"), "{err}");
     assert_ne!(o.status.code(), Some(101));
 }
+
+/// `devices` says where the kernel's buffers live and which queues a device has (what a
+/// GPU run needs to tell whether the kernel reads device memory the host writes in place):
+/// the evaluator's input and output buffers are host-visible on every device (it writes
+/// and reads them in place), and the device vkbrdf uses has a compute queue.
+#[test]
+fn devices_report_queue_families_and_the_buffers_memory() {
+    let o = vkbrdf(&["devices"]);
+    if !o.status.success() {
+        assert_ne!(
+            std::env::var("VKBRDF_REQUIRE_VULKAN").as_deref(),
+            Ok("1"),
+            "{}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        return; // no Vulkan here
+    }
+    let out = String::from_utf8_lossy(&o.stdout);
+    let line = |label: &str| {
+        out.lines()
+            .find(|l| l.trim_start().starts_with(label))
+            .unwrap_or_else(|| panic!("no {label:?} line: {out}"))
+            .to_string()
+    };
+    assert!(line("queue family 0:").contains("queue(s)"), "{out}");
+    assert!(
+        out.lines()
+            .any(|l| l.trim_start().starts_with("queue family") && l.contains("compute")),
+        "{out}"
+    );
+    for label in ["input buffers:", "output buffers:"] {
+        let l = line(label);
+        assert!(l.contains("host-visible") && l.contains("heap "), "{l}");
+    }
+}

@@ -7,7 +7,10 @@ use vkbrdf::gpu::{list_devices, DeviceSelector, INSTALL_HINT};
 #[derive(clap::Args, Debug, Clone)]
 #[command(after_help = "\
 Lists every Vulkan physical device with its type, driver, Vulkan version, subgroup size,
-largest storage-buffer range and memory heaps. `(default)` marks the device vkbrdf picks
+largest storage-buffer range, memory heaps and queue families, and the memory the
+evaluator's input and output buffers take (where the kernel reads its rows and writes its
+results: device-local and host-visible input memory means the kernel reads device memory
+that the host writes in place). `(default)` marks the device vkbrdf picks
 on its own: a discrete GPU, else an integrated one, else a virtual one, else a CPU
 implementation such as lavapipe (llvmpipe). Choose another with `--device INDEX` or
 `--device NAME` (any part of the name, case-insensitive) on the evaluating commands, or

@@ -324,6 +324,8 @@ pub(crate) struct PhysicalInfo {
     pub device_float64: bool,
     /// Driver name and info (Vulkan 1.2+).
     pub driver: Option<(String, String)>,
+    /// Each queue family's capabilities and queue count.
+    pub queue_families: Vec<(vk::QueueFlags, u32)>,
 }
 
 impl PhysicalInfo {
@@ -400,6 +402,10 @@ pub(crate) fn enumerate(instance: &Instance) -> Result<Vec<PhysicalInfo>> {
                 .shader_float64
                 == vk::TRUE,
             driver: None,
+            queue_families: families
+                .iter()
+                .map(|f| (f.queue_flags, f.queue_count))
+                .collect(),
         };
         info.shader_float64 = info.device_float64 && !disable_float64;
         let version = properties.api_version.min(instance.api_version);

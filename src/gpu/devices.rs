@@ -1,6 +1,7 @@
 //! `vkbrdf devices`: what Vulkan devices this machine has, and which one vkbrdf would pick.
 
 use super::context::{choose, enumerate, Instance, PhysicalInfo};
+use super::memory::MemoryUse;
 use crate::error::Result;
 use ash::vk;
 use std::fmt;
@@ -40,6 +41,15 @@ pub struct DeviceInfo {
     pub frame: String,
     /// Whether the device has a compute queue (vkbrdf can use it).
     pub compute: bool,
+    /// Each queue family: its capabilities (`graphics compute transfer`, …) and queues.
+    pub queue_families: Vec<(String, u32)>,
+    /// The memory the evaluator's input buffers take (written by the host, read by the
+    /// kernel): type index, heap and flags, e.g. `type 1, heap 0: device-local
+    /// host-visible host-coherent` (resizable BAR: the kernel reads device memory).
+    pub upload_memory: Option<String>,
+    /// The memory the evaluator's output buffers take (written by the kernel, read by the
+    /// host), as `upload_memory`.
+    pub readback_memory: Option<String>,
     /// Whether vkbrdf picks this device when no `--device` / `VKBRDF_DEVICE` is given.
     pub default_choice: bool,
 }
@@ -52,6 +62,45 @@ fn type_name(t: vk::PhysicalDeviceType) -> &'static str {
         vk::PhysicalDeviceType::CPU => "CPU",
         _ => "other",
     }
+}
+
+/// `graphics compute transfer …`: the capabilities vkbrdf cares about, in words.
+fn queue_words(flags: vk::QueueFlags) -> String {
+    let words: Vec<&str> = [
+        (vk::QueueFlags::GRAPHICS, "graphics"),
+        (vk::QueueFlags::COMPUTE, "compute"),
+        (vk::QueueFlags::TRANSFER, "transfer"),
+    ]
+    .into_iter()
+    .filter(|(f, _)| flags.contains(*f))
+    .map(|(_, w)| w)
+    .collect();
+    if words.is_empty() {
+        "other".to_string()
+    } else {
+        words.join(" ")
+    }
+}
+
+/// `type N, heap H: device-local host-visible …` for the memory type `usage` takes.
+fn memory_words(p: &PhysicalInfo, usage: MemoryUse) -> Option<String> {
+    let t = usage.chosen_type(&p.memory)?;
+    let ty = p.memory.memory_types[t as usize];
+    let words: Vec<&str> = [
+        (vk::MemoryPropertyFlags::DEVICE_LOCAL, "device-local"),
+        (vk::MemoryPropertyFlags::HOST_VISIBLE, "host-visible"),
+        (vk::MemoryPropertyFlags::HOST_COHERENT, "host-coherent"),
+        (vk::MemoryPropertyFlags::HOST_CACHED, "host-cached"),
+    ]
+    .into_iter()
+    .filter(|(f, _)| ty.property_flags.contains(*f))
+    .map(|(_, w)| w)
+    .collect();
+    Some(format!(
+        "type {t}, heap {}: {}",
+        ty.heap_index,
+        words.join(" ")
+    ))
 }
 
 fn info(p: &PhysicalInfo, default_choice: bool) -> DeviceInfo {
@@ -86,6 +135,13 @@ fn info(p: &PhysicalInfo, default_choice: bool) -> DeviceInfo {
             (false, false) => "f32 (the device has no shaderFloat64)".to_string(),
         },
         compute: p.compute_family.is_some(),
+        queue_families: p
+            .queue_families
+            .iter()
+            .map(|&(flags, count)| (queue_words(flags), count))
+            .collect(),
+        upload_memory: memory_words(p, MemoryUse::Upload),
+        readback_memory: memory_words(p, MemoryUse::Readback),
         default_choice,
     }
 }
@@ -139,6 +195,15 @@ impl fmt::Display for DeviceInfo {
                 "host"
             };
             writeln!(f, "   heap {i}:          {} ({local})", mib(h.size))?;
+        }
+        for (i, (words, count)) in self.queue_families.iter().enumerate() {
+            writeln!(f, "   queue family {i}:  {words} ({count} queue(s))")?;
+        }
+        if let Some(m) = &self.upload_memory {
+            writeln!(f, "   input buffers:   {m}")?;
+        }
+        if let Some(m) = &self.readback_memory {
+            writeln!(f, "   output buffers:  {m}")?;
         }
         if !self.compute {
             writeln!(f, "   (no compute queue: not usable by vkbrdf)")?;

@@ -28,6 +28,29 @@ pub(crate) enum MemoryUse {
     Resident,
 }
 
+impl MemoryUse {
+    /// The memory properties a buffer for this use requires, and those it prefers.
+    fn flags(self) -> (vk::MemoryPropertyFlags, vk::MemoryPropertyFlags) {
+        let host = vk::MemoryPropertyFlags::HOST_VISIBLE | vk::MemoryPropertyFlags::HOST_COHERENT;
+        match self {
+            MemoryUse::Upload => (host, vk::MemoryPropertyFlags::DEVICE_LOCAL),
+            MemoryUse::Readback => (host, vk::MemoryPropertyFlags::HOST_CACHED),
+            MemoryUse::Resident => (
+                vk::MemoryPropertyFlags::DEVICE_LOCAL,
+                vk::MemoryPropertyFlags::empty(),
+            ),
+        }
+    }
+
+    /// The memory type a buffer for this use takes on a device with `props`, where the
+    /// buffer allows every type (storage buffers do on the drivers seen so far; `vkbrdf
+    /// devices` reports it so that a GPU run says where the kernel reads and writes).
+    pub fn chosen_type(self, props: &vk::PhysicalDeviceMemoryProperties) -> Option<u32> {
+        let (required, preferred) = self.flags();
+        memory_type(props, u32::MAX, required, preferred)
+    }
+}
+
 /// Source of [`Buffer::id`]s.
 static NEXT_ID: AtomicU64 = AtomicU64::new(1);
 
@@ -117,15 +140,7 @@ impl Buffer {
         let mut guard = Guard(d, raw, vk::DeviceMemory::null());
         // SAFETY: `raw` is a live buffer of this device.
         let req = unsafe { d.get_buffer_memory_requirements(raw) };
-        let host = vk::MemoryPropertyFlags::HOST_VISIBLE | vk::MemoryPropertyFlags::HOST_COHERENT;
-        let (required, preferred) = match usage {
-            MemoryUse::Upload => (host, vk::MemoryPropertyFlags::DEVICE_LOCAL),
-            MemoryUse::Readback => (host, vk::MemoryPropertyFlags::HOST_CACHED),
-            MemoryUse::Resident => (
-                vk::MemoryPropertyFlags::DEVICE_LOCAL,
-                vk::MemoryPropertyFlags::empty(),
-            ),
-        };
+        let (required, preferred) = usage.flags();
         let type_index = memory_type(
             &device.physical.memory,
             req.memory_type_bits,
