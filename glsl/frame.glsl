@@ -16,10 +16,6 @@
 
 // Builds the frame of FORMULAS.md §1 and classifies the tuple. The invalid test comes first.
 uint make_frame(Row r, GpuMaterial m, out Frame f) {
-    bool ok_l, ok_v, ok_n;
-    f.l = safe_normalize(r.l, ok_l);
-    f.v = safe_normalize(r.v, ok_v);
-    f.n = safe_normalize(r.n, ok_n);
     f.t = vec3(0.0);
     f.b = vec3(0.0);
     f.hx = 0.0;
@@ -41,6 +37,29 @@ uint make_frame(Row r, GpuMaterial m, out Frame f) {
     f.cos_h_xf = vec2(0.0);
     f.c_xf = vec2(0.0);
 #endif
+    // Rows with N exactly +z (the local shading frame, and the rows the slices and tables
+    // generate) take a local frame (docs/VULKAN.md, "The local frames"). GGX's lanes try
+    // the f32 one first, before the general normalisations: a lane it certifies has L and
+    // V finite and nonzero (their squared lengths within [1e-20, 1e20], the cosines at
+    // least 1e-4), so it is valid, and it reads none of the normalised l, v, n; every
+    // other lane (invalid ones among them) goes on below as before. Anisotropic materials
+    // keep the general frame, whose tangent frame needs n.
+    bool local = r.n_bits == LOCAL_N_BITS;
+#if defined(HAS_ANISOTROPIC)
+    local = local && !is_anisotropic(m);
+#endif
+#if defined(HAS_LOCAL32_FRAME)
+    if (local && local32_material(m)) {
+        uint status = frame_scalars_local32(r, m, f);
+        if (status != STATUS_UNCERTIFIED) {
+            return status;
+        }
+    }
+#endif
+    bool ok_l, ok_v, ok_n;
+    f.l = safe_normalize(r.l, ok_l);
+    f.v = safe_normalize(r.v, ok_v);
+    f.n = safe_normalize(r.n, ok_n);
     if (!(ok_l && ok_v && ok_n)) {
         return STATUS_INVALID;
     }
@@ -79,26 +98,11 @@ uint make_frame(Row r, GpuMaterial m, out Frame f) {
 #endif
     }
 #endif
-    // Rows with N exactly +z (the local shading frame, and the rows the slices and tables
-    // generate) take a local frame: GGX's lanes the f32 one where D's slope certifies it
-    // (frame_local32.glsl), Beckmann's, with f64, the one with h in f64 and l, v in f32
-    // (frame_local_h64.glsl), else, with f64, the f64 frame without N's normalisation and
-    // the products with n (frame_scalars_f64_local): the same values, faster
-    // (docs/VULKAN.md, "The local frames"). Anisotropic materials keep the general frame,
-    // whose tangent frame needs n. NO_LOCAL_FRAME, NO_LOCAL32_FRAME and NO_LOCAL_H64_FRAME
-    // (kernel_time variants) turn them off.
-    bool local = r.n_bits == LOCAL_N_BITS;
-#if defined(HAS_ANISOTROPIC)
-    local = local && !is_anisotropic(m);
-#endif
-#if defined(HAS_LOCAL32_FRAME)
-    if (local && local32_material(m)) {
-        uint status = frame_scalars_local32(r, m, f);
-        if (status != STATUS_UNCERTIFIED) {
-            return status;
-        }
-    }
-#endif
+    // The other local frames: Beckmann's lanes, with f64, the one with h in f64 and l, v
+    // in f32 (frame_local_h64.glsl), else, with f64, the f64 frame without N's
+    // normalisation and the products with n (frame_scalars_f64_local): the same values,
+    // faster. NO_LOCAL_FRAME, NO_LOCAL32_FRAME and NO_LOCAL_H64_FRAME (kernel_time
+    // variants) turn the local frames off.
 #if defined(HAS_LOCAL_H64_FRAME)
     if (local && local_h64_material(m)) {
         uint status = frame_scalars_local_h64(r, m, f);

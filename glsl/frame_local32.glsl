@@ -137,6 +137,11 @@ uint frame_scalars_local32(Row r, GpuMaterial m, inout Frame f) {
         return STATUS_UNCERTIFIED;
     }
     f.h = h * inv_len;
+    // make_frame calls this before its normalisations: the unit vectors from here (no
+    // model on this frame reads them; set so that no field is left undefined).
+    f.l = l;
+    f.v = v;
+    f.n = vec3(0.0, 0.0, 1.0);
     local_frame_cosines(l, v, f);
     return STATUS_VALID;
 }
