@@ -14,7 +14,8 @@
 #include "frame_local32.glsl"
 #include "frame_local_h64.glsl"
 
-// Builds the frame of FORMULAS.md §1 and classifies the tuple. The invalid test comes first.
+// Builds the frame of FORMULAS.md §1 and classifies the tuple. The invalid test comes first,
+// but for the lanes a local frame takes (valid by that frame's own tests, below).
 uint make_frame(Row r, GpuMaterial m, out Frame f) {
     f.t = vec3(0.0);
     f.b = vec3(0.0);
@@ -38,12 +39,14 @@ uint make_frame(Row r, GpuMaterial m, out Frame f) {
     f.c_xf = vec2(0.0);
 #endif
     // Rows with N exactly +z (the local shading frame, and the rows the slices and tables
-    // generate) take a local frame (docs/VULKAN.md, "The local frames"). GGX's lanes try
-    // the f32 one first, before the general normalisations: a lane it certifies has L and
-    // V finite and nonzero (their squared lengths within [1e-20, 1e20], the cosines at
-    // least 1e-4), so it is valid, and it reads none of the normalised l, v, n; every
-    // other lane (invalid ones among them) goes on below as before. Anisotropic materials
-    // keep the general frame, whose tangent frame needs n.
+    // generate) take a local frame (docs/VULKAN.md, "The local frames"): GGX's lanes the
+    // f32 one where D's slope certifies it (frame_local32.glsl), Beckmann's, with f64, the
+    // one with h in f64 and l, v in f32 (frame_local_h64.glsl). Both come before the
+    // general normalisations: a lane either takes has L and V finite and nonzero (their
+    // squared lengths within [1e-20, 1e20], the cosines at least 1e-4), so it is valid,
+    // and it reads none of the normalised l, v, n; every other lane (invalid ones among
+    // them) goes on below as before. Anisotropic materials keep the general frame, whose
+    // tangent frame needs n.
     bool local = r.n_bits == LOCAL_N_BITS;
 #if defined(HAS_ANISOTROPIC)
     local = local && !is_anisotropic(m);
@@ -51,6 +54,14 @@ uint make_frame(Row r, GpuMaterial m, out Frame f) {
 #if defined(HAS_LOCAL32_FRAME)
     if (local && local32_material(m)) {
         uint status = frame_scalars_local32(r, m, f);
+        if (status != STATUS_UNCERTIFIED) {
+            return status;
+        }
+    }
+#endif
+#if defined(HAS_LOCAL_H64_FRAME)
+    if (local && local_h64_material(m)) {
+        uint status = frame_scalars_local_h64(r, m, f);
         if (status != STATUS_UNCERTIFIED) {
             return status;
         }
@@ -98,19 +109,10 @@ uint make_frame(Row r, GpuMaterial m, out Frame f) {
 #endif
     }
 #endif
-    // The other local frames: Beckmann's lanes, with f64, the one with h in f64 and l, v
-    // in f32 (frame_local_h64.glsl), else, with f64, the f64 frame without N's
-    // normalisation and the products with n (frame_scalars_f64_local): the same values,
-    // faster. NO_LOCAL_FRAME, NO_LOCAL32_FRAME and NO_LOCAL_H64_FRAME (kernel_time
-    // variants) turn the local frames off.
-#if defined(HAS_LOCAL_H64_FRAME)
-    if (local && local_h64_material(m)) {
-        uint status = frame_scalars_local_h64(r, m, f);
-        if (status != STATUS_UNCERTIFIED) {
-            return status;
-        }
-    }
-#endif
+    // The other lanes with N = +z, with f64: the f64 frame without N's normalisation and
+    // the products with n (frame_scalars_f64_local), the same values, faster.
+    // NO_LOCAL_FRAME, NO_LOCAL32_FRAME and NO_LOCAL_H64_FRAME (kernel_time variants) turn
+    // the local frames off.
 #if defined(HAS_FLOAT64)
 #if !defined(NO_LOCAL_FRAME)
     if (local) {

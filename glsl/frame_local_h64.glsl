@@ -57,6 +57,10 @@ uint frame_scalars_local_h64(Row r, GpuMaterial m, inout Frame f) {
     }
     f.sin2_h = float(dot(h.xy, h.xy) * (sh * sh));
     f.h = vec3(h * sh);
+    // make_frame calls this before its normalisations (see frame_scalars_local32).
+    f.l = l;
+    f.v = v;
+    f.n = vec3(0.0, 0.0, 1.0);
     local_frame_cosines(l, v, f);
     return STATUS_VALID;
 }
