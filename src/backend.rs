@@ -271,7 +271,8 @@ impl StreamChunk<'_> {
 /// row counted from the chunk's first row. Dropping it with chunks in flight waits for the
 /// device and discards them.
 pub trait OverlappedStream {
-    /// The most rows one chunk may have (a device's chunk for its memory budget).
+    /// The most rows one chunk may have (a device's chunk for its memory budget); a larger
+    /// chunk is refused with an error.
     fn max_chunk_rows(&self) -> usize;
 
     /// Starts evaluating `chunk` into `out` (its previous contents do not matter); the

@@ -702,6 +702,50 @@ fn the_vulkan_stream_keeps_chunks_in_flight_and_writes_what_one_call_computes() 
             "{extra:?}: terms differ from one call"
         );
     }
+    // The library's stream: chunks of at most `max_chunk_rows` come back in order, each as
+    // a call on it alone; a larger chunk is an error, not a panic.
+    {
+        use vkbrdf::backend::{Output, StreamChunk};
+        let options = vkbrdf::gpu::VulkanOptions {
+            max_gpu_memory: 2 << 20,
+            chunks_in_flight: Some(2),
+            ..vkbrdf::gpu::VulkanOptions::default()
+        };
+        let mut small = common::vulkan_with(options).expect("a device (found above)");
+        let request = Request { terms: false };
+        let mut stream = small.overlapped(&table, request, n as u64).expect("stream");
+        let max = stream.max_chunk_rows();
+        assert!(max < n, "{max}");
+        let err = stream
+            .submit(StreamChunk::Rows(&batch), 0, Output::default())
+            .expect_err("an oversized chunk is refused");
+        assert!(err.to_string().contains("max_chunk_rows"), "{err}");
+        let cols = batch.columns();
+        let parts: Vec<_> = (0..5)
+            .map(|k| {
+                let rows = batch.as_slice()[k * max * cols..(k + 1) * max * cols].to_vec();
+                vkbrdf::batch::Batch::new(rows, cols, table.len(), &t).expect("part")
+            })
+            .collect();
+        let mut outs = Vec::new();
+        for (k, part) in parts.iter().enumerate() {
+            let first = (k * max) as u64;
+            let done = stream.submit(StreamChunk::Rows(part), first, Output::default());
+            outs.extend(done.expect("submit"));
+        }
+        while let Some(out) = stream.finish_oldest().expect("finish") {
+            outs.push(out);
+        }
+        assert_eq!(outs.len(), parts.len());
+        for (k, out) in outs.iter().enumerate() {
+            assert!(
+                bits(&out.brdf) == bits(&want.brdf[k * max * 3..(k + 1) * max * 3]),
+                "library stream, chunk {k}: BRDF differs from one call"
+            );
+        }
+        // Row 1,000 (invalid) lies in the first chunk, counted from its first row.
+        assert_eq!(outs[0].counts.first_invalid, Some(1_000));
+    }
     // The local-frame form: six columns, material 0, against its rows' one call.
     let local: Vec<f32> = batch
         .as_slice()

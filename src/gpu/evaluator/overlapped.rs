@@ -12,7 +12,7 @@
 use super::state::{Pending, VulkanBackend, FRAMES_IN_FLIGHT};
 use crate::backend::{Counts, Output, OverlappedStream, Request, StreamChunk, TERM_COLUMNS};
 use crate::batch::Batch;
-use crate::error::{FailedChunk, Result};
+use crate::error::{Error, FailedChunk, Result};
 use crate::features::FeatureSet;
 use crate::gpu::layout::{gpu_materials, GpuMaterial, PushConstants};
 use crate::material::Material;
@@ -173,11 +173,13 @@ impl OverlappedStream for VulkanStream<'_> {
     ) -> Result<Option<Output>> {
         self.backend.cancel.check()?;
         let len = chunk.len();
-        assert!(
-            len <= self.chunk,
-            "a stream chunk of {len} rows exceeds max_chunk_rows() = {}",
-            self.chunk
-        );
+        if len > self.chunk {
+            return Err(Error::Unsupported(format!(
+                "a stream chunk of {len} rows exceeds the device's chunk of {} rows \
+                 (OverlappedStream::max_chunk_rows)",
+                self.chunk
+            )));
+        }
         let ring = (self.depth + 1).min(FRAMES_IN_FLIGHT);
         let done = if self.in_flight.len() == ring {
             self.complete_oldest()?
