@@ -337,6 +337,23 @@ impl VulkanBackend {
         Ok(out.brdf)
     }
 
+    /// The features a call on `batch` gets: what it uses (with the shared ones, when
+    /// [`Backend::share_kernels`] gave some), without `BUCKETED` when the options turn the
+    /// grouping off. A call and a stream's chunk (`overlapped.rs`) take the same.
+    fn batch_features(
+        &self,
+        batch: &Batch,
+        materials: &[Material],
+        request: &Request,
+    ) -> FeatureSet {
+        let features = if self.shared_features == FeatureSet::EMPTY {
+            FeatureSet::of_batch(batch, materials, request)
+        } else {
+            Self::features_with(batch, materials, request, self.shared_features)
+        };
+        self.grouping(features)
+    }
+
     /// `features` without `BUCKETED` when the options turn the grouping off.
     fn grouping(&self, features: FeatureSet) -> FeatureSet {
         if self.options.group_by_material {
@@ -711,12 +728,7 @@ impl Backend for VulkanBackend {
         materials: &[Material],
         request: &Request,
     ) -> Result<Output> {
-        let features = if self.shared_features == FeatureSet::EMPTY {
-            FeatureSet::of_batch(batch, materials, request)
-        } else {
-            Self::features_with(batch, materials, request, self.shared_features)
-        };
-        let features = self.grouping(features);
+        let features = self.batch_features(batch, materials, request);
         self.run(RowSource::Rows(batch), materials, features)
     }
 

@@ -36,7 +36,8 @@ pub struct VulkanOptions {
     pub folded_tuples_per_invocation: Option<u32>,
     /// Chunks of an `eval` stream left on the device while the host copies the next chunk
     /// in and an older one out (`Backend::overlapped`), 0 to
-    /// [`FRAMES_IN_FLIGHT`](crate::gpu::FRAMES_IN_FLIGHT) (more is taken as that). `None`
+    /// [`FRAMES_IN_FLIGHT`](crate::gpu::FRAMES_IN_FLIGHT) − 1 (more is taken as that; the
+    /// ring keeps one slot for the chunk being copied in). `None`
     /// (the default, unless the environment variable `VKBRDF_CHUNKS_IN_FLIGHT` gives a
     /// count): 0 on a CPU device
     /// (lavapipe computes on the host's own cores, so nothing overlaps: 1–3 measured no
@@ -116,7 +117,7 @@ impl Default for VulkanOptions {
             group_by_material: true,
             fold_material_min_tuples: fold_min_tuples_from_env(),
             folded_tuples_per_invocation: tuples_per_invocation_from_env(),
-            chunks_in_flight: chunks_in_flight_from_env(),
+            chunks_in_flight: count_from_env("VKBRDF_CHUNKS_IN_FLIGHT"),
             host_copy_threads: count_from_env("VKBRDF_HOST_COPY_THREADS"),
             inject_fault: None,
         }
@@ -143,12 +144,6 @@ fn tuples_per_invocation_from_env() -> Option<u32> {
         .ok()
         .and_then(|v| v.trim().parse().ok())
         .filter(|k| (1..=4).contains(k))
-}
-
-/// `VKBRDF_CHUNKS_IN_FLIGHT`: a count (above 3 taken as 3); anything else, the device's
-/// default (a setting for measurements).
-fn chunks_in_flight_from_env() -> Option<usize> {
-    count_from_env("VKBRDF_CHUNKS_IN_FLIGHT")
 }
 
 /// A count from the environment variable `name`; unset or unreadable, `None` (the

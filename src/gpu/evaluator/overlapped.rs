@@ -42,10 +42,12 @@ pub(super) struct VulkanStream<'a> {
     /// errors give.
     stream_chunk: u64,
     in_flight: VecDeque<InFlight>,
-    /// Chunks left in flight when `submit` returns
-    /// ([`VulkanOptions::chunks_in_flight`](crate::gpu::VulkanOptions::chunks_in_flight));
-    /// the ring uses `depth + 1` slots (at most [`FRAMES_IN_FLIGHT`]).
-    depth: usize,
+    /// Slots the stream uses in turn: one more than the chunks left in flight when
+    /// `submit` returns
+    /// ([`VulkanOptions::chunks_in_flight`](crate::gpu::VulkanOptions::chunks_in_flight),
+    /// at most `FRAMES_IN_FLIGHT − 1`), so the next chunk always finds its slot free and a
+    /// stream that keeps nothing in flight reuses one slot's buffers.
+    ring: usize,
 }
 
 impl<'a> VulkanStream<'a> {
@@ -59,7 +61,7 @@ impl<'a> VulkanStream<'a> {
     ) -> Result<VulkanStream<'a>> {
         let chunk = backend.chunk_tuples(materials.len())?;
         let depth = match backend.options.chunks_in_flight {
-            Some(k) => k.min(FRAMES_IN_FLIGHT),
+            Some(k) => k.min(FRAMES_IN_FLIGHT - 1),
             None if backend.is_cpu_device() => 0,
             None => FRAMES_IN_FLIGHT - 1,
         };
@@ -76,7 +78,7 @@ impl<'a> VulkanStream<'a> {
             submitted: 0,
             stream_chunk: chunk as u64,
             in_flight: VecDeque::with_capacity(FRAMES_IN_FLIGHT),
-            depth,
+            ring: depth + 1,
         })
     }
 
@@ -93,22 +95,11 @@ impl<'a> VulkanStream<'a> {
         }
     }
 
-    /// The slot of chunk `index`: the ring's `depth + 1` slots in turn, so a stream that
-    /// keeps nothing in flight reuses one slot's buffers.
-    fn slot(&self, index: u64) -> usize {
-        (index % (self.depth + 1).min(FRAMES_IN_FLIGHT) as u64) as usize
-    }
-
     /// Loads `batch` into the next slot and submits its dispatch.
     fn start(&mut self, batch: &Batch, index: u64, rows: std::ops::Range<u64>) -> Result<()> {
-        let s = self.slot(index);
+        let s = (index % self.ring as u64) as usize;
         let b = &mut *self.backend;
-        let features = if b.shared_features == FeatureSet::EMPTY {
-            FeatureSet::of_batch(batch, self.materials, &self.request)
-        } else {
-            VulkanBackend::features_with(batch, self.materials, &self.request, b.shared_features)
-        };
-        let features = b.grouping(features);
+        let features = b.batch_features(batch, self.materials, &self.request);
         b.last_features = Some(features);
         // The fold is decided on the chunk's rows, as a call on the chunk alone decides it:
         // a folded conductor takes F's fitted polynomial, so deciding on the stream's rows
@@ -180,12 +171,6 @@ impl OverlappedStream for VulkanStream<'_> {
                 self.chunk
             )));
         }
-        let ring = (self.depth + 1).min(FRAMES_IN_FLIGHT);
-        let done = if self.in_flight.len() == ring {
-            self.complete_oldest()?
-        } else {
-            None
-        };
         let (index, rows) = (self.submitted, first_row..first_row + len as u64);
         if index == 0 {
             self.stream_chunk = len as u64;
@@ -213,16 +198,17 @@ impl OverlappedStream for VulkanStream<'_> {
         }
         self.submitted += 1;
         self.in_flight.push_back(InFlight {
-            slot: self.slot(index),
+            slot: (index % self.ring as u64) as usize,
             out,
             index,
             rows,
         });
-        if self.in_flight.len() > self.depth {
-            debug_assert!(done.is_none(), "one completion a submission");
+        // The ring's other slots hold the chunks left in flight; with all of them taken,
+        // the oldest completes (its slot is the next chunk's).
+        if self.in_flight.len() == self.ring {
             return self.complete_oldest();
         }
-        Ok(done)
+        Ok(None)
     }
 
     fn finish_oldest(&mut self) -> Result<Option<Output>> {
