@@ -9,7 +9,7 @@ mod material_column;
 pub mod rows;
 
 pub use local_material::{check_local_material, local_material};
-use material_column::{material_in_range, material_index};
+use material_column::material_index;
 
 use crate::cancel::Cancel;
 use crate::error::{Error, Result};
@@ -135,21 +135,11 @@ impl<'a> Batch<'a> {
     }
 
     fn first_bad_material(&self, material_count: usize) -> Option<(usize, f32)> {
-        // Blocks of rows checked without a branch (the compiler vectorises the block's
-        // conversions and compares: the check was half the read stage's time, one branch a
-        // row), then the rows from the first block with a bad one, one by one.
-        const BLOCK: usize = 16;
+        // Blocks of rows checked without a branch a row (the check was half the read
+        // stage's time with one), then the rows from the first block with a bad one, one
+        // by one.
         let columns = self.columns;
-        let clean = self
-            .data
-            .chunks_exact(columns * BLOCK)
-            .take_while(|block| {
-                let m: [f32; BLOCK] = std::array::from_fn(|k| block[k * columns + 9]);
-                m.iter()
-                    .fold(true, |ok, &x| ok & material_in_range(x, material_count))
-            })
-            .count()
-            * BLOCK;
+        let clean = material_column::clean_rows(&self.data, columns, material_count);
         self.data[clean * columns..]
             .chunks_exact(columns)
             .map(|row| row[9])
