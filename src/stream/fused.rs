@@ -50,6 +50,56 @@ pub(super) fn slice_rows(
     chunk_rows_for(budget, row_bytes, columns, out_columns).min(SLICE_ROWS)
 }
 
+/// The bytes of a page: slice boundaries fall on them ([`Slices`]).
+const PAGE: u64 = 4096;
+
+/// How the rows of a part are cut into slices: a first, shorter one (`lead` rows) that
+/// ends where an output's row starts on a page boundary, then slices of `slice` rows, a
+/// whole number of pages of that output each. Every later write then covers whole pages
+/// (but the last): a write that shares its first and last page with a neighbouring slice
+/// (the 128-byte `.npy` header shifts every row) fills them twice, from two workers, and
+/// costs more a byte (docs/STREAMING.md has the figures).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct Slices {
+    n: u64,
+    lead: u64,
+    slice: u64,
+}
+
+impl Slices {
+    /// `n` rows in slices of `slice` rows, aligned for an output whose rows (`row_bytes`
+    /// each) start at byte `data_start`; no shorter first slice when `slice` is not a whole
+    /// number of pages of it.
+    fn new(n: u64, slice: u64, data_start: u64, row_bytes: u64) -> Slices {
+        let slice = slice.max(1);
+        // Rows whose bytes make a whole number of pages: PAGE / gcd(row_bytes, PAGE).
+        let period = (1..=PAGE)
+            .find(|r| (r * row_bytes).is_multiple_of(PAGE))
+            .unwrap_or(PAGE);
+        let lead = (0..period)
+            .find(|r| (data_start + r * row_bytes).is_multiple_of(PAGE))
+            .filter(|_| slice.is_multiple_of(period))
+            .unwrap_or(0)
+            .min(n);
+        Slices { n, lead, slice }
+    }
+
+    /// How many slices.
+    fn count(&self) -> u64 {
+        u64::from(self.lead > 0) + (self.n - self.lead).div_ceil(self.slice)
+    }
+
+    /// Slice `k`'s rows, from the part's first.
+    fn rows(&self, k: u64) -> std::ops::Range<u64> {
+        if self.lead > 0 && k == 0 {
+            return 0..self.lead;
+        }
+        let k = k - u64::from(self.lead > 0);
+        let start = self.lead + k * self.slice;
+        start..(start + self.slice).min(self.n)
+    }
+}
+
 /// One float32 `.npy` output written by rows at their places.
 struct RowsOut {
     writer: StagedWriter,
@@ -148,8 +198,7 @@ struct Shared<'a> {
     rows: &'a NpyRows,
     outputs: &'a Outputs,
     cancel: &'a Cancel,
-    slice: u64,
-    slices: u64,
+    slices: Slices,
     /// The next slice to take.
     next: AtomicU64,
     /// The first slice that failed (`u64::MAX`: none): no worker takes a later one.
@@ -170,11 +219,12 @@ impl Shared<'_> {
                 break;
             }
             let k = self.next.fetch_add(1, Ordering::Relaxed);
-            if k >= self.slices || k > self.stop.load(Ordering::Relaxed) {
+            if k >= self.slices.count() || k > self.stop.load(Ordering::Relaxed) {
                 break;
             }
-            let at = self.setup.part.start + k * self.slice;
-            let len = self.slice.min(self.setup.part.end - at) as usize;
+            let rows = self.slices.rows(k);
+            let at = self.setup.part.start + rows.start;
+            let len = (rows.end - rows.start) as usize;
             match self.slice_at(
                 engine,
                 at,
@@ -270,14 +320,16 @@ pub(super) fn evaluate(
         outputs_a_row,
         workers.len(),
     ) as u64;
+    // The boundaries on the pages of the larger output (the terms', when asked for).
+    let widest = outputs.terms.as_ref().unwrap_or(&outputs.brdf);
+    let slices = Slices::new(n, slice, widest.data_start, 4 * widest.columns as u64);
     let shared = Shared {
         job,
         setup,
         rows,
         outputs: &outputs,
         cancel,
-        slice,
-        slices: n.div_ceil(slice),
+        slices,
         next: AtomicU64::new(0),
         stop: AtomicU64::new(u64::MAX),
         done: AtomicU64::new(0),
@@ -332,4 +384,43 @@ pub(super) fn evaluate(
         staged.push(w.finish(path)?);
     }
     Ok((summary, Some(staged)))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The slices cover the rows once, in order, each at most `slice` rows; with a
+    /// `slice` that is a whole number of pages of the output, every boundary after the
+    /// first slice starts a row on a page (the BRDF's 12-byte rows and the terms'
+    /// 24-byte rows behind a 128-byte header: 672 and 336 rows first), and without one
+    /// the slices are even.
+    #[test]
+    fn slices_cover_the_rows_once_and_start_on_pages() {
+        for (row_bytes, lead) in [(12, 672), (24, 336)] {
+            assert_eq!(Slices::new(1 << 20, 8192, 128, row_bytes).lead, lead);
+            for n in [0, 1, 335, 336, 671, 672, 673, 8192, 8864, 100_000, 1 << 20] {
+                for slice in [8192, 4096, 1000, 1] {
+                    let s = Slices::new(n, slice, 128, row_bytes);
+                    let mut next = 0;
+                    for k in 0..s.count() {
+                        let r = s.rows(k);
+                        assert_eq!(r.start, next, "n {n}, slice {slice}, k {k}");
+                        assert!(r.end > r.start && r.end - r.start <= slice);
+                        if k > 0 && slice.is_multiple_of(1024) {
+                            assert!(
+                                (128 + r.start * row_bytes).is_multiple_of(PAGE),
+                                "n {n}, k {k}"
+                            );
+                        }
+                        next = r.end;
+                    }
+                    assert_eq!(next, n, "n {n}, slice {slice}");
+                    if !slice.is_multiple_of(1024) {
+                        assert_eq!(s.lead, 0, "slice {slice}");
+                    }
+                }
+            }
+        }
+    }
 }
