@@ -101,9 +101,15 @@ fn start_writeback(file: &File) -> std::io::Result<()> {
     // sync_file_range reads no memory of ours: its arguments are integers.
     let r = unsafe { libc::sync_file_range(file.as_raw_fd(), 0, 0, libc::SYNC_FILE_RANGE_WRITE) };
     if r == 0 {
-        Ok(())
-    } else {
-        Err(std::io::Error::last_os_error())
+        return Ok(());
+    }
+    let e = std::io::Error::last_os_error();
+    match e.raw_os_error() {
+        // A kernel or file system that does not take the call (a sandbox's ENOSYS, a
+        // file system's EINVAL or EOPNOTSUPP) gets the sync it had before; any other
+        // error is the output's.
+        Some(libc::ENOSYS | libc::EINVAL | libc::EOPNOTSUPP) => file.sync_data(),
+        _ => Err(e),
     }
 }
 
