@@ -516,6 +516,27 @@ impl StagedWriter {
         Ok(())
     }
 
+    /// Reserves the staged file's `len` bytes on the disk before they are written (a
+    /// regular file on Linux; elsewhere, and for what is written directly, nothing): the
+    /// writes then fill blocks already allocated, which costs ext4 less than allocating
+    /// them piece by piece as the early writeback reaches them (docs/STREAMING.md), and a
+    /// disk without room for the output says so before any work instead of part-way. A
+    /// file system without the call writes as before.
+    pub fn preallocate(&self, len: u64) -> Result<()> {
+        #[cfg(target_os = "linux")]
+        if let WriterInner::Temp { file, .. } = &self.inner {
+            use rustix::fs::{fallocate, FallocateFlags};
+            use rustix::io::Errno;
+            match fallocate(file.as_file(), FallocateFlags::empty(), 0, len) {
+                Ok(()) | Err(Errno::OPNOTSUPP | Errno::NOSYS | Errno::INVAL) => {}
+                Err(e) => return Err(write_error(&self.cancel, &self.path, e.into())),
+            }
+        }
+        #[cfg(not(target_os = "linux"))]
+        let _ = len;
+        Ok(())
+    }
+
     /// The error for a failed write to this output (or [`Error::Cancelled`]).
     pub fn error(&self, source: std::io::Error) -> Error {
         write_error(&self.cancel, &self.path, source)

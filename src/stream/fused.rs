@@ -123,6 +123,7 @@ impl RowsOut {
             return Ok(None);
         }
         let header = npy_header_f32(rows, columns);
+        writer.preallocate(header.len() as u64 + rows * columns as u64 * 4)?;
         writer.write_at(0, &header)?;
         Ok(Some(RowsOut {
             writer,

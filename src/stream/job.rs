@@ -123,9 +123,9 @@ pub(super) struct NpyOut {
 impl NpyOut {
     pub(super) fn start(path: &Path, rows: u64, columns: usize, cancel: &Cancel) -> Result<NpyOut> {
         let mut writer = atomic::stage_writer(path, cancel)?;
-        writer
-            .write_all(&crate::batch::npy_header_f32(rows, columns))
-            .map_err(|e| writer.error(e))?;
+        let header = crate::batch::npy_header_f32(rows, columns);
+        writer.preallocate(header.len() as u64 + rows * columns as u64 * 4)?;
+        writer.write_all(&header).map_err(|e| writer.error(e))?;
         Ok(NpyOut {
             writer,
             path: path.to_owned(),
