@@ -22,11 +22,12 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Mutex;
 use std::time::Instant;
 
-/// Rows a worker takes at a time, at most: its rows (40–52 bytes each) and outputs (12,
-/// 36 with the terms) stay within a core's L2 cache (256 KiB to 2 MiB) while it reads,
-/// evaluates and writes them, and the pieces are large enough that a positioned read and
-/// write cost little per row. docs/STREAMING.md has the measurement.
-const SLICE_ROWS: usize = 8192;
+/// Rows a worker takes at a time, at most: 1.3–1.7 MB of rows and 0.4–1.2 MB of outputs,
+/// past a core's L2 but within the last-level cache, and few enough calls that the
+/// kernel's work a read or write (the page-cache lookups, the file's lock) costs little
+/// a row; 8,192 rows (in L2) and 65,536 or more (fewer slices than a small batch's two
+/// workers balance well) both ran slower. docs/STREAMING.md has the measurement.
+const SLICE_ROWS: usize = 32768;
 
 /// Whether this path can run `job`: every output is a regular file ([`Outputs::start`]
 /// decides that), the rows are evaluated in RGB, and no HTSG spike is asked for (those
