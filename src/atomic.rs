@@ -14,11 +14,13 @@
 //!   the evaluation has succeeded — atomicity is a promise for regular files only.
 //! - Writing checks a [`Cancel`] token between blocks.
 
+mod disk;
 mod file_kind;
 mod writeback;
 
 use crate::cancel::Cancel;
 use crate::error::{Error, Result};
+use disk::{set_final_mode, sync_dir};
 use file_kind::{file_id, is_fifo, is_fifo_or_device, FileId, Identity};
 use std::fs::File;
 use std::io::{BufWriter, Cursor, Seek, SeekFrom, Write};
@@ -516,25 +518,15 @@ impl StagedWriter {
         Ok(())
     }
 
-    /// Reserves the staged file's `len` bytes on the disk before they are written (a
-    /// regular file on Linux; elsewhere, and for what is written directly, nothing): the
-    /// writes then fill blocks already allocated, which costs ext4 less than allocating
-    /// them piece by piece as the early writeback reaches them (docs/STREAMING.md), and a
-    /// disk without room for the output says so before any work instead of part-way. A
-    /// file system without the call writes as before.
+    /// Reserves the staged file's `len` bytes on the disk before they are written, so that
+    /// a disk without room says so before any work (`atomic/disk.rs` says why and where);
+    /// nothing for an output written directly.
     pub fn preallocate(&self, len: u64) -> Result<()> {
-        #[cfg(target_os = "linux")]
-        if let WriterInner::Temp { file, .. } = &self.inner {
-            use rustix::fs::{fallocate, FallocateFlags};
-            use rustix::io::Errno;
-            match fallocate(file.as_file(), FallocateFlags::empty(), 0, len) {
-                Ok(()) | Err(Errno::OPNOTSUPP | Errno::NOSYS | Errno::INVAL) => {}
-                Err(e) => return Err(write_error(&self.cancel, &self.path, e.into())),
-            }
+        match &self.inner {
+            WriterInner::Temp { file, .. } => disk::reserve(file.as_file(), len)
+                .map_err(|e| write_error(&self.cancel, &self.path, e)),
+            WriterInner::Memory { .. } => Ok(()),
         }
-        #[cfg(not(target_os = "linux"))]
-        let _ = len;
-        Ok(())
     }
 
     /// The error for a failed write to this output (or [`Error::Cancelled`]).
@@ -749,14 +741,6 @@ fn write_direct(path: &Path, data: &[u8], stdout: bool) -> std::io::Result<()> {
     }
 }
 
-/// Makes a rename durable; a failure here loses nothing that the rename has not already
-/// made visible, so it is not reported.
-fn sync_dir(dir: &Path) {
-    if let Ok(d) = File::open(dir) {
-        let _ = d.sync_all();
-    }
-}
-
 /// A failed write to `path`: [`Error::Cancelled`] when the token was the cause (the writer
 /// refused the block), else the I/O error naming the path.
 fn write_error(cancel: &Cancel, path: &Path, source: std::io::Error) -> Error {
@@ -779,32 +763,4 @@ fn output_error(path: &Path, message: &str) -> Error {
         path: path.to_owned(),
         message: message.to_owned(),
     }
-}
-
-#[cfg(unix)]
-fn set_final_mode(file: &File, path: &Path) -> std::io::Result<()> {
-    use std::os::unix::fs::PermissionsExt;
-    let mode = match std::fs::metadata(path) {
-        Ok(m) => m.permissions().mode() & 0o7777,
-        Err(_) => 0o666 & !current_umask(),
-    };
-    file.set_permissions(std::fs::Permissions::from_mode(mode))
-}
-
-#[cfg(not(unix))]
-fn set_final_mode(_file: &File, _path: &Path) -> std::io::Result<()> {
-    Ok(())
-}
-
-/// The process umask, read from /proc (no libc call, no unsafe); 022 when unreadable.
-#[cfg(unix)]
-fn current_umask() -> u32 {
-    std::fs::read_to_string("/proc/self/status")
-        .ok()
-        .and_then(|s| {
-            s.lines()
-                .find_map(|l| l.strip_prefix("Umask:").map(|v| v.trim().to_string()))
-        })
-        .and_then(|v| u32::from_str_radix(&v, 8).ok())
-        .unwrap_or(0o022)
 }

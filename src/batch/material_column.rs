@@ -21,7 +21,7 @@ pub(super) fn material_index(m: f32, count: usize) -> Option<usize> {
 }
 
 /// Rows checked together by [`clean_rows`].
-pub(super) const BLOCK: usize = 16;
+const BLOCK: usize = 16;
 
 /// How many rows of `data` (row-major, `columns` a row, the material in column 9) lie
 /// before the first block of [`BLOCK`] rows with a material [`material_in_range`] refuses:
