@@ -5,6 +5,8 @@
 
 pub mod columns;
 mod local_material;
+#[cfg(target_os = "linux")]
+mod mapped;
 mod material_column;
 pub mod rows;
 
@@ -79,7 +81,39 @@ impl Batch<'static> {
     }
 }
 
+/// Lets streamed runs on the CPU engine read a float32 input's rows where the page cache
+/// holds them (read-only mappings of a slice at a time) instead of copying them; returns
+/// whether they can (Linux). It installs a SIGBUS handler for the process, once: a file
+/// truncated under the run then fails the run with an error naming the row, as a read
+/// would, instead of ending the process; a SIGBUS elsewhere goes to the action installed
+/// before. Programs call it at start (`vkbrdf`'s `main` does); without it, or where
+/// another handler later replaces this one, rows are read by `pread`.
+pub fn enable_mapped_reads() -> bool {
+    #[cfg(target_os = "linux")]
+    return mapped::enable();
+    #[cfg(not(target_os = "linux"))]
+    false
+}
+
 impl<'a> Batch<'a> {
+    /// [`Batch::borrowed`] for rows `first_row..` of a larger batch (a mapped slice of a
+    /// streamed file): errors name rows counted from the batch's start.
+    pub(crate) fn borrowed_at(
+        data: &'a [f32],
+        columns: usize,
+        material_count: usize,
+        source: &Path,
+        first_row: u64,
+    ) -> Result<Batch<'a>> {
+        Batch::checked(
+            Cow::Borrowed(data),
+            columns,
+            material_count,
+            source,
+            first_row,
+        )
+    }
+
     /// [`Batch::new`] on the caller's row-major data, without copying it (the Python
     /// binding evaluates a C-contiguous float32 array in place).
     pub fn borrowed(

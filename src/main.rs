@@ -35,6 +35,9 @@ fn main() -> ExitCode {
             }
         }
     });
+    // The CPU engine's streamed runs read the input's rows in place (mapped), with a
+    // truncated input reported as an error rather than a SIGBUS that ends the process.
+    vkbrdf::batch::enable_mapped_reads();
     match cli::run(args, cancel) {
         Ok(code) => code,
         Err(e) => {

@@ -11,10 +11,19 @@
 //! fsync is what makes the output durable, on every system; an error of the early writes
 //! reaches it (the kernel records writeback errors for the file's next fsync), and the
 //! thread's own errors are reported too. Elsewhere the thread calls `fdatasync`.
+//!
+//! When every core is busy (the CPU engine's workers take them all), the thread, woken,
+//! may not run for milliseconds: the scheduler lets the running workers finish their
+//! slices first, and a 2^20-tuple run's whole output then waited for its final fsync
+//! (1–4 ms of a 10 ms run, against 0.4–0.9 with the writes started on time). So a writer
+//! that finds the last request still untaken, with the thread not inside a call, starts
+//! the write itself; a thread inside a call means the disk is what is slow, and the writer
+//! goes on (docs/STREAMING.md, "The writeback thread starved").
 
 use std::fs::File;
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::mpsc::{sync_channel, SyncSender, TrySendError};
+use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
 
 /// Bytes written between two early writebacks: large enough that a call's fixed cost is
@@ -33,6 +42,17 @@ pub(crate) struct Writeback {
     request: Option<SyncSender<()>>,
     thread: Option<JoinHandle<std::io::Result<()>>>,
     since_last: AtomicU64,
+    shared: Arc<Shared>,
+}
+
+/// What the thread and the writers share.
+struct Shared {
+    /// A handle of the file's own (the writers' calls use it).
+    file: File,
+    /// The thread is inside a call.
+    calling: AtomicBool,
+    /// The first error of a writer's own call (the thread returns its own).
+    error: Mutex<Option<std::io::Error>>,
 }
 
 impl Writeback {
@@ -40,13 +60,21 @@ impl Writeback {
     /// handle or a thread: the output is then made durable by its final fsync alone, as
     /// before (slower, never less safe).
     pub(crate) fn start(file: &File) -> Option<Writeback> {
-        let handle = file.try_clone().ok()?;
+        let shared = Arc::new(Shared {
+            file: file.try_clone().ok()?,
+            calling: AtomicBool::new(false),
+            error: Mutex::new(None),
+        });
+        let theirs = Arc::clone(&shared);
         let (request, requests) = sync_channel::<()>(1);
         let thread = std::thread::Builder::new()
             .name("vkbrdf-writeback".into())
             .spawn(move || {
                 for () in requests {
-                    start_writeback(&handle)?;
+                    theirs.calling.store(true, Ordering::Relaxed);
+                    let started = start_writeback(&theirs.file);
+                    theirs.calling.store(false, Ordering::Relaxed);
+                    started?;
                 }
                 Ok(())
             })
@@ -55,6 +83,7 @@ impl Writeback {
             request: Some(request),
             thread: Some(thread),
             since_last: AtomicU64::new(0),
+            shared,
         })
     }
 
@@ -68,8 +97,20 @@ impl Writeback {
         }
         if let Some(r) = &self.request {
             match r.try_send(()) {
-                Ok(()) | Err(TrySendError::Full(())) => {
+                Ok(()) => {
                     self.since_last.fetch_sub(since, Ordering::Relaxed);
+                }
+                Err(TrySendError::Full(())) => {
+                    self.since_last.fetch_sub(since, Ordering::Relaxed);
+                    // The last request is still untaken: a thread outside any call has
+                    // not run since (starved, see the module docs), so start it here.
+                    if !self.shared.calling.load(Ordering::Relaxed) {
+                        if let Err(e) = start_writeback(&self.shared.file) {
+                            let mut first =
+                                self.shared.error.lock().unwrap_or_else(|p| p.into_inner());
+                            first.get_or_insert(e);
+                        }
+                    }
                 }
                 // The thread stopped on an error, which `finish` reports.
                 Err(TrySendError::Disconnected(())) => {}
@@ -82,11 +123,18 @@ impl Writeback {
     /// pages and cleared the error).
     pub(crate) fn finish(mut self) -> std::io::Result<()> {
         self.request = None;
-        match self.thread.take().map(JoinHandle::join) {
+        let thread = match self.thread.take().map(JoinHandle::join) {
             Some(Ok(result)) => result,
             Some(Err(_)) => Err(std::io::Error::other("the writeback thread panicked")),
             None => Ok(()),
-        }
+        };
+        let mine = self
+            .shared
+            .error
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .take();
+        thread.and(mine.map_or(Ok(()), Err))
     }
 }
 
@@ -97,7 +145,7 @@ impl Writeback {
 fn start_writeback(file: &File) -> std::io::Result<()> {
     use std::os::fd::AsRawFd;
     // Offset 0 and length 0: the whole file, as far as it reaches when the call runs.
-    // SAFETY: `file` is an open file this thread owns a handle of for the whole call, and
+    // SAFETY: `file` is an open file the caller holds a handle of for the whole call, and
     // sync_file_range reads no memory of ours: its arguments are integers.
     let r = unsafe { libc::sync_file_range(file.as_raw_fd(), 0, 0, libc::SYNC_FILE_RANGE_WRITE) };
     if r == 0 {

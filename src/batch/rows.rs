@@ -244,6 +244,50 @@ impl NpyRows {
         Ok(())
     }
 
+    /// Rows `at..at + n` as a checked [`Batch`] read where the page cache holds them (a
+    /// mapped window, no copy), handed to `use_rows`; `None` where they cannot be (not
+    /// [`enable_mapped_reads`](super::enable_mapped_reads), not Linux, a float64 or
+    /// Fortran-order file, the kernel refused): read them with [`NpyRows::batch_at`].
+    /// A page that could not be read (the file shrank under the run, a disk error) fails
+    /// with the row it holds, before any error of the rows' own: its values read as zeros.
+    pub(crate) fn with_mapped<T>(
+        &self,
+        at: u64,
+        n: usize,
+        use_rows: impl FnOnce(&Batch<'_>) -> Result<T>,
+    ) -> Option<Result<T>> {
+        #[cfg(target_os = "linux")]
+        {
+            if self.fortran || self.dtype != Dtype::F4 || cfg!(target_endian = "big") {
+                return None;
+            }
+            let offset = self.data_start + at * self.row_bytes() as u64;
+            let window =
+                super::mapped::Window::new(self.reader.get_ref(), offset, n * self.row_bytes())?;
+            // A float32 file's rows start 4-byte aligned (the header is 64-byte padded);
+            // a file whose are not is read instead.
+            let floats: &[f32] = bytemuck::try_cast_slice(window.bytes()).ok()?;
+            let used =
+                Batch::borrowed_at(floats, self.columns, self.material_count, &self.source, at)
+                    .and_then(|b| use_rows(&b));
+            if let Some(offset) = window.fault() {
+                let row = at + (offset / self.row_bytes()) as u64;
+                return Some(Err(Error::Batch {
+                    path: self.source.clone(),
+                    message: format!(
+                        "row {row} could not be read: the file shrank while it was read (truncated by another process?) or its disk failed"
+                    ),
+                }));
+            }
+            Some(used)
+        }
+        #[cfg(not(target_os = "linux"))]
+        {
+            let _ = (at, n, use_rows);
+            None
+        }
+    }
+
     /// Rows `at..at + n` as a checked [`Batch`] (as [`NpyRows::next_chunk`] makes it) in
     /// `buffer`'s memory; see [`NpyRows::floats_at`].
     pub fn batch_at(
@@ -294,5 +338,65 @@ impl NpyRows {
             materials,
             &self.source,
         )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Needs the mapped reads of Linux.
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn a_truncated_input_fails_with_the_first_row_it_lost() {
+        assert!(crate::batch::enable_mapped_reads());
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("t.npy");
+        let rows = 2000_u64;
+        let data: Vec<f32> = (0..rows * 10)
+            .map(|i| {
+                if i % 10 == 9 {
+                    0.0
+                } else {
+                    1.0 + (i % 7) as f32
+                }
+            })
+            .collect();
+        crate::batch::write_npy_f32(&path, &data, 10).unwrap();
+        let npy = NpyRows::open(&path, 1).unwrap();
+        // The whole file in place: the rows as written, no error.
+        let sum = npy
+            .with_mapped(0, rows as usize, |b| Ok(b.as_slice().iter().sum::<f32>()))
+            .expect("a float32 file maps")
+            .unwrap();
+        assert_eq!(sum, data.iter().sum::<f32>());
+        // Cut the file inside row 1000's page: the rows of the pages after it are lost.
+        let header = std::fs::metadata(&path).unwrap().len() - rows * 40;
+        let cut = header + 1000 * 40 + 8;
+        std::fs::OpenOptions::new()
+            .write(true)
+            .open(&path)
+            .unwrap()
+            .set_len(cut)
+            .unwrap();
+        let page = crate::batch::mapped::page_size() as u64;
+        let first_lost = (cut.next_multiple_of(page) - header) / 40;
+        let err = npy
+            .with_mapped(0, rows as usize, |b| {
+                // The rows' own error, which the lost page's must come before.
+                Err::<(), _>(crate::error::Error::Batch {
+                    path: path.clone(),
+                    message: format!("saw {} rows", b.len()),
+                })
+            })
+            .expect("a float32 file maps")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains(&format!("row {first_lost} could not be read"))
+                && err.contains("t.npy")
+                && err.contains("shrank"),
+            "{err} (expected row {first_lost})"
+        );
     }
 }

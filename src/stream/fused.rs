@@ -15,7 +15,7 @@ use super::job::{chunk_rows_for, Setup, StreamJob, StreamSummary};
 use crate::atomic::{stage_writer, Staged, StagedWriter};
 use crate::backend::{Backend, Counts, Output, TERM_COLUMNS};
 use crate::batch::rows::NpyRows;
-use crate::batch::{check_tangent_rows, npy_header_f32};
+use crate::batch::{check_tangent_rows, npy_header_f32, Batch};
 use crate::cancel::Cancel;
 use crate::error::{Error, Result};
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -277,12 +277,25 @@ impl Shared<'_> {
                 t1
             }
             None => {
-                let b = self.rows.batch_at(at, len, data, bytes)?;
-                check_tangent_rows(b.as_slice(), b.columns(), at, job.materials, job.input)?;
-                let t1 = Instant::now();
-                engine.evaluate_into(&b, job.materials, request, out)?;
-                *buffer = b.into_data();
-                t1
+                let evaluate = |b: &Batch<'_>, engine: &mut dyn Backend, out: &mut Output| {
+                    check_tangent_rows(b.as_slice(), b.columns(), at, job.materials, job.input)?;
+                    let t1 = Instant::now();
+                    engine.evaluate_into(b, job.materials, request, out)?;
+                    Ok(t1)
+                };
+                // Where the page cache holds the rows, read in place; else copied out.
+                match self.rows.with_mapped(at, len, |b| evaluate(b, engine, out)) {
+                    Some(t1) => {
+                        *buffer = data;
+                        t1?
+                    }
+                    None => {
+                        let b = self.rows.batch_at(at, len, data, bytes)?;
+                        let t1 = evaluate(&b, engine, out)?;
+                        *buffer = b.into_data();
+                        t1
+                    }
+                }
             }
         };
         let t2 = Instant::now();
