@@ -5,12 +5,12 @@
 
 pub mod columns;
 mod local_material;
-#[cfg(target_os = "linux")]
 mod mapped;
 mod material_column;
 pub mod rows;
 
 pub use local_material::{check_local_material, local_material};
+pub use mapped::enable as enable_mapped_reads;
 use material_column::material_index;
 
 use crate::cancel::Cancel;
@@ -81,20 +81,6 @@ impl Batch<'static> {
     }
 }
 
-/// Lets streamed runs on the CPU engine read a float32 input's rows where the page cache
-/// holds them (read-only mappings of a slice at a time) instead of copying them; returns
-/// whether they can (Linux). It installs a SIGBUS handler for the process, once: a file
-/// truncated under the run then fails the run with an error naming the row, as a read
-/// would, instead of ending the process; a SIGBUS elsewhere goes to the action installed
-/// before. Programs call it at start (`vkbrdf`'s `main` does); without it, or where
-/// another handler later replaces this one, rows are read by `pread`.
-pub fn enable_mapped_reads() -> bool {
-    #[cfg(target_os = "linux")]
-    return mapped::enable();
-    #[cfg(not(target_os = "linux"))]
-    false
-}
-
 impl<'a> Batch<'a> {
     /// [`Batch::borrowed`] for rows `first_row..` of a larger batch (a mapped slice of a
     /// streamed file): errors name rows counted from the batch's start.
@@ -112,6 +98,15 @@ impl<'a> Batch<'a> {
             source,
             first_row,
         )
+    }
+
+    /// Rows checked before (a mapped chunk the reader checked, handed to the engine's
+    /// thread), wrapped without checking them again.
+    pub(crate) fn checked_before(data: &'a [f32], columns: usize) -> Batch<'a> {
+        Batch {
+            data: Cow::Borrowed(data),
+            columns,
+        }
     }
 
     /// [`Batch::new`] on the caller's row-major data, without copying it (the Python

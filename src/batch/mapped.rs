@@ -1,7 +1,8 @@
-//! Windows of a float32 `.npy` input mapped read-only ([`Window`]), so that the CPU
-//! engine's workers read their rows where the page cache holds them instead of copying
-//! them into a buffer first: that copy was the largest share of a streamed `eval` left
-//! (docs/STREAMING.md, "Rows read in place").
+//! Windows of a float32 `.npy` input mapped read-only ([`Window`]), so that a streamed
+//! `eval` reads its rows where the page cache holds them instead of copying them into a
+//! buffer first: the CPU engine's workers evaluate them there, and the Vulkan engine's
+//! one copy is the page cache's into its staging memory. That copy was the largest share
+//! of a streamed `eval` left (docs/STREAMING.md, "Rows read in place").
 //!
 //! A mapped file that shrinks under the run (another process truncates it) or whose page
 //! cannot be read (a disk's I/O error) raises SIGBUS at the access, which kills the process
@@ -43,9 +44,14 @@ const FREE: Slot = Slot {
 
 static LIVE: [Slot; SLOTS] = [FREE; SLOTS];
 
-/// Installs the SIGBUS handler once for the process; returns whether mapped reads are
-/// available ([`crate::batch::enable_mapped_reads`] documents it for callers).
-pub(crate) fn enable() -> bool {
+/// Lets streamed runs read a float32 input's rows where the page cache holds them
+/// (read-only mappings of a chunk at a time) instead of copying them; returns whether
+/// they can (Linux). It installs a SIGBUS handler for the process, once: a file truncated
+/// under the run then fails the run with an error naming the row, as a read would,
+/// instead of ending the process; a SIGBUS elsewhere goes to the action installed before.
+/// Programs call it at start (`vkbrdf`'s `main` does); without it, or where another
+/// handler later replaces this one, rows are read by `pread`.
+pub fn enable() -> bool {
     guard::install()
 }
 
@@ -140,7 +146,24 @@ fn map(file: &File, offset: u64, len: usize) -> Option<memmap2::Mmap> {
     .ok()
 }
 
+/// Elsewhere no handler: mapped reads stay off, rows are read by `pread`.
+#[cfg(not(target_os = "linux"))]
+mod guard {
+    pub(super) fn install() -> bool {
+        false
+    }
+
+    pub(super) fn installed() -> bool {
+        false
+    }
+
+    pub(super) fn page_size() -> usize {
+        4096
+    }
+}
+
 /// The SIGBUS handler and its installation (Linux).
+#[cfg(target_os = "linux")]
 mod guard {
     use super::{Ordering, LIVE};
     use std::sync::OnceLock;
@@ -305,6 +328,7 @@ mod tests {
     }
 
     #[test]
+    #[cfg(target_os = "linux")]
     fn a_window_reads_the_file_in_place_and_a_truncated_page_reads_zeros_and_is_reported() {
         assert!(enable(), "the SIGBUS handler installs on Linux");
         let page = guard_page();
@@ -351,6 +375,7 @@ mod tests {
     /// A SIGBUS outside every window still ends the process: the test runs itself in a
     /// child process that faults on a mapping of its own, and the child must die of it.
     #[test]
+    #[cfg(target_os = "linux")]
     fn a_sigbus_outside_every_window_still_ends_the_process() {
         const CHILD: &str = "VKBRDF_SIGBUS_CHILD";
         if let Some(dir) = std::env::var_os(CHILD) {

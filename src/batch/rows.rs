@@ -3,6 +3,7 @@
 //! straight into a float buffer (float64 files rounded to float32, as [`Batch::read_npy`]
 //! does).
 
+use super::mapped::Window;
 use super::{
     npy_head, open_sized, Batch, LocalBatch, LocalLayout, COLUMNS_LOCAL, COLUMNS_PLAIN,
     COLUMNS_TANGENT,
@@ -245,47 +246,76 @@ impl NpyRows {
     }
 
     /// Rows `at..at + n` as a checked [`Batch`] read where the page cache holds them (a
-    /// mapped window, no copy), handed to `use_rows`; `None` where they cannot be (not
-    /// [`enable_mapped_reads`](super::enable_mapped_reads), not Linux, a float64 or
-    /// Fortran-order file, the kernel refused): read them with [`NpyRows::batch_at`].
-    /// A page that could not be read (the file shrank under the run, a disk error) fails
-    /// with the row it holds, before any error of the rows' own: its values read as zeros.
+    /// mapped window, no copy), handed to `use_rows`; `None` where they cannot be (see
+    /// [`NpyRows::window`]): read them with [`NpyRows::batch_at`]. A page that could not
+    /// be read (the file shrank under the run, a disk error) fails with the row it holds,
+    /// before any error of the rows' own: its values read as zeros.
     pub(crate) fn with_mapped<T>(
         &self,
         at: u64,
         n: usize,
         use_rows: impl FnOnce(&Batch<'_>) -> Result<T>,
     ) -> Option<Result<T>> {
-        #[cfg(target_os = "linux")]
-        {
-            if self.fortran || self.dtype != Dtype::F4 || cfg!(target_endian = "big") {
-                return None;
+        let window = self.window(at, n)?;
+        Some(self.in_window(&window, at, use_rows))
+    }
+
+    /// [`NpyRows::next_chunk_reusing`], with the rows mapped where the page cache holds
+    /// them ([`RowsChunk::Mapped`], no copy) where they can be; `check` runs on the rows
+    /// after the material check, and a page lost under the mapping fails before either.
+    pub(crate) fn next_in_place(
+        &mut self,
+        max_rows: usize,
+        spare: Vec<f32>,
+        check: impl FnOnce(&Batch<'_>, u64) -> Result<()>,
+    ) -> Result<Option<(u64, RowsChunk)>> {
+        self.next(max_rows, |rows, at, n, bytes| match rows.window(at, n) {
+            Some(window) => {
+                rows.in_window(&window, at, |b| check(b, at))?;
+                Ok(RowsChunk::Mapped(MappedRows {
+                    window,
+                    columns: rows.columns,
+                    first: at,
+                    source: rows.source.clone(),
+                }))
             }
-            let offset = self.data_start + at * self.row_bytes() as u64;
-            let window =
-                super::mapped::Window::new(self.reader.get_ref(), offset, n * self.row_bytes())?;
-            // A float32 file's rows start 4-byte aligned (the header is 64-byte padded);
-            // a file whose are not is read instead.
-            let floats: &[f32] = bytemuck::try_cast_slice(window.bytes()).ok()?;
-            let used =
-                Batch::borrowed_at(floats, self.columns, self.material_count, &self.source, at)
-                    .and_then(|b| use_rows(&b));
-            if let Some(offset) = window.fault() {
-                let row = at + (offset / self.row_bytes()) as u64;
-                return Some(Err(Error::Batch {
-                    path: self.source.clone(),
-                    message: format!(
-                        "row {row} could not be read: the file shrank while it was read (truncated by another process?) or its disk failed"
-                    ),
-                }));
+            None => {
+                let b = rows.batch_at(at, n, spare, bytes)?;
+                check(&b, at)?;
+                Ok(RowsChunk::Read(b))
             }
-            Some(used)
+        })
+    }
+
+    /// Rows `at..at + n` mapped read-only; `None` where they cannot be: mapped reads not
+    /// enabled ([`enable_mapped_reads`](super::enable_mapped_reads)) or not Linux, a
+    /// float64 or Fortran-order file (converted as read), rows not 4-byte aligned, no
+    /// window free or the kernel refused.
+    fn window(&self, at: u64, n: usize) -> Option<Window> {
+        if self.fortran || self.dtype != Dtype::F4 || cfg!(target_endian = "big") {
+            return None;
         }
-        #[cfg(not(target_os = "linux"))]
-        {
-            let _ = (at, n, use_rows);
-            None
+        let offset = self.data_start + at * self.row_bytes() as u64;
+        // A float32 file's rows start 4-byte aligned (NumPy pads the header to 64 bytes).
+        if !offset.is_multiple_of(4) {
+            return None;
         }
+        Window::new(self.reader.get_ref(), offset, n * self.row_bytes())
+    }
+
+    /// `use_rows` on `window`'s rows (from row `at`) as a checked batch; a lost page's
+    /// error first.
+    fn in_window<T>(
+        &self,
+        window: &Window,
+        at: u64,
+        use_rows: impl FnOnce(&Batch<'_>) -> Result<T>,
+    ) -> Result<T> {
+        let floats = bytemuck::cast_slice(window.bytes());
+        let used = Batch::borrowed_at(floats, self.columns, self.material_count, &self.source, at)
+            .and_then(|b| use_rows(&b));
+        lost_page(window, at, self.row_bytes(), &self.source)?;
+        used
     }
 
     /// Rows `at..at + n` as a checked [`Batch`] (as [`NpyRows::next_chunk`] makes it) in
@@ -341,12 +371,62 @@ impl NpyRows {
     }
 }
 
+/// A chunk of rows as [`NpyRows::next_in_place`] gives it.
+pub(crate) enum RowsChunk {
+    /// Where the page cache holds them, checked.
+    Mapped(MappedRows),
+    /// Copied into a buffer, checked.
+    Read(Batch<'static>),
+}
+
+/// Rows of a float32 file mapped read-only and checked: a chunk the pipeline's reader
+/// hands to the engine's thread, which reads it in place ([`MappedRows::batch`]); on Vulkan
+/// the one copy is then the page cache's into the staging memory.
+pub(crate) struct MappedRows {
+    window: Window,
+    columns: usize,
+    first: u64,
+    source: PathBuf,
+}
+
+impl MappedRows {
+    /// The rows, as checked when they were mapped.
+    pub(crate) fn batch(&self) -> Batch<'_> {
+        Batch::checked_before(bytemuck::cast_slice(self.window.bytes()), self.columns)
+    }
+
+    /// Rows in the chunk.
+    pub(crate) fn len(&self) -> usize {
+        self.window.bytes().len() / (4 * self.columns)
+    }
+
+    /// The error of a page lost since the rows were mapped (the file shrank under the
+    /// run): ask after every use of [`MappedRows::batch`], whose values read as zeros there.
+    pub(crate) fn lost_page(&self) -> Result<()> {
+        lost_page(&self.window, self.first, 4 * self.columns, &self.source)
+    }
+}
+
+/// The error naming the first row of `window` (rows from `first`, `row_bytes` each) on a
+/// page that could not be read, if one could not.
+fn lost_page(window: &Window, first: u64, row_bytes: usize, source: &Path) -> Result<()> {
+    match window.fault() {
+        None => Ok(()),
+        Some(offset) => Err(Error::Batch {
+            path: source.to_owned(),
+            message: format!(
+                "row {} could not be read: the file shrank while it was read (truncated by another process?) or its disk failed",
+                first + (offset / row_bytes) as u64
+            ),
+        }),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    /// Needs the mapped reads of Linux.
-    #[cfg(target_os = "linux")]
+    #[cfg(target_os = "linux")] // mapped reads
     #[test]
     fn a_truncated_input_fails_with_the_first_row_it_lost() {
         assert!(crate::batch::enable_mapped_reads());
@@ -398,5 +478,68 @@ mod tests {
                 && err.contains("shrank"),
             "{err} (expected row {first_lost})"
         );
+    }
+
+    /// The pipeline's form: a chunk mapped and checked on one thread, read on another
+    /// after the file shrank, reports the first row it lost when asked after the read.
+    #[cfg(target_os = "linux")] // mapped reads
+    #[test]
+    fn a_mapped_chunk_read_after_a_truncation_reports_its_first_lost_row() {
+        assert!(crate::batch::enable_mapped_reads());
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("t.npy");
+        let rows = 3000_u64;
+        let data: Vec<f32> = (0..rows * 10)
+            .map(|i| {
+                if i % 10 == 9 {
+                    (i / 10 % 2) as f32
+                } else {
+                    0.5
+                }
+            })
+            .collect();
+        crate::batch::write_npy_f32(&path, &data, 10).unwrap();
+        let mut npy = NpyRows::open(&path, 2).unwrap();
+        npy.restrict(1000..rows).unwrap();
+        let mut checked = 0;
+        let (first, chunk) = npy
+            .next_in_place(1500, Vec::new(), |b, at| {
+                checked = b.len() as u64 + at;
+                Ok(())
+            })
+            .unwrap()
+            .expect("rows left");
+        assert_eq!((first, checked), (1000, 2500));
+        let RowsChunk::Mapped(m) = chunk else {
+            panic!("a float32 file maps");
+        };
+        assert_eq!(m.len(), 1500);
+        assert!(m.batch().as_slice() == &data[10_000..25_000]);
+        assert!(m.lost_page().is_ok());
+        let header = std::fs::metadata(&path).unwrap().len() - rows * 40;
+        let cut = header + 2000 * 40;
+        std::fs::OpenOptions::new()
+            .write(true)
+            .open(&path)
+            .unwrap()
+            .set_len(cut)
+            .unwrap();
+        let page = crate::batch::mapped::page_size() as u64;
+        let first_lost = (cut.next_multiple_of(page) - header) / 40;
+        let sum: f32 = m.batch().as_slice().iter().sum();
+        assert!(
+            sum < data[10_000..25_000].iter().sum::<f32>(),
+            "lost rows read as zeros"
+        );
+        let err = m.lost_page().unwrap_err().to_string();
+        assert!(
+            err.contains(&format!("row {first_lost} could not be read")),
+            "{err} (expected row {first_lost})"
+        );
+        // The next chunk starts past the end of the shrunk file: mapped, it reads only
+        // zeros, and says so before any use.
+        let next = npy.next_in_place(1500, Vec::new(), |_, _| Ok(()));
+        let err = next.err().expect("rows past the end").to_string();
+        assert!(err.contains("row 2500 could not be read"), "{err}");
     }
 }

@@ -150,8 +150,7 @@ pub fn measure(
         .backend()
         .evaluate(&chunks[0], materials, &Request::default())?;
     let mut out = first.clone();
-    let in_place = engine.backend().stream_workers().is_some();
-    read_pass(&input, materials.len(), piece, in_place)?;
+    read_pass(&input, materials.len(), piece)?;
 
     let [mut read, mut copy, mut eng, mut write, mut write_copy, mut e2e] =
         std::array::from_fn::<Times, 6, _>(|_| Times::default());
@@ -161,7 +160,7 @@ pub fn measure(
     // not depend on the values).
     let blocks: Vec<&[f32]> = chunks.iter().map(|c| &first.brdf[..3 * c.len()]).collect();
     for _ in 0..repeats.max(1) {
-        let ((), w, c) = timed(|| read_pass(&input, materials.len(), piece, in_place))?;
+        let ((), w, c) = timed(|| read_pass(&input, materials.len(), piece))?;
         read.push(w, c);
         let ((), w, c) = timed(|| copy_pass(&input, piece * 4 * batch.columns()))?;
         copy.push(w, c);
@@ -276,14 +275,14 @@ fn read_all(path: &Path, material_count: usize, chunk: usize) -> Result<Vec<Batc
     Ok(chunks)
 }
 
-/// The read stage as `eval` runs it: every chunk read and checked into the one buffer the
-/// last chunk gave back, or (`in_place`: the CPU engine's workers, where the input can be
-/// mapped) each mapped where the page cache holds it and checked there.
-fn read_pass(path: &Path, material_count: usize, chunk: usize, in_place: bool) -> Result<()> {
+/// The read stage as `eval` runs it: every chunk mapped where the page cache holds it and
+/// checked there, or (mapped reads off: not Linux, no handler) read and checked into the
+/// one buffer the last chunk gave back.
+fn read_pass(path: &Path, material_count: usize, chunk: usize) -> Result<()> {
     let mut rows = NpyRows::open(path, material_count)?;
     let n = rows.rows();
     let mut at = 0;
-    while in_place && at < n {
+    while at < n {
         let len = (chunk as u64).min(n - at);
         match rows.with_mapped(at, len as usize, |_| Ok(())) {
             Some(checked) => checked?,
@@ -371,7 +370,7 @@ pub fn print(rows: &[StageRow]) {
         );
     }
     println!(
-        "\neach stage against its ceiling (M tuples/s: page-cache copy for read, which the CPU engine's mapped read skips and may pass, host→device and device→host transfers for upload and readback, write(2) to the page cache for write), and CPU ns a tuple:"
+        "\neach stage against its ceiling (M tuples/s: page-cache copy for read, which the mapped read skips and may pass, host→device and device→host transfers for upload and readback, write(2) to the page cache for write), and CPU ns a tuple:"
     );
     println!(
         "  {:<26} {:<11} {:>9} {:>7} {:>9} {:>7} {:>9} {:>7} {:>9} {:>7} {:>13}",

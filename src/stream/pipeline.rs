@@ -5,7 +5,7 @@
 use super::job::{NpyOut, Setup, StreamJob, StreamSummary};
 use crate::atomic::Staged;
 use crate::backend::{Backend, Output, OverlappedStream, Request, StreamChunk, TERM_COLUMNS};
-use crate::batch::rows::NpyRows;
+use crate::batch::rows::{MappedRows, NpyRows, RowsChunk};
 use crate::batch::{check_tangent_rows, Batch, LocalBatch};
 use crate::cancel::Cancel;
 use crate::error::Result;
@@ -71,19 +71,27 @@ pub(super) fn evaluate(
                 Some(m) => rows
                     .next_local(chunk, m, job.materials)
                     .map(|c| c.map(|(first, b)| (first, Chunk::Local(b)))),
+                // Mapped where the page cache holds the rows (the engine's copy into its
+                // staging memory is then the only one), else read into a spare buffer.
                 None => rows
-                    .next_chunk_reusing(chunk, spent_rx.try_recv().unwrap_or_default())
-                    .and_then(|c| {
-                        if let Some((first, batch)) = &c {
+                    .next_in_place(
+                        chunk,
+                        spent_rx.try_recv().unwrap_or_default(),
+                        |batch, first| {
                             check_tangent_rows(
                                 batch.as_slice(),
                                 batch.columns(),
-                                *first,
+                                first,
                                 job.materials,
                                 job.input,
-                            )?;
-                        }
-                        Ok(c.map(|(first, b)| (first, Chunk::Rows(b))))
+                            )
+                        },
+                    )
+                    .map(|c| {
+                        c.map(|(first, c)| match c {
+                            RowsChunk::Mapped(m) => (first, Chunk::Mapped(m)),
+                            RowsChunk::Read(b) => (first, Chunk::Rows(b)),
+                        })
                     }),
             };
             let message = match next {
@@ -135,20 +143,23 @@ pub(super) fn evaluate(
                 let out = recycle_rx.try_recv().unwrap_or_default();
                 // The spike's weights, when asked for: the host's f64 form (cheap next to
                 // the BRDF's series), in the same chunk, so all outputs advance together.
-                let spikes = match (&batch, job.spike.is_some()) {
-                    (_, false) => Vec::new(),
-                    (Chunk::Rows(b), true) => spike_rows(b, job.materials),
-                    (Chunk::Local(b), true) => spike_rows(&b.rows(0..b.len()), job.materials),
+                let spikes = match job.spike.is_some() {
+                    false => Vec::new(),
+                    true => batch.with_rows(|rows| spike_rows(rows, job.materials)),
                 };
                 held.push_back((first, batch.len(), spikes));
-                let finished = match &mut engine {
-                    Engine::Stream(stream) => stream.submit(batch.as_stream(), first, out)?,
+                let finished = batch.with_rows(|rows| match &mut engine {
+                    Engine::Stream(stream) => stream.submit(rows, first, out),
                     Engine::Calls(backend) => {
                         let mut out = out;
-                        batch.evaluate(&mut **backend, job, request, &mut out)?;
-                        Some(out)
+                        evaluate_chunk(rows, &mut **backend, job, request, &mut out)?;
+                        Ok(Some(out))
                     }
-                };
+                })?;
+                // A mapped chunk's page lost while the engine read it read as zeros.
+                if let Chunk::Mapped(m) = &batch {
+                    m.lost_page()?;
+                }
                 summary.eval_s += t.elapsed().as_secs_f64();
                 if let Chunk::Rows(b) = batch {
                     let _ = spent_tx.try_send(b.into_data()); // full: the reader has spares
@@ -204,9 +215,10 @@ enum Engine<'a> {
 /// The chunks an engine holds, oldest first: first row, rows, spike weights.
 type Held = std::collections::VecDeque<(u64, usize, Vec<f32>)>;
 
-/// One chunk as read: rows, or the local-frame form.
+/// One chunk as read: rows (copied or mapped), or the local-frame form.
 enum Chunk {
     Rows(Batch<'static>),
+    Mapped(MappedRows),
     Local(LocalBatch),
 }
 
@@ -215,62 +227,68 @@ impl Chunk {
     fn len(&self) -> usize {
         match self {
             Chunk::Rows(b) => b.len(),
+            Chunk::Mapped(m) => m.len(),
             Chunk::Local(b) => b.len(),
         }
     }
 
-    /// The chunk as an engine's stream takes it.
-    fn as_stream(&self) -> StreamChunk<'_> {
+    /// `use_rows` on the chunk as an engine's stream takes it.
+    fn with_rows<T>(&self, use_rows: impl FnOnce(StreamChunk<'_>) -> T) -> T {
         match self {
-            Chunk::Rows(b) => StreamChunk::Rows(b),
-            Chunk::Local(b) => StreamChunk::Local(b),
+            Chunk::Rows(b) => use_rows(StreamChunk::Rows(b)),
+            Chunk::Mapped(m) => use_rows(StreamChunk::Rows(&m.batch())),
+            Chunk::Local(b) => use_rows(StreamChunk::Local(b)),
         }
-    }
-
-    /// The chunk's outputs into `out` on `backend` with `materials`.
-    fn evaluate_into(
-        &self,
-        backend: &mut dyn Backend,
-        materials: &[Material],
-        request: &Request,
-        out: &mut Output,
-    ) -> Result<()> {
-        match self {
-            Chunk::Rows(b) => backend.evaluate_into(b, materials, request, out),
-            Chunk::Local(b) => backend.evaluate_local_into(b, materials, request, out),
-        }
-    }
-
-    /// The job's outputs of the chunk into `out`: the materials' BRDF, or the spectral
-    /// job's (its evaluations at the basis or wavelength materials, combined per row).
-    fn evaluate(
-        &self,
-        backend: &mut dyn Backend,
-        job: &StreamJob,
-        request: &Request,
-        out: &mut Output,
-    ) -> Result<()> {
-        let Some(s) = job.spectral else {
-            return self.evaluate_into(backend, job.materials, request, out);
-        };
-        type Row<'a> = Box<dyn Fn(usize) -> ([f32; 3], [f32; 3], usize) + Sync + 'a>;
-        let row: Row = match self {
-            Chunk::Rows(b) => Box::new(crate::spectral_eval::batch_rows(b)),
-            Chunk::Local(b) => Box::new(crate::spectral_eval::local_rows(b)),
-        };
-        let triplets = backend.is_reference();
-        s.evaluate_with(
-            self.len(),
-            triplets,
-            &row,
-            |m, o| self.evaluate_into(backend, m, request, o),
-            out,
-        )
     }
 }
 
-/// `ρ_s` of each row of `batch` ([`crate::reference::htsg_spike_rows`]); every material is
+/// `rows`' outputs into `out` on `backend` with `materials`.
+fn evaluate_into(
+    rows: StreamChunk<'_>,
+    backend: &mut dyn Backend,
+    materials: &[Material],
+    request: &Request,
+    out: &mut Output,
+) -> Result<()> {
+    match rows {
+        StreamChunk::Rows(b) => backend.evaluate_into(b, materials, request, out),
+        StreamChunk::Local(b) => backend.evaluate_local_into(b, materials, request, out),
+    }
+}
+
+/// The job's outputs of `rows` into `out`: the materials' BRDF, or the spectral job's
+/// (its evaluations at the basis or wavelength materials, combined per row).
+fn evaluate_chunk(
+    rows: StreamChunk<'_>,
+    backend: &mut dyn Backend,
+    job: &StreamJob,
+    request: &Request,
+    out: &mut Output,
+) -> Result<()> {
+    let Some(s) = job.spectral else {
+        return evaluate_into(rows, backend, job.materials, request, out);
+    };
+    type Row<'a> = Box<dyn Fn(usize) -> ([f32; 3], [f32; 3], usize) + Sync + 'a>;
+    let row: Row = match rows {
+        StreamChunk::Rows(b) => Box::new(crate::spectral_eval::batch_rows(b)),
+        StreamChunk::Local(b) => Box::new(crate::spectral_eval::local_rows(b)),
+    };
+    let triplets = backend.is_reference();
+    s.evaluate_with(
+        rows.len(),
+        triplets,
+        &row,
+        |m, o| evaluate_into(rows, backend, m, request, o),
+        out,
+    )
+}
+
+/// `ρ_s` of each row of `rows` ([`crate::reference::htsg_spike_rows`]); every material is
 /// HTSG's (`spike_allowed` checked it before any work), so no row can fail.
-fn spike_rows(batch: &crate::batch::Batch, materials: &[Material]) -> Vec<f32> {
-    crate::reference::htsg_spike_rows(batch, materials).unwrap_or_default()
+fn spike_rows(rows: StreamChunk<'_>, materials: &[Material]) -> Vec<f32> {
+    let weights = match rows {
+        StreamChunk::Rows(b) => crate::reference::htsg_spike_rows(b, materials),
+        StreamChunk::Local(b) => crate::reference::htsg_spike_rows(&b.rows(0..b.len()), materials),
+    };
+    weights.unwrap_or_default()
 }
