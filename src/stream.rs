@@ -10,6 +10,7 @@
 
 mod fused;
 mod job;
+mod pin;
 mod pipeline;
 pub mod shard;
 

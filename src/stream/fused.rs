@@ -12,6 +12,7 @@
 //! batch, as the pipeline reports it.
 
 use super::job::{chunk_rows_for, Setup, StreamJob, StreamSummary};
+use super::pin::{cores_for, Held};
 use crate::atomic::{stage_writer, Staged, StagedWriter};
 use crate::backend::{Backend, Counts, Output, TERM_COLUMNS};
 use crate::batch::rows::NpyRows;
@@ -212,8 +213,10 @@ struct Shared<'a> {
 
 impl Shared<'_> {
     /// A worker's loop: slices until none is left, the run is cancelled or one failed
-    /// before the next; `tick` is told after each slice.
-    fn work(&self, engine: &mut dyn Backend, mut tick: impl FnMut()) -> Part {
+    /// before the next; `tick` is told after each slice. Held to `core` while it runs,
+    /// when given ([`super::pin`]).
+    fn work(&self, engine: &mut dyn Backend, mut tick: impl FnMut(), core: Option<usize>) -> Part {
+        let _held = core.map(Held::to);
         let mut part = Part::default();
         let (mut buffer, mut bytes, mut out) = (Vec::new(), Vec::new(), Output::default());
         loop {
@@ -350,17 +353,20 @@ pub(super) fn evaluate(
         done: AtomicU64::new(0),
         failures: Mutex::new(Vec::new()),
     };
+    let cores = cores_for(workers.len());
+    let core = |i: usize| cores.as_ref().map(|c| c[i]);
     let mut workers = workers.iter_mut();
     let mine = workers.next();
     let parts: Vec<Part> = std::thread::scope(|scope| {
+        let shared = &shared;
         let helpers: Vec<_> = workers
-            .map(|w| scope.spawn(|| shared.work(w.as_mut(), || {})))
+            .enumerate()
+            .map(|(i, w)| scope.spawn(move || shared.work(w.as_mut(), || {}, core(i + 1))))
             .collect();
         let mut parts = Vec::with_capacity(helpers.len() + 1);
         if let Some(w) = mine {
-            parts.push(shared.work(w.as_mut(), || {
-                progress(shared.done.load(Ordering::Relaxed), n)
-            }));
+            let tick = || progress(shared.done.load(Ordering::Relaxed), n);
+            parts.push(shared.work(w.as_mut(), tick, core(0)));
         }
         for h in helpers {
             parts.push(h.join().expect("a stream worker does not panic"));
