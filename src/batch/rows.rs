@@ -423,26 +423,41 @@ fn lost_page(window: &Window, first: u64, row_bytes: usize, source: &Path) -> Re
 }
 
 #[cfg(test)]
+#[cfg(target_os = "linux")] // mapped reads
 mod tests {
     use super::*;
 
-    #[cfg(target_os = "linux")] // mapped reads
-    #[test]
-    fn a_truncated_input_fails_with_the_first_row_it_lost() {
+    /// `rows` rows of 10 columns written to `t.npy` in a fresh directory (kept alive by
+    /// the returned guard), the material column from `material(row)`, the rest not zero.
+    fn written(rows: u64, material: fn(u64) -> f32) -> (tempfile::TempDir, PathBuf, Vec<f32>) {
         assert!(crate::batch::enable_mapped_reads());
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("t.npy");
-        let rows = 2000_u64;
         let data: Vec<f32> = (0..rows * 10)
-            .map(|i| {
-                if i % 10 == 9 {
-                    0.0
-                } else {
-                    1.0 + (i % 7) as f32
-                }
+            .map(|i| match i % 10 {
+                9 => material(i / 10),
+                _ => 1.0 + (i % 7) as f32,
             })
             .collect();
         crate::batch::write_npy_f32(&path, &data, 10).unwrap();
+        (dir, path, data)
+    }
+
+    /// Truncates `path` (`rows` rows of 40 bytes behind its header) `extra` bytes into
+    /// row `row`; returns the first row on a page now past the end.
+    fn cut_into_row(path: &Path, rows: u64, row: u64, extra: u64) -> u64 {
+        let header = std::fs::metadata(path).unwrap().len() - rows * 40;
+        let cut = header + row * 40 + extra;
+        let file = std::fs::OpenOptions::new().write(true).open(path).unwrap();
+        file.set_len(cut).unwrap();
+        let page = crate::batch::mapped::page_size() as u64;
+        (cut.next_multiple_of(page) - header) / 40
+    }
+
+    #[test]
+    fn a_truncated_input_fails_with_the_first_row_it_lost() {
+        let rows = 2000;
+        let (_dir, path, data) = written(rows, |_| 0.0);
         let npy = NpyRows::open(&path, 1).unwrap();
         // The whole file in place: the rows as written, no error.
         let sum = npy
@@ -451,20 +466,11 @@ mod tests {
             .unwrap();
         assert_eq!(sum, data.iter().sum::<f32>());
         // Cut the file inside row 1000's page: the rows of the pages after it are lost.
-        let header = std::fs::metadata(&path).unwrap().len() - rows * 40;
-        let cut = header + 1000 * 40 + 8;
-        std::fs::OpenOptions::new()
-            .write(true)
-            .open(&path)
-            .unwrap()
-            .set_len(cut)
-            .unwrap();
-        let page = crate::batch::mapped::page_size() as u64;
-        let first_lost = (cut.next_multiple_of(page) - header) / 40;
+        let first_lost = cut_into_row(&path, rows, 1000, 8);
         let err = npy
             .with_mapped(0, rows as usize, |b| {
                 // The rows' own error, which the lost page's must come before.
-                Err::<(), _>(crate::error::Error::Batch {
+                Err::<(), _>(Error::Batch {
                     path: path.clone(),
                     message: format!("saw {} rows", b.len()),
                 })
@@ -482,23 +488,10 @@ mod tests {
 
     /// The pipeline's form: a chunk mapped and checked on one thread, read on another
     /// after the file shrank, reports the first row it lost when asked after the read.
-    #[cfg(target_os = "linux")] // mapped reads
     #[test]
     fn a_mapped_chunk_read_after_a_truncation_reports_its_first_lost_row() {
-        assert!(crate::batch::enable_mapped_reads());
-        let dir = tempfile::tempdir().unwrap();
-        let path = dir.path().join("t.npy");
-        let rows = 3000_u64;
-        let data: Vec<f32> = (0..rows * 10)
-            .map(|i| {
-                if i % 10 == 9 {
-                    (i / 10 % 2) as f32
-                } else {
-                    0.5
-                }
-            })
-            .collect();
-        crate::batch::write_npy_f32(&path, &data, 10).unwrap();
+        let rows = 3000;
+        let (_dir, path, data) = written(rows, |row| (row % 2) as f32);
         let mut npy = NpyRows::open(&path, 2).unwrap();
         npy.restrict(1000..rows).unwrap();
         let mut checked = 0;
@@ -514,23 +507,12 @@ mod tests {
             panic!("a float32 file maps");
         };
         assert_eq!(m.len(), 1500);
-        assert!(m.batch().as_slice() == &data[10_000..25_000]);
+        let kept = &data[10_000..25_000];
+        assert!(m.batch().as_slice() == kept);
         assert!(m.lost_page().is_ok());
-        let header = std::fs::metadata(&path).unwrap().len() - rows * 40;
-        let cut = header + 2000 * 40;
-        std::fs::OpenOptions::new()
-            .write(true)
-            .open(&path)
-            .unwrap()
-            .set_len(cut)
-            .unwrap();
-        let page = crate::batch::mapped::page_size() as u64;
-        let first_lost = (cut.next_multiple_of(page) - header) / 40;
+        let first_lost = cut_into_row(&path, rows, 2000, 0);
         let sum: f32 = m.batch().as_slice().iter().sum();
-        assert!(
-            sum < data[10_000..25_000].iter().sum::<f32>(),
-            "lost rows read as zeros"
-        );
+        assert!(sum < kept.iter().sum::<f32>(), "lost rows read as zeros");
         let err = m.lost_page().unwrap_err().to_string();
         assert!(
             err.contains(&format!("row {first_lost} could not be read")),
