@@ -1,10 +1,12 @@
 //! The streamed path of an engine that runs one copy a core ([`Backend::stream_workers`]:
 //! the CPU engine): each worker takes the next slice of rows, reads it from the file
-//! (a positioned read into its own buffer), checks it, evaluates it and writes its outputs
-//! where they go in the staged files (positioned writes), then takes the next. A slice
-//! stays in its core's cache from the file to the output, and no stage waits on another's
-//! thread: the pipeline of a reader, an engine and a writer thread kept four threads busy
-//! on two cores and moved every chunk between caches (docs/STREAMING.md has the figures).
+//! (mapped where the page cache holds it, else a positioned read into its own buffer),
+//! checks it, evaluates it and writes its outputs where they go in the staged files
+//! (positioned writes), then takes the next. A slice stays in its core's cache from the
+//! file to the output, and no stage waits on another's thread: the pipeline of a reader,
+//! an engine and a writer thread kept four threads busy on two cores and moved every chunk
+//! between caches (docs/STREAMING.md has the figures). Where the run has the cores to
+//! itself, each worker is held to one ([`super::pin`]).
 //!
 //! Errors keep their batch order: a worker that meets one (a bad material index, a missing
 //! tangent, a short file) records it with its slice's index, and no worker takes a slice
