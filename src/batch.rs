@@ -117,7 +117,7 @@ impl<'a> Batch<'a> {
         material_count: usize,
         source: &Path,
     ) -> Result<Batch<'a>> {
-        Batch::checked(Cow::Borrowed(data), columns, material_count, source, 0)
+        Batch::borrowed_at(data, columns, material_count, source, 0)
     }
 
     /// Whether the batch borrows its data ([`Batch::borrowed`]) rather than owning a copy.

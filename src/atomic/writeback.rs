@@ -95,25 +95,22 @@ impl Writeback {
         if since < WRITEBACK_EVERY {
             return;
         }
-        if let Some(r) = &self.request {
-            match r.try_send(()) {
-                Ok(()) => {
-                    self.since_last.fetch_sub(since, Ordering::Relaxed);
-                }
-                Err(TrySendError::Full(())) => {
-                    self.since_last.fetch_sub(since, Ordering::Relaxed);
-                    // The last request is still untaken: a thread outside any call has
-                    // not run since (starved, see the module docs), so start it here.
-                    if !self.shared.calling.load(Ordering::Relaxed) {
-                        if let Err(e) = start_writeback(&self.shared.file) {
-                            let mut first =
-                                self.shared.error.lock().unwrap_or_else(|p| p.into_inner());
-                            first.get_or_insert(e);
-                        }
-                    }
-                }
-                // The thread stopped on an error, which `finish` reports.
-                Err(TrySendError::Disconnected(())) => {}
+        let Some(r) = &self.request else {
+            return;
+        };
+        let sent = r.try_send(());
+        // Disconnected: the thread stopped on an error, which `finish` reports.
+        if matches!(sent, Err(TrySendError::Disconnected(()))) {
+            return;
+        }
+        self.since_last.fetch_sub(since, Ordering::Relaxed);
+        // Full: the last request is still untaken; a thread outside any call has not run
+        // since (starved, see the module docs), so the write is started here.
+        let starved = sent.is_err() && !self.shared.calling.load(Ordering::Relaxed);
+        if starved {
+            if let Err(e) = start_writeback(&self.shared.file) {
+                let mut first = self.shared.error.lock().unwrap_or_else(|p| p.into_inner());
+                first.get_or_insert(e);
             }
         }
     }

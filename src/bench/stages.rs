@@ -9,7 +9,7 @@
 //! from the page cache.
 
 use crate::backend::{Backend, Request};
-use crate::batch::rows::NpyRows;
+use crate::batch::rows::{NpyRows, RowsChunk};
 use crate::batch::{write_npy_f32, Batch};
 use crate::cancel::Cancel;
 use crate::error::Result;
@@ -275,25 +275,17 @@ fn read_all(path: &Path, material_count: usize, chunk: usize) -> Result<Vec<Batc
     Ok(chunks)
 }
 
-/// The read stage as `eval` runs it: every chunk mapped where the page cache holds it and
-/// checked there, or (mapped reads off: not Linux, no handler) read and checked into the
-/// one buffer the last chunk gave back.
+/// The read stage as `eval`'s reader runs it: every chunk mapped where the page cache
+/// holds it and checked there, or (mapped reads off: not Linux, no handler) read and
+/// checked into the one buffer the last chunk gave back.
 fn read_pass(path: &Path, material_count: usize, chunk: usize) -> Result<()> {
     let mut rows = NpyRows::open(path, material_count)?;
-    let n = rows.rows();
-    let mut at = 0;
-    while at < n {
-        let len = (chunk as u64).min(n - at);
-        match rows.with_mapped(at, len as usize, |_| Ok(())) {
-            Some(checked) => checked?,
-            None => break, // not mapped: the rest is read as below
-        }
-        at += len;
-    }
-    rows.restrict(at..n)?;
     let mut spare = Vec::new();
-    while let Some((_, b)) = rows.next_chunk_reusing(chunk, spare)? {
-        spare = b.into_data();
+    while let Some((_, c)) = rows.next_in_place(chunk, spare, |_, _| Ok(()))? {
+        spare = match c {
+            RowsChunk::Mapped(_) => Vec::new(),
+            RowsChunk::Read(b) => b.into_data(),
+        };
     }
     Ok(())
 }
